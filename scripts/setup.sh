@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# scripts/setup.sh: the README's two commands.
+#
+#   bash scripts/setup.sh demo   install what is missing, build (Release), render
+#                                scenes/ring-caustics and print where the images are
+#   bash scripts/setup.sh test   install what is missing, build, run the whole test
+#                                suite (ctest), then the unit tests again under
+#                                AddressSanitizer + UndefinedBehaviorSanitizer
+#
+# Works on a fresh Debian 12 machine as root (or with sudo). Environment:
+#   LMC_JOBS      parallel build jobs (default: the number of cores)
+#   LMC_DEMO_SPP  samples per pixel of the demo render (default 256)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+mode=${1:-demo}
+jobs=${LMC_JOBS:-$(nproc)}
+packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-dev
+          libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev)
+
+# Install the Debian packages that are missing.
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# Build (Release, warnings are errors).
+build() { # dir, extra cmake args...
+  local dir=$1
+  shift
+  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release -DLMC_WERROR=ON "$@" >/dev/null
+  cmake --build "$dir" -j "$jobs"
+}
+
+case "$mode" in
+  demo)
+    build build
+    mkdir -p out
+    build/lmc render scenes/ring-caustics/scene.xml --spp "${LMC_DEMO_SPP:-256}" \
+      -o out/ring-caustics.exr
+    ;;
+  test)
+    build build
+    ctest --test-dir build --output-on-failure -j "$jobs"
+    build build-sanitize -DLMC_SANITIZE=ON
+    ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
+      ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -L fast
+    ;;
+  *)
+    echo "usage: bash scripts/setup.sh demo|test" >&2
+    exit 2
+    ;;
+esac

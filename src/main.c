@@ -1,0 +1,513 @@
+/*
+ * main.c: the `lmc` command line.
+ *
+ *   lmc render SCENE.xml [flags]     render to OUT.exr (linear) and OUT.png (preview)
+ *   lmc compare IMAGE.exr REF.exr    error metrics, one `name: value` per line
+ *
+ * Every flag is accepted as `--flag value` and `--flag=value`. Exit status:
+ * 0 success, 1 usage or internal error... see lmc_usage for the table. Only
+ * this file turns errors into exit codes and installs signal handlers.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/error.h"
+#include "render/image.h"
+#include "render/integrator.h"
+#include "render/io/io.h"
+#include "render/scene.h"
+
+#define LMC_VERSION "0.1.0"
+
+/* Exit statuses. */
+enum {
+  EXIT_OK = 0,
+  EXIT_FAIL = 1,      /* rendering or writing failed */
+  EXIT_BADINPUT = 2,  /* bad flag, bad scene, images of different sizes */
+  EXIT_SIGINT = 130,  /* interrupted by SIGINT (image of the samples so far written) */
+  EXIT_SIGTERM = 143  /* interrupted by SIGTERM (likewise) */
+};
+
+static const char *lmc_usage =
+    "usage: lmc <command> [arguments]\n"
+    "\n"
+    "commands:\n"
+    "  render SCENE.xml [flags]        render a Mitsuba XML scene\n"
+    "  compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
+    "                                  print mse, relmse and mean_ratio\n"
+    "  --help, -h                      this text (lmc render --help: the render flags)\n"
+    "  --version                       the version\n"
+    "\n"
+    "exit status: 0 ok, 1 failure, 2 bad input (flags, scene, image sizes),\n"
+    "130/143 interrupted by SIGINT/SIGTERM (the image so far is still written)\n";
+
+static const char *lmc_render_usage =
+    "usage: lmc render SCENE.xml [flags]   (every flag also as --flag=value)\n"
+    "\n"
+    "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
+    "                           (default: the scene's name in the current folder)\n"
+    "  --integrator NAME        pt | bdpt (default: the scene's <integrator>/<dpt>, else pt)\n"
+    "  --spp N                  samples per pixel (default: the scene's, else 16)\n"
+    "  --time SECONDS           stop after this long (with --spp: whichever comes first)\n"
+    "  --threads N              worker threads (default: all cores)\n"
+    "  --seed S                 random seed (default 1); same seed and threads: same image\n"
+    "  --maxdepth N             longest path in segments, Mitsuba's maxDepth (-1: unbounded)\n"
+    "  --rrdepth N              Russian roulette from this length on (default 5)\n"
+    "  --resolution WxH         film size (keeps the field of view)\n"
+    "  -D name=value            override a <default> of the scene (repeatable)\n"
+    "  -q, --quiet              no progress bar\n"
+    "  -h, --help               this text\n";
+
+/* --- flag parsing ------------------------------------------------------------ */
+
+typedef struct lmc_args {
+  int argc, i;
+  char **argv;
+  const char *inline_value; /* the part after '=' of the current flag */
+} lmc_args;
+
+/* Matches argv[i] against a flag name (with or without "=value"). */
+static int lmc_flag_is(lmc_args *a, const char *name) {
+  const char *arg = a->argv[a->i];
+  size_t n = strlen(name);
+  if (strncmp(arg, name, n) != 0) return 0;
+  if (arg[n] == '\0') {
+    a->inline_value = NULL;
+    return 1;
+  }
+  if (arg[n] == '=') {
+    a->inline_value = arg + n + 1;
+    return 1;
+  }
+  return 0;
+}
+
+/* The value of the current flag, from "=value" or the next argument. */
+static const char *lmc_flag_value(lmc_args *a) {
+  if (a->inline_value) return a->inline_value;
+  if (a->i + 1 >= a->argc) {
+    fprintf(stderr, "lmc: flag %s needs a value\n", a->argv[a->i]);
+    return NULL;
+  }
+  return a->argv[++a->i];
+}
+
+static int lmc_parse_int64(const char *flag, const char *s, int64_t lo, int64_t hi, int64_t *out) {
+  char *end;
+  errno = 0;
+  long long v = strtoll(s, &end, 10);
+  if (errno || end == s || *end != '\0' || v < lo || v > hi) {
+    fprintf(stderr, "lmc: flag %s: '%s' is not an integer in [%lld, %lld]\n", flag, s,
+            (long long)lo, (long long)hi);
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+static int lmc_parse_double(const char *flag, const char *s, double lo, double hi, double *out) {
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (errno || end == s || *end != '\0' || !isfinite(v) || v < lo || v > hi) {
+    fprintf(stderr, "lmc: flag %s: '%s' is not a number in [%g, %g]\n", flag, s, lo, hi);
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+/* --- lmc render --------------------------------------------------------------- */
+
+static void lmc_on_signal(int sig) { render_request_stop(sig); }
+
+static void lmc_install_signals(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = lmc_on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+/* Default output name: the scene file's name without .xml, or its folder's
+ * name when the file is called scene.xml. */
+static void lmc_default_output(const char *scene_path, char *out, size_t size) {
+  const char *slash = strrchr(scene_path, '/');
+  const char *base = slash ? slash + 1 : scene_path;
+  char stem[256];
+  snprintf(stem, sizeof stem, "%s", base);
+  char *dot = strrchr(stem, '.');
+  if (dot) *dot = '\0';
+  if (strcmp(stem, "scene") == 0 && slash) {
+    const char *end = slash, *start = slash;
+    while (start > scene_path && start[-1] != '/') start--;
+    if (end > start) snprintf(stem, sizeof stem, "%.*s", (int)(end - start), start);
+  }
+  snprintf(out, size, "%s.exr", stem);
+}
+
+/* Exposure of the preview: the 99th percentile of luminance maps to 1. */
+static double lmc_preview_scale(const lmc_image *img) {
+  size_t n = (size_t)img->width * (size_t)img->height;
+  float *lum = malloc(n * sizeof(float));
+  if (!lum || n == 0) {
+    free(lum);
+    return 1.0;
+  }
+  size_t k = 0;
+  for (size_t i = 0; i < n; i++) {
+    const float *p = img->data + 3 * i;
+    double l = rgb_luminance(rgb_make(p[0], p[1], p[2]));
+    if (isfinite(l) && l > 0.0) lum[k++] = (float)l;
+  }
+  double scale = 1.0;
+  if (k > 0) {
+    /* Partial selection of the percentile (nth element by quickselect). */
+    size_t target = (size_t)(0.99 * (double)(k - 1));
+    size_t lo = 0, hi = k - 1;
+    while (lo < hi) {
+      float pivot = lum[(lo + hi) / 2];
+      size_t i = lo, j = hi;
+      while (i <= j) {
+        while (lum[i] < pivot) i++;
+        while (lum[j] > pivot) j--;
+        if (i <= j) {
+          float t = lum[i];
+          lum[i] = lum[j];
+          lum[j] = t;
+          i++;
+          if (j == 0) break;
+          j--;
+        }
+      }
+      if (target <= j) hi = j;
+      else if (target >= i) lo = i;
+      else break;
+    }
+    double p = lum[target];
+    if (p > 0.0 && isfinite(p)) scale = 1.0 / p;
+  }
+  free(lum);
+  return scale;
+}
+
+static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size) {
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_image img = {0};
+  char msg[2048];
+  if (film_develop(f, &img, &err) || image_write_exr(exr_path, &img, &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    image_free(&img);
+    return 0;
+  }
+  snprintf(png_path, png_size, "%s", exr_path);
+  size_t len = strlen(png_path);
+  if (len > 4 && strcmp(png_path + len - 4, ".exr") == 0) png_path[len - 4] = '\0';
+  strncat(png_path, ".png", png_size - strlen(png_path) - 1);
+  if (image_write_png(png_path, &img, lmc_preview_scale(&img), &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    image_free(&img);
+    return 0;
+  }
+  image_free(&img);
+  return 1;
+}
+
+static int lmc_cmd_render(int argc, char **argv) {
+  const char *scene_path = NULL, *output = NULL;
+  const char **defines = calloc((size_t)argc + 1, sizeof(char *));
+  int n_defines = 0;
+  render_settings cli = render_settings_default();
+  cli.set = 0;
+  int res_w = 0, res_h = 0;
+  lmc_args a = {argc, 2, argv, NULL};
+  if (!defines) return EXIT_FAIL;
+
+  /* Parse the flags; the scene's own settings are merged below. */
+  for (a.i = 2; a.i < argc; a.i++) {
+    const char *arg = argv[a.i], *v;
+    int64_t iv;
+    if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      fputs(lmc_render_usage, stdout);
+      free(defines);
+      return EXIT_OK;
+    } else if (lmc_flag_is(&a, "-o") || lmc_flag_is(&a, "--output")) {
+      if (!(output = lmc_flag_value(&a))) goto bad;
+    } else if (lmc_flag_is(&a, "--integrator")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "pt") && strcmp(v, "bdpt")) {
+        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt)\n", v);
+        goto bad;
+      }
+      snprintf(cli.integrator, sizeof cli.integrator, "%s", v);
+      cli.set |= SET_INTEGRATOR;
+    } else if (lmc_flag_is(&a, "--spp")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--spp", v, 1, INT64_MAX / 2, &cli.spp))
+        goto bad;
+      cli.set |= SET_SPP;
+    } else if (lmc_flag_is(&a, "--time")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--time", v, 1e-3, 1e9, &cli.time_limit))
+        goto bad;
+      cli.set |= SET_TIME;
+    } else if (lmc_flag_is(&a, "--threads")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--threads", v, 1, 1024, &iv)) goto bad;
+      cli.threads = (int)iv;
+    } else if (lmc_flag_is(&a, "--seed")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--seed", v, 0, INT64_MAX, &iv)) goto bad;
+      cli.seed = (uint64_t)iv;
+    } else if (lmc_flag_is(&a, "--maxdepth")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--maxdepth", v, -1, 1000, &iv)) goto bad;
+      cli.maxdepth = (int)iv;
+      cli.set |= SET_MAXDEPTH;
+    } else if (lmc_flag_is(&a, "--rrdepth")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--rrdepth", v, 1, 1000, &iv)) goto bad;
+      cli.rrdepth = (int)iv;
+      cli.set |= SET_RRDEPTH;
+    } else if (lmc_flag_is(&a, "--resolution")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      char tail;
+      if (sscanf(v, "%dx%d%c", &res_w, &res_h, &tail) != 2 || res_w <= 0 || res_h <= 0 ||
+          res_w > 65536 || res_h > 65536) {
+        fprintf(stderr, "lmc: flag --resolution: '%s' is not WIDTHxHEIGHT (e.g. 320x240)\n", v);
+        goto bad;
+      }
+    } else if (strcmp(arg, "-D") == 0 || (strncmp(arg, "-D", 2) == 0 && arg[2] != '\0')) {
+      const char *d = arg[2] ? arg + 2 : (a.i + 1 < argc ? argv[++a.i] : NULL);
+      if (!d || !strchr(d, '=') || d[0] == '=') {
+        fprintf(stderr, "lmc: flag -D needs name=value\n");
+        goto bad;
+      }
+      defines[n_defines++] = d;
+    } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
+      cli.quiet = 1;
+    } else if (arg[0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
+      goto bad;
+    } else if (!scene_path) {
+      scene_path = arg;
+    } else {
+      fprintf(stderr, "lmc: unexpected argument '%s' (one scene at a time)\n", arg);
+      goto bad;
+    }
+  }
+  if (!scene_path) {
+    fprintf(stderr, "lmc render: no scene given\n%s", lmc_render_usage);
+    goto bad;
+  }
+
+  /* Load the scene. */
+  lmc_error err;
+  lmc_error_clear(&err);
+  scene *s = NULL;
+  double t_load = omp_get_wtime();
+  if (scene_load_xml(scene_path, defines, n_defines, &s, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    free(defines);
+    return EXIT_BADINPUT;
+  }
+  free(defines);
+  t_load = omp_get_wtime() - t_load;
+  if (res_w > 0) {
+    camera_set_resolution(&s->cam, res_w, res_h);
+  }
+
+  /* The scene's settings, overridden by the command line. */
+  render_settings rs = s->settings;
+  if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
+  if (cli.set & SET_INTEGRATOR) memcpy(rs.integrator, cli.integrator, sizeof rs.integrator);
+  if (cli.set & SET_SPP) rs.spp = cli.spp;
+  if (cli.set & SET_TIME) rs.time_limit = cli.time_limit;
+  if (cli.set & SET_MAXDEPTH) rs.maxdepth = cli.maxdepth;
+  if (cli.set & SET_RRDEPTH) rs.rrdepth = cli.rrdepth;
+  if ((cli.set & SET_TIME) && !(cli.set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
+  rs.set |= cli.set;
+  rs.threads = cli.threads;
+  rs.seed = cli.seed;
+  rs.quiet = cli.quiet;
+  if (strcmp(rs.integrator, "pt") && strcmp(rs.integrator, "bdpt")) {
+    lmc_warn(scene_path, 0,
+             "the scene asks for integrator '%s', which this build does not have yet; "
+             "rendering with bdpt (choose with --integrator)",
+             rs.integrator);
+    snprintf(rs.integrator, sizeof rs.integrator, "bdpt");
+  }
+
+  /* Render, then write what we have even when interrupted. */
+  char out_exr[1024], out_png[1100];
+  if (output)
+    snprintf(out_exr, sizeof out_exr, "%s", output);
+  else
+    lmc_default_output(scene_path, out_exr, sizeof out_exr);
+  lmc_install_signals();
+  film f;
+  render_stats st;
+  if (render_run(s, &rs, &f, &st, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    scene_destroy(s);
+    return EXIT_FAIL;
+  }
+  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png);
+  fprintf(stderr,
+          "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
+          "%.3g Mrays/s%s%s\n",
+          rs.integrator, f.width, f.height, (long long)st.passes, (long long)st.samples,
+          st.seconds, t_load, (double)st.rays, st.rays / fmax(st.seconds, 1e-9) / 1e6,
+          st.interrupted ? ", interrupted" : "", st.timed_out ? ", time limit reached" : "");
+  if (st.nan_samples > 0)
+    fprintf(stderr, "lmc: dropped %lld non-finite samples\n", (long long)st.nan_samples);
+  if (ok) printf("wrote %s\nwrote %s\n", out_exr, out_png);
+  film_free(&f);
+  scene_destroy(s);
+  if (!ok) return EXIT_FAIL;
+  if (st.interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
+  return EXIT_OK;
+bad:
+  free(defines);
+  return EXIT_BADINPUT;
+}
+
+/* --- lmc compare ---------------------------------------------------------------- */
+
+/* A false-colour ramp (dark blue - cyan - yellow - red) for t in [0, 1]. */
+static rgb lmc_heat_color(double t) {
+  static const double stops[5][3] = {
+      {0.05, 0.05, 0.25}, {0.0, 0.45, 0.85}, {0.1, 0.85, 0.75}, {0.95, 0.9, 0.1}, {0.85, 0.1, 0.05}};
+  t = fmin(1.0, fmax(0.0, t)) * 4.0;
+  int i = (int)t;
+  if (i >= 4) i = 3;
+  double f = t - i;
+  return rgb_make(stops[i][0] + f * (stops[i + 1][0] - stops[i][0]),
+                  stops[i][1] + f * (stops[i + 1][1] - stops[i][1]),
+                  stops[i][2] + f * (stops[i + 1][2] - stops[i][2]));
+}
+
+static int lmc_cmd_compare(int argc, char **argv) {
+  const char *paths[2] = {NULL, NULL}, *heatmap = NULL;
+  int n_paths = 0;
+  lmc_args a = {argc, 2, argv, NULL};
+  for (a.i = 2; a.i < argc; a.i++) {
+    if (lmc_flag_is(&a, "--heatmap")) {
+      if (!(heatmap = lmc_flag_value(&a))) return EXIT_BADINPUT;
+    } else if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      printf("usage: lmc compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
+             "prints mse, relmse (mean of (I-R)^2 / (R^2 + 0.01)) and mean_ratio\n"
+             "(mean luminance of IMAGE over REFERENCE); exit 2 if the sizes differ\n");
+      return EXIT_OK;
+    } else if (argv[a.i][0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (see lmc compare --help)\n", argv[a.i]);
+      return EXIT_BADINPUT;
+    } else if (n_paths < 2) {
+      paths[n_paths++] = argv[a.i];
+    } else {
+      fprintf(stderr, "lmc compare: too many arguments\n");
+      return EXIT_BADINPUT;
+    }
+  }
+  if (n_paths != 2) {
+    fprintf(stderr, "usage: lmc compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n");
+    return EXIT_BADINPUT;
+  }
+  lmc_image img[2] = {{0}, {0}};
+  lmc_error err;
+  lmc_error_clear(&err);
+  char msg[2048];
+  for (int k = 0; k < 2; k++) {
+    if (image_read(paths[k], 0, &img[k], &err) || image_to_rgb(&img[k], &err)) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: %s\n", msg);
+      image_free(&img[0]);
+      image_free(&img[1]);
+      return EXIT_BADINPUT;
+    }
+  }
+  if (img[0].width != img[1].width || img[0].height != img[1].height) {
+    fprintf(stderr, "lmc: %s is %dx%d but %s is %dx%d\n", paths[0], img[0].width, img[0].height,
+            paths[1], img[1].width, img[1].height);
+    image_free(&img[0]);
+    image_free(&img[1]);
+    return EXIT_BADINPUT;
+  }
+
+  /* The metrics, over pixels and channels. */
+  size_t n = (size_t)img[0].width * (size_t)img[0].height;
+  double mse = 0.0, relmse = 0.0, lum_i = 0.0, lum_r = 0.0;
+  for (size_t p = 0; p < n; p++) {
+    const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
+    for (int c = 0; c < 3; c++) {
+      double d = (double)I[c] - (double)R[c];
+      mse += d * d;
+      relmse += d * d / ((double)R[c] * R[c] + 0.01);
+    }
+    lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));
+    lum_r += rgb_luminance(rgb_make(R[0], R[1], R[2]));
+  }
+  mse /= 3.0 * (double)n;
+  relmse /= 3.0 * (double)n;
+  printf("mse: %.9g\nrelmse: %.9g\nmean_ratio: %.9g\n", mse, relmse,
+         lum_r != 0.0 ? lum_i / lum_r : (lum_i == 0.0 ? 1.0 : INFINITY));
+
+  /* The heatmap: per-pixel relative error, log scale from 1e-4 to 1. */
+  int status = EXIT_OK;
+  if (heatmap) {
+    lmc_image hm = {0};
+    if (image_init(&hm, img[0].width, img[0].height, 3, &err) == LMC_OK) {
+      for (size_t p = 0; p < n; p++) {
+        const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
+        double e = 0.0;
+        for (int c = 0; c < 3; c++) {
+          double d = (double)I[c] - (double)R[c];
+          e += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+        }
+        double t = (log10(fmax(e, 1e-4)) + 4.0) / 4.0;
+        rgb col = lmc_heat_color(t);
+        hm.data[3 * p] = (float)srgb_to_linear(col.r);
+        hm.data[3 * p + 1] = (float)srgb_to_linear(col.g);
+        hm.data[3 * p + 2] = (float)srgb_to_linear(col.b);
+      }
+      if (image_write_png(heatmap, &hm, 1.0, &err)) status = EXIT_FAIL;
+    } else {
+      status = EXIT_FAIL;
+    }
+    if (status != EXIT_OK) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: %s\n", msg);
+    }
+    image_free(&hm);
+  }
+  image_free(&img[0]);
+  image_free(&img[1]);
+  return status;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fputs(lmc_usage, stderr);
+    return EXIT_BADINPUT;
+  }
+  if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+    fputs(lmc_usage, stdout);
+    return EXIT_OK;
+  }
+  if (!strcmp(argv[1], "--version")) {
+    printf("lmc %s\n", LMC_VERSION);
+    return EXIT_OK;
+  }
+  if (!strcmp(argv[1], "render")) return lmc_cmd_render(argc, argv);
+  if (!strcmp(argv[1], "compare")) return lmc_cmd_compare(argc, argv);
+  fprintf(stderr, "lmc: unknown command '%s'\n%s", argv[1], lmc_usage);
+  return EXIT_BADINPUT;
+}

@@ -1,0 +1,113 @@
+/*
+ * bsdf.h: the BSDF models of Mitsuba 0.5/0.6 that research scenes use.
+ *
+ * Models (parameters as Mitsuba names them; see the .c files for the papers):
+ *   diffuse         reflectance
+ *   phong           diffuseReflectance, specularReflectance, exponent
+ *                   (Mitsuba's energy-normalised modified Phong)
+ *   conductor       smooth metal: eta, k (or material=), specularReflectance
+ *   roughconductor  microfacet metal: distribution beckmann|ggx, alpha
+ *   dielectric      smooth glass: intIOR, extIOR, specularReflectance/Transmittance
+ *   roughdielectric microfacet glass (Walter et al. 2007): distribution, alpha
+ *   plastic         smooth dielectric coating on a diffuse base (Mitsuba's plastic)
+ *   twosided        the flag `twosided` on the wrapped model
+ *
+ * Conventions: all directions are in the local shading frame (z-up), unit,
+ * pointing away from the surface. bsdf_eval returns f without the cosine
+ * factor. A sample's `weight` is f |cos wi| / pdf. Delta lobes (smooth
+ * conductor, dielectric, the specular part of plastic) are never returned by
+ * bsdf_eval or bsdf_pdf; bsdf_sample returns them with BSDF_DELTA set, pdf
+ * equal to the probability of choosing that lobe, and f such that
+ * weight = f |cos wi| / pdf.
+ *
+ * One-sided models (all but dielectrics and twosided ones) are black when
+ * wo or wi is below the surface. `mode` says whether radiance (camera paths)
+ * or importance (light paths) is transported: refraction scales radiance by
+ * 1/eta^2 but not importance.
+ *
+ * Random numbers: u_lobe chooses among lobes, (u1, u2) the direction.
+ */
+#ifndef LMC_RENDER_BSDF_H
+#define LMC_RENDER_BSDF_H
+
+#include "render/texture.h"
+#include "render/vec3.h"
+
+typedef enum bsdf_type {
+  BSDF_DIFFUSE = 0,
+  BSDF_PHONG,
+  BSDF_CONDUCTOR,
+  BSDF_ROUGHCONDUCTOR,
+  BSDF_DIELECTRIC,
+  BSDF_ROUGHDIELECTRIC,
+  BSDF_PLASTIC,
+  BSDF_TYPE_COUNT
+} bsdf_type;
+
+typedef enum mf_dist { MF_BECKMANN = 0, MF_GGX } mf_dist;
+
+typedef enum transport_mode { TRANSPORT_RADIANCE = 0, TRANSPORT_IMPORTANCE } transport_mode;
+
+/* Lobe flags. */
+enum {
+  BSDF_REFLECTION = 1 << 0,
+  BSDF_TRANSMISSION = 1 << 1,
+  BSDF_DIFFUSE_LOBE = 1 << 2,
+  BSDF_GLOSSY = 1 << 3,
+  BSDF_DELTA = 1 << 4
+};
+
+typedef struct bsdf {
+  bsdf_type type;
+  int twosided;
+  texture diffuse;       /* diffuse: reflectance; phong, plastic: diffuseReflectance */
+  texture specular;      /* specularReflectance (phong, conductors, dielectrics, plastic) */
+  texture transmittance; /* specularTransmittance (dielectrics) */
+  double exponent;       /* phong */
+  mf_dist dist;          /* rough models */
+  double alpha;          /* rough models: roughness (> 0) */
+  int sample_visible;    /* rough models: sample visible normals (Heitz 2014/2018) */
+  double eta;            /* dielectrics, plastic: intIOR / extIOR */
+  rgb cond_eta, cond_k;  /* conductors: complex index of refraction relative to extIOR */
+  int nonlinear;         /* plastic: Mitsuba's `nonlinear` */
+  char id[64];           /* the XML id, for messages */
+} bsdf;
+
+typedef struct bsdf_sample {
+  vec3 wi;      /* sampled direction, local frame */
+  rgb f;        /* BSDF value (see the delta convention above) */
+  double pdf;   /* solid-angle density (or lobe probability for delta lobes) */
+  rgb weight;   /* f |cos wi| / pdf */
+  double eta;   /* relative IOR crossed (1 for reflection) */
+  int flags;    /* the lobe sampled: BSDF_REFLECTION/TRANSMISSION | DIFFUSE/GLOSSY/DELTA */
+} bsdf_sample;
+
+/* Fills the defaults Mitsuba uses for the model `type`. */
+void bsdf_init_defaults(bsdf *b, bsdf_type type);
+
+/* f(wo, wi) without cosine; zero for delta lobes. (tu, tv): texture coordinates. */
+rgb bsdf_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
+/* Solid-angle density of bsdf_sample producing wi (delta lobes excluded). */
+double bsdf_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
+/* Samples wi; returns 1 on success, 0 when the sample is absorbed or invalid. */
+int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1,
+                  double u2, transport_mode mode, bsdf_sample *out);
+/* Union of the lobe flags the model has. */
+int bsdf_flags(const bsdf *b);
+/* 1 when every lobe is a delta (no point in light sampling at this vertex). */
+int bsdf_is_delta(const bsdf *b);
+
+/* Fresnel reflectance of a dielectric interface; cos_i may be negative
+ * (coming from inside); eta = int/ext. *cos_t gets the signed cosine of the
+ * refracted direction (0 on total internal reflection). */
+double fresnel_dielectric(double cos_i, double eta, double *cos_t);
+/* Fresnel reflectance of a conductor, per channel. */
+rgb fresnel_conductor(double cos_i, rgb eta, rgb k);
+/* Looks up a named IOR ("bk7", "water", "air", "polypropylene", ...);
+ * returns 0 when unknown. */
+int ior_lookup(const char *name, double *out);
+/* Looks up a named conductor ("Cu", "Au", "Ag", "Al", "Cr", "none", ...)
+ * as RGB eta and k; returns 0 when unknown. */
+int conductor_lookup(const char *name, rgb *eta, rgb *k);
+
+#endif

@@ -1,0 +1,72 @@
+/*
+ * film.h: the film (accumulation buffers) and its reconstruction filter.
+ *
+ * Two buffers with separate normalisations:
+ *  - `sum`/`count`: camera-ray estimates, each into the pixel it was taken
+ *    for (the film position is drawn from the filter around the pixel
+ *    centre, so no weights are needed: filter importance sampling). Pixel
+ *    value = sum / count.
+ *  - `splat`: contributions that land anywhere on the film (light tracing,
+ *    MCMC), spread over nearby pixels with the filter's weights.
+ *    Pixel value = splat * splat_scale.
+ * The image is the sum of the two. Both are sums of doubles, merged in a
+ * fixed order, so a render is repeatable.
+ *
+ * Filters (Mitsuba's rfilter): box (radius 0.5), tent (radius 1), gaussian
+ * (stddev 0.5, truncated at 4 stddev), each normalised to integrate to one.
+ */
+#ifndef LMC_RENDER_FILM_H
+#define LMC_RENDER_FILM_H
+
+#include <stdint.h>
+
+#include "render/error.h"
+#include "render/image.h"
+#include "render/vec3.h"
+
+typedef enum filter_type { FILTER_BOX = 0, FILTER_TENT, FILTER_GAUSSIAN } filter_type;
+
+#define FILTER_TABLE_SIZE 64
+
+typedef struct film_filter {
+  filter_type type;
+  double radius;
+  double stddev;
+  /* gaussian: tabulated 1-D cdf for sampling */
+  double cdf[FILTER_TABLE_SIZE + 1];
+  double norm1d;
+} film_filter;
+
+void filter_init(film_filter *f, filter_type type);
+/* Normalised 2-D weight at offset (dx, dy) from a pixel centre. */
+double filter_eval(const film_filter *f, double dx, double dy);
+/* Samples an offset with density filter_eval. */
+void filter_sample(const film_filter *f, double u1, double u2, double *dx, double *dy);
+
+typedef struct film {
+  int width, height;
+  double *sum;      /* 3 per pixel */
+  double *count;    /* 1 per pixel */
+  double *splat;    /* 3 per pixel */
+  double splat_scale;
+} film;
+
+lmc_status film_init(film *f, int width, int height, lmc_error *err);
+void film_free(film *f);
+void film_clear(film *f);
+/* Adds a camera-ray estimate to pixel (x, y). */
+static inline void film_add(film *f, int x, int y, rgb v) {
+  double *s = f->sum + 3 * ((int64_t)y * f->width + x);
+  s[0] += v.r;
+  s[1] += v.g;
+  s[2] += v.b;
+  f->count[(int64_t)y * f->width + x] += 1.0;
+}
+/* Spreads v around raster point (rx, ry) with the filter's weights. */
+void film_splat(film *f, const film_filter *filter, double rx, double ry, rgb v);
+/* dst += src (same size). */
+void film_merge(film *dst, const film *src);
+/* The image: sum / count + splat * splat_scale (out is initialised here). */
+lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err);
+
+#endif

@@ -1,0 +1,55 @@
+/*
+ * mesh.h: triangle meshes, in world space.
+ *
+ * Every shape (obj, ply, serialized files and the built-in rectangle, cube,
+ * sphere, disk, cylinder) becomes a triangle mesh with its toWorld transform
+ * applied at load time. Positions are float (what Embree traces; the
+ * buffer has one float of padding at the end, as rtcSetSharedGeometryBuffer
+ * requires); normals and uvs are optional. `face_normals` ignores vertex
+ * normals. The geometric normal of triangle (a, b, c) is normalize((b-a) x
+ * (c-a)), flipped when `flip_normals` is set; area lights emit on its side.
+ */
+#ifndef LMC_RENDER_MESH_H
+#define LMC_RENDER_MESH_H
+
+#include <stdint.h>
+
+#include "render/error.h"
+#include "render/transform.h"
+#include "render/vec3.h"
+
+typedef struct mesh {
+  int64_t n_vertices, n_triangles;
+  float *p;       /* owned: 3 * n_vertices (+1 padding) */
+  float *n;       /* owned or NULL: 3 * n_vertices, unit */
+  float *uv;      /* owned or NULL: 2 * n_vertices */
+  uint32_t *idx;  /* owned: 3 * n_triangles */
+  int face_normals;
+  int flip_normals;
+  int bsdf;       /* index into scene->bsdfs */
+  int light;      /* index into scene->lights, or -1 */
+  char name[128]; /* for messages: "file.obj" or the XML id */
+} mesh;
+
+/* Allocates the arrays (normals/uvs only when asked). */
+lmc_status mesh_alloc(mesh *m, int64_t n_vertices, int64_t n_triangles, int with_normals,
+                      int with_uvs, lmc_error *err);
+/* Frees the arrays; accepts NULL. */
+void mesh_free(mesh *m);
+/* Applies a transform to positions and normals (normals renormalised);
+ * reverses the winding when the transform mirrors, so geometric normals
+ * keep pointing outwards. */
+void mesh_transform(mesh *m, const xform *t);
+/* Drops degenerate triangles and checks indices and values; errors name
+ * `file` and `line` (the XML element). Warns (with file and line) about
+ * what it drops. */
+lmc_status mesh_validate(mesh *m, const char *file, int line, lmc_error *err);
+
+static inline vec3 mesh_position(const mesh *m, uint32_t i) {
+  return v3(m->p[3 * i], m->p[3 * i + 1], m->p[3 * i + 2]);
+}
+/* Unit geometric normal of triangle `tri` (with flip_normals applied). */
+vec3 mesh_face_normal(const mesh *m, int64_t tri);
+double mesh_triangle_area(const mesh *m, int64_t tri);
+
+#endif

@@ -1,0 +1,196 @@
+/*
+ * render.c: the render driver for the pixel-sample integrators (pt, bdpt),
+ * and the progress bar.
+ *
+ * The image is rendered in passes of one sample per pixel; OpenMP threads
+ * take rows round-robin (static schedule), so the work of a thread is a
+ * fixed function of the thread count. Every pixel sample draws from its own
+ * random stream, seeded by (seed, pixel, pass): the camera-ray estimates do
+ * not depend on the schedule at all. Splats (light tracing) go to
+ * per-thread buffers merged in thread order at the end, so the same seed
+ * and thread count give the same image bit for bit.
+ *
+ * Stopping: the spp budget, the time limit, or render_request_stop (from
+ * SIGINT/SIGTERM) end the render at the next row. Pixels keep their own
+ * sample counts and splats are normalised by the number of camera samples
+ * actually taken (each traces one light subpath), so an interrupted render
+ * is still a correct image of the samples it has.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "render/integrator.h"
+
+#include <omp.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static volatile sig_atomic_t render__stop_signal;
+static volatile sig_atomic_t render__stop;
+
+void render_request_stop(int signal_number) {
+  render__stop_signal = signal_number;
+  render__stop = 1;
+}
+
+int render_stop_signal(void) { return render__stop_signal; }
+
+void render_reset_stop(void) {
+  render__stop = 0;
+  render__stop_signal = 0;
+}
+
+/* --- progress bar --------------------------------------------------------- */
+
+void progress_init(progress *p, const char *label, int quiet) {
+  memset(p, 0, sizeof *p);
+  p->enabled = !quiet && isatty(STDERR_FILENO);
+  p->start = omp_get_wtime();
+  p->last_print = -1.0;
+  snprintf(p->label, sizeof p->label, "%s", label);
+}
+
+void progress_update(progress *p, double fraction) {
+  if (!p->enabled) return;
+  double now = omp_get_wtime();
+  if (p->last_print >= 0.0 && now - p->last_print < 0.2 && fraction < 1.0) return;
+  p->last_print = now;
+  if (fraction < 0.0) fraction = 0.0;
+  if (fraction > 1.0) fraction = 1.0;
+  enum { WIDTH = 40 };
+  char bar[WIDTH + 1];
+  int full = (int)(fraction * WIDTH);
+  for (int i = 0; i < WIDTH; i++) bar[i] = i < full ? '=' : (i == full ? '>' : ' ');
+  bar[WIDTH] = '\0';
+  double elapsed = now - p->start;
+  double eta = fraction > 1e-6 ? elapsed * (1.0 - fraction) / fraction : 0.0;
+  fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs  ETA %.1fs   ", p->label, bar, 100.0 * fraction,
+          elapsed, eta);
+  fflush(stderr);
+}
+
+void progress_finish(progress *p) {
+  if (!p->enabled) return;
+  progress_update(p, 1.0);
+  fprintf(stderr, "\n");
+}
+
+/* --- the pass loop ----------------------------------------------------------- */
+
+lmc_status render_run(const scene *s, const render_settings *rs, film *out, render_stats *st,
+                      lmc_error *err) {
+  memset(st, 0, sizeof *st);
+  int use_bdpt = strcmp(rs->integrator, "bdpt") == 0;
+  if (!use_bdpt && strcmp(rs->integrator, "pt") != 0)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "render_run: unknown integrator '%s'",
+                         rs->integrator);
+  const int W = s->cam.width, H = s->cam.height;
+  lmc_status status = film_init(out, W, H, err);
+  if (status) return status;
+
+  int nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
+  film *splats = NULL;
+  if (use_bdpt) {
+    splats = calloc((size_t)nthreads, sizeof(film));
+    if (!splats) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for splat buffers");
+    for (int t = 0; t < nthreads; t++) {
+      status = film_init(&splats[t], W, H, err);
+      if (status) {
+        for (int k = 0; k < t; k++) film_free(&splats[k]);
+        free(splats);
+        return status;
+      }
+    }
+  }
+  render_counters *counters = calloc((size_t)nthreads, sizeof(render_counters));
+  if (!counters) {
+    if (splats)
+      for (int t = 0; t < nthreads; t++) film_free(&splats[t]);
+    free(splats);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
+  }
+
+  progress bar;
+  progress_init(&bar, rs->integrator, rs->quiet);
+  double t0 = omp_get_wtime();
+  int64_t max_passes = rs->time_limit > 0.0 && !(rs->set & SET_SPP) ? INT64_MAX : rs->spp;
+  if (max_passes <= 0) max_passes = 1;
+  volatile int stop = 0;
+
+  /* Render passes until the budget, the clock or a signal says stop. */
+  int64_t pass;
+  for (pass = 0; pass < max_passes && !stop; pass++) {
+#pragma omp parallel num_threads(nthreads)
+    {
+      int tid = omp_get_thread_num();
+      render_counters *cnt = &counters[tid];
+#pragma omp for schedule(static, 1)
+      for (int y = 0; y < H; y++) {
+        if (stop) continue;
+        if (render__stop) {
+          stop = 1;
+          continue;
+        }
+        if (rs->time_limit > 0.0 && omp_get_wtime() - t0 >= rs->time_limit) {
+          stop = 2;
+          continue;
+        }
+        for (int x = 0; x < W; x++) {
+          /* One sample of pixel (x, y) in this pass, from its own stream. */
+          lmc_indep_sampler smp;
+          uint64_t pixel = (uint64_t)y * (uint64_t)W + (uint64_t)x;
+          indep_sampler_init(&smp, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
+          double dx, dy;
+          double u1 = sampler_next(&smp.base), u2 = sampler_next(&smp.base);
+          filter_sample(&s->filter, u1, u2, &dx, &dy);
+          double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
+          rgb L;
+          if (use_bdpt) {
+            L = bdpt_li(s, rs, &smp.base, rx, ry, &splats[tid], cnt);
+          } else {
+            vec3 org, dir;
+            camera_generate_ray(&s->cam, rx, ry, &org, &dir);
+            L = pt_li(s, rs, &smp.base, org, dir, cnt);
+          }
+          if (!rgb_isfinite(L)) {
+            cnt->nan_samples++;
+            L = rgb_zero();
+          }
+          film_add(out, x, y, L);
+          cnt->samples++;
+        }
+        if (tid == 0) {
+          double frac;
+          if (max_passes == INT64_MAX)
+            frac = (omp_get_wtime() - t0) / rs->time_limit;
+          else
+            frac = ((double)pass + (double)y / H) / (double)max_passes;
+          progress_update(&bar, frac);
+        }
+      }
+    }
+  }
+  if (stop == 1) st->interrupted = 1;
+  if (stop == 2) st->timed_out = 1;
+  progress_finish(&bar);
+
+  /* Totals, and the splat normalisation: one light subpath per sample. */
+  for (int t = 0; t < nthreads; t++) {
+    st->rays += counters[t].rays;
+    st->samples += counters[t].samples;
+    st->nan_samples += counters[t].nan_samples;
+  }
+  st->passes = (st->samples == (int64_t)W * H * pass) ? pass : st->samples / ((int64_t)W * H);
+  if (use_bdpt) {
+    for (int t = 0; t < nthreads; t++) {
+      film_merge(out, &splats[t]);
+      film_free(&splats[t]);
+    }
+    out->splat_scale = st->samples > 0 ? (double)W * H / (double)st->samples : 0.0;
+  }
+  free(splats);
+  free(counters);
+  st->seconds = omp_get_wtime() - t0;
+  return LMC_OK;
+}

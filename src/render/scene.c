@@ -1,0 +1,219 @@
+/*
+ * scene.c: the scene container, its finalisation and the ray queries that
+ * turn an accelerator hit into a shading point.
+ *
+ * Normals: the geometric normal comes from the triangle's winding (flipped
+ * by flipNormals); the interpolated shading normal is turned to the same
+ * side when the mesh's vertex normals disagree with its winding, so that a
+ * one-sided BSDF and a one-sided area light agree on which side is front.
+ * Texture coordinates default to the barycentrics (b1, b2) when a mesh has
+ * none.
+ *
+ * Self-intersection: rays leaving a surface start at t = scene_ray_eps(p),
+ * an offset proportional to the magnitude of p (Embree traces in float).
+ */
+#include "render/scene.h"
+
+#include <float.h>
+#include <stdlib.h>
+#include <string.h>
+
+lmc_status scene_create(scene **out, lmc_error *err) {
+  *out = calloc(1, sizeof(scene));
+  if (!*out) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory creating the scene");
+  (*out)->settings = render_settings_default();
+  (*out)->settings.set = 0;
+  filter_init(&(*out)->filter, FILTER_BOX);
+  return LMC_OK;
+}
+
+void scene_destroy(scene *s) {
+  if (!s) return;
+  accel_destroy(s->accel);
+  for (int i = 0; i < s->n_meshes; i++) mesh_free(&s->meshes[i]);
+  for (int i = 0; i < s->n_lights; i++) light_free(&s->lights[i]);
+  for (int i = 0; i < s->n_images; i++) image_free(&s->images[i]);
+  distrib1d_free(&s->light_select);
+  free(s->meshes);
+  free(s->bsdfs);
+  free(s->lights);
+  free(s->images);
+  free(s->infinite_lights);
+  free(s);
+}
+
+/* Grows an array of `size`-byte elements to hold one more. */
+static int scene__grow(void **arr, int *cap, int n, size_t size) {
+  if (n < *cap) return 1;
+  int ncap = *cap ? 2 * *cap : 8;
+  void *p = realloc(*arr, (size_t)ncap * size);
+  if (!p) return 0;
+  *arr = p;
+  *cap = ncap;
+  return 1;
+}
+
+int scene_add_bsdf(scene *s, const bsdf *b, lmc_error *err) {
+  if (!scene__grow((void **)&s->bsdfs, &s->cap_bsdfs, s->n_bsdfs, sizeof(bsdf)))
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding a BSDF");
+  s->bsdfs[s->n_bsdfs] = *b;
+  return s->n_bsdfs++;
+}
+
+int scene_add_mesh(scene *s, mesh *m, lmc_error *err) {
+  if (!scene__grow((void **)&s->meshes, &s->cap_meshes, s->n_meshes, sizeof(mesh)))
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding a mesh");
+  s->meshes[s->n_meshes] = *m;
+  memset(m, 0, sizeof *m);
+  return s->n_meshes++;
+}
+
+int scene_add_light(scene *s, const light *l, lmc_error *err) {
+  if (!scene__grow((void **)&s->lights, &s->cap_lights, s->n_lights, sizeof(light)))
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding a light");
+  s->lights[s->n_lights] = *l;
+  return s->n_lights++;
+}
+
+int scene_add_image(scene *s, lmc_image *img, lmc_error *err) {
+  if (!scene__grow((void **)&s->images, &s->cap_images, s->n_images, sizeof(lmc_image)))
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding an image");
+  s->images[s->n_images] = *img;
+  memset(img, 0, sizeof *img);
+  return s->n_images++;
+}
+
+lmc_status scene_finalize(scene *s, lmc_error *err) {
+  lmc_status st;
+  if (s->finalized) return LMC_OK;
+  /* Bounds of all geometry (and the camera, so infinite lights' disks
+   * enclose it too). */
+  vec3 lo = v3(DBL_MAX, DBL_MAX, DBL_MAX), hi = v3(-DBL_MAX, -DBL_MAX, -DBL_MAX);
+  int64_t n_tris = 0;
+  for (int i = 0; i < s->n_meshes; i++) {
+    const mesh *m = &s->meshes[i];
+    for (int64_t v = 0; v < m->n_vertices; v++) {
+      vec3 p = mesh_position(m, (uint32_t)v);
+      lo = v3_min(lo, p);
+      hi = v3_max(hi, p);
+    }
+    n_tris += m->n_triangles;
+  }
+  lo = v3_min(lo, s->cam.pos);
+  hi = v3_max(hi, s->cam.pos);
+  s->bounds_min = lo;
+  s->bounds_max = hi;
+  s->center = v3_scale(v3_add(lo, hi), 0.5);
+  s->radius = fmax(1e-3, 0.5 * v3_len(v3_sub(hi, lo)) * 1.001);
+  if (n_tris == 0 && s->n_lights == 0)
+    return lmc_error_set(err, LMC_EINVAL, s->path, 0, "the scene has neither geometry nor lights");
+
+  /* The accelerator. */
+  st = accel_create(&s->accel, s->meshes, s->n_meshes, err);
+  if (st) return st;
+
+  /* Lights: sampling distributions, the list of infinite ones, and the
+   * light choice in proportion to power. */
+  s->infinite_lights = calloc((size_t)s->n_lights + 1, sizeof(int));
+  if (!s->infinite_lights) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
+  s->n_infinite = 0;
+  double *power = calloc((size_t)s->n_lights + 1, sizeof(double));
+  if (!power) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
+  for (int i = 0; i < s->n_lights; i++) {
+    st = light_prepare(&s->lights[i], s, err);
+    if (st) {
+      free(power);
+      return st;
+    }
+    if (light_is_infinite(&s->lights[i])) s->infinite_lights[s->n_infinite++] = i;
+    double p = light_power(&s->lights[i], s);
+    power[i] = (isfinite(p) && p > 0.0) ? p : 0.0;
+  }
+  if (s->n_lights > 0) {
+    st = distrib1d_init(&s->light_select, power, s->n_lights, err);
+    free(power);
+    if (st) return st;
+  } else {
+    free(power);
+  }
+  s->finalized = 1;
+  return LMC_OK;
+}
+
+double scene_ray_eps(const scene *s, vec3 p) {
+  (void)s;
+  double m = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+  return 2e-5 * (1.0 + m);
+}
+
+int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
+                    surface_hit *OUT_hit) {
+  accel_hit ah;
+  if (!accel_intersect(s->accel, org, dir, tmin, tmax, &ah)) return 0;
+  const mesh *m = &s->meshes[ah.mesh];
+  surface_hit *h = OUT_hit;
+  h->t = ah.t;
+  h->mesh = ah.mesh;
+  h->prim = ah.prim;
+  h->b1 = ah.b1;
+  h->b2 = ah.b2;
+  /* Re-evaluate the hit point on the triangle from its barycentrics. */
+  const uint32_t *tri = m->idx + 3 * ah.prim;
+  double b0 = 1.0 - ah.b1 - ah.b2;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+  h->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, ah.b1)), v3_scale(p2, ah.b2));
+  h->ng = mesh_face_normal(m, ah.prim);
+  /* Shading normal: interpolated, turned to the geometric side. */
+  vec3 ns = h->ng;
+  if (m->n && !m->face_normals) {
+    const float *n = m->n;
+    vec3 n0 = v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]);
+    vec3 n1 = v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]);
+    vec3 n2 = v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]);
+    vec3 ni = v3_add(v3_add(v3_scale(n0, b0), v3_scale(n1, ah.b1)), v3_scale(n2, ah.b2));
+    double l = v3_len(ni);
+    if (l > 1e-12) {
+      ns = v3_scale(ni, 1.0 / l);
+      if (v3_dot(ns, h->ng) < 0.0) ns = v3_neg(ns);
+    }
+  }
+  h->sh = frame_from_z(ns);
+  if (m->uv) {
+    const float *uv = m->uv;
+    h->tu = b0 * uv[2 * tri[0]] + ah.b1 * uv[2 * tri[1]] + ah.b2 * uv[2 * tri[2]];
+    h->tv = b0 * uv[2 * tri[0] + 1] + ah.b1 * uv[2 * tri[1] + 1] + ah.b2 * uv[2 * tri[2] + 1];
+  } else {
+    h->tu = ah.b1;
+    h->tv = ah.b2;
+  }
+  h->bsdf = &s->bsdfs[m->bsdf];
+  h->light = m->light;
+  return 1;
+}
+
+int scene_occluded_segment(const scene *s, vec3 p0, vec3 p1) {
+  vec3 d = v3_sub(p1, p0);
+  double len = v3_len(d);
+  if (!(len > 0.0)) return 0;
+  d = v3_scale(d, 1.0 / len);
+  double e0 = scene_ray_eps(s, p0), e1 = scene_ray_eps(s, p1);
+  if (len <= e0 + e1) return 0;
+  return accel_occluded(s->accel, p0, d, e0, len - e1);
+}
+
+int scene_occluded_ray(const scene *s, vec3 p, vec3 dir) {
+  return accel_occluded(s->accel, p, dir, scene_ray_eps(s, p), INFINITY);
+}
+
+int scene_sample_light(const scene *s, double u, double *OUT_pmf, double *OUT_u_remap) {
+  if (s->n_lights == 0) {
+    *OUT_pmf = 0.0;
+    return -1;
+  }
+  return distrib1d_sample_discrete(&s->light_select, u, OUT_pmf, OUT_u_remap);
+}
+
+double scene_light_pmf(const scene *s, int index) {
+  if (index < 0 || index >= s->n_lights) return 0.0;
+  return distrib1d_pmf(&s->light_select, index);
+}

@@ -1,0 +1,85 @@
+/*
+ * scene.h: the scene, immutable after loading and shared read-only by all
+ * threads.
+ *
+ * The loader (io/scene_xml.c) fills the arrays through the scene_add_*
+ * functions, then scene_finalize computes bounds, builds the accelerator and
+ * the light distributions. Everything the scene points to it owns.
+ */
+#ifndef LMC_RENDER_SCENE_H
+#define LMC_RENDER_SCENE_H
+
+#include "render/accel.h"
+#include "render/bsdf.h"
+#include "render/camera.h"
+#include "render/distribution.h"
+#include "render/film.h"
+#include "render/frame.h"
+#include "render/light.h"
+#include "render/mesh.h"
+#include "render/settings.h"
+
+typedef struct scene {
+  char path[512];          /* the scene file, for messages */
+  mesh *meshes;
+  int n_meshes, cap_meshes;
+  bsdf *bsdfs;
+  int n_bsdfs, cap_bsdfs;
+  light *lights;
+  int n_lights, cap_lights;
+  lmc_image *images;       /* texture images (pointers into it are stable after finalize) */
+  int n_images, cap_images;
+  int *infinite_lights;    /* indices of constant/envmap lights */
+  int n_infinite;
+  camera cam;
+  film_filter filter;
+  render_settings settings; /* from the scene's <integrator>/<dpt> */
+  vec3 bounds_min, bounds_max;
+  vec3 center;
+  double radius;           /* bounding sphere radius (> 0) */
+  distrib1d light_select;  /* light choice, in proportion to power */
+  accel *accel;
+  int finalized;
+} scene;
+
+/* Surface point found by a ray, with everything shading needs. */
+typedef struct surface_hit {
+  double t;
+  int mesh;
+  int64_t prim;
+  double b1, b2;   /* barycentrics */
+  vec3 p;          /* position */
+  vec3 ng;         /* unit geometric normal (emitting side for area lights) */
+  frame sh;        /* shading frame (sh.n: interpolated normal, same side as ng) */
+  double tu, tv;   /* texture coordinates */
+  const bsdf *bsdf;
+  int light;       /* area light index, or -1 */
+} surface_hit;
+
+lmc_status scene_create(scene **out, lmc_error *err);
+void scene_destroy(scene *s);
+/* Each returns the index of the added element, or a negative status.
+ * scene_add_mesh takes ownership of the mesh's arrays. */
+int scene_add_bsdf(scene *s, const bsdf *b, lmc_error *err);
+int scene_add_mesh(scene *s, mesh *m, lmc_error *err);
+int scene_add_light(scene *s, const light *l, lmc_error *err);
+/* Takes ownership of img's pixels; returns the index. Pointers to scene
+ * images are only valid after scene_finalize (the array may grow before). */
+int scene_add_image(scene *s, lmc_image *img, lmc_error *err);
+lmc_status scene_finalize(scene *s, lmc_error *err);
+
+/* Closest surface along the ray (dir unit), with t in (tmin, tmax). */
+int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
+                    surface_hit *OUT_hit);
+/* 1 when the segment from p0 to p1 is blocked (endpoints excluded). */
+int scene_occluded_segment(const scene *s, vec3 p0, vec3 p1);
+/* 1 when the ray from p along dir hits anything (towards an infinite light). */
+int scene_occluded_ray(const scene *s, vec3 p, vec3 dir);
+/* Offset for rays leaving point p, relative to the scene's scale. */
+double scene_ray_eps(const scene *s, vec3 p);
+
+/* Light choice: index of the light for u, with its probability. */
+int scene_sample_light(const scene *s, double u, double *OUT_pmf, double *OUT_u_remap);
+double scene_light_pmf(const scene *s, int index);
+
+#endif

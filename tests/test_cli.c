@@ -1,0 +1,264 @@
+/*
+ * test_cli.c: the `lmc` command line as a user runs it.
+ *
+ * Runs the built binary (LMC_BINARY) on the small analytic scene and checks
+ * exit statuses, messages, flag syntax (--flag value and --flag=value),
+ * determinism for a fixed seed and thread count, --resolution, `compare`
+ * against metrics computed here, and that SIGINT still leaves a valid image.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "render/image.h"
+
+#define SCENE "data/analytic/diffuse_sphere.xml"
+#define TMP "/tmp/lmc_test_cli"
+
+/* Runs `lmc ARGS` through the shell; stdout and stderr go to files that
+ * out/err_text read back. Returns the exit status. */
+static char out_text[65536], err_text[65536];
+
+static void slurp(const char *path, char *buf, size_t size) {
+  buf[0] = '\0';
+  FILE *f = fopen(path, "rb");
+  if (!f) return;
+  size_t n = fread(buf, 1, size - 1, f);
+  buf[n] = '\0';
+  fclose(f);
+}
+
+static int run_lmc(const char *args) {
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
+  int rc = system(cmd);
+  slurp(TMP "/out.txt", out_text, sizeof out_text);
+  slurp(TMP "/err.txt", err_text, sizeof err_text);
+  if (rc == -1 || !WIFEXITED(rc)) return -1;
+  return WEXITSTATUS(rc);
+}
+
+static int setup(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  return 0;
+}
+
+static void test_help_lists_every_flag(void **state) {
+  (void)state;
+  assert_int_equal(run_lmc("--help"), 0);
+  assert_non_null(strstr(out_text, "render"));
+  assert_non_null(strstr(out_text, "compare"));
+  assert_int_equal(run_lmc("render --help"), 0);
+  static const char *flags[] = {"-o", "--integrator", "--spp", "--time", "--threads", "--seed",
+                                "--maxdepth", "--resolution", "-D"};
+  int found = 0;
+  for (size_t i = 0; i < sizeof flags / sizeof flags[0]; i++) {
+    if (!strstr(out_text, flags[i])) fail_msg("render --help does not mention %s", flags[i]);
+    found++;
+  }
+  assert_int_equal(found, 9);
+}
+
+static void test_bad_flags_exit_2_naming_the_flag(void **state) {
+  (void)state;
+  static const struct {
+    const char *args, *needle;
+  } cases[] = {
+      {"render " SCENE " --bogus", "--bogus"},
+      {"render " SCENE " --spp abc", "--spp"},
+      {"render " SCENE " --spp=-3", "--spp"},
+      {"render " SCENE " --integrator=foo", "foo"},
+      {"render " SCENE " --resolution 10by10", "--resolution"},
+      {"render " SCENE " --threads", "--threads"},
+      {"render " SCENE " -D novalue", "-D"},
+      {"render no/such/scene.xml", "no/such/scene.xml"},
+      {"frobnicate", "frobnicate"},
+      {"render", "no scene"},
+  };
+  int n = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    int rc = run_lmc(cases[i].args);
+    if (rc != 2) fail_msg("lmc %s: exit %d, expected 2 (stderr: %s)", cases[i].args, rc, err_text);
+    if (!strstr(err_text, cases[i].needle))
+      fail_msg("lmc %s: stderr does not name '%s': %s", cases[i].args, cases[i].needle, err_text);
+    n++;
+  }
+  assert_int_equal(n, 10);
+}
+
+/* Reads an EXR written by the CLI; fails the test when it cannot. */
+static lmc_image read_exr(const char *path) {
+  lmc_image img = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (image_read_exr(path, &img, &err)) fail_msg("cannot read %s: %s", path, err.msg);
+  return img;
+}
+
+static void test_flag_syntax_and_determinism(void **state) {
+  (void)state;
+  assert_int_equal(run_lmc("render " SCENE " --spp 4 --threads 2 --seed 3 -q -o " TMP "/a.exr"), 0);
+  assert_non_null(strstr(out_text, TMP "/a.exr"));
+  assert_non_null(strstr(out_text, TMP "/a.png"));
+  assert_int_equal(run_lmc("render " SCENE " --spp=4 --threads=2 --seed=3 --quiet --output=" TMP "/b.exr"), 0);
+  lmc_image a = read_exr(TMP "/a.exr"), b = read_exr(TMP "/b.exr");
+  assert_int_equal(a.width, 40);
+  assert_int_equal(a.height, 30);
+  assert_int_equal(a.width * a.height * a.channels, b.width * b.height * b.channels);
+  assert_memory_equal(a.data, b.data, sizeof(float) * (size_t)(a.width * a.height * a.channels));
+  /* A different seed gives a different image (the test is not vacuous). */
+  assert_int_equal(run_lmc("render " SCENE " --spp 4 --threads 2 --seed 4 -q -o " TMP "/c.exr"), 0);
+  lmc_image c = read_exr(TMP "/c.exr");
+  assert_true(memcmp(a.data, c.data, sizeof(float) * (size_t)(a.width * a.height * 3)) != 0);
+  image_free(&a);
+  image_free(&b);
+  image_free(&c);
+}
+
+static void test_resolution_override(void **state) {
+  (void)state;
+  assert_int_equal(run_lmc("render " SCENE " --spp 1 --resolution=20x10 -q -o " TMP "/r.exr"), 0);
+  lmc_image r = read_exr(TMP "/r.exr");
+  assert_int_equal(r.width, 20);
+  assert_int_equal(r.height, 10);
+  image_free(&r);
+}
+
+static double metric(const char *name) {
+  char key[64];
+  snprintf(key, sizeof key, "%s: ", name);
+  const char *p = strstr(out_text, key);
+  if (!p) fail_msg("compare printed no '%s' line: %s", name, out_text);
+  return strtod(p + strlen(key), NULL);
+}
+
+static void test_compare_metrics(void **state) {
+  (void)state;
+  /* Two 2x1 images with known differences. */
+  lmc_image I, R, S;
+  lmc_error err;
+  assert_int_equal(image_init(&I, 2, 1, 3, &err), LMC_OK);
+  assert_int_equal(image_init(&R, 2, 1, 3, &err), LMC_OK);
+  assert_int_equal(image_init(&S, 3, 1, 3, &err), LMC_OK);
+  const float iv[6] = {1.0f, 2.0f, 0.5f, 0.0f, 0.25f, 1.0f};
+  const float rv[6] = {1.0f, 1.0f, 1.0f, 0.1f, 0.25f, 2.0f};
+  memcpy(I.data, iv, sizeof iv);
+  memcpy(R.data, rv, sizeof rv);
+  assert_int_equal(image_write_exr(TMP "/I.exr", &I, &err), LMC_OK);
+  assert_int_equal(image_write_exr(TMP "/R.exr", &R, &err), LMC_OK);
+  assert_int_equal(image_write_exr(TMP "/S.exr", &S, &err), LMC_OK);
+  double mse = 0.0, rel = 0.0, li = 0.0, lr = 0.0;
+  for (int k = 0; k < 6; k++) {
+    double d = (double)iv[k] - rv[k];
+    mse += d * d / 6.0;
+    rel += d * d / ((double)rv[k] * rv[k] + 0.01) / 6.0;
+  }
+  for (int p = 0; p < 2; p++) {
+    li += rgb_luminance(rgb_make(iv[3 * p], iv[3 * p + 1], iv[3 * p + 2]));
+    lr += rgb_luminance(rgb_make(rv[3 * p], rv[3 * p + 1], rv[3 * p + 2]));
+  }
+  assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/R.exr --heatmap=" TMP "/h.png"), 0);
+  assert_float_equal(metric("mse"), mse, 1e-7 * mse);
+  assert_float_equal(metric("relmse"), rel, 1e-7 * rel);
+  assert_float_equal(metric("mean_ratio"), li / lr, 1e-7);
+  lmc_image h = {0};
+  assert_int_equal(image_read(TMP "/h.png", 0, &h, &err), LMC_OK);
+  assert_int_equal(h.width, 2);
+  image_free(&h);
+  /* Identical images: zero error. */
+  assert_int_equal(run_lmc("compare " TMP "/R.exr " TMP "/R.exr"), 0);
+  assert_float_equal(metric("mse"), 0.0, 0.0);
+  assert_float_equal(metric("mean_ratio"), 1.0, 1e-12);
+  /* Different sizes: exit 2. */
+  assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/S.exr"), 2);
+  assert_non_null(strstr(err_text, "3x1"));
+  image_free(&I);
+  image_free(&R);
+  image_free(&S);
+}
+
+/* SIGINT during a long render: exit 130 within seconds, and the image of
+ * what was rendered is written and valid. */
+static void test_interrupt_writes_image(void **state) {
+  (void)state;
+  unlink(TMP "/int.exr");
+  pid_t pid = fork();
+  assert_true(pid >= 0);
+  if (pid == 0) {
+    freopen("/dev/null", "w", stdout);
+    freopen("/dev/null", "w", stderr);
+    execl(LMC_BINARY, LMC_BINARY, "render", SCENE, "--spp", "100000000", "-q", "-o", TMP "/int.exr",
+          (char *)NULL);
+    _exit(127);
+  }
+  struct timespec ts = {1, 0};
+  nanosleep(&ts, NULL);
+  kill(pid, SIGINT);
+  int status = 0, waited = 0;
+  for (int i = 0; i < 100; i++) { /* up to 10 s */
+    if (waitpid(pid, &status, WNOHANG) == pid) {
+      waited = 1;
+      break;
+    }
+    struct timespec t = {0, 100000000};
+    nanosleep(&t, NULL);
+  }
+  if (!waited) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    fail_msg("lmc did not stop within 10 s of SIGINT");
+  }
+  assert_true(WIFEXITED(status));
+  assert_int_equal(WEXITSTATUS(status), 130);
+  lmc_image img = read_exr(TMP "/int.exr");
+  double sum = 0.0;
+  int finite = 0;
+  for (int i = 0; i < img.width * img.height * 3; i++) {
+    finite += isfinite(img.data[i]) != 0;
+    sum += img.data[i];
+  }
+  assert_int_equal(finite, img.width * img.height * 3);
+  /* The background alone (L = 1, 2, 4) makes the mean clearly positive. */
+  assert_true(sum / (img.width * img.height * 3) > 0.5);
+  image_free(&img);
+}
+
+static void test_time_limit(void **state) {
+  (void)state;
+  struct timespec t0, t1;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  assert_int_equal(run_lmc("render " SCENE " --time 1 -q -o " TMP "/t.exr"), 0);
+  clock_gettime(CLOCK_MONOTONIC, &t1);
+  double secs = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
+  assert_true(secs < 10.0);
+  assert_non_null(strstr(err_text, "time limit"));
+  lmc_image img = read_exr(TMP "/t.exr");
+  assert_int_equal(img.width, 40);
+  image_free(&img);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_help_lists_every_flag),
+      cmocka_unit_test(test_bad_flags_exit_2_naming_the_flag),
+      cmocka_unit_test(test_flag_syntax_and_determinism),
+      cmocka_unit_test(test_resolution_override),
+      cmocka_unit_test(test_compare_metrics),
+      cmocka_unit_test(test_interrupt_writes_image),
+      cmocka_unit_test(test_time_limit),
+  };
+  return cmocka_run_group_tests(tests, setup, NULL);
+}
