@@ -110,4 +110,94 @@ static inline double mis_power(double a, double b) {
   return a2 / (a2 + b2);
 }
 
+
+/* ---- Bidirectional path tracing (integrator_bdpt.c) ----------------------
+ *
+ * BDPT (Veach and Guibas 1995; Veach 1997, ch. 10) joins a camera subpath
+ * of t vertices and a light subpath of s vertices in every way (s, t) and
+ * weights each strategy with the power heuristic. A full path has s + t - 1
+ * segments and is counted only when that length lies in [mindepth,
+ * maxdepth] (Mitsuba's convention, as pt_li). Strategy (s=1, t=1), a light
+ * endpoint joined straight to the pinhole, is not used (as pbrt): lights
+ * seen directly come from s = 0, point lights are never seen directly.
+ *
+ * Primary sample layout of bdpt_li, per stream (numbers are always taken,
+ * used or not, so that each keeps its meaning when the path changes):
+ *   LMC_STREAM_CAMERA   2 for the film position (taken by the caller), then
+ *                       BDPT_DIMS_PER_VERTEX per camera-subpath surface vertex:
+ *                       0 BSDF lobe, 1-2 BSDF direction, 3 Russian roulette.
+ *   LMC_STREAM_LIGHT    BDPT_DIMS_LIGHT_START for the emitter: 0 light choice,
+ *                       1-2 position, 3-4 direction (light_sample_le); then
+ *                       BDPT_DIMS_PER_VERTEX per light-subpath surface vertex
+ *                       (same order as the camera's).
+ *   LMC_STREAM_CONNECT  BDPT_DIMS_CONNECT per camera vertex t = 2, 3, ...:
+ *                       0 light choice, 1-2 point on the light (the s = 1
+ *                       strategy, next-event estimation, for that t).
+ */
+#define BDPT_MAX_VERTICES 64 /* per subpath; with maxdepth < 0 paths are capped at 63 segments */
+#define BDPT_DIMS_PER_VERTEX 4
+#define BDPT_DIMS_LIGHT_START 5
+#define BDPT_DIMS_CONNECT 3
+
+typedef enum bdpt_vertex_type {
+  BDPT_VERTEX_CAMERA = 0, /* the pinhole */
+  BDPT_VERTEX_LIGHT,      /* a light endpoint (also an escaped camera ray: light = -1) */
+  BDPT_VERTEX_SURFACE     /* a scattering vertex (possibly on an area light) */
+} bdpt_vertex_type;
+
+/* One subpath vertex. Densities are per unit area at the vertex, except
+ * for vertices at infinity (infinite and directional light endpoints),
+ * whose densities are per unit solid angle (as pbrt's). */
+typedef struct bdpt_vertex {
+  bdpt_vertex_type type;
+  int delta;       /* the subpath left this vertex through a delta BSDF lobe */
+  int light;       /* LIGHT: light index (-1: all infinite lights); SURFACE: area light of the mesh or -1 */
+  rgb beta;        /* subpath throughput up to this vertex (divided by its sampling densities) */
+  double pdf_fwd;  /* density of this vertex when its own subpath samples it */
+  double pdf_rev;  /* density when sampled from the other end (0 until known) */
+  vec3 p;          /* position (a far point for vertices at infinity) */
+  vec3 n;          /* geometric normal (surfaces, area lights); zero otherwise */
+  vec3 dir;        /* vertices at infinity: the direction the light travels */
+  vec3 wo;         /* SURFACE: unit direction towards the previous vertex of its subpath */
+  surface_hit hit; /* SURFACE: the shading point */
+} bdpt_vertex;
+
+/* Subpath lengths for render settings: at most max_camera camera vertices
+ * and max_light light vertices (maxdepth + 1 and maxdepth, capped). */
+void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OUT_max_light);
+
+/* The camera subpath through raster point (rx, ry) from the current stream
+ * of smp (BDPT_DIMS_PER_VERTEX per surface vertex); path[0] is the camera.
+ * Returns the number of vertices written (1 ... max_vertices). */
+int bdpt_camera_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                        double ry, int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt);
+
+/* The light subpath from the current stream of smp (BDPT_DIMS_LIGHT_START,
+ * then BDPT_DIMS_PER_VERTEX per surface vertex); path[0] is the light.
+ * Returns the number of vertices written (0 ... max_vertices). */
+int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                       int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt);
+
+/* Evaluates the single strategy (s, t): the first t vertices of cam joined
+ * with the first s of light (for s = 1 the light is sampled afresh from
+ * u_connect, which may be NULL otherwise). Returns the MIS-weighted
+ * contribution (0 when the strategy cannot produce a path); for t = 1 it
+ * is a film splat at (*OUT_rx, *OUT_ry). OUT_weight (may be NULL) gets the
+ * MIS weight. This is what multiplexed MLT evaluates per state. */
+rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *light, int s,
+                 const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
+                 render_counters *cnt);
+
+/* The power-heuristic MIS weight of strategy (s, t) for the full path made
+ * of cam[0..t-1] and light[0..s-1] (pbrt's ratio walk). `sampled` replaces
+ * light[0] when s = 1 (may be NULL). The densities of the four vertices
+ * next to the connection are recomputed here; the arrays are not changed. */
+double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *light,
+                       int s, const bdpt_vertex *sampled);
+
+/* Recomputes pdf_fwd and pdf_rev of every vertex of the full path
+ * cam[0..t-1] + light[0..s-1] from its geometry (tests use it to check the
+ * bookkeeping of the random walks and to re-split a path). */
+void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *light, int s);
+
 #endif

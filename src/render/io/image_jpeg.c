@@ -1,0 +1,107 @@
+/*
+ * image_jpeg.c: JPEG reading with libjpeg.
+ *
+ * Greyscale files give a 1-channel image, everything else libjpeg can turn
+ * into RGB gives 3 channels (CMYK/YCCK files are rejected). Samples are
+ * 8-bit and sRGB-encoded: value / 255, then the sRGB curve when asked.
+ *
+ * libjpeg's default error handler calls exit(); ours records the message
+ * and longjmps back. A file that ends early only makes libjpeg warn (it
+ * pads the image with grey); we treat that warning as an error, so a
+ * truncated JPEG is reported instead of silently read.
+ */
+#include <errno.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jpeglib.h>
+#include <jerror.h>
+
+#include "render/image.h"
+
+typedef struct jpeg__err {
+  struct jpeg_error_mgr mgr; /* first member: libjpeg sees this */
+  jmp_buf jump;
+  char msg[JMSG_LENGTH_MAX];
+} jpeg__err;
+
+static void jpeg__error_exit(j_common_ptr cinfo) {
+  jpeg__err *e = (jpeg__err *)cinfo->err;
+  e->mgr.format_message(cinfo, e->msg);
+  longjmp(e->jump, 1);
+}
+
+/* Warnings: silent, except premature end of data, which is fatal here. */
+static void jpeg__emit_message(j_common_ptr cinfo, int level) {
+  jpeg__err *e = (jpeg__err *)cinfo->err;
+  if (level < 0 && e->mgr.msg_code == JWRN_JPEG_EOF) {
+    e->mgr.format_message(cinfo, e->msg);
+    longjmp(e->jump, 1);
+  }
+}
+
+lmc_status image_read_jpeg(const char *path, int srgb_to_linear_flag, lmc_image *out,
+                           lmc_error *err) {
+  memset(out, 0, sizeof *out);
+  FILE *f = fopen(path, "rb");
+  if (!f) return lmc_error_set(err, LMC_EIO, path, 0, "cannot open: %s", strerror(errno));
+  struct jpeg_decompress_struct cinfo;
+  jpeg__err je;
+  unsigned char *volatile row = NULL;
+  cinfo.err = jpeg_std_error(&je.mgr);
+  je.mgr.error_exit = jpeg__error_exit;
+  je.mgr.emit_message = jpeg__emit_message;
+  je.msg[0] = '\0';
+  if (setjmp(je.jump)) {
+    jpeg_destroy_decompress(&cinfo);
+    fclose(f);
+    free(row);
+    image_free(out);
+    return lmc_error_set(err, LMC_EPARSE, path, 0, "bad JPEG: %s", je.msg);
+  }
+  jpeg_create_decompress(&cinfo);
+  jpeg_stdio_src(&cinfo, f);
+  jpeg_read_header(&cinfo, TRUE);
+
+  /* Grey stays grey; YCbCr/RGB become RGB; CMYK is not supported. */
+  if (cinfo.jpeg_color_space == JCS_GRAYSCALE) {
+    cinfo.out_color_space = JCS_GRAYSCALE;
+  } else if (cinfo.jpeg_color_space == JCS_CMYK || cinfo.jpeg_color_space == JCS_YCCK) {
+    snprintf(je.msg, sizeof je.msg, "CMYK JPEG files are not supported");
+    longjmp(je.jump, 1);
+  } else {
+    cinfo.out_color_space = JCS_RGB;
+  }
+  jpeg_start_decompress(&cinfo);
+  int w = (int)cinfo.output_width, h = (int)cinfo.output_height, ch = cinfo.output_components;
+  lmc_status st = image_init(out, w, h, ch, err);
+  if (st != LMC_OK) {
+    snprintf(je.msg, sizeof je.msg, "%.150s", err ? err->msg : "cannot allocate the image");
+    longjmp(je.jump, 1);
+  }
+  row = malloc((size_t)w * (size_t)ch);
+  if (!row) {
+    snprintf(je.msg, sizeof je.msg, "out of memory");
+    longjmp(je.jump, 1);
+  }
+  float lut[256];
+  for (int i = 0; i < 256; i++)
+    lut[i] = (float)(srgb_to_linear_flag ? srgb_to_linear(i / 255.0) : i / 255.0);
+  while (cinfo.output_scanline < cinfo.output_height) {
+    size_t y = cinfo.output_scanline;
+    JSAMPROW rows[1] = {row};
+    if (jpeg_read_scanlines(&cinfo, rows, 1) != 1) {
+      snprintf(je.msg, sizeof je.msg, "cannot read scanline %zu", y);
+      longjmp(je.jump, 1);
+    }
+    float *dst = out->data + y * (size_t)w * (size_t)ch;
+    for (size_t i = 0; i < (size_t)w * (size_t)ch; i++) dst[i] = lut[row[i]];
+  }
+  jpeg_finish_decompress(&cinfo);
+  jpeg_destroy_decompress(&cinfo);
+  fclose(f);
+  free(row);
+  return LMC_OK;
+}

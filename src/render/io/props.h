@@ -1,0 +1,91 @@
+/*
+ * props.h: the property sets between the XML parser and the scene builder
+ * (private to src/render/io/scene_xml*.c).
+ *
+ * The first pass (scene_xml_parse.c) turns a Mitsuba XML document, with its
+ * <include>s, <default>s and $name substitutions resolved, into a tree of
+ * plain property sets: one `pset` per object element (scene, shape, bsdf,
+ * texture, emitter, sensor, film, rfilter, integrator, dpt, or any unknown
+ * element), holding its named properties in document order. Nested objects
+ * and <ref>s are properties too (of kind PROP_OBJECT / PROP_REF; their name
+ * is the `name` attribute, or empty). The second pass (scene_xml.c) reads
+ * the sets and never sees XML.
+ *
+ * Every pset and prop remembers the file and line it came from, and a prop
+ * is marked `used` when the builder consumes it, so anything left unused can
+ * be reported as a warning naming file, line and element.
+ *
+ * Ownership: a pset owns its props and nested psets; file names are interned
+ * in the pdoc and outlive all psets. pdoc_free frees everything.
+ */
+#ifndef LMC_RENDER_IO_PROPS_H
+#define LMC_RENDER_IO_PROPS_H
+
+#include "render/error.h"
+#include "render/transform.h"
+#include "render/vec3.h"
+
+typedef enum prop_kind {
+  PROP_INT = 0,
+  PROP_FLOAT,
+  PROP_BOOL,
+  PROP_STRING,
+  PROP_RGB,       /* <rgb>, <srgb>, <spectrum>, <blackbody> (converted to linear RGB) */
+  PROP_POINT,
+  PROP_VECTOR,
+  PROP_TRANSFORM,
+  PROP_OBJECT,    /* a nested object element */
+  PROP_REF        /* <ref id=...> */
+} prop_kind;
+
+struct pset;
+
+typedef struct prop {
+  prop_kind kind;
+  char name[64];
+  const char *file; /* interned in the pdoc */
+  int line;
+  int used;
+  char tag[32];     /* the element's tag ("float", "rgb", "spectrum", ...) */
+  long long i;      /* PROP_INT */
+  double f;         /* PROP_FLOAT */
+  int b;            /* PROP_BOOL */
+  char *s;          /* PROP_STRING (owned) */
+  rgb c;            /* PROP_RGB */
+  vec3 v;           /* PROP_POINT, PROP_VECTOR */
+  xform t;          /* PROP_TRANSFORM */
+  struct pset *obj; /* PROP_OBJECT (owned) */
+  char ref[128];    /* PROP_REF: the referenced id */
+} prop;
+
+typedef struct pset {
+  char tag[32];     /* object element: "shape", "bsdf", ... */
+  char type[64];    /* the plugin `type` attribute ("" when absent) */
+  char id[128];     /* `id` attribute ("" when absent) */
+  const char *file;
+  int line;
+  prop *props;
+  int n_props, cap_props;
+  /* builder bookkeeping (scene_xml.c) */
+  int built;        /* 1 once instantiated */
+  int building;     /* cycle guard */
+  int index;        /* bsdf index, or image index of a bitmap texture */
+} pset;
+
+typedef struct pdoc {
+  pset *root;       /* the <scene> */
+  char **files;     /* interned file names */
+  int n_files, cap_files;
+} pdoc;
+
+/* Parses `path` into doc (caller-owned, zeroed by the call). `defines` are
+ * "name=value" strings that override <default>. Errors carry file and line. */
+lmc_status pdoc_parse(pdoc *doc, const char *path, const char *const *defines, int n_defines,
+                      lmc_error *err);
+void pdoc_free(pdoc *doc);
+void pset_free(pset *p);
+
+/* Name of a prop kind for messages ("float", "string", ...). */
+const char *prop_kind_name(prop_kind k);
+
+#endif

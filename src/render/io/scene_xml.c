@@ -1,0 +1,1313 @@
+/*
+ * scene_xml.c: second pass of the Mitsuba 0.5/0.6 scene loader, property
+ * sets to a scene (the first pass, XML to property sets, is
+ * scene_xml_parse.c; the sets are described in props.h).
+ *
+ * scene_load_xml parses the file, registers every object that has an `id`,
+ * then walks the children of <scene> in document order:
+ *   sensor      perspective pinhole with its film and reconstruction filter;
+ *   bsdf        diffuse, phong, conductor, roughconductor, dielectric,
+ *               roughdielectric, plastic, twosided (Mitsuba's names and
+ *               defaults; see bsdf.h);
+ *   texture     bitmap and checkerboard, built when a BSDF refers to them;
+ *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
+ *               cylinder, with an optional nested area emitter;
+ *   emitter     point, spot, directional, constant, envmap;
+ *   integrator  and the <dpt> block of the LMC/H2MC reference scenes, into
+ *               scene->settings;
+ * and finally calls scene_finalize.
+ *
+ * Conventions:
+ *   - Relative file names resolve against the folder of the XML file that
+ *     names them (an <include>d file has its own folder).
+ *   - Every property the builder reads is marked used; what is left unused
+ *     on a known plugin, an unknown plugin type and an unsupported element
+ *     are warnings (lmc_warn) naming file and line, never silent.
+ *   - Fatal errors (wrong property type, missing required property,
+ *     dangling ref, missing mesh or image file, ...) return LMC_EPARSE or
+ *     LMC_EIO with the XML file and line of the offending element.
+ *   - Conductors: cond_eta = eta / extEta and cond_k = k / extEta, where
+ *     extEta defaults to 1 (Mitsuba's "air", 1.000277, differs by 0.03%).
+ *     Dielectrics and plastic: eta = intIOR / extIOR.
+ *   - Texture images live in scene->images, which may move while the scene
+ *     grows, so BSDF textures keep an image index while loading and get
+ *     their pointers after the last image was added (fix-up list).
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/io/io.h"
+#include "render/io/props.h"
+
+#define XML_PI 3.14159265358979323846
+
+typedef struct tex_fixup {
+  int bsdf;  /* index into scene->bsdfs */
+  int which; /* 0 diffuse, 1 specular, 2 transmittance */
+  int image; /* index into scene->images */
+} tex_fixup;
+
+typedef struct builder {
+  scene *s;
+  lmc_error *err;
+  pdoc *doc;
+  pset **ids;
+  int n_ids, cap_ids;
+  tex_fixup *fix;
+  int n_fix, cap_fix;
+  int default_bsdf; /* shared diffuse 0.5, or -1 */
+  int have_sensor;
+  int spp_from_dpt;
+} builder;
+
+/* ---- Errors and warnings. ----------------------------------------------- */
+
+static lmc_status xml__fail(builder *B, lmc_status code, const char *file, int line,
+                            const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
+
+static lmc_status xml__fail(builder *B, lmc_status code, const char *file, int line,
+                            const char *fmt, ...) {
+  char msg[900];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  return lmc_error_set(B->err, code, file, line, "%s", msg);
+}
+
+/* Warns about everything on o the builder did not read, then marks it. */
+static void xml__warn_unused(pset *o) {
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    if (p->used) continue;
+    p->used = 1;
+    if (p->kind == PROP_OBJECT) {
+      lmc_warn(p->file, p->line, "unsupported <%s type=\"%s\"> inside <%s type=\"%s\">: ignored",
+               p->obj->tag, p->obj->type, o->tag, o->type);
+    } else if (p->kind == PROP_REF) {
+      lmc_warn(p->file, p->line, "unused <ref id=\"%s\"> inside <%s type=\"%s\">: ignored",
+               p->ref, o->tag, o->type);
+    } else {
+      lmc_warn(p->file, p->line, "unknown property '%s' (<%s>) on <%s type=\"%s\">: ignored",
+               p->name, p->tag, o->tag, o->type);
+    }
+  }
+}
+
+/* Marks the named properties as read without using them (accepted silently). */
+static void xml__accept(pset *o, const char *const *names) {
+  for (int i = 0; i < o->n_props; i++)
+    for (int k = 0; names[k]; k++)
+      if (o->props[i].kind != PROP_OBJECT && strcmp(o->props[i].name, names[k]) == 0)
+        o->props[i].used = 1;
+}
+
+/* ---- Property lookup. --------------------------------------------------- */
+
+/* The named property (value, named nested object or named ref); marks it. */
+static prop *xml__find(pset *o, const char *name) {
+  prop *found = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    if (strcmp(o->props[i].name, name) == 0) {
+      /* A later duplicate overrides an earlier one, as in Mitsuba's
+       * property sets; both count as read. */
+      o->props[i].used = 1;
+      found = &o->props[i];
+    }
+  }
+  return found;
+}
+
+static lmc_status xml__wrong(builder *B, const prop *p, const char *want) {
+  return xml__fail(B, LMC_EPARSE, p->file, p->line, "property '%s' must be %s, not <%s>",
+                   p->name, want, p->tag);
+}
+
+static lmc_status xml__missing(builder *B, const pset *o, const char *name) {
+  return xml__fail(B, LMC_EPARSE, o->file, o->line,
+                   "<%s type=\"%s\"> needs the property '%s'", o->tag, o->type, name);
+}
+
+static lmc_status xml__float(builder *B, pset *o, const char *name, double def, double *out,
+                             int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind == PROP_FLOAT) *out = p->f;
+  else if (p->kind == PROP_INT) *out = (double)p->i;
+  else return xml__wrong(B, p, "a <float>");
+  return LMC_OK;
+}
+
+static lmc_status xml__int(builder *B, pset *o, const char *name, long long def, long long *out,
+                           int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind != PROP_INT) return xml__wrong(B, p, "an <integer>");
+  *out = p->i;
+  return LMC_OK;
+}
+
+static lmc_status xml__bool(builder *B, pset *o, const char *name, int def, int *out,
+                            int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind != PROP_BOOL) return xml__wrong(B, p, "a <boolean>");
+  *out = p->b;
+  return LMC_OK;
+}
+
+/* *out is NULL when absent (and def is NULL). */
+static lmc_status xml__string(builder *B, pset *o, const char *name, const char *def,
+                              const char **out, prop **where) {
+  prop *p = xml__find(o, name);
+  if (where) *where = p;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind != PROP_STRING) return xml__wrong(B, p, "a <string>");
+  *out = p->s;
+  return LMC_OK;
+}
+
+static lmc_status xml__rgb(builder *B, pset *o, const char *name, rgb def, rgb *out,
+                           int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind == PROP_RGB) *out = p->c;
+  else if (p->kind == PROP_FLOAT) *out = rgb_gray(p->f);
+  else if (p->kind == PROP_INT) *out = rgb_gray((double)p->i);
+  else return xml__wrong(B, p, "a colour (<rgb>, <spectrum>, <srgb>)");
+  return LMC_OK;
+}
+
+static lmc_status xml__vec(builder *B, pset *o, const char *name, vec3 def, vec3 *out,
+                           int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind != PROP_POINT && p->kind != PROP_VECTOR)
+    return xml__wrong(B, p, "a <point> or <vector>");
+  *out = p->v;
+  return LMC_OK;
+}
+
+static lmc_status xml__xform(builder *B, pset *o, const char *name, xform *out, int *found) {
+  prop *p = xml__find(o, name);
+  if (found) *found = p != NULL;
+  if (!p) {
+    *out = xform_identity();
+    return LMC_OK;
+  }
+  if (p->kind != PROP_TRANSFORM) return xml__wrong(B, p, "a <transform>");
+  *out = p->t;
+  return LMC_OK;
+}
+
+/* An index of refraction: a number or a name known to ior_lookup. */
+static lmc_status xml__ior(builder *B, pset *o, const char *name, double def, double *out) {
+  prop *p = xml__find(o, name);
+  if (!p) {
+    *out = def;
+    return LMC_OK;
+  }
+  if (p->kind == PROP_FLOAT) *out = p->f;
+  else if (p->kind == PROP_INT) *out = (double)p->i;
+  else if (p->kind == PROP_STRING) {
+    if (!ior_lookup(p->s, out))
+      return xml__fail(B, LMC_EPARSE, p->file, p->line, "unknown IOR name '%s' for '%s'", p->s,
+                       p->name);
+  } else {
+    return xml__wrong(B, p, "a <float> or an IOR name <string>");
+  }
+  if (!(*out > 0.0))
+    return xml__fail(B, LMC_EPARSE, p->file, p->line, "'%s' must be positive", p->name);
+  return LMC_OK;
+}
+
+static pset *xml__lookup_id(builder *B, const char *id) {
+  for (int i = 0; i < B->n_ids; i++)
+    if (strcmp(B->ids[i]->id, id) == 0) return B->ids[i];
+  return NULL;
+}
+
+/* The object a ref points to, or an error naming the ref's line. */
+static lmc_status xml__deref(builder *B, const prop *p, pset **out) {
+  *out = xml__lookup_id(B, p->ref);
+  if (!*out)
+    return xml__fail(B, LMC_EPARSE, p->file, p->line, "<ref id=\"%s\">: no object has this id",
+                     p->ref);
+  return LMC_OK;
+}
+
+/* Registers every object with an id, recursively; duplicates are errors. */
+static lmc_status xml__register_ids(builder *B, pset *o) {
+  if (o->id[0]) {
+    pset *prev = xml__lookup_id(B, o->id);
+    if (prev)
+      return xml__fail(B, LMC_EPARSE, o->file, o->line,
+                       "duplicate id \"%s\" (first defined at %s:%d)", o->id, prev->file,
+                       prev->line);
+    if (B->n_ids == B->cap_ids) {
+      int cap = B->cap_ids ? 2 * B->cap_ids : 16;
+      pset **n = realloc(B->ids, (size_t)cap * sizeof *n);
+      if (!n) return xml__fail(B, LMC_ENOMEM, NULL, 0, "out of memory");
+      B->ids = n;
+      B->cap_ids = cap;
+    }
+    B->ids[B->n_ids++] = o;
+  }
+  for (int i = 0; i < o->n_props; i++) {
+    if (o->props[i].kind != PROP_OBJECT) continue;
+    lmc_status st = xml__register_ids(B, o->props[i].obj);
+    if (st != LMC_OK) return st;
+  }
+  return LMC_OK;
+}
+
+/* Resolves a file name against the folder of the XML file `base`. */
+static void xml__resolve(const char *base, const char *name, char *out, size_t size) {
+  const char *slash = strrchr(base, '/');
+  if (name[0] == '/' || !slash) snprintf(out, size, "%s", name);
+  else snprintf(out, size, "%.*s/%s", (int)(slash - base), base, name);
+}
+
+/* A file property, resolved; missing property is an error, and so is a file
+ * that cannot be opened (LMC_EIO at the property's line). */
+static lmc_status xml__file(builder *B, pset *o, const char *name, const char *what,
+                            char *out, size_t size, prop **where) {
+  const char *fn;
+  prop *p;
+  lmc_status st = xml__string(B, o, name, NULL, &fn, &p);
+  if (st != LMC_OK) return st;
+  if (!fn) return xml__missing(B, o, name);
+  xml__resolve(p->file, fn, out, size);
+  FILE *f = fopen(out, "rb");
+  if (!f) return xml__fail(B, LMC_EIO, p->file, p->line, "cannot open %s file '%s'", what, out);
+  fclose(f);
+  if (where) *where = p;
+  return LMC_OK;
+}
+
+/* Re-labels an error from a reader (which names the data file) with the
+ * XML element that asked for it, keeping the reader's text. */
+static lmc_status xml__relabel(builder *B, lmc_status st, const prop *p, const char *what) {
+  char inner[1100];
+  lmc_error_format(B->err, inner, sizeof inner);
+  return xml__fail(B, st, p->file, p->line, "cannot read %s: %s", what, inner);
+}
+
+/* ---- Textures. ---------------------------------------------------------- */
+
+/* Loads (once per texture object) the image of a bitmap texture. */
+static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
+  if (o->index >= 0) {
+    *out_index = o->index;
+    return LMC_OK;
+  }
+  char path[1024];
+  prop *fp;
+  lmc_status st = xml__file(B, o, "filename", "texture", path, sizeof path, &fp);
+  if (st != LMC_OK) return st;
+  double gamma;
+  int has_gamma;
+  if ((st = xml__float(B, o, "gamma", -1.0, &gamma, &has_gamma)) != LMC_OK) return st;
+  int srgb = 1;
+  if (has_gamma && gamma == 1.0) srgb = 0;
+  else if (has_gamma && gamma != -1.0)
+    lmc_warn(o->file, o->line, "bitmap gamma %g is approximated by the sRGB curve", gamma);
+  lmc_image img = {0};
+  st = image_read(path, srgb, &img, B->err);
+  if (st == LMC_OK) st = image_to_rgb(&img, B->err);
+  if (st != LMC_OK) {
+    image_free(&img);
+    return xml__relabel(B, st, fp, "texture image");
+  }
+  int idx = scene_add_image(B->s, &img, B->err);
+  if (idx < 0) {
+    image_free(&img);
+    return (lmc_status)idx;
+  }
+  o->index = idx;
+  *out_index = idx;
+  return LMC_OK;
+}
+
+/* uvscale sets both scales; uscale/vscale override it. */
+static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
+  double uv, us, vs;
+  lmc_status st;
+  if ((st = xml__float(B, o, "uvscale", 1.0, &uv, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "uscale", uv, &us, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "vscale", uv, &vs, NULL)) != LMC_OK) return st;
+  t->uscale = us;
+  t->vscale = vs;
+  if ((st = xml__float(B, o, "uoffset", 0.0, &t->uoffset, NULL)) != LMC_OK) return st;
+  return xml__float(B, o, "voffset", 0.0, &t->voffset, NULL);
+}
+
+/* Builds a texture object; *image gets the image index (-1: none). An
+ * unsupported texture type warns and gives the constant `def`. */
+static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image) {
+  lmc_status st;
+  *image = -1;
+  *out = tex_constant(def);
+  if (strcmp(o->type, "bitmap") == 0) {
+    if ((st = xml__bitmap_image(B, o, image)) != LMC_OK) return st;
+    out->type = TEX_BITMAP;
+    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
+    const char *s;
+    prop *p;
+    if ((st = xml__string(B, o, "filterType", "ewa", &s, &p)) != LMC_OK) return st;
+    if (p && strcmp(s, "ewa") != 0)
+      lmc_warn(p->file, p->line, "bitmap filterType \"%s\": textures are always bilinear", s);
+    const char *wraps[3] = {"wrapMode", "wrapModeU", "wrapModeV"};
+    for (int k = 0; k < 3; k++) {
+      if ((st = xml__string(B, o, wraps[k], "repeat", &s, &p)) != LMC_OK) return st;
+      if (p && strcmp(s, "repeat") != 0)
+        lmc_warn(p->file, p->line, "bitmap %s \"%s\": textures always repeat", wraps[k], s);
+    }
+    static const char *const silent[] = {"cache", "maxAnisotropy", NULL};
+    xml__accept(o, silent);
+  } else if (strcmp(o->type, "checkerboard") == 0) {
+    out->type = TEX_CHECKERBOARD;
+    if ((st = xml__rgb(B, o, "color0", rgb_gray(0.4), &out->color0, NULL)) != LMC_OK) return st;
+    if ((st = xml__rgb(B, o, "color1", rgb_gray(0.2), &out->color1, NULL)) != LMC_OK) return st;
+    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
+  } else {
+    lmc_warn(o->file, o->line,
+             "unsupported texture type \"%s\": using the constant %g %g %g instead", o->type,
+             def.r, def.g, def.b);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  xml__warn_unused(o);
+  return LMC_OK;
+}
+
+/* A BSDF parameter: a colour, a nested <texture name=...> or a
+ * <ref name=... id=...> to a texture. */
+static lmc_status xml__texture(builder *B, pset *o, const char *name, rgb def, texture *out,
+                               int *image) {
+  *image = -1;
+  prop *p = xml__find(o, name);
+  if (!p) {
+    *out = tex_constant(def);
+    return LMC_OK;
+  }
+  if (p->kind == PROP_RGB || p->kind == PROP_FLOAT || p->kind == PROP_INT) {
+    rgb c;
+    lmc_status st = xml__rgb(B, o, name, def, &c, NULL);
+    if (st != LMC_OK) return st;
+    *out = tex_constant(c);
+    return LMC_OK;
+  }
+  pset *t = NULL;
+  if (p->kind == PROP_OBJECT) t = p->obj;
+  else if (p->kind == PROP_REF) {
+    lmc_status st = xml__deref(B, p, &t);
+    if (st != LMC_OK) return st;
+  } else {
+    return xml__wrong(B, p, "a colour or a texture");
+  }
+  if (strcmp(t->tag, "texture") != 0)
+    return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                     "property '%s' must be a colour or a texture, not a <%s>", name, t->tag);
+  return xml__texture_object(B, t, def, out, image);
+}
+
+/* ---- BSDFs. ------------------------------------------------------------- */
+
+static lmc_status xml__add_fixup(builder *B, int bsdf_index, int which, int image) {
+  if (image < 0) return LMC_OK;
+  if (B->n_fix == B->cap_fix) {
+    int cap = B->cap_fix ? 2 * B->cap_fix : 16;
+    tex_fixup *f = realloc(B->fix, (size_t)cap * sizeof *f);
+    if (!f) return xml__fail(B, LMC_ENOMEM, NULL, 0, "out of memory");
+    B->fix = f;
+    B->cap_fix = cap;
+  }
+  B->fix[B->n_fix].bsdf = bsdf_index;
+  B->fix[B->n_fix].which = which;
+  B->fix[B->n_fix].image = image;
+  B->n_fix++;
+  return LMC_OK;
+}
+
+/* The single nested BSDF of a wrapper (twosided, bumpmap, ...): a nested
+ * <bsdf> or a <ref> to one; NULL when there is none. */
+static lmc_status xml__inner_bsdf(builder *B, pset *o, pset **out) {
+  *out = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    if (p->kind == PROP_OBJECT && strcmp(p->obj->tag, "bsdf") == 0) c = p->obj;
+    else if (p->kind == PROP_REF) {
+      lmc_status st = xml__deref(B, p, &c);
+      if (st != LMC_OK) return st;
+      if (strcmp(c->tag, "bsdf") != 0) continue;
+    } else {
+      continue;
+    }
+    p->used = 1;
+    if (*out) {
+      lmc_warn(p->file, p->line, "<%s type=\"%s\"> wraps more than one BSDF: using the first",
+               o->tag, o->type);
+      continue;
+    }
+    *out = c;
+  }
+  return LMC_OK;
+}
+
+/* Microfacet parameters shared by the rough models. */
+static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
+  lmc_status st;
+  const char *d;
+  prop *p;
+  if ((st = xml__string(B, o, "distribution", "beckmann", &d, &p)) != LMC_OK) return st;
+  if (strcmp(d, "beckmann") == 0) b->dist = MF_BECKMANN;
+  else if (strcmp(d, "ggx") == 0) b->dist = MF_GGX;
+  else {
+    lmc_warn(p->file, p->line, "microfacet distribution \"%s\" is not supported: using beckmann",
+             d);
+    b->dist = MF_BECKMANN;
+  }
+  double alpha, au, av;
+  int has_a, has_u, has_v;
+  if ((st = xml__float(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
+  if ((has_u || has_v) && au != av) {
+    lmc_warn(o->file, o->line,
+             "anisotropic roughness (alphaU %g, alphaV %g) is not supported: using their mean",
+             au, av);
+  }
+  b->alpha = 0.5 * (au + av);
+  if (!(b->alpha > 0.0))
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughness alpha must be positive");
+  return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
+}
+
+/* Fills *b from a bsdf object; img[3] get image indices of the diffuse,
+ * specular and transmittance textures (-1: none). Does not add to the scene. */
+static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int depth) {
+  lmc_status st;
+  img[0] = img[1] = img[2] = -1;
+  if (depth > 8)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "BSDFs nested too deeply (a cycle?)");
+  const char *t = o->type;
+  if (strcmp(t, "twosided") == 0 || strcmp(t, "bumpmap") == 0 || strcmp(t, "normalmap") == 0 ||
+      strcmp(t, "mask") == 0 || strcmp(t, "coating") == 0 || strcmp(t, "roughcoating") == 0) {
+    /* Wrappers: twosided sets the flag, the others are not modelled and
+     * fall back to the wrapped BSDF. */
+    pset *inner;
+    if ((st = xml__inner_bsdf(B, o, &inner)) != LMC_OK) return st;
+    if (!inner) {
+      if (strcmp(t, "twosided") == 0)
+        return xml__fail(B, LMC_EPARSE, o->file, o->line, "<bsdf type=\"twosided\"> needs a nested BSDF");
+      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported and wraps nothing: using diffuse", t);
+      bsdf_init_defaults(b, BSDF_DIFFUSE);
+      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+      return LMC_OK;
+    }
+    if ((st = xml__make_bsdf(B, inner, b, img, depth + 1)) != LMC_OK) return st;
+    if (strcmp(t, "twosided") == 0) {
+      b->twosided = 1;
+      xml__warn_unused(o);
+    } else {
+      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported: using the BSDF it wraps", t);
+      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    }
+    if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
+    return LMC_OK;
+  }
+
+  if (strcmp(t, "diffuse") == 0) {
+    bsdf_init_defaults(b, BSDF_DIFFUSE);
+    if ((st = xml__texture(B, o, "reflectance", rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK)
+      return st;
+  } else if (strcmp(t, "phong") == 0) {
+    bsdf_init_defaults(b, BSDF_PHONG);
+    if ((st = xml__float(B, o, "exponent", b->exponent, &b->exponent, NULL)) != LMC_OK) return st;
+    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
+                           &img[0])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+  } else if (strcmp(t, "conductor") == 0 || strcmp(t, "roughconductor") == 0) {
+    int rough = t[0] == 'r';
+    bsdf_init_defaults(b, rough ? BSDF_ROUGHCONDUCTOR : BSDF_CONDUCTOR);
+    rgb eta = b->cond_eta, k = b->cond_k;
+    const char *mat;
+    prop *mp;
+    if ((st = xml__string(B, o, "material", NULL, &mat, &mp)) != LMC_OK) return st;
+    if (mat && !conductor_lookup(mat, &eta, &k))
+      return xml__fail(B, LMC_EPARSE, mp->file, mp->line, "unknown conductor material '%s'", mat);
+    if ((st = xml__rgb(B, o, "eta", eta, &eta, NULL)) != LMC_OK) return st;
+    if ((st = xml__rgb(B, o, "k", k, &k, NULL)) != LMC_OK) return st;
+    double ext;
+    if ((st = xml__ior(B, o, "extEta", 1.0, &ext)) != LMC_OK) return st;
+    b->cond_eta = rgb_scale(eta, 1.0 / ext);
+    b->cond_k = rgb_scale(k, 1.0 / ext);
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
+  } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
+             strcmp(t, "thindielectric") == 0) {
+    int rough = t[0] == 'r';
+    if (t[0] == 't')
+      lmc_warn(o->file, o->line, "thindielectric is not supported: using dielectric");
+    bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
+    double int_ior, ext_ior, bk7 = 1.5046, air = 1.000277;
+    ior_lookup("bk7", &bk7);
+    ior_lookup("air", &air);
+    if ((st = xml__ior(B, o, "intIOR", bk7, &int_ior)) != LMC_OK) return st;
+    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
+    b->eta = int_ior / ext_ior;
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularTransmittance", tex_mean(&b->transmittance),
+                           &b->transmittance, &img[2])) != LMC_OK)
+      return st;
+    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
+  } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
+    if (t[0] == 'r') {
+      lmc_warn(o->file, o->line, "roughplastic is not supported: using smooth plastic");
+      static const char *const rough_names[] = {"alpha", "distribution", "sampleVisible", NULL};
+      xml__accept(o, rough_names);
+    }
+    bsdf_init_defaults(b, BSDF_PLASTIC);
+    double int_ior, ext_ior, pp = 1.49, air = 1.000277;
+    ior_lookup("polypropylene", &pp);
+    ior_lookup("air", &air);
+    if ((st = xml__ior(B, o, "intIOR", pp, &int_ior)) != LMC_OK) return st;
+    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
+    b->eta = int_ior / ext_ior;
+    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
+                           &img[0])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
+      return st;
+  } else {
+    lmc_warn(o->file, o->line, "unknown BSDF type \"%s\": using diffuse with reflectance 0.5", t);
+    bsdf_init_defaults(b, BSDF_DIFFUSE);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+  }
+  if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
+  xml__warn_unused(o);
+  return LMC_OK;
+}
+
+/* Builds a bsdf object into the scene once; returns its index. */
+static lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
+  if (o->built) {
+    *out_index = o->index;
+    return LMC_OK;
+  }
+  bsdf b;
+  memset(&b, 0, sizeof b);
+  int img[3];
+  lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
+  if (st != LMC_OK) return st;
+  int idx = scene_add_bsdf(B->s, &b, B->err);
+  if (idx < 0) return (lmc_status)idx;
+  for (int k = 0; k < 3; k++)
+    if ((st = xml__add_fixup(B, idx, k, img[k])) != LMC_OK) return st;
+  o->built = 1;
+  o->index = idx;
+  *out_index = idx;
+  return LMC_OK;
+}
+
+static lmc_status xml__default_bsdf(builder *B, int *out_index) {
+  if (B->default_bsdf < 0) {
+    bsdf b;
+    memset(&b, 0, sizeof b);
+    bsdf_init_defaults(&b, BSDF_DIFFUSE);
+    b.diffuse = tex_constant(rgb_gray(0.5));
+    snprintf(b.id, sizeof b.id, "(default diffuse)");
+    int idx = scene_add_bsdf(B->s, &b, B->err);
+    if (idx < 0) return (lmc_status)idx;
+    B->default_bsdf = idx;
+  }
+  *out_index = B->default_bsdf;
+  return LMC_OK;
+}
+
+/* ---- Shapes. ------------------------------------------------------------ */
+
+static lmc_status xml__shape(builder *B, pset *o) {
+  lmc_status st;
+  mesh m;
+  memset(&m, 0, sizeof m);
+  const char *t = o->type;
+  char path[1024];
+  prop *fp = NULL;
+  const char *label = t;
+
+  /* Read or generate the mesh in object space. */
+  if (strcmp(t, "obj") == 0 || strcmp(t, "ply") == 0 || strcmp(t, "serialized") == 0) {
+    if ((st = xml__file(B, o, "filename", "mesh", path, sizeof path, &fp)) != LMC_OK) return st;
+    label = fp->s;
+    if (t[0] == 'o') {
+      st = mesh_read_obj(path, &m, B->err);
+      static const char *const silent[] = {"flipTexCoords", "collapse", NULL};
+      xml__accept(o, silent);
+    } else if (t[0] == 'p') {
+      st = mesh_read_ply(path, &m, B->err);
+      static const char *const silent[] = {"srgb", NULL};
+      xml__accept(o, silent);
+    } else {
+      long long index;
+      if ((st = xml__int(B, o, "shapeIndex", 0, &index, NULL)) != LMC_OK) return st;
+      if (index < 0 || index > 1000000000LL)
+        return xml__fail(B, LMC_EPARSE, o->file, o->line, "bad shapeIndex %lld", index);
+      st = mesh_read_serialized(path, (int)index, &m, B->err);
+    }
+    if (st != LMC_OK) {
+      mesh_free(&m);
+      return xml__relabel(B, st, fp, "mesh");
+    }
+    double angle;
+    int has_angle;
+    if ((st = xml__float(B, o, "maxSmoothAngle", 0.0, &angle, &has_angle)) != LMC_OK) goto fail;
+    if (has_angle)
+      lmc_warn(o->file, o->line, "maxSmoothAngle is not supported: normals kept as in the file");
+  } else if (strcmp(t, "rectangle") == 0) {
+    st = shape_rectangle(&m, B->err);
+  } else if (strcmp(t, "cube") == 0) {
+    st = shape_cube(&m, B->err);
+  } else if (strcmp(t, "disk") == 0) {
+    st = shape_disk(&m, B->err);
+  } else if (strcmp(t, "sphere") == 0) {
+    vec3 c;
+    double r;
+    if ((st = xml__vec(B, o, "center", v3(0, 0, 0), &c, NULL)) != LMC_OK) return st;
+    if ((st = xml__float(B, o, "radius", 1.0, &r, NULL)) != LMC_OK) return st;
+    if (!(r > 0.0)) return xml__fail(B, LMC_EPARSE, o->file, o->line, "sphere radius must be positive");
+    st = shape_sphere(c, r, &m, B->err);
+  } else if (strcmp(t, "cylinder") == 0) {
+    vec3 p0, p1;
+    double r;
+    if ((st = xml__vec(B, o, "p0", v3(0, 0, 0), &p0, NULL)) != LMC_OK) return st;
+    if ((st = xml__vec(B, o, "p1", v3(0, 0, 1), &p1, NULL)) != LMC_OK) return st;
+    if ((st = xml__float(B, o, "radius", 1.0, &r, NULL)) != LMC_OK) return st;
+    if (!(r > 0.0) || v3_len2(v3_sub(p1, p0)) == 0.0)
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "degenerate cylinder");
+    st = shape_cylinder(p0, p1, r, &m, B->err);
+  } else {
+    lmc_warn(o->file, o->line, "unsupported shape type \"%s\": ignored", t);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  if (st != LMC_OK) {
+    mesh_free(&m);
+    return st;
+  }
+
+  /* Place it in the world and set the flags. */
+  xform to_world;
+  if ((st = xml__xform(B, o, "toWorld", &to_world, NULL)) != LMC_OK) goto fail;
+  if (!xform_is_identity(&to_world)) mesh_transform(&m, &to_world);
+  if ((st = xml__bool(B, o, "flipNormals", 0, &m.flip_normals, NULL)) != LMC_OK) goto fail;
+  /* faceNormals adds to what the shape itself asks (a cube, a serialized
+   * mesh with its face-normal flag); it never turns that off. */
+  int face_normals = 0;
+  if ((st = xml__bool(B, o, "faceNormals", 0, &face_normals, NULL)) != LMC_OK) goto fail;
+  m.face_normals = m.face_normals || face_normals;
+  snprintf(m.name, sizeof m.name, "%s", o->id[0] ? o->id : label);
+  m.light = -1;
+  if ((st = mesh_validate(&m, o->file, o->line, B->err)) != LMC_OK) goto fail;
+
+  /* Its BSDF and area emitter. */
+  int bsdf_index = -1;
+  pset *emitter = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    if (p->kind == PROP_OBJECT) c = p->obj;
+    else if (p->kind == PROP_REF) {
+      if ((st = xml__deref(B, p, &c)) != LMC_OK) goto fail;
+    } else {
+      continue;
+    }
+    if (strcmp(c->tag, "bsdf") == 0) {
+      p->used = 1;
+      if (bsdf_index >= 0) {
+        lmc_warn(p->file, p->line, "shape has more than one BSDF: using the first");
+        continue;
+      }
+      if ((st = xml__bsdf(B, c, &bsdf_index)) != LMC_OK) goto fail;
+    } else if (strcmp(c->tag, "emitter") == 0 && p->kind == PROP_OBJECT) {
+      p->used = 1;
+      if (strcmp(c->type, "area") != 0) {
+        lmc_warn(c->file, c->line, "emitter \"%s\" inside a shape is not supported: ignored",
+                 c->type);
+        for (int k = 0; k < c->n_props; k++) c->props[k].used = 1;
+        continue;
+      }
+      if (emitter) {
+        lmc_warn(c->file, c->line, "shape has more than one area emitter: using the first");
+        continue;
+      }
+      emitter = c;
+    } else if (p->kind == PROP_REF) {
+      st = xml__fail(B, LMC_EPARSE, p->file, p->line,
+                     "<ref id=\"%s\"> inside a shape must name a BSDF, not a <%s>", p->ref, c->tag);
+      goto fail;
+    }
+  }
+  if (bsdf_index < 0 && (st = xml__default_bsdf(B, &bsdf_index)) != LMC_OK) goto fail;
+  m.bsdf = bsdf_index;
+
+  light l;
+  memset(&l, 0, sizeof l);
+  if (emitter) {
+    int found;
+    if ((st = xml__rgb(B, emitter, "radiance", rgb_gray(1.0), &l.value, &found)) != LMC_OK)
+      goto fail;
+    if (!found) {
+      st = xml__missing(B, emitter, "radiance");
+      goto fail;
+    }
+    static const char *const silent[] = {"samplingWeight", NULL};
+    xml__accept(emitter, silent);
+    xml__warn_unused(emitter);
+  }
+  xml__warn_unused(o);
+
+  int mi = scene_add_mesh(B->s, &m, B->err);
+  if (mi < 0) {
+    mesh_free(&m);
+    return (lmc_status)mi;
+  }
+  if (emitter) {
+    l.type = LIGHT_AREA;
+    l.mesh = mi;
+    l.scale = 1.0;
+    l.to_world = xform_identity();
+    int li = scene_add_light(B->s, &l, B->err);
+    if (li < 0) return (lmc_status)li;
+    B->s->meshes[mi].light = li;
+  }
+  return LMC_OK;
+fail:
+  mesh_free(&m);
+  return st;
+}
+
+/* ---- Emitters. ---------------------------------------------------------- */
+
+static lmc_status xml__emitter(builder *B, pset *o) {
+  lmc_status st;
+  light l;
+  memset(&l, 0, sizeof l);
+  l.mesh = -1;
+  l.scale = 1.0;
+  l.to_world = xform_identity();
+  const char *t = o->type;
+  xform tw;
+  int has_tw;
+  static const char *const silent[] = {"samplingWeight", NULL};
+  xml__accept(o, silent);
+
+  if (strcmp(t, "point") == 0) {
+    l.type = LIGHT_POINT;
+    if ((st = xml__rgb(B, o, "intensity", rgb_gray(1.0), &l.value, NULL)) != LMC_OK) return st;
+    if ((st = xml__xform(B, o, "toWorld", &tw, &has_tw)) != LMC_OK) return st;
+    vec3 p = xform_point(&tw, v3(0, 0, 0));
+    if ((st = xml__vec(B, o, "position", p, &l.pos, NULL)) != LMC_OK) return st;
+    l.to_world = tw;
+  } else if (strcmp(t, "spot") == 0) {
+    l.type = LIGHT_SPOT;
+    double cutoff, beam;
+    if ((st = xml__rgb(B, o, "intensity", rgb_gray(1.0), &l.value, NULL)) != LMC_OK) return st;
+    if ((st = xml__float(B, o, "cutoffAngle", 20.0, &cutoff, NULL)) != LMC_OK) return st;
+    if ((st = xml__float(B, o, "beamWidth", cutoff * 0.75, &beam, NULL)) != LMC_OK) return st;
+    if (!(cutoff > 0.0 && cutoff <= 180.0) || !(beam > 0.0))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "bad spot angles (cutoff %g, beam %g)",
+                       cutoff, beam);
+    if (beam > cutoff) beam = cutoff;
+    if ((st = xml__xform(B, o, "toWorld", &tw, NULL)) != LMC_OK) return st;
+    l.to_world = tw;
+    l.pos = xform_point(&tw, v3(0, 0, 0));
+    l.frm = frame_from_z(v3_normalize(xform_vector(&tw, v3(0, 0, 1))));
+    l.cutoff = cutoff * XML_PI / 180.0;
+    l.beam_width = beam * XML_PI / 180.0;
+    l.cos_cutoff = cos(l.cutoff);
+    l.cos_beam = cos(l.beam_width);
+  } else if (strcmp(t, "directional") == 0) {
+    l.type = LIGHT_DIRECTIONAL;
+    if ((st = xml__rgb(B, o, "irradiance", rgb_gray(1.0), &l.value, NULL)) != LMC_OK) return st;
+    if ((st = xml__xform(B, o, "toWorld", &tw, NULL)) != LMC_OK) return st;
+    vec3 d;
+    if ((st = xml__vec(B, o, "direction", xform_vector(&tw, v3(0, 0, 1)), &d, NULL)) != LMC_OK)
+      return st;
+    if (!(v3_len2(d) > 0.0))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "directional emitter: zero direction");
+    l.frm = frame_from_z(v3_normalize(d));
+    l.to_world = tw;
+  } else if (strcmp(t, "constant") == 0) {
+    l.type = LIGHT_CONSTANT;
+    if ((st = xml__rgb(B, o, "radiance", rgb_gray(1.0), &l.value, NULL)) != LMC_OK) return st;
+  } else if (strcmp(t, "envmap") == 0) {
+    l.type = LIGHT_ENVMAP;
+    char path[1024];
+    prop *fp;
+    if ((st = xml__file(B, o, "filename", "environment map", path, sizeof path, &fp)) != LMC_OK)
+      return st;
+    if ((st = xml__float(B, o, "scale", 1.0, &l.scale, NULL)) != LMC_OK) return st;
+    if ((st = xml__xform(B, o, "toWorld", &l.to_world, NULL)) != LMC_OK) return st;
+    double gamma;
+    int has_gamma;
+    if ((st = xml__float(B, o, "gamma", -1.0, &gamma, &has_gamma)) != LMC_OK) return st;
+    if (has_gamma && gamma != -1.0 && gamma != 1.0)
+      lmc_warn(o->file, o->line, "envmap gamma %g is approximated by the sRGB curve", gamma);
+    static const char *const env_silent[] = {"cache", NULL};
+    xml__accept(o, env_silent);
+    l.value = rgb_gray(1.0);
+    st = image_read(path, !(has_gamma && gamma == 1.0), &l.image, B->err);
+    if (st == LMC_OK) st = image_to_rgb(&l.image, B->err);
+    if (st != LMC_OK) {
+      image_free(&l.image);
+      return xml__relabel(B, st, fp, "environment map");
+    }
+  } else if (strcmp(t, "area") == 0) {
+    lmc_warn(o->file, o->line, "an area emitter must be nested in a shape: ignored");
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  } else {
+    lmc_warn(o->file, o->line, "unsupported emitter type \"%s\": ignored", t);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  xml__warn_unused(o);
+  int li = scene_add_light(B->s, &l, B->err);
+  if (li < 0) {
+    image_free(&l.image);
+    return (lmc_status)li;
+  }
+  return LMC_OK;
+}
+
+/* ---- Sensor, film, filter. ---------------------------------------------- */
+
+static pset *xml__child(pset *o, const char *tag, int *count) {
+  pset *first = NULL;
+  *count = 0;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    if (p->kind == PROP_OBJECT && strcmp(p->obj->tag, tag) == 0) {
+      p->used = 1;
+      if (!first) first = p->obj;
+      else lmc_warn(p->obj->file, p->obj->line, "more than one <%s>: using the first", tag);
+      (*count)++;
+    }
+  }
+  return first;
+}
+
+static lmc_status xml__film(builder *B, pset *f, int *w, int *h) {
+  lmc_status st;
+  long long lw = 768, lh = 576;
+  filter_type ft = FILTER_GAUSSIAN;
+  if (f) {
+    if (strcmp(f->type, "hdrfilm") != 0)
+      lmc_warn(f->file, f->line, "film type \"%s\": treated as hdrfilm", f->type);
+    if ((st = xml__int(B, f, "width", 768, &lw, NULL)) != LMC_OK) return st;
+    if ((st = xml__int(B, f, "height", 576, &lh, NULL)) != LMC_OK) return st;
+    static const char *const silent[] = {
+        "banner", "filename", "pixelFormat", "componentFormat", "fileFormat", "attachLog",
+        "highQualityEdges", "cropOffsetX", "cropOffsetY", "cropWidth", "cropHeight",
+        "gamma", "exposure", "tonemapMethod", "key", "burn", "dithering", NULL};
+    xml__accept(f, silent);
+    int nr;
+    pset *r = xml__child(f, "rfilter", &nr);
+    if (r) {
+      if (strcmp(r->type, "box") == 0) ft = FILTER_BOX;
+      else if (strcmp(r->type, "tent") == 0) ft = FILTER_TENT;
+      else if (strcmp(r->type, "gaussian") == 0) {
+        double sd;
+        int has_sd;
+        if ((st = xml__float(B, r, "stddev", 0.5, &sd, &has_sd)) != LMC_OK) return st;
+        if (has_sd && sd != 0.5)
+          lmc_warn(r->file, r->line, "gaussian stddev %g is not supported: using 0.5", sd);
+      } else {
+        lmc_warn(r->file, r->line, "unsupported rfilter \"%s\": using gaussian", r->type);
+        for (int i = 0; i < r->n_props; i++) r->props[i].used = 1;
+      }
+      xml__warn_unused(r);
+    }
+    xml__warn_unused(f);
+  }
+  if (lw <= 0 || lh <= 0 || lw > 65536 || lh > 65536)
+    return xml__fail(B, LMC_EPARSE, f ? f->file : NULL, f ? f->line : 0, "bad film size %lldx%lld",
+                     lw, lh);
+  filter_init(&B->s->filter, ft);
+  *w = (int)lw;
+  *h = (int)lh;
+  return LMC_OK;
+}
+
+static lmc_status xml__sensor(builder *B, pset *o) {
+  lmc_status st;
+  const char *t = o->type;
+  if (B->have_sensor) {
+    lmc_warn(o->file, o->line, "more than one sensor: using the first");
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  if (strcmp(t, "thinlens") == 0) {
+    lmc_warn(o->file, o->line, "thinlens sensor: rendered as a pinhole (no depth of field)");
+    static const char *const lens[] = {"apertureRadius", NULL};
+    xml__accept(o, lens);
+  } else if (strcmp(t, "perspective") != 0) {
+    lmc_warn(o->file, o->line, "unsupported sensor type \"%s\": ignored", t);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  camera *c = &B->s->cam;
+
+  /* Film first: the field of view depends on its aspect. */
+  int nf, w = 0, h = 0;
+  pset *film_set = xml__child(o, "film", &nf);
+  if ((st = xml__film(B, film_set, &w, &h)) != LMC_OK) return st;
+  int ns;
+  pset *sampler = xml__child(o, "sampler", &ns);
+  if (sampler) {
+    long long spp;
+    int found;
+    if ((st = xml__int(B, sampler, "sampleCount", 4, &spp, &found)) != LMC_OK) return st;
+    if (found && !B->spp_from_dpt && spp > 0) {
+      B->s->settings.spp = spp;
+      B->s->settings.set |= SET_SPP;
+    }
+    static const char *const silent[] = {"scramble", "dimension", NULL};
+    xml__accept(sampler, silent);
+    xml__warn_unused(sampler);
+  }
+
+  /* Projection: fov, or a 35 mm equivalent focal length on the diagonal. */
+  double fov;
+  int has_fov;
+  const char *axis;
+  prop *fov_prop = NULL;
+  if ((st = xml__float(B, o, "fov", 0.0, &fov, &has_fov)) != LMC_OK) return st;
+  if (has_fov) {
+    for (int i = 0; i < o->n_props; i++)
+      if (strcmp(o->props[i].name, "fov") == 0) fov_prop = &o->props[i];
+    if ((st = xml__string(B, o, "fovAxis", "x", &axis, NULL)) != LMC_OK) return st;
+  } else {
+    const char *fl;
+    prop *flp;
+    if ((st = xml__string(B, o, "focalLength", "50mm", &fl, &flp)) != LMC_OK) return st;
+    double mm = atof(fl);
+    if (!(mm > 0.0))
+      return xml__fail(B, LMC_EPARSE, flp ? flp->file : o->file, flp ? flp->line : o->line,
+                       "bad focalLength '%s'", fl);
+    /* fov = 2 atan(d / (2 f)) with the 36 x 24 mm frame's diagonal d. */
+    fov = 2.0 * atan(sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2.0 * mm)) * 180.0 / XML_PI;
+    axis = "diagonal";
+    static const char *const fa[] = {"fovAxis", NULL};
+    xml__accept(o, fa);
+  }
+  if (strcmp(axis, "x") != 0 && strcmp(axis, "y") != 0 && strcmp(axis, "diagonal") != 0 &&
+      strcmp(axis, "smaller") != 0 && strcmp(axis, "larger") != 0)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "bad fovAxis '%s'", axis);
+  c->width = w;
+  c->height = h;
+  if (!camera_set_fov(c, fov, axis, w, h))
+    return xml__fail(B, LMC_EPARSE, fov_prop ? fov_prop->file : o->file,
+                     fov_prop ? fov_prop->line : o->line, "fov %g is outside (0, 180)", fov);
+
+  /* Pose and clipping. */
+  xform tw;
+  if ((st = xml__xform(B, o, "toWorld", &tw, NULL)) != LMC_OK) return st;
+  double dx = v3_len(xform_vector(&tw, v3(1, 0, 0))), dy = v3_len(xform_vector(&tw, v3(0, 1, 0))),
+         dz = v3_len(xform_vector(&tw, v3(0, 0, 1)));
+  if (fabs(dx - 1.0) > 1e-6 || fabs(dy - 1.0) > 1e-6 || fabs(dz - 1.0) > 1e-6)
+    lmc_warn(o->file, o->line, "the sensor's toWorld scales (%g, %g, %g): scale ignored", dx, dy,
+             dz);
+  if (!(dx > 0.0 && dy > 0.0 && dz > 0.0))
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "singular sensor toWorld");
+  if (fabs(dx - 1.0) > 1e-6 || fabs(dy - 1.0) > 1e-6 || fabs(dz - 1.0) > 1e-6) {
+    /* Rebuild with unit axes (keeps a mirroring sign). */
+    double v[16];
+    double len[3] = {dx, dy, dz};
+    for (int i = 0; i < 4; i++)
+      for (int j = 0; j < 4; j++) v[4 * i + j] = tw.m[i][j] / (j < 3 && i < 3 ? len[j] : 1.0);
+    if (!xform_from_matrix(v, &tw))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "singular sensor toWorld");
+  }
+  c->to_world = tw;
+  c->pos = xform_point(&tw, v3(0, 0, 0));
+  c->forward = v3_normalize(xform_vector(&tw, v3(0, 0, 1)));
+  if ((st = xml__float(B, o, "nearClip", 1e-2, &c->near_clip, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "farClip", 1e4, &c->far_clip, NULL)) != LMC_OK) return st;
+  if (!(c->near_clip > 0.0 && c->far_clip > c->near_clip))
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "bad clip range [%g, %g]", c->near_clip,
+                     c->far_clip);
+  static const char *const silent[] = {"focusDistance", "shutterOpen", "shutterClose", NULL};
+  xml__accept(o, silent);
+  xml__warn_unused(o);
+  B->have_sensor = 1;
+  return LMC_OK;
+}
+
+/* ---- Integrators. ------------------------------------------------------- */
+
+static void xml__set_integrator(render_settings *r, const char *name) {
+  snprintf(r->integrator, sizeof r->integrator, "%s", name);
+  r->set |= SET_INTEGRATOR;
+}
+
+/* Reads maxDepth / rrDepth of an integrator unless already set by an outer
+ * one. */
+static lmc_status xml__depths(builder *B, pset *o) {
+  render_settings *r = &B->s->settings;
+  lmc_status st;
+  long long v;
+  int found;
+  if ((st = xml__int(B, o, "maxDepth", -1, &v, &found)) != LMC_OK) return st;
+  if (found && !(r->set & SET_MAXDEPTH)) {
+    r->maxdepth = (int)v;
+    r->set |= SET_MAXDEPTH;
+  }
+  if ((st = xml__int(B, o, "rrDepth", 5, &v, &found)) != LMC_OK) return st;
+  if (found && !(r->set & SET_RRDEPTH)) {
+    r->rrdepth = (int)v;
+    r->set |= SET_RRDEPTH;
+  }
+  return LMC_OK;
+}
+
+static lmc_status xml__integrator(builder *B, pset *o, int nested) {
+  render_settings *r = &B->s->settings;
+  lmc_status st;
+  const char *t = o->type;
+  int choose = !nested || !(r->set & SET_INTEGRATOR);
+  static const char *const silent[] = {"strictNormals", "hideEmitters", "twoStage",
+                                       "directSamples", "luminanceSamples", "separateDirect",
+                                       "lightImage", "sampleDirect", "granularity", NULL};
+  if (strcmp(t, "path") == 0 || strcmp(t, "volpath") == 0 || strcmp(t, "volpath_simple") == 0) {
+    if (t[0] == 'v') lmc_warn(o->file, o->line, "integrator \"%s\" maps to path tracing (no media)", t);
+    if (choose) xml__set_integrator(r, "pt");
+  } else if (strcmp(t, "bdpt") == 0) {
+    if (choose) xml__set_integrator(r, "bdpt");
+  } else if (strcmp(t, "pssmlt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "erpt") == 0) {
+    if (t[0] == 'm')
+      lmc_warn(o->file, o->line, "path-space MLT (\"mlt\") maps to multiplexed MLT (mmlt)");
+    if (t[0] == 'e') lmc_warn(o->file, o->line, "integrator \"erpt\" maps to pssmlt");
+    if (choose) xml__set_integrator(r, t[0] == 'm' ? "mmlt" : "pssmlt");
+    double pl;
+    int found;
+    if ((st = xml__float(B, o, "pLarge", 0.3, &pl, &found)) != LMC_OK) return st;
+    if (found) {
+      r->largestep = pl;
+      r->set |= SET_LARGESTEP;
+    }
+    static const char *const mlt_silent[] = {"bidirectional", "lambda", "chainLength",
+                                             "numChains", "maxChains", "bidirectionalMutation",
+                                             "lensPerturbation", "multiChainPerturbation",
+                                             "causticPerturbation", "manifoldPerturbation",
+                                             NULL};
+    xml__accept(o, mlt_silent);
+  } else {
+    int has_inner = 0;
+    for (int i = 0; i < o->n_props; i++)
+      if (o->props[i].kind == PROP_OBJECT && strcmp(o->props[i].obj->tag, "integrator") == 0)
+        has_inner = 1;
+    if (has_inner)
+      lmc_warn(o->file, o->line, "integrator \"%s\" is not supported: using the nested one", t);
+    else
+      lmc_warn(o->file, o->line, "integrator \"%s\" is not supported: ignored", t);
+    for (int i = 0; i < o->n_props; i++)
+      if (o->props[i].kind != PROP_OBJECT) o->props[i].used = 1;
+  }
+  if ((st = xml__depths(B, o)) != LMC_OK) return st;
+  xml__accept(o, silent);
+  /* Nested integrators (pssmlt wrapping a path tracer, adaptive, ...). */
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    if (p->kind == PROP_OBJECT && strcmp(p->obj->tag, "integrator") == 0) {
+      p->used = 1;
+      if ((st = xml__integrator(B, p->obj, 1)) != LMC_OK) return st;
+    }
+  }
+  xml__warn_unused(o);
+  return LMC_OK;
+}
+
+/* The <dpt> block of the LMC / H2MC reference scenes (Li et al.'s dpt). */
+static lmc_status xml__dpt(builder *B, pset *o) {
+  render_settings *r = &B->s->settings;
+  lmc_status st;
+  const char *integ;
+  prop *ip;
+  int bidir, mala, h2mc, found;
+  long long v;
+  double d;
+  if ((st = xml__string(B, o, "integrator", "mcmc", &integ, &ip)) != LMC_OK) return st;
+  if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, NULL)) != LMC_OK) return st;
+  if ((st = xml__bool(B, o, "mala", 0, &mala, NULL)) != LMC_OK) return st;
+  if ((st = xml__bool(B, o, "h2mc", 0, &h2mc, NULL)) != LMC_OK) return st;
+  r->mala = mala;
+  r->h2mc = h2mc;
+  if (strcmp(integ, "mcmc") == 0) {
+    if (mala) {
+      xml__set_integrator(r, "lmc");
+    } else if (h2mc) {
+      lmc_warn(o->file, o->line, "H2MC is not implemented yet: using lmc");
+      xml__set_integrator(r, "lmc");
+    } else {
+      xml__set_integrator(r, bidir ? "mmlt" : "pssmlt");
+    }
+  } else if (strcmp(integ, "pt") == 0 || strcmp(integ, "mc") == 0) {
+    xml__set_integrator(r, bidir && integ[1] == 'c' ? "bdpt" : "pt");
+  } else if (strcmp(integ, "bdpt") == 0) {
+    xml__set_integrator(r, "bdpt");
+  } else {
+    lmc_warn(ip ? ip->file : o->file, ip ? ip->line : o->line,
+             "<dpt> integrator \"%s\" is not supported: ignored", integ);
+  }
+  if ((st = xml__int(B, o, "mindepth", -1, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    r->mindepth = (int)v;
+    r->set |= SET_MINDEPTH;
+  }
+  if ((st = xml__int(B, o, "maxdepth", -1, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    r->maxdepth = (int)v;
+    r->set |= SET_MAXDEPTH;
+  }
+  if ((st = xml__int(B, o, "spp", 16, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    if (v <= 0) return xml__fail(B, LMC_EPARSE, o->file, o->line, "spp must be positive");
+    r->spp = v;
+    r->set |= SET_SPP;
+    B->spp_from_dpt = 1;
+  }
+  if ((st = xml__float(B, o, "largestepprob", 0.3, &d, &found)) != LMC_OK) return st;
+  if (found) {
+    r->largestep = d;
+    r->set |= SET_LARGESTEP;
+  }
+  if ((st = xml__int(B, o, "numinitsamples", 0, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    r->bootstrap = v;
+    r->set |= SET_BOOTSTRAP;
+  }
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    if (p->used) continue;
+    p->used = 1;
+    lmc_warn(p->file, p->line, "<dpt> parameter '%s' is not used by lmc: ignored", p->name);
+  }
+  return LMC_OK;
+}
+
+/* ---- The scene. --------------------------------------------------------- */
+
+static lmc_status xml__build(builder *B, pset *root) {
+  lmc_status st;
+  if ((st = xml__register_ids(B, root)) != LMC_OK) return st;
+  for (int i = 0; i < root->n_props; i++) {
+    prop *p = &root->props[i];
+    p->used = 1;
+    if (p->kind != PROP_OBJECT) {
+      if (p->kind == PROP_REF)
+        lmc_warn(p->file, p->line, "<ref id=\"%s\"> at the top level: ignored", p->ref);
+      else
+        lmc_warn(p->file, p->line, "property '%s' (<%s>) at the top level: ignored", p->name,
+                 p->tag);
+      continue;
+    }
+    pset *o = p->obj;
+    const char *tag = o->tag;
+    int dummy;
+    if (strcmp(tag, "sensor") == 0) st = xml__sensor(B, o);
+    else if (strcmp(tag, "bsdf") == 0) st = xml__bsdf(B, o, &dummy);
+    else if (strcmp(tag, "texture") == 0) st = LMC_OK; /* built when referenced */
+    else if (strcmp(tag, "shape") == 0) st = xml__shape(B, o);
+    else if (strcmp(tag, "emitter") == 0) st = xml__emitter(B, o);
+    else if (strcmp(tag, "integrator") == 0) st = xml__integrator(B, o, 0);
+    else if (strcmp(tag, "dpt") == 0) st = xml__dpt(B, o);
+    else lmc_warn(o->file, o->line, "unsupported element <%s>: ignored", tag);
+    if (st != LMC_OK) return st;
+  }
+  if (!B->have_sensor)
+    return xml__fail(B, LMC_EPARSE, root->file, root->line,
+                     "the scene has no (supported) sensor");
+
+  /* All images are in: point bitmap textures at them. */
+  for (int i = 0; i < B->n_fix; i++) {
+    const tex_fixup *f = &B->fix[i];
+    bsdf *b = &B->s->bsdfs[f->bsdf];
+    texture *t = f->which == 0 ? &b->diffuse : f->which == 1 ? &b->specular : &b->transmittance;
+    t->image = &B->s->images[f->image];
+  }
+  return scene_finalize(B->s, B->err);
+}
+
+lmc_status scene_load_xml(const char *path, const char *const *defines, int n_defines,
+                          scene **OUT_scene, lmc_error *err) {
+  *OUT_scene = NULL;
+  pdoc doc;
+  lmc_status st = pdoc_parse(&doc, path, defines, n_defines, err);
+  if (st != LMC_OK) return st;
+  scene *s = NULL;
+  st = scene_create(&s, err);
+  if (st != LMC_OK) {
+    pdoc_free(&doc);
+    return st;
+  }
+  snprintf(s->path, sizeof s->path, "%s", path);
+  builder B;
+  memset(&B, 0, sizeof B);
+  B.s = s;
+  B.err = err;
+  B.doc = &doc;
+  B.default_bsdf = -1;
+  st = xml__build(&B, doc.root);
+  free(B.ids);
+  free(B.fix);
+  pdoc_free(&doc);
+  if (st != LMC_OK) {
+    scene_destroy(s);
+    return st;
+  }
+  *OUT_scene = s;
+  return LMC_OK;
+}

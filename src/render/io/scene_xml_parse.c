@@ -1,0 +1,913 @@
+/*
+ * scene_xml_parse.c: first pass of the Mitsuba scene loader, XML to property
+ * sets (see props.h).
+ *
+ * The document is read with expat as a stream of start/end events. A small
+ * stack remembers what kind of element encloses the current one:
+ *   - an object element (scene, shape, bsdf, ..., or any unknown tag): its
+ *     children are properties, nested objects, <ref>s, <default>s and
+ *     <include>s;
+ *   - a <transform>: its children are the elementary transforms translate,
+ *     rotate, scale, lookat and matrix, composed in document order as Mitsuba
+ *     does (each one is applied after the ones before: M = M_new * M_old);
+ *   - a leaf property, which may not have children.
+ *
+ * Attribute values go through parameter substitution first: `$name` is
+ * replaced by the value of a parameter, where parameters come from the
+ * `defines` ("name=value", the -D flag) and from <default name value>
+ * elements (which never override a define or an earlier default). An
+ * undefined `$name` is an error.
+ *
+ * <include filename> parses another file (relative to the including file's
+ * folder) whose root <scene> element's children are appended to the object
+ * that contains the <include>.
+ *
+ * Values are parsed strictly: a number must use the whole attribute
+ * ("1.2.3" is an error), colour and vector lists accept commas and/or
+ * blanks. Colours become linear RGB here: <rgb> as given, <srgb> decoded
+ * with the sRGB transfer curve, <spectrum> either uniform, a list of three
+ * (taken as RGB), or wavelength:value pairs reduced to three bands
+ * (B 400-500 nm, G 500-600 nm, R 600-700 nm, averaging the piecewise-linear
+ * spectrum) with a warning, since that is only a rough conversion.
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <expat.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/io/props.h"
+
+#define PARSE_MAX_DEPTH 128
+#define PARSE_MAX_ATTRS 32
+#define PARSE_MAX_INCLUDE 16
+#define PARSE_VALUE_MAX 8192
+
+typedef enum frame_kind { FR_OBJECT = 0, FR_TRANSFORM, FR_LEAF, FR_SKIP } frame_kind;
+
+typedef struct parse_frame {
+  frame_kind kind;
+  pset *obj;     /* FR_OBJECT: the object; FR_TRANSFORM: its owner */
+  int prop;      /* FR_TRANSFORM: index of the transform prop in obj */
+} parse_frame;
+
+typedef struct param {
+  char *name, *value;
+} param;
+
+typedef struct parse_ctx {
+  pdoc *doc;
+  lmc_error *err;
+  lmc_status status;
+  param *params;
+  int n_params, cap_params;
+  parse_frame stack[PARSE_MAX_DEPTH];
+  int depth;
+  const char *file;   /* interned name of the file being read */
+  XML_Parser parser;
+  int include_depth;
+  pset *include_parent; /* where the root <scene> of the current file maps to (NULL: new root) */
+  /* substituted attributes of the current element */
+  char *attr_name[PARSE_MAX_ATTRS];
+  char *attr_value[PARSE_MAX_ATTRS];
+  int n_attrs;
+} parse_ctx;
+
+const char *prop_kind_name(prop_kind k) {
+  switch (k) {
+    case PROP_INT: return "integer";
+    case PROP_FLOAT: return "float";
+    case PROP_BOOL: return "boolean";
+    case PROP_STRING: return "string";
+    case PROP_RGB: return "color";
+    case PROP_POINT: return "point";
+    case PROP_VECTOR: return "vector";
+    case PROP_TRANSFORM: return "transform";
+    case PROP_OBJECT: return "object";
+    case PROP_REF: return "reference";
+  }
+  return "?";
+}
+
+static char *parse__strdup(const char *s) {
+  size_t n = strlen(s) + 1;
+  char *d = malloc(n);
+  if (d) memcpy(d, s, n);
+  return d;
+}
+
+/* ---- Memory of the property tree. -------------------------------------- */
+
+void pset_free(pset *p) {
+  if (!p) return;
+  for (int i = 0; i < p->n_props; i++) {
+    free(p->props[i].s);
+    pset_free(p->props[i].obj);
+  }
+  free(p->props);
+  free(p);
+}
+
+void pdoc_free(pdoc *doc) {
+  if (!doc) return;
+  pset_free(doc->root);
+  for (int i = 0; i < doc->n_files; i++) free(doc->files[i]);
+  free(doc->files);
+  memset(doc, 0, sizeof *doc);
+}
+
+static const char *parse__intern(pdoc *doc, const char *file) {
+  for (int i = 0; i < doc->n_files; i++)
+    if (strcmp(doc->files[i], file) == 0) return doc->files[i];
+  if (doc->n_files == doc->cap_files) {
+    int cap = doc->cap_files ? 2 * doc->cap_files : 8;
+    char **f = realloc(doc->files, (size_t)cap * sizeof *f);
+    if (!f) return NULL;
+    doc->files = f;
+    doc->cap_files = cap;
+  }
+  char *d = parse__strdup(file);
+  if (!d) return NULL;
+  doc->files[doc->n_files++] = d;
+  return d;
+}
+
+/* Appends a zeroed prop to p; NULL when out of memory. */
+static prop *parse__add_prop(pset *p) {
+  if (p->n_props == p->cap_props) {
+    int cap = p->cap_props ? 2 * p->cap_props : 8;
+    prop *np = realloc(p->props, (size_t)cap * sizeof *np);
+    if (!np) return NULL;
+    p->props = np;
+    p->cap_props = cap;
+  }
+  prop *q = &p->props[p->n_props++];
+  memset(q, 0, sizeof *q);
+  return q;
+}
+
+/* ---- Errors. ------------------------------------------------------------ */
+
+static int parse__line(parse_ctx *c) {
+  return c->parser ? (int)XML_GetCurrentLineNumber(c->parser) : 0;
+}
+
+/* Records the first error (at the current line) and stops the parser. */
+static void parse__fail(parse_ctx *c, lmc_status code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static void parse__fail(parse_ctx *c, lmc_status code, const char *fmt, ...) {
+  if (c->status != LMC_OK) return;
+  char msg[900];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  c->status = lmc_error_set(c->err, code, c->file, parse__line(c), "%s", msg);
+  if (c->parser) XML_StopParser(c->parser, XML_FALSE);
+}
+
+/* ---- Parameters and substitution. --------------------------------------- */
+
+static param *parse__find_param(parse_ctx *c, const char *name, size_t len) {
+  for (int i = 0; i < c->n_params; i++)
+    if (strlen(c->params[i].name) == len && strncmp(c->params[i].name, name, len) == 0)
+      return &c->params[i];
+  return NULL;
+}
+
+/* Adds a parameter unless one of that name exists (defines come first, so a
+ * later <default> never overrides them). Returns 0 when out of memory. */
+static int parse__add_param(parse_ctx *c, const char *name, size_t len, const char *value) {
+  if (parse__find_param(c, name, len)) return 1;
+  if (c->n_params == c->cap_params) {
+    int cap = c->cap_params ? 2 * c->cap_params : 8;
+    param *np = realloc(c->params, (size_t)cap * sizeof *np);
+    if (!np) return 0;
+    c->params = np;
+    c->cap_params = cap;
+  }
+  char *n = malloc(len + 1);
+  char *v = parse__strdup(value);
+  if (!n || !v) {
+    free(n);
+    free(v);
+    return 0;
+  }
+  memcpy(n, name, len);
+  n[len] = '\0';
+  c->params[c->n_params].name = n;
+  c->params[c->n_params].value = v;
+  c->n_params++;
+  return 1;
+}
+
+/* Replaces every $name (name = [A-Za-z0-9_]+) in `in`. Returns a new string,
+ * or NULL after recording an error. */
+static char *parse__subst(parse_ctx *c, const char *in) {
+  size_t cap = strlen(in) + 64, n = 0;
+  char *out = malloc(cap);
+  if (!out) {
+    parse__fail(c, LMC_ENOMEM, "out of memory");
+    return NULL;
+  }
+  for (const char *p = in; *p;) {
+    const char *rep = NULL;
+    size_t rep_len = 0, skip = 1;
+    if (*p == '$') {
+      const char *q = p + 1;
+      while (isalnum((unsigned char)*q) || *q == '_') q++;
+      size_t len = (size_t)(q - p - 1);
+      if (len > 0) {
+        param *pr = parse__find_param(c, p + 1, len);
+        if (!pr) {
+          char name[128];
+          snprintf(name, sizeof name, "%.*s", (int)(len < 100 ? len : 100), p + 1);
+          parse__fail(c, LMC_EPARSE, "undefined parameter $%s (no <default> or -D for it)",
+                      name);
+          free(out);
+          return NULL;
+        }
+        rep = pr->value;
+        rep_len = strlen(rep);
+        skip = len + 1;
+      }
+    }
+    if (!rep) {
+      rep = p;
+      rep_len = 1;
+    }
+    if (n + rep_len + 1 > cap) {
+      cap = 2 * (n + rep_len + 1);
+      char *o2 = realloc(out, cap);
+      if (!o2) {
+        free(out);
+        parse__fail(c, LMC_ENOMEM, "out of memory");
+        return NULL;
+      }
+      out = o2;
+    }
+    memcpy(out + n, rep, rep_len);
+    n += rep_len;
+    p += skip;
+  }
+  out[n] = '\0';
+  return out;
+}
+
+static void parse__clear_attrs(parse_ctx *c) {
+  for (int i = 0; i < c->n_attrs; i++) {
+    free(c->attr_name[i]);
+    free(c->attr_value[i]);
+  }
+  c->n_attrs = 0;
+}
+
+/* Copies the element's attributes with parameters substituted. */
+static int parse__load_attrs(parse_ctx *c, const char **atts) {
+  parse__clear_attrs(c);
+  for (int i = 0; atts[i]; i += 2) {
+    if (c->n_attrs == PARSE_MAX_ATTRS) {
+      parse__fail(c, LMC_EPARSE, "too many attributes");
+      return 0;
+    }
+    char *v = parse__subst(c, atts[i + 1]);
+    if (!v) return 0;
+    char *nm = parse__strdup(atts[i]);
+    if (!nm) {
+      free(v);
+      parse__fail(c, LMC_ENOMEM, "out of memory");
+      return 0;
+    }
+    c->attr_name[c->n_attrs] = nm;
+    c->attr_value[c->n_attrs] = v;
+    c->n_attrs++;
+  }
+  return 1;
+}
+
+static const char *parse__attr(parse_ctx *c, const char *name) {
+  for (int i = 0; i < c->n_attrs; i++)
+    if (strcmp(c->attr_name[i], name) == 0) return c->attr_value[i];
+  return NULL;
+}
+
+/* An attribute that must be present. */
+static const char *parse__need_attr(parse_ctx *c, const char *tag, const char *name) {
+  const char *v = parse__attr(c, name);
+  if (!v) parse__fail(c, LMC_EPARSE, "<%s> needs the attribute '%s'", tag, name);
+  return v;
+}
+
+/* ---- Values. ------------------------------------------------------------ */
+
+/* Strict number: the whole string (blanks around allowed) must be a finite
+ * number. */
+static int parse__number(const char *s, double *out) {
+  while (isspace((unsigned char)*s)) s++;
+  if (!*s) return 0;
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (end == s) return 0;
+  while (isspace((unsigned char)*end)) end++;
+  if (*end || !isfinite(v)) return 0;
+  *out = v;
+  return 1;
+}
+
+static int parse__integer(const char *s, long long *out) {
+  while (isspace((unsigned char)*s)) s++;
+  if (!*s) return 0;
+  char *end;
+  errno = 0;
+  long long v = strtoll(s, &end, 10);
+  if (end == s || errno == ERANGE) return 0;
+  while (isspace((unsigned char)*end)) end++;
+  if (*end) return 0;
+  *out = v;
+  return 1;
+}
+
+/* Splits s at commas and/or blanks into at most `max` strict numbers.
+ * Returns the count, or -1 on a bad token or too many values. */
+static int parse__list(const char *s, double *vals, int max) {
+  int n = 0;
+  const char *p = s;
+  for (;;) {
+    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
+    if (!*p) break;
+    const char *q = p;
+    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
+    char tok[128];
+    size_t len = (size_t)(q - p);
+    if (len >= sizeof tok || n == max) return -1;
+    memcpy(tok, p, len);
+    tok[len] = '\0';
+    if (!parse__number(tok, &vals[n])) return -1;
+    n++;
+    p = q;
+  }
+  return n;
+}
+
+static double parse__srgb_decode(double v) {
+  /* sRGB EOTF: v / 12.92 below 0.04045, else ((v + 0.055) / 1.055)^2.4 */
+  if (v <= 0.04045) return v / 12.92;
+  return pow((v + 0.055) / 1.055, 2.4);
+}
+
+/* Piecewise-linear interpolation of a sampled spectrum (wavelengths sorted
+ * ascending), clamped to the end values outside the sampled range. */
+static double parse__spectrum_at(const double *wl, const double *val, int n, double x) {
+  if (x <= wl[0]) return val[0];
+  if (x >= wl[n - 1]) return val[n - 1];
+  for (int i = 0; i + 1 < n; i++) {
+    if (x <= wl[i + 1]) {
+      double span = wl[i + 1] - wl[i];
+      double t = span > 0.0 ? (x - wl[i]) / span : 0.0;
+      return val[i] + t * (val[i + 1] - val[i]);
+    }
+  }
+  return val[n - 1];
+}
+
+/* "w1:v1, w2:v2, ..." -> RGB by band averages (B 400-500, G 500-600,
+ * R 600-700 nm), each the mean of 20 evenly spaced samples of the
+ * interpolated spectrum. Returns 0 on a syntax error. */
+static int parse__spectrum_pairs(const char *s, rgb *out) {
+  enum { MAXP = 512 };
+  double wl[MAXP], val[MAXP];
+  int n = 0;
+  const char *p = s;
+  for (;;) {
+    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
+    if (!*p) break;
+    const char *q = p;
+    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
+    char tok[128];
+    size_t len = (size_t)(q - p);
+    if (len >= sizeof tok || n == MAXP) return 0;
+    memcpy(tok, p, len);
+    tok[len] = '\0';
+    char *colon = strchr(tok, ':');
+    if (!colon) return 0;
+    *colon = '\0';
+    if (!parse__number(tok, &wl[n]) || !parse__number(colon + 1, &val[n])) return 0;
+    if (n > 0 && !(wl[n] > wl[n - 1])) return 0;
+    n++;
+    p = q;
+  }
+  if (n == 0) return 0;
+  double band[3];
+  for (int b = 0; b < 3; b++) {
+    double lo = 600.0 - 100.0 * b, acc = 0.0;
+    for (int k = 0; k < 20; k++) acc += parse__spectrum_at(wl, val, n, lo + 5.0 * (k + 0.5));
+    band[b] = acc / 20.0;
+  }
+  *out = rgb_make(band[0], band[1], band[2]);
+  return 1;
+}
+
+/* A colour element (rgb, srgb, spectrum, blackbody) into linear RGB. */
+static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
+  const char *value = parse__attr(c, "value");
+  double v[3];
+  if (strcmp(tag, "blackbody") == 0) {
+    /* Not modelled: white scaled by `scale`. */
+    double scale = 1.0;
+    const char *sc = parse__attr(c, "scale");
+    if (sc && !parse__number(sc, &scale)) {
+      parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", sc, tag);
+      return 0;
+    }
+    lmc_warn(c->file, parse__line(c), "<blackbody> is not supported: using white * scale");
+    *out = rgb_gray(scale);
+    return 1;
+  }
+  if (strcmp(tag, "spectrum") == 0 && !value && parse__attr(c, "filename")) {
+    lmc_warn(c->file, parse__line(c),
+             "<spectrum filename=...> is not supported: using the value 1");
+    *out = rgb_gray(1.0);
+    return 1;
+  }
+  if (!value) {
+    parse__fail(c, LMC_EPARSE, "<%s> needs the attribute 'value'", tag);
+    return 0;
+  }
+  if (strcmp(tag, "srgb") == 0 && value[strspn(value, " \t\r\n")] == '#') {
+    /* "#rrggbb": 8-bit sRGB. */
+    const char *h = value + strspn(value, " \t\r\n") + 1;
+    unsigned r, g, b;
+    char extra;
+    if (strlen(h) < 6 || sscanf(h, "%2x%2x%2x%c", &r, &g, &b, &extra) != 3) {
+      parse__fail(c, LMC_EPARSE, "bad colour '%s' in <%s>", value, tag);
+      return 0;
+    }
+    *out = rgb_make(parse__srgb_decode(r / 255.0), parse__srgb_decode(g / 255.0),
+                    parse__srgb_decode(b / 255.0));
+    return 1;
+  }
+  if (strcmp(tag, "spectrum") == 0 && strchr(value, ':')) {
+    if (!parse__spectrum_pairs(value, out)) {
+      parse__fail(c, LMC_EPARSE, "bad spectrum '%s' (expected wavelength:value pairs)",
+                  value);
+      return 0;
+    }
+    lmc_warn(c->file, parse__line(c),
+             "sampled <spectrum> converted roughly to RGB by 100 nm band averages");
+    return 1;
+  }
+  int n = parse__list(value, v, 3);
+  if (n != 1 && n != 3) {
+    parse__fail(c, LMC_EPARSE, "bad colour '%s' in <%s> (expected 1 or 3 numbers)", value, tag);
+    return 0;
+  }
+  if (n == 1) v[1] = v[2] = v[0];
+  if (strcmp(tag, "srgb") == 0)
+    for (int i = 0; i < 3; i++) v[i] = parse__srgb_decode(v[i]);
+  *out = rgb_make(v[0], v[1], v[2]);
+  return 1;
+}
+
+/* A vector from attributes x, y, z (default `def`) or value="x,y,z". */
+static int parse__xyz(parse_ctx *c, const char *tag, double def, vec3 *out) {
+  const char *value = parse__attr(c, "value");
+  double v[3] = {def, def, def};
+  if (value) {
+    int n = parse__list(value, v, 3);
+    if (n != 3) {
+      parse__fail(c, LMC_EPARSE, "bad value '%s' in <%s> (expected 3 numbers)", value, tag);
+      return 0;
+    }
+  } else {
+    const char *names[3] = {"x", "y", "z"};
+    for (int i = 0; i < 3; i++) {
+      const char *a = parse__attr(c, names[i]);
+      if (a && !parse__number(a, &v[i])) {
+        parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", a, tag);
+        return 0;
+      }
+    }
+  }
+  *out = v3(v[0], v[1], v[2]);
+  return 1;
+}
+
+/* A named 3-vector attribute "x, y, z" (lookat's origin/target/up). */
+static int parse__vec_attr(parse_ctx *c, const char *tag, const char *name, vec3 *out) {
+  const char *a = parse__need_attr(c, tag, name);
+  if (!a) return 0;
+  double v[3];
+  if (parse__list(a, v, 3) != 3) {
+    parse__fail(c, LMC_EPARSE, "bad vector '%s' in <%s> (expected 3 numbers)", a, tag);
+    return 0;
+  }
+  *out = v3(v[0], v[1], v[2]);
+  return 1;
+}
+
+/* ---- Elements. ---------------------------------------------------------- */
+
+static int parse__is_property_tag(const char *t) {
+  static const char *tags[] = {"integer", "float", "boolean", "string", "rgb",
+                               "srgb",    "spectrum", "blackbody", "point", "vector"};
+  for (size_t i = 0; i < sizeof tags / sizeof tags[0]; i++)
+    if (strcmp(t, tags[i]) == 0) return 1;
+  return 0;
+}
+
+static void parse__push(parse_ctx *c, frame_kind k, pset *obj, int prop_index) {
+  if (c->depth == PARSE_MAX_DEPTH) {
+    parse__fail(c, LMC_EPARSE, "elements nested too deeply");
+    return;
+  }
+  c->stack[c->depth].kind = k;
+  c->stack[c->depth].obj = obj;
+  c->stack[c->depth].prop = prop_index;
+  c->depth++;
+}
+
+/* A new prop on obj with the common fields; name from the attribute. */
+static prop *parse__new_prop(parse_ctx *c, pset *obj, const char *tag, prop_kind kind,
+                             int need_name) {
+  const char *name = parse__attr(c, "name");
+  if (need_name && !name) {
+    parse__fail(c, LMC_EPARSE, "<%s> needs the attribute 'name'", tag);
+    return NULL;
+  }
+  prop *q = parse__add_prop(obj);
+  if (!q) {
+    parse__fail(c, LMC_ENOMEM, "out of memory");
+    return NULL;
+  }
+  q->kind = kind;
+  snprintf(q->name, sizeof q->name, "%s", name ? name : "");
+  snprintf(q->tag, sizeof q->tag, "%s", tag);
+  q->file = c->file;
+  q->line = parse__line(c);
+  return q;
+}
+
+/* A value element (integer, float, ...) inside an object. */
+static void parse__property(parse_ctx *c, pset *obj, const char *tag) {
+  prop_kind kind;
+  if (strcmp(tag, "integer") == 0) kind = PROP_INT;
+  else if (strcmp(tag, "float") == 0) kind = PROP_FLOAT;
+  else if (strcmp(tag, "boolean") == 0) kind = PROP_BOOL;
+  else if (strcmp(tag, "string") == 0) kind = PROP_STRING;
+  else if (strcmp(tag, "point") == 0) kind = PROP_POINT;
+  else if (strcmp(tag, "vector") == 0) kind = PROP_VECTOR;
+  else kind = PROP_RGB;
+  prop *q = parse__new_prop(c, obj, tag, kind, 1);
+  if (!q) return;
+  const char *value = NULL;
+  if (kind == PROP_INT || kind == PROP_FLOAT || kind == PROP_BOOL || kind == PROP_STRING) {
+    value = parse__need_attr(c, tag, "value");
+    if (!value) return;
+  }
+  switch (kind) {
+    case PROP_INT:
+      if (!parse__integer(value, &q->i))
+        parse__fail(c, LMC_EPARSE, "bad integer '%s' for '%s'", value, q->name);
+      break;
+    case PROP_FLOAT:
+      if (!parse__number(value, &q->f))
+        parse__fail(c, LMC_EPARSE, "bad number '%s' for '%s'", value, q->name);
+      break;
+    case PROP_BOOL: {
+      char low[8] = {0};
+      size_t len = strlen(value);
+      for (size_t i = 0; i < len && i < sizeof low - 1; i++)
+        low[i] = (char)tolower((unsigned char)value[i]);
+      if (len < sizeof low && (strcmp(low, "true") == 0 || strcmp(low, "1") == 0)) q->b = 1;
+      else if (len < sizeof low && (strcmp(low, "false") == 0 || strcmp(low, "0") == 0)) q->b = 0;
+      else parse__fail(c, LMC_EPARSE, "bad boolean '%s' for '%s' (true or false)", value, q->name);
+      break;
+    }
+    case PROP_STRING:
+      q->s = parse__strdup(value);
+      if (!q->s) parse__fail(c, LMC_ENOMEM, "out of memory");
+      break;
+    case PROP_POINT:
+    case PROP_VECTOR:
+      parse__xyz(c, tag, 0.0, &q->v);
+      break;
+    default:
+      parse__color(c, tag, &q->c);
+      break;
+  }
+}
+
+/* One elementary transform inside <transform>, composed after the others. */
+static void parse__transform_op(parse_ctx *c, prop *xf, const char *tag) {
+  xform op;
+  if (strcmp(tag, "translate") == 0) {
+    vec3 d;
+    if (!parse__xyz(c, tag, 0.0, &d)) return;
+    op = xform_translate(d);
+  } else if (strcmp(tag, "scale") == 0) {
+    vec3 s = v3(1, 1, 1);
+    const char *value = parse__attr(c, "value");
+    if (value) {
+      double v[3];
+      int n = parse__list(value, v, 3);
+      if (n == 1) s = v3(v[0], v[0], v[0]);
+      else if (n == 3) s = v3(v[0], v[1], v[2]);
+      else {
+        parse__fail(c, LMC_EPARSE, "bad value '%s' in <%s> (1 or 3 numbers)", value, tag);
+        return;
+      }
+    } else if (!parse__xyz(c, tag, 1.0, &s)) {
+      return;
+    }
+    if (s.x == 0.0 || s.y == 0.0 || s.z == 0.0) {
+      parse__fail(c, LMC_EPARSE, "<scale> with a zero factor is singular");
+      return;
+    }
+    op = xform_scale(s);
+  } else if (strcmp(tag, "rotate") == 0) {
+    vec3 axis;
+    double angle;
+    if (!parse__xyz(c, tag, 0.0, &axis)) return;
+    const char *a = parse__need_attr(c, tag, "angle");
+    if (!a) return;
+    if (!parse__number(a, &angle)) {
+      parse__fail(c, LMC_EPARSE, "bad number '%s' for the angle of <%s>", a, tag);
+      return;
+    }
+    if (v3_len2(axis) == 0.0) {
+      parse__fail(c, LMC_EPARSE, "<rotate> needs a non-zero axis (x, y, z)");
+      return;
+    }
+    op = xform_rotate(axis, angle);
+  } else if (strcmp(tag, "lookat") == 0) {
+    vec3 o, t, up;
+    if (!parse__vec_attr(c, tag, "origin", &o) || !parse__vec_attr(c, tag, "target", &t)) return;
+    if (parse__attr(c, "up")) {
+      if (!parse__vec_attr(c, tag, "up", &up)) return;
+    } else {
+      /* No up given: any direction not parallel to the view direction. */
+      vec3 d = v3_normalize(v3_sub(t, o));
+      up = fabs(d.y) < 0.9 ? v3(0, 1, 0) : v3(1, 0, 0);
+    }
+    if (!xform_lookat(o, t, up, &op)) {
+      parse__fail(c, LMC_EPARSE,
+                  "degenerate <lookat> (origin equals target, or up parallel to the view)");
+      return;
+    }
+  } else if (strcmp(tag, "matrix") == 0) {
+    const char *value = parse__need_attr(c, tag, "value");
+    if (!value) return;
+    double v[16];
+    if (parse__list(value, v, 16) != 16) {
+      parse__fail(c, LMC_EPARSE, "<matrix> needs 16 numbers, got '%s'", value);
+      return;
+    }
+    if (!xform_from_matrix(v, &op)) {
+      parse__fail(c, LMC_EPARSE, "<matrix> is singular");
+      return;
+    }
+  } else {
+    parse__fail(c, LMC_EPARSE, "unexpected <%s> inside <transform>", tag);
+    return;
+  }
+  xf->t = xform_compose(&op, &xf->t);
+}
+
+static lmc_status parse__file(parse_ctx *c, const char *path, pset *parent);
+
+/* Resolves `name` against the folder of the file being read. */
+static void parse__resolve(const char *base_file, const char *name, char *out, size_t size) {
+  if (name[0] == '/') {
+    snprintf(out, size, "%s", name);
+    return;
+  }
+  const char *slash = strrchr(base_file, '/');
+  if (!slash) {
+    snprintf(out, size, "%s", name);
+    return;
+  }
+  snprintf(out, size, "%.*s/%s", (int)(slash - base_file), base_file, name);
+}
+
+static void XMLCALL parse__start(void *user, const XML_Char *tag, const XML_Char **atts) {
+  parse_ctx *c = user;
+  if (c->status != LMC_OK) return;
+  if (!parse__load_attrs(c, atts)) return;
+
+  /* The root element. */
+  if (c->depth == 0) {
+    if (strcmp(tag, "scene") != 0) {
+      parse__fail(c, LMC_EPARSE, "the root element must be <scene>, not <%s>", tag);
+      return;
+    }
+    pset *root = c->include_parent;
+    if (!root) {
+      root = calloc(1, sizeof *root);
+      if (!root) {
+        parse__fail(c, LMC_ENOMEM, "out of memory");
+        return;
+      }
+      snprintf(root->tag, sizeof root->tag, "scene");
+      root->file = c->file;
+      root->line = parse__line(c);
+      root->index = -1;
+      c->doc->root = root;
+    }
+    parse__push(c, FR_OBJECT, root, -1);
+    return;
+  }
+
+  parse_frame *top = &c->stack[c->depth - 1];
+  if (top->kind == FR_SKIP) {
+    parse__push(c, FR_SKIP, NULL, -1);
+    return;
+  }
+  if (top->kind == FR_LEAF) {
+    parse__fail(c, LMC_EPARSE, "unexpected <%s> inside a value element", tag);
+    return;
+  }
+  if (top->kind == FR_TRANSFORM) {
+    parse__transform_op(c, &top->obj->props[top->prop], tag);
+    parse__push(c, FR_LEAF, NULL, -1);
+    return;
+  }
+
+  /* Inside an object. */
+  pset *obj = top->obj;
+  if (parse__is_property_tag(tag)) {
+    parse__property(c, obj, tag);
+    parse__push(c, FR_LEAF, NULL, -1);
+  } else if (strcmp(tag, "transform") == 0) {
+    prop *q = parse__new_prop(c, obj, tag, PROP_TRANSFORM, 1);
+    if (!q) return;
+    q->t = xform_identity();
+    parse__push(c, FR_TRANSFORM, obj, obj->n_props - 1);
+  } else if (strcmp(tag, "ref") == 0) {
+    const char *id = parse__need_attr(c, tag, "id");
+    if (!id) return;
+    prop *q = parse__new_prop(c, obj, tag, PROP_REF, 0);
+    if (!q) return;
+    snprintf(q->ref, sizeof q->ref, "%s", id);
+    parse__push(c, FR_LEAF, NULL, -1);
+  } else if (strcmp(tag, "default") == 0) {
+    const char *name = parse__need_attr(c, tag, "name");
+    const char *value = name ? parse__need_attr(c, tag, "value") : NULL;
+    if (!value) return;
+    if (!parse__add_param(c, name, strlen(name), value)) {
+      parse__fail(c, LMC_ENOMEM, "out of memory");
+      return;
+    }
+    parse__push(c, FR_LEAF, NULL, -1);
+  } else if (strcmp(tag, "include") == 0) {
+    const char *fn = parse__need_attr(c, tag, "filename");
+    if (!fn) return;
+    if (c->include_depth >= PARSE_MAX_INCLUDE) {
+      parse__fail(c, LMC_EPARSE, "<include> nested too deeply (a cycle?) at '%s'", fn);
+      return;
+    }
+    char path[1024];
+    parse__resolve(c->file, fn, path, sizeof path);
+    /* Parse the included file into this object, then restore our state. */
+    parse__clear_attrs(c);
+    parse_ctx saved = *c;
+    c->depth = 0;
+    c->n_attrs = 0;
+    c->include_depth++;
+    lmc_status st = parse__file(c, path, obj);
+    int line = (int)XML_GetCurrentLineNumber(saved.parser);
+    c->file = saved.file;
+    c->parser = saved.parser;
+    c->include_depth = saved.include_depth;
+    c->include_parent = saved.include_parent;
+    c->depth = saved.depth;
+    memcpy(c->stack, saved.stack, sizeof c->stack);
+    if (st != LMC_OK) {
+      /* A missing include file is reported at the <include>; errors inside
+       * it keep their own file and line. */
+      if (st == LMC_EIO && c->err && c->err->line == 0) {
+        lmc_error_set(c->err, LMC_EIO, c->file, line, "cannot open included file '%s'", path);
+      }
+      c->status = st;
+      XML_StopParser(c->parser, XML_FALSE);
+      return;
+    }
+    parse__push(c, FR_LEAF, NULL, -1);
+  } else if (strcmp(tag, "alias") == 0 || strcmp(tag, "animation") == 0) {
+    lmc_warn(c->file, parse__line(c), "<%s> is not supported: ignored", tag);
+    parse__push(c, FR_SKIP, NULL, -1);
+  } else {
+    /* An object element (known or not: the builder judges). */
+    pset *child = calloc(1, sizeof *child);
+    if (!child) {
+      parse__fail(c, LMC_ENOMEM, "out of memory");
+      return;
+    }
+    snprintf(child->tag, sizeof child->tag, "%s", tag);
+    const char *type = parse__attr(c, "type");
+    const char *id = parse__attr(c, "id");
+    snprintf(child->type, sizeof child->type, "%s", type ? type : "");
+    snprintf(child->id, sizeof child->id, "%s", id ? id : "");
+    child->file = c->file;
+    child->line = parse__line(c);
+    child->index = -1;
+    prop *q = parse__new_prop(c, obj, tag, PROP_OBJECT, 0);
+    if (!q) {
+      free(child);
+      return;
+    }
+    q->obj = child;
+    parse__push(c, FR_OBJECT, child, -1);
+  }
+}
+
+static void XMLCALL parse__end(void *user, const XML_Char *tag) {
+  parse_ctx *c = user;
+  (void)tag;
+  if (c->status != LMC_OK) return;
+  if (c->depth > 0) c->depth--;
+}
+
+/* Reads one file with its own expat parser; children of its root <scene>
+ * go to `parent` (NULL: this is the main file). */
+static lmc_status parse__file(parse_ctx *c, const char *path, pset *parent) {
+  const char *file = parse__intern(c->doc, path);
+  if (!file) return lmc_error_set(c->err, LMC_ENOMEM, path, 0, "out of memory");
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return lmc_error_set(c->err, LMC_EIO, path, 0, "cannot open the scene file");
+  XML_Parser p = XML_ParserCreate(NULL);
+  if (!p) {
+    fclose(fp);
+    return lmc_error_set(c->err, LMC_ENOMEM, path, 0, "out of memory");
+  }
+  XML_SetUserData(p, c);
+  XML_SetElementHandler(p, parse__start, parse__end);
+  c->parser = p;
+  c->file = file;
+  c->include_parent = parent;
+  c->depth = 0;
+
+  char buf[65536];
+  for (;;) {
+    size_t n = fread(buf, 1, sizeof buf, fp);
+    int final = n < sizeof buf;
+    if (ferror(fp)) {
+      if (c->status == LMC_OK)
+        c->status = lmc_error_set(c->err, LMC_EIO, path, 0, "read error");
+      break;
+    }
+    if (XML_Parse(p, buf, (int)n, final) == XML_STATUS_ERROR) {
+      if (c->status == LMC_OK) {
+        c->status = lmc_error_set(c->err, LMC_EPARSE, file, (int)XML_GetCurrentLineNumber(p),
+                                  "malformed XML: %s", XML_ErrorString(XML_GetErrorCode(p)));
+      }
+      break;
+    }
+    if (final) break;
+  }
+  if (c->status == LMC_OK && parent == NULL && !c->doc->root)
+    c->status = lmc_error_set(c->err, LMC_EPARSE, file, 0, "no <scene> element");
+  XML_ParserFree(p);
+  c->parser = NULL;
+  fclose(fp);
+  parse__clear_attrs(c);
+  return c->status;
+}
+
+lmc_status pdoc_parse(pdoc *doc, const char *path, const char *const *defines, int n_defines,
+                      lmc_error *err) {
+  memset(doc, 0, sizeof *doc);
+  parse_ctx c;
+  memset(&c, 0, sizeof c);
+  c.doc = doc;
+  c.err = err;
+  c.status = LMC_OK;
+  /* The -D defines come first, so <default> cannot override them. */
+  for (int i = 0; i < n_defines; i++) {
+    const char *eq = strchr(defines[i], '=');
+    if (!eq || eq == defines[i]) {
+      c.status = lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                               "bad define '%s' (expected name=value)", defines[i]);
+      break;
+    }
+    if (!parse__add_param(&c, defines[i], (size_t)(eq - defines[i]), eq + 1)) {
+      c.status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
+      break;
+    }
+  }
+  if (c.status == LMC_OK) parse__file(&c, path, NULL);
+  for (int i = 0; i < c.n_params; i++) {
+    free(c.params[i].name);
+    free(c.params[i].value);
+  }
+  free(c.params);
+  if (c.status != LMC_OK) pdoc_free(doc);
+  return c.status;
+}

@@ -1,0 +1,553 @@
+/*
+ * light.c: Mitsuba 0.6's emitters (area, point, spot, directional,
+ * constant, envmap) with the sampling routines that path tracing and BDPT
+ * need: direct sampling from a receiver (sample_li / pdf_li), emission
+ * (sample_le / pdf_le) and evaluation (le_area / le_infinite).
+ *
+ * Conventions (light.h): wi points from the receiver towards the light;
+ * densities of sample_li are per unit solid angle at the receiver; those of
+ * sample_le are per unit area (pdf_pos) times per unit solid angle
+ * (pdf_dir). For sample_le, u1 and u2 always drive the position and u3 and
+ * u4 the direction, whatever the light, so primary-sample-space mutations
+ * keep the same meaning for every light type.
+ *
+ * The models.
+ *  area        Radiance L, one-sided on the side of mesh_face_normal (which
+ *              honours flip_normals). A triangle is chosen with probability
+ *              area_i / A (tri_dist), then a uniform point on it, so the
+ *              area density is 1/A. Seen from ref at distance d with
+ *              cos_l = <n, -wi>, the solid-angle density is
+ *                  pdf_li = (1/A) d^2 / cos_l,
+ *              and the sample fails (returns 0) when cos_l <= 0: the
+ *              receiver is behind the emitting side. Emission: position by
+ *              area, direction cosine-weighted around n (pdf cos/pi).
+ *              Power pi A lum(L).
+ *  point       Intensity I at pos: li = I / d^2, delta; emission uniform on
+ *              the sphere (pdf 1/(4 pi)).
+ *  spot        Intensity I along the local +z axis frm.n with Mitsuba 0.6's
+ *              falloff, linear in the angle theta from the axis:
+ *                  1                                  theta <= beam_width
+ *                  (cutoff - theta)/(cutoff - beam)   beam < theta < cutoff
+ *                  0                                  theta >= cutoff.
+ *              Emission uniform in the cone of half angle cutoff.
+ *  directional Irradiance E travelling along frm.n: wi = -frm.n, li = E,
+ *              dist = INFINITY. Emission: parallel rays along frm.n from a
+ *              disk of radius r (the scene's bounding radius) centred at
+ *              center - frm.n r, perpendicular to frm.n; pdf_pos = 1/(pi r^2).
+ *  constant    Radiance L from every direction; sample_li uniform on the
+ *              sphere (pdf 1/(4 pi)). Emission: travel direction uniform on
+ *              the sphere, origin uniform on the disk of radius r facing it
+ *              just outside the bounding sphere.
+ *  envmap      A latitude-longitude image in Mitsuba's orientation. With
+ *              d = to_world^-1(w) the direction towards the environment in
+ *              the map's local frame (+y up),
+ *                  u = atan2(d.x, -d.z) / (2 pi)  (wrapped into [0,1)),
+ *                  v = acos(d.y) / pi,
+ *              so row 0 (the image's top) is +y, column 0 looks along -z
+ *              and u = 1/4 looks along +x; inversely, with phi = 2 pi u and
+ *              theta = pi v,
+ *                  d = (sin phi sin theta, cos theta, -cos phi sin theta).
+ *              Radiance is the pixel containing (u, v) times `scale`
+ *              (piecewise constant, no filtering), and pixels are importance
+ *              sampled by a distrib2d over luminance * sin(theta at the row
+ *              centre). Since domega = 2 pi^2 sin(theta) du dv, the density
+ *              in solid angle is p(u, v) / (2 pi^2 sin theta); it is exactly
+ *              the density of the samples, and radiance and density use the
+ *              same pixel, so light_sample_li is unbiased.
+ *
+ * Which lights are "infinite": constant and envmap, the lights a ray that
+ * escapes the scene sees (scene->infinite_lights). Directional lights are
+ * delta lights with dist = INFINITY, but no ray can hit them.
+ */
+#include "render/light.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/mesh.h"
+#include "render/scene.h"
+#include "render/warp.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* ---------------------------------------------------------------------------
+ * Helpers.
+ */
+
+/* Vertices of triangle `tri` of mesh m. */
+static void light__triangle(const mesh *m, int64_t tri, vec3 *a, vec3 *b, vec3 *c) {
+  const uint32_t *idx = m->idx + 3 * tri;
+  *a = mesh_position(m, idx[0]);
+  *b = mesh_position(m, idx[1]);
+  *c = mesh_position(m, idx[2]);
+}
+
+/* Mitsuba's spot falloff as a function of the cosine to the axis. */
+static double light__spot_falloff(const light *l, double cos_theta) {
+  if (cos_theta <= l->cos_cutoff) return 0.0;
+  if (cos_theta >= l->cos_beam) return 1.0;
+  double width = l->cutoff - l->beam_width;
+  if (!(width > 0.0)) return 1.0;
+  /* (cutoff - theta) / (cutoff - beam_width), theta = acos(cos_theta) */
+  double theta = acos(fmin(1.0, fmax(-1.0, cos_theta)));
+  return fmin(1.0, fmax(0.0, (l->cutoff - theta) / width));
+}
+
+/* Pixel (x, y) of the environment map as RGB (grey and RGBA accepted). */
+static rgb light__env_pixel(const lmc_image *img, int x, int y) {
+  const float *p = img->data + ((size_t)y * (size_t)img->width + (size_t)x) * (size_t)img->channels;
+  if (img->channels >= 3) return rgb_make(p[0], p[1], p[2]);
+  return rgb_gray(p[0]);
+}
+
+/* Pixel containing (u, v) in [0,1]^2 (u wraps, v clamps). */
+static void light__env_cell(const lmc_image *img, double u, double v, int *x, int *y) {
+  double fx = floor(u * img->width), fy = floor(v * img->height);
+  int ix = isfinite(fx) ? (int)fmod(fx, (double)img->width) : 0;
+  if (ix < 0) ix += img->width;
+  int iy = fy < 0.0 || !isfinite(fy) ? 0 : (fy > img->height - 1 ? img->height - 1 : (int)fy);
+  *x = ix;
+  *y = iy;
+}
+
+/* World direction (towards the environment) -> lat-long (u, v) and
+ * sin(theta) in the map's frame. Returns 0 for a degenerate direction. */
+static int light__env_dir_to_uv(const light *l, vec3 dir, double *u, double *v, double *sin_theta) {
+  vec3 d = v3_normalize(xform_inv_vector(&l->to_world, dir));
+  if (!v3_isfinite(d) || !(v3_len2(d) > 0.0)) return 0;
+  double uu = atan2(d.x, -d.z) * (0.5 / M_PI);
+  if (uu < 0.0) uu += 1.0;
+  if (uu >= 1.0) uu = 0.0;
+  double y = fmin(1.0, fmax(-1.0, d.y));
+  *u = uu;
+  *v = acos(y) / M_PI;
+  *sin_theta = sqrt(fmax(0.0, 1.0 - y * y));
+  return 1;
+}
+
+/* Lat-long (u, v) -> unit world direction (towards the environment). */
+static vec3 light__env_uv_to_dir(const light *l, double u, double v, double *sin_theta) {
+  double phi = 2.0 * M_PI * u, theta = M_PI * v;
+  double st = sin(theta), ct = cos(theta);
+  *sin_theta = st;
+  vec3 d = v3(sin(phi) * st, ct, -cos(phi) * st);
+  return v3_normalize(xform_vector(&l->to_world, d));
+}
+
+/* Radiance of the envmap for lat-long (u, v). */
+static rgb light__env_eval_uv(const light *l, double u, double v) {
+  int x, y;
+  light__env_cell(&l->image, u, v, &x, &y);
+  return rgb_scale(light__env_pixel(&l->image, x, y), l->scale);
+}
+
+/* Solid-angle density of the envmap's importance sampling for (u, v). */
+static double light__env_pdf_uv(const light *l, double u, double v, double sin_theta) {
+  if (!(sin_theta > 0.0)) return 0.0;
+  /* pdf_omega = p(u, v) / (2 pi^2 sin theta) */
+  return distrib2d_pdf(&l->env_dist, u, v) / (2.0 * M_PI * M_PI * sin_theta);
+}
+
+/* A point uniformly on the disk of radius r perpendicular to unit dir,
+ * centred at center - dir * r (the plane that rays along dir leave from). */
+static vec3 light__disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
+  double x, y;
+  warp_square_to_disk_concentric(u1, u2, &x, &y);
+  frame f = frame_from_z(dir);
+  vec3 offset = v3_add(v3_scale(f.s, x), v3_scale(f.t, y));
+  return v3_add(s->center, v3_scale(v3_sub(offset, dir), s->radius));
+}
+
+static double light__disk_pdf(const struct scene *s) {
+  return 1.0 / (M_PI * s->radius * s->radius);
+}
+
+/* ---------------------------------------------------------------------------
+ * Preparation and properties.
+ */
+
+static lmc_status light__prepare_area(light *l, const struct scene *s, lmc_error *err) {
+  if (l->mesh < 0 || l->mesh >= s->n_meshes)
+    return lmc_error_set(err, LMC_EINVAL, s->path, 0, "area light attached to missing mesh %d",
+                         l->mesh);
+  const mesh *m = &s->meshes[l->mesh];
+  if (m->n_triangles < 1 || m->n_triangles > INT32_MAX)
+    return lmc_error_set(err, LMC_EINVAL, s->path, 0,
+                         "area light on mesh \"%s\" with %lld triangles", m->name,
+                         (long long)m->n_triangles);
+  int n = (int)m->n_triangles;
+  double *areas = malloc((size_t)n * sizeof(double));
+  if (!areas) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for an area light");
+  double total = 0.0;
+  for (int i = 0; i < n; i++) {
+    double a = mesh_triangle_area(m, i);
+    areas[i] = isfinite(a) && a > 0.0 ? a : 0.0;
+    total += areas[i];
+  }
+  if (!(total > 0.0)) {
+    free(areas);
+    return lmc_error_set(err, LMC_EINVAL, s->path, 0, "area light on mesh \"%s\" has zero area",
+                         m->name);
+  }
+  distrib1d_free(&l->tri_dist);
+  lmc_status st = distrib1d_init(&l->tri_dist, areas, n, err);
+  free(areas);
+  if (st) return st;
+  l->area = total;
+  return LMC_OK;
+}
+
+static lmc_status light__prepare_envmap(light *l, const struct scene *s, lmc_error *err) {
+  const lmc_image *img = &l->image;
+  if (!img->data || img->width < 1 || img->height < 1 || img->channels < 1)
+    return lmc_error_set(err, LMC_EINVAL, s->path, 0, "environment map without an image");
+  int w = img->width, h = img->height;
+  double *f = malloc((size_t)w * (size_t)h * sizeof(double));
+  if (!f) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for an environment map");
+  /* Weight of pixel (x, y): luminance * sin(theta at the row centre);
+   * negative or invalid pixels get no samples. */
+  for (int y = 0; y < h; y++) {
+    double sin_theta = sin(M_PI * (y + 0.5) / h);
+    for (int x = 0; x < w; x++) {
+      double lum = rgb_luminance(light__env_pixel(img, x, y));
+      f[(size_t)y * (size_t)w + (size_t)x] = isfinite(lum) && lum > 0.0 ? lum * sin_theta : 0.0;
+    }
+  }
+  distrib2d_free(&l->env_dist);
+  lmc_status st = distrib2d_init(&l->env_dist, f, w, h, err);
+  free(f);
+  return st;
+}
+
+lmc_status light_prepare(light *l, const struct scene *s, lmc_error *err) {
+  switch (l->type) {
+  case LIGHT_AREA:
+    return light__prepare_area(l, s, err);
+  case LIGHT_POINT:
+    return LMC_OK;
+  case LIGHT_SPOT: {
+    vec3 n = v3_normalize(l->frm.n);
+    if (!(v3_len2(n) > 0.5) || !v3_isfinite(n))
+      return lmc_error_set(err, LMC_EINVAL, s->path, 0, "spot light without a direction");
+    l->frm = frame_from_z(n);
+    if (!(l->cutoff > 0.0) || l->cutoff > M_PI)
+      return lmc_error_set(err, LMC_EINVAL, s->path, 0, "spot light cutoffAngle %g degrees",
+                           l->cutoff * 180.0 / M_PI);
+    if (!(l->beam_width >= 0.0) || l->beam_width > l->cutoff) l->beam_width = l->cutoff;
+    l->cos_cutoff = cos(l->cutoff);
+    l->cos_beam = cos(l->beam_width);
+    return LMC_OK;
+  }
+  case LIGHT_DIRECTIONAL: {
+    vec3 n = v3_normalize(l->frm.n);
+    if (!(v3_len2(n) > 0.5) || !v3_isfinite(n))
+      return lmc_error_set(err, LMC_EINVAL, s->path, 0, "directional light without a direction");
+    l->frm = frame_from_z(n);
+    return LMC_OK;
+  }
+  case LIGHT_CONSTANT:
+    return LMC_OK;
+  case LIGHT_ENVMAP:
+    return light__prepare_envmap(l, s, err);
+  }
+  return lmc_error_set(err, LMC_EUNSUPPORTED, s->path, 0, "unknown light type %d", (int)l->type);
+}
+
+void light_free(light *l) {
+  if (!l) return;
+  distrib1d_free(&l->tri_dist);
+  distrib2d_free(&l->env_dist);
+  image_free(&l->image);
+}
+
+int light_is_delta(const light *l) {
+  return l->type == LIGHT_POINT || l->type == LIGHT_SPOT || l->type == LIGHT_DIRECTIONAL;
+}
+
+int light_is_infinite(const light *l) {
+  return l->type == LIGHT_CONSTANT || l->type == LIGHT_ENVMAP;
+}
+
+double light_power(const light *l, const struct scene *s) {
+  double r2 = s->radius * s->radius;
+  switch (l->type) {
+  case LIGHT_AREA:
+    return M_PI * l->area * rgb_luminance(l->value);
+  case LIGHT_POINT:
+    return 4.0 * M_PI * rgb_luminance(l->value);
+  case LIGHT_SPOT:
+    /* Intensity over the cone, the transition counted at half weight. */
+    return 2.0 * M_PI * (1.0 - 0.5 * (l->cos_cutoff + l->cos_beam)) * rgb_luminance(l->value);
+  case LIGHT_DIRECTIONAL:
+    return M_PI * r2 * rgb_luminance(l->value);
+  case LIGHT_CONSTANT:
+    return M_PI * r2 * 4.0 * M_PI * rgb_luminance(l->value);
+  case LIGHT_ENVMAP: {
+    /* pi r^2 times the integral of luminance over the sphere,
+     * sum over pixels of lum * (2 pi / w) (pi / h) sin(theta). */
+    const lmc_image *img = &l->image;
+    if (!img->data) return 0.0;
+    double sum = 0.0;
+    for (int y = 0; y < img->height; y++) {
+      double sin_theta = sin(M_PI * (y + 0.5) / img->height);
+      for (int x = 0; x < img->width; x++) {
+        double lum = rgb_luminance(light__env_pixel(img, x, y));
+        if (isfinite(lum) && lum > 0.0) sum += lum * sin_theta;
+      }
+    }
+    double integral = sum * (2.0 * M_PI / img->width) * (M_PI / img->height) * l->scale;
+    return M_PI * r2 * integral;
+  }
+  }
+  return 0.0;
+}
+
+/* ---------------------------------------------------------------------------
+ * Direct sampling from a receiver.
+ */
+
+int light_sample_li(const light *l, const struct scene *s, vec3 ref, double u1, double u2,
+                    light_li_sample *out) {
+  memset(out, 0, sizeof *out);
+  switch (l->type) {
+  case LIGHT_AREA: {
+    /* Choose a triangle by area, then a uniform point on it. */
+    const mesh *m = &s->meshes[l->mesh];
+    double pmf, u1r;
+    int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
+    double b1, b2;
+    warp_square_to_triangle(u1r, u2, &b1, &b2);
+    vec3 a, b, c;
+    light__triangle(m, tri, &a, &b, &c);
+    vec3 p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
+    vec3 n = mesh_face_normal(m, tri);
+    /* Convert the area density 1/A to solid angle: d^2 / cos_l. */
+    vec3 d = v3_sub(p, ref);
+    double dist2 = v3_len2(d);
+    if (!(dist2 > 0.0)) return 0;
+    double dist = sqrt(dist2);
+    vec3 wi = v3_scale(d, 1.0 / dist);
+    double cos_l = -v3_dot(n, wi);
+    if (!(cos_l > 0.0)) return 0; /* ref is behind the emitting side */
+    out->wi = wi;
+    out->dist = dist;
+    out->p = p;
+    out->n = n;
+    out->li = l->value;
+    out->pdf = dist2 / (cos_l * l->area);
+    out->delta = 0;
+    return isfinite(out->pdf) && out->pdf > 0.0;
+  }
+  case LIGHT_POINT:
+  case LIGHT_SPOT: {
+    vec3 d = v3_sub(l->pos, ref);
+    double dist2 = v3_len2(d);
+    if (!(dist2 > 0.0)) return 0;
+    double dist = sqrt(dist2);
+    vec3 wi = v3_scale(d, 1.0 / dist);
+    double falloff = 1.0;
+    if (l->type == LIGHT_SPOT) {
+      falloff = light__spot_falloff(l, -v3_dot(wi, l->frm.n));
+      if (!(falloff > 0.0)) return 0;
+    }
+    out->wi = wi;
+    out->dist = dist;
+    out->p = l->pos;
+    out->li = rgb_scale(l->value, falloff / dist2);
+    out->pdf = 1.0;
+    out->delta = 1;
+    return 1;
+  }
+  case LIGHT_DIRECTIONAL:
+    out->wi = v3_neg(l->frm.n);
+    out->dist = INFINITY;
+    out->p = v3_fma(ref, out->wi, 2.0 * s->radius);
+    out->li = l->value;
+    out->pdf = 1.0;
+    out->delta = 1;
+    return 1;
+  case LIGHT_CONSTANT:
+    out->wi = warp_square_to_uniform_sphere(u1, u2);
+    out->dist = INFINITY;
+    out->p = v3_fma(ref, out->wi, 2.0 * s->radius);
+    out->li = l->value;
+    out->pdf = 1.0 / (4.0 * M_PI);
+    out->delta = 0;
+    return 1;
+  case LIGHT_ENVMAP: {
+    /* Pick (u, v) in proportion to luminance * sin(theta), map to the
+     * sphere, divide by the Jacobian 2 pi^2 sin(theta). */
+    double uv[2], pdf_uv, sin_theta;
+    distrib2d_sample(&l->env_dist, u1, u2, uv, &pdf_uv);
+    vec3 wi = light__env_uv_to_dir(l, uv[0], uv[1], &sin_theta);
+    if (!(sin_theta > 0.0) || !(pdf_uv > 0.0)) return 0;
+    out->wi = wi;
+    out->dist = INFINITY;
+    out->p = v3_fma(ref, wi, 2.0 * s->radius);
+    out->li = light__env_eval_uv(l, uv[0], uv[1]);
+    out->pdf = pdf_uv / (2.0 * M_PI * M_PI * sin_theta);
+    out->delta = 0;
+    return isfinite(out->pdf);
+  }
+  }
+  return 0;
+}
+
+double light_pdf_li(const light *l, const struct scene *s, vec3 ref, vec3 wi, vec3 p, vec3 n) {
+  (void)s;
+  switch (l->type) {
+  case LIGHT_AREA: {
+    /* (1/A) d^2 / cos_l, zero when wi reaches the back of the light. */
+    double dist2 = v3_len2(v3_sub(p, ref));
+    double cos_l = -v3_dot(n, wi);
+    if (!(cos_l > 0.0) || !(dist2 > 0.0) || !(l->area > 0.0)) return 0.0;
+    return dist2 / (cos_l * l->area);
+  }
+  case LIGHT_POINT:
+  case LIGHT_SPOT:
+  case LIGHT_DIRECTIONAL:
+    return 0.0;
+  case LIGHT_CONSTANT:
+    return 1.0 / (4.0 * M_PI);
+  case LIGHT_ENVMAP: {
+    double u, v, sin_theta;
+    if (!light__env_dir_to_uv(l, wi, &u, &v, &sin_theta)) return 0.0;
+    return light__env_pdf_uv(l, u, v, sin_theta);
+  }
+  }
+  return 0.0;
+}
+
+rgb light_le_area(const light *l, vec3 n, vec3 w) {
+  if (l->type != LIGHT_AREA) return rgb_zero();
+  return v3_dot(n, w) > 0.0 ? l->value : rgb_zero();
+}
+
+rgb light_le_infinite(const light *l, vec3 dir) {
+  if (l->type == LIGHT_CONSTANT) return l->value;
+  if (l->type != LIGHT_ENVMAP) return rgb_zero();
+  double u, v, sin_theta;
+  if (!light__env_dir_to_uv(l, dir, &u, &v, &sin_theta)) return rgb_zero();
+  return light__env_eval_uv(l, u, v);
+}
+
+/* ---------------------------------------------------------------------------
+ * Emission.
+ */
+
+int light_sample_le(const light *l, const struct scene *s, double u1, double u2, double u3,
+                    double u4, light_le_sample *out) {
+  memset(out, 0, sizeof *out);
+  switch (l->type) {
+  case LIGHT_AREA: {
+    /* Position by area (u1, u2), direction cosine-weighted (u3, u4). */
+    const mesh *m = &s->meshes[l->mesh];
+    double pmf, u1r;
+    int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
+    double b1, b2;
+    warp_square_to_triangle(u1r, u2, &b1, &b2);
+    vec3 a, b, c;
+    light__triangle(m, tri, &a, &b, &c);
+    out->p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
+    out->n = mesh_face_normal(m, tri);
+    vec3 local = warp_square_to_cosine_hemisphere(u3, u4);
+    frame f = frame_from_z(out->n);
+    out->dir = v3_normalize(frame_to_world(&f, local));
+    out->le = l->value;
+    out->pdf_pos = 1.0 / l->area;
+    out->pdf_dir = warp_square_to_cosine_hemisphere_pdf(local);
+    return out->pdf_dir > 0.0;
+  }
+  case LIGHT_POINT:
+    out->p = l->pos;
+    out->dir = warp_square_to_uniform_sphere(u3, u4);
+    out->le = l->value;
+    out->pdf_pos = 1.0;
+    out->pdf_dir = 1.0 / (4.0 * M_PI);
+    out->delta_pos = 1;
+    return 1;
+  case LIGHT_SPOT: {
+    vec3 local = warp_square_to_uniform_cone(u3, u4, l->cos_cutoff);
+    out->p = l->pos;
+    out->dir = v3_normalize(frame_to_world(&l->frm, local));
+    out->le = rgb_scale(l->value, light__spot_falloff(l, local.z));
+    out->pdf_pos = 1.0;
+    out->pdf_dir = 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff));
+    out->delta_pos = 1;
+    return !rgb_is_black(out->le);
+  }
+  case LIGHT_DIRECTIONAL:
+    out->dir = l->frm.n;
+    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->n = out->dir;
+    out->le = l->value;
+    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_dir = 1.0;
+    out->delta_dir = 1;
+    return 1;
+  case LIGHT_CONSTANT:
+    /* Travel direction uniform (u3, u4); radiance arrives from -dir. */
+    out->dir = warp_square_to_uniform_sphere(u3, u4);
+    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->n = out->dir;
+    out->le = l->value;
+    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_dir = 1.0 / (4.0 * M_PI);
+    return 1;
+  case LIGHT_ENVMAP: {
+    /* Importance-sample the direction towards the environment (u3, u4);
+     * the ray travels the opposite way. */
+    double uv[2], pdf_uv, sin_theta;
+    distrib2d_sample(&l->env_dist, u3, u4, uv, &pdf_uv);
+    vec3 w_env = light__env_uv_to_dir(l, uv[0], uv[1], &sin_theta);
+    if (!(sin_theta > 0.0) || !(pdf_uv > 0.0)) return 0;
+    out->dir = v3_neg(w_env);
+    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->n = out->dir;
+    out->le = light__env_eval_uv(l, uv[0], uv[1]);
+    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_dir = pdf_uv / (2.0 * M_PI * M_PI * sin_theta);
+    return isfinite(out->pdf_dir);
+  }
+  }
+  return 0;
+}
+
+void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 dir,
+                  double *OUT_pdf_pos, double *OUT_pdf_dir) {
+  (void)p;
+  double pdf_pos = 0.0, pdf_dir = 0.0;
+  switch (l->type) {
+  case LIGHT_AREA:
+    pdf_pos = l->area > 0.0 ? 1.0 / l->area : 0.0;
+    pdf_dir = fmax(0.0, v3_dot(n, dir)) / M_PI;
+    break;
+  case LIGHT_POINT:
+    pdf_pos = 1.0;
+    pdf_dir = 1.0 / (4.0 * M_PI);
+    break;
+  case LIGHT_SPOT:
+    pdf_pos = 1.0;
+    pdf_dir = v3_dot(dir, l->frm.n) >= l->cos_cutoff ? 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff))
+                                                     : 0.0;
+    break;
+  case LIGHT_DIRECTIONAL:
+    pdf_pos = light__disk_pdf(s);
+    pdf_dir = 1.0;
+    break;
+  case LIGHT_CONSTANT:
+    pdf_pos = light__disk_pdf(s);
+    pdf_dir = 1.0 / (4.0 * M_PI);
+    break;
+  case LIGHT_ENVMAP:
+    pdf_pos = light__disk_pdf(s);
+    pdf_dir = light_pdf_li(l, s, p, v3_neg(dir), p, n);
+    break;
+  }
+  if (OUT_pdf_pos) *OUT_pdf_pos = pdf_pos;
+  if (OUT_pdf_dir) *OUT_pdf_dir = pdf_dir;
+}

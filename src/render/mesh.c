@@ -1,0 +1,237 @@
+/*
+ * mesh.c: triangle mesh storage, transformation and validation.
+ *
+ * A mesh is an indexed triangle list (see mesh.h). Positions are stored as
+ * float because that is what Embree traces; every derived quantity here
+ * (face normals, areas) is computed in double from those floats, so the
+ * values the renderer uses match the geometry Embree intersects.
+ *
+ * Transformation. Points go through the affine map M; normals go through the
+ * inverse transpose M^-T and are renormalised. The geometric normal of a
+ * triangle (a, b, c) is (b - a) x (c - a); under a mirroring map
+ * (det M < 0) the cross product of the mapped edges equals
+ *   (M e1) x (M e2) = det(M) M^-T (e1 x e2),
+ * i.e. it flips relative to the transformed normal. Swapping two indices of
+ * every triangle undoes that flip, so geometric normals keep the side they
+ * had in object space (the side an area light emits on).
+ *
+ * Validation. Loaders run mesh_validate on every mesh. Hard errors (an index
+ * out of range, a NaN or infinite position, normal or uv) carry the file and
+ * line given by the caller (the XML element). Soft problems are repaired
+ * with a warning: zero-area triangles are dropped, zero-length vertex
+ * normals are recomputed from the area-weighted normals of the adjacent
+ * faces (and if that fails too, all vertex normals are dropped), an empty
+ * mesh ends with zero triangles so the loader can skip it.
+ */
+#include "render/mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+lmc_status mesh_alloc(mesh *m, int64_t n_vertices, int64_t n_triangles, int with_normals,
+                      int with_uvs, lmc_error *err) {
+  /* Check the counts before any allocation: indices are uint32. */
+  if (n_vertices < 0 || n_triangles < 0)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mesh_alloc: negative count");
+  if (n_vertices > (int64_t)UINT32_MAX || n_triangles > (int64_t)(SIZE_MAX / 12 / 4))
+    return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
+                         "mesh too large (%lld vertices, %lld triangles)",
+                         (long long)n_vertices, (long long)n_triangles);
+  m->n_vertices = n_vertices;
+  m->n_triangles = n_triangles;
+  /* One float of padding after the positions, as Embree's shared buffers read 16 bytes. */
+  m->p = calloc((size_t)(3 * n_vertices + 1), sizeof(float));
+  m->n = with_normals ? calloc((size_t)(3 * n_vertices + 1), sizeof(float)) : NULL;
+  m->uv = with_uvs ? calloc((size_t)(2 * n_vertices + 1), sizeof(float)) : NULL;
+  m->idx = calloc((size_t)(3 * n_triangles + 1), sizeof(uint32_t));
+  if (!m->p || !m->idx || (with_normals && !m->n) || (with_uvs && !m->uv)) {
+    mesh_free(m);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory allocating a mesh of %lld vertices",
+                         (long long)n_vertices);
+  }
+  return LMC_OK;
+}
+
+void mesh_free(mesh *m) {
+  if (!m) return;
+  free(m->p);
+  free(m->n);
+  free(m->uv);
+  free(m->idx);
+  m->p = NULL;
+  m->n = NULL;
+  m->uv = NULL;
+  m->idx = NULL;
+  m->n_vertices = 0;
+  m->n_triangles = 0;
+}
+
+void mesh_transform(mesh *m, const xform *t) {
+  for (int64_t i = 0; i < m->n_vertices; i++) {
+    vec3 p = xform_point(t, v3(m->p[3 * i], m->p[3 * i + 1], m->p[3 * i + 2]));
+    m->p[3 * i] = (float)p.x;
+    m->p[3 * i + 1] = (float)p.y;
+    m->p[3 * i + 2] = (float)p.z;
+  }
+  if (m->n) {
+    /* Normals by the inverse transpose, renormalised (zero stays zero). */
+    for (int64_t i = 0; i < m->n_vertices; i++) {
+      vec3 n = xform_normal(t, v3(m->n[3 * i], m->n[3 * i + 1], m->n[3 * i + 2]));
+      n = v3_normalize(n);
+      m->n[3 * i] = (float)n.x;
+      m->n[3 * i + 1] = (float)n.y;
+      m->n[3 * i + 2] = (float)n.z;
+    }
+  }
+  /* A mirroring map flips (b-a)x(c-a); swap b and c to restore the side. */
+  if (xform_det3(t) < 0.0) {
+    for (int64_t f = 0; f < m->n_triangles; f++) {
+      uint32_t tmp = m->idx[3 * f + 1];
+      m->idx[3 * f + 1] = m->idx[3 * f + 2];
+      m->idx[3 * f + 2] = tmp;
+    }
+  }
+}
+
+/* Unnormalised (b - a) x (c - a) of triangle f, in double. */
+static vec3 mesh__cross(const mesh *m, int64_t f) {
+  vec3 a = mesh_position(m, m->idx[3 * f]);
+  vec3 b = mesh_position(m, m->idx[3 * f + 1]);
+  vec3 c = mesh_position(m, m->idx[3 * f + 2]);
+  return v3_cross(v3_sub(b, a), v3_sub(c, a));
+}
+
+vec3 mesh_face_normal(const mesh *m, int64_t tri) {
+  vec3 n = v3_normalize(mesh__cross(m, tri));
+  return m->flip_normals ? v3_neg(n) : n;
+}
+
+double mesh_triangle_area(const mesh *m, int64_t tri) { return 0.5 * v3_len(mesh__cross(m, tri)); }
+
+/* Recomputes every vertex normal whose length is zero from the area-weighted
+ * normals of its faces (sum of (b-a)x(c-a), which weights by twice the area).
+ * Returns the number of normals that could not be repaired. */
+static int64_t mesh__repair_normals(mesh *m, int64_t *n_repaired) {
+  int64_t bad = 0;
+  *n_repaired = 0;
+  unsigned char *zero = calloc((size_t)m->n_vertices + 1, 1);
+  double *acc = calloc((size_t)(3 * m->n_vertices + 1), sizeof(double));
+  if (!zero || !acc) {
+    free(zero);
+    free(acc);
+    return m->n_vertices; /* cannot repair: caller drops the normals */
+  }
+  int64_t n_zero = 0;
+  for (int64_t i = 0; i < m->n_vertices; i++) {
+    double l2 = (double)m->n[3 * i] * m->n[3 * i] + (double)m->n[3 * i + 1] * m->n[3 * i + 1] +
+                (double)m->n[3 * i + 2] * m->n[3 * i + 2];
+    if (!(l2 > 0.0)) {
+      zero[i] = 1;
+      n_zero++;
+    } else if (fabs(l2 - 1.0) > 1e-6) {
+      double s = 1.0 / sqrt(l2);
+      for (int k = 0; k < 3; k++) m->n[3 * i + k] = (float)(m->n[3 * i + k] * s);
+    }
+  }
+  if (n_zero > 0) {
+    for (int64_t f = 0; f < m->n_triangles; f++) {
+      vec3 c = mesh__cross(m, f);
+      for (int k = 0; k < 3; k++) {
+        uint32_t v = m->idx[3 * f + k];
+        if (!zero[v]) continue;
+        zero[v] = 2; /* referenced */
+        acc[3 * v] += c.x;
+        acc[3 * v + 1] += c.y;
+        acc[3 * v + 2] += c.z;
+      }
+    }
+    for (int64_t i = 0; i < m->n_vertices; i++) {
+      if (!zero[i]) continue;
+      vec3 n = v3(acc[3 * i], acc[3 * i + 1], acc[3 * i + 2]);
+      double l = v3_len(n);
+      if (l > 0.0 && isfinite(l)) {
+        m->n[3 * i] = (float)(n.x / l);
+        m->n[3 * i + 1] = (float)(n.y / l);
+        m->n[3 * i + 2] = (float)(n.z / l);
+        (*n_repaired)++;
+      } else if (zero[i] == 1) {
+        /* No triangle uses this vertex: any unit vector will do. */
+        m->n[3 * i] = 0.0f;
+        m->n[3 * i + 1] = 0.0f;
+        m->n[3 * i + 2] = 1.0f;
+      } else {
+        bad++;
+      }
+    }
+  }
+  free(zero);
+  free(acc);
+  return bad;
+}
+
+lmc_status mesh_validate(mesh *m, const char *file, int line, lmc_error *err) {
+  const char *name = m->name[0] ? m->name : "mesh";
+
+  /* Indices in range. */
+  for (int64_t f = 0; f < m->n_triangles; f++) {
+    for (int k = 0; k < 3; k++) {
+      if ((int64_t)m->idx[3 * f + k] >= m->n_vertices)
+        return lmc_error_set(err, LMC_EPARSE, file, line,
+                             "%s: triangle %lld refers to vertex %lu, but there are %lld vertices",
+                             name, (long long)f, (unsigned long)m->idx[3 * f + k],
+                             (long long)m->n_vertices);
+    }
+  }
+
+  /* Finite positions, normals and uvs. */
+  for (int64_t i = 0; i < 3 * m->n_vertices; i++) {
+    if (!isfinite(m->p[i]))
+      return lmc_error_set(err, LMC_EPARSE, file, line, "%s: vertex %lld has a non-finite position",
+                           name, (long long)(i / 3));
+    if (m->n && !isfinite(m->n[i]))
+      return lmc_error_set(err, LMC_EPARSE, file, line, "%s: vertex %lld has a non-finite normal",
+                           name, (long long)(i / 3));
+  }
+  if (m->uv) {
+    for (int64_t i = 0; i < 2 * m->n_vertices; i++)
+      if (!isfinite(m->uv[i]))
+        return lmc_error_set(err, LMC_EPARSE, file, line,
+                             "%s: vertex %lld has a non-finite texture coordinate", name,
+                             (long long)(i / 2));
+  }
+
+  /* Drop zero-area triangles, compacting the index array in place. */
+  int64_t kept = 0;
+  for (int64_t f = 0; f < m->n_triangles; f++) {
+    vec3 c = mesh__cross(m, f);
+    if (!(v3_len2(c) > 0.0)) continue;
+    if (kept != f) memmove(&m->idx[3 * kept], &m->idx[3 * f], 3 * sizeof(uint32_t));
+    kept++;
+  }
+  if (kept != m->n_triangles) {
+    lmc_warn(file, line, "%s: dropped %lld zero-area triangle(s) of %lld", name,
+             (long long)(m->n_triangles - kept), (long long)m->n_triangles);
+    m->n_triangles = kept;
+  }
+  if (m->n_triangles == 0) {
+    lmc_warn(file, line, "%s: the mesh has no triangles", name);
+    return LMC_OK;
+  }
+
+  /* Unit vertex normals: recompute zero ones, or drop them all. */
+  if (m->n) {
+    int64_t repaired = 0;
+    int64_t bad = mesh__repair_normals(m, &repaired);
+    if (bad > 0) {
+      lmc_warn(file, line, "%s: %lld vertex normal(s) of zero length; vertex normals dropped", name,
+               (long long)bad);
+      free(m->n);
+      m->n = NULL;
+    } else if (repaired > 0) {
+      lmc_warn(file, line, "%s: recomputed %lld zero-length vertex normal(s)", name,
+               (long long)repaired);
+    }
+  }
+  return LMC_OK;
+}

@@ -1,0 +1,469 @@
+/*
+ * test_loader.c: the Mitsuba XML scene loader (src/render/io/scene_xml*.c).
+ *
+ *  - malformed inputs: a table of small scenes written to /tmp, each of
+ *    which must fail with the right status, naming the right file and line;
+ *  - warnings: unsupported things load, but each produces one warning
+ *    (counted with lmc_warning_count);
+ *  - the happy path: tests/data/loader/happy.xml has every shape type,
+ *    every BSDF, textures, an <include>, <default>s and emitters; its counts
+ *    and values are checked, with and without a -D override;
+ *  - the LMC reference scene (../shared/scenes/torus, skipped when absent).
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "render/io/io.h"
+
+#define DATA "data/loader/"
+
+static void write_text(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+}
+
+static int near(double a, double b, double tol) { return fabs(a - b) <= tol; }
+
+/* ---- Malformed inputs. -------------------------------------------------- */
+
+typedef struct bad_case {
+  const char *name;   /* file /tmp/lmc_loader_<name>.xml */
+  const char *xml;
+  lmc_status status;
+  const char *file;   /* substring of err.file */
+  int line;           /* expected err.line */
+  const char *needle; /* substring of the message */
+} bad_case;
+
+#define HEAD "<?xml version=\"1.0\"?>\n<scene version=\"0.5.0\">\n" /* lines 1-2 */
+#define SENSOR                                                         \
+  "  <sensor type=\"perspective\">\n  <float name=\"fov\" value=\"40\"/>\n" \
+  "  </sensor>\n" /* 3 lines */
+
+static const bad_case bad_cases[] = {
+    {"unclosed", HEAD "  <sensor type=\"perspective\">\n"  /* 3 */
+                      "    <float name=\"fov\" value=\"40\"/>\n" /* 4 */
+                      "  <shape type=\"cube\"/>\n"          /* 5 */
+                      "</scene>\n",                         /* 6: mismatched tag */
+     LMC_EPARSE, "lmc_loader_unclosed.xml", 6, "malformed XML"},
+    {"badfloat", HEAD "  <sensor type=\"perspective\">\n" /* 3 */
+                      "    <float name=\"fov\" value=\"1.2.3\"/>\n" /* 4 */
+                      "  </sensor>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_badfloat.xml", 4, "1.2.3"},
+    {"notnumber", HEAD "  <sensor type=\"perspective\">\n" /* 3 */
+                       "    <float name=\"fov\" value=\"abc\"/>\n" /* 4 */
+                       "  </sensor>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_notnumber.xml", 4, "abc"},
+    {"wrongtype", HEAD "  <sensor type=\"perspective\">\n" /* 3 */
+                       "    <string name=\"fov\" value=\"40\"/>\n" /* 4 */
+                       "  </sensor>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_wrongtype.xml", 4, "fov"},
+    {"badref", HEAD SENSOR /* 3-5 */
+                    "  <shape type=\"cube\">\n" /* 6 */
+                    "    <ref id=\"nope\"/>\n"   /* 7 */
+                    "  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_badref.xml", 7, "nope"},
+    {"nomesh", HEAD SENSOR /* 3-5 */
+                    "  <shape type=\"obj\">\n" /* 6 */
+                    "    <string name=\"filename\" value=\"lmc_nonexistent_mesh.obj\"/>\n" /* 7 */
+                    "  </shape>\n</scene>\n",
+     LMC_EIO, "lmc_loader_nomesh.xml", 7, "lmc_nonexistent_mesh.obj"},
+    {"notexture", HEAD SENSOR /* 3-5 */
+                       "  <shape type=\"cube\">\n"           /* 6 */
+                       "    <bsdf type=\"diffuse\">\n"       /* 7 */
+                       "      <texture type=\"bitmap\" name=\"reflectance\">\n" /* 8 */
+                       "        <string name=\"filename\" value=\"lmc_nonexistent.png\"/>\n" /* 9 */
+                       "      </texture>\n    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EIO, "lmc_loader_notexture.xml", 9, "lmc_nonexistent.png"},
+    {"nosensor", HEAD "  <shape type=\"cube\"/>\n</scene>\n", LMC_EPARSE,
+     "lmc_loader_nosensor.xml", 2, "sensor"},
+    {"undefined", HEAD "  <sensor type=\"perspective\">\n" /* 3 */
+                       "    <float name=\"fov\" value=\"$myfov\"/>\n" /* 4 */
+                       "  </sensor>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_undefined.xml", 4, "myfov"},
+    {"noinclude", HEAD SENSOR "  <include filename=\"lmc_nonexistent_inc.xml\"/>\n" /* 6 */
+                              "</scene>\n",
+     LMC_EIO, "lmc_loader_noinclude.xml", 6, "lmc_nonexistent_inc.xml"},
+    {"duplicate", HEAD SENSOR "  <bsdf type=\"diffuse\" id=\"a\"/>\n" /* 6 */
+                              "  <bsdf type=\"diffuse\" id=\"a\"/>\n" /* 7 */
+                              "</scene>\n",
+     LMC_EPARSE, "lmc_loader_duplicate.xml", 7, "duplicate"},
+    {"noradiance", HEAD SENSOR "  <shape type=\"cube\">\n" /* 6 */
+                               "    <emitter type=\"area\"/>\n" /* 7 */
+                               "  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_noradiance.xml", 7, "radiance"},
+    {"zeroscale", HEAD SENSOR "  <shape type=\"cube\">\n" /* 6 */
+                              "    <transform name=\"toWorld\">\n" /* 7 */
+                              "      <scale x=\"0\"/>\n"           /* 8 */
+                              "    </transform>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_zeroscale.xml", 8, "scale"},
+    {"badmatrix", HEAD SENSOR "  <shape type=\"cube\">\n" /* 6 */
+                              "    <transform name=\"toWorld\">\n" /* 7 */
+                              "      <matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0\"/>\n" /* 8 */
+                              "    </transform>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_badmatrix.xml", 8, "16 numbers"},
+    {"badroot", "<?xml version=\"1.0\"?>\n<scenery/>\n", LMC_EPARSE, "lmc_loader_badroot.xml", 2,
+     "scene"},
+    {"refnottex", HEAD SENSOR "  <bsdf type=\"diffuse\" id=\"b\"/>\n" /* 6 */
+                              "  <bsdf type=\"diffuse\">\n"          /* 7 */
+                              "    <ref name=\"reflectance\" id=\"b\"/>\n" /* 8 */
+                              "  </bsdf>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_refnottex.xml", 8, "texture"},
+};
+
+static void test_malformed(void **state) {
+  (void)state;
+  lmc_warn_set_quiet(1);
+  int n = (int)(sizeof bad_cases / sizeof bad_cases[0]), ok = 0;
+  for (int i = 0; i < n; i++) {
+    const bad_case *c = &bad_cases[i];
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/lmc_loader_%s.xml", c->name);
+    write_text(path, c->xml);
+    scene *s = (scene *)1;
+    lmc_error err;
+    lmc_error_clear(&err);
+    lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
+    char text[2048];
+    lmc_error_format(&err, text, sizeof text);
+    int good = st == c->status && s == NULL && strstr(err.file, c->file) != NULL &&
+               err.line == c->line && strstr(err.msg, c->needle) != NULL;
+    if (!good)
+      print_error("case %s: status %d (want %d), line %d (want %d): %s\n", c->name, (int)st,
+                  (int)c->status, err.line, c->line, text);
+    ok += good;
+    scene_destroy(s);
+  }
+  lmc_warn_set_quiet(0);
+  assert_int_equal(ok, n);
+}
+
+/* An error inside an included file names that file and its line. */
+static void test_error_in_include(void **state) {
+  (void)state;
+  write_text("/tmp/lmc_loader_inner.xml",
+             "<scene version=\"0.5.0\">\n"
+             "  <bsdf type=\"diffuse\">\n"
+             "    <float name=\"reflectance\" value=\"x1\"/>\n" /* 3 */
+             "  </bsdf>\n</scene>\n");
+  write_text("/tmp/lmc_loader_outer.xml", HEAD SENSOR "  <include filename=\"lmc_loader_inner.xml\"/>\n"
+                                          "</scene>\n");
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  assert_int_equal(scene_load_xml("/tmp/lmc_loader_outer.xml", NULL, 0, &s, &err), LMC_EPARSE);
+  assert_null(s);
+  assert_non_null(strstr(err.file, "lmc_loader_inner.xml"));
+  assert_int_equal(err.line, 3);
+}
+
+/* ---- Warnings. ---------------------------------------------------------- */
+
+static void test_warnings(void **state) {
+  (void)state;
+  write_text("/tmp/lmc_loader_warn.xml",
+             HEAD SENSOR
+             "  <medium type=\"homogeneous\" id=\"fog\"/>\n"               /* 1: element */
+             "  <bsdf type=\"weirdbsdf\" id=\"w\"/>\n"                     /* 2: plugin type */
+             "  <shape type=\"cube\">\n"
+             "    <bsdf type=\"diffuse\">\n"
+             "      <float name=\"bogus\" value=\"1\"/>\n"                 /* 3: property */
+             "    </bsdf>\n"
+             "  </shape>\n"
+             "  <shape type=\"cube\">\n"
+             "    <bsdf type=\"diffuse\">\n"
+             "      <texture type=\"wireframe\" name=\"reflectance\"/>\n"  /* 4: texture */
+             "    </bsdf>\n"
+             "  </shape>\n"
+             "  <shape type=\"hair\"/>\n"                                   /* 5: shape type */
+             "  <emitter type=\"constant\">\n"
+             "    <spectrum name=\"radiance\" value=\"400:1, 700:2\"/>\n"   /* 6: sampled spectrum */
+             "  </emitter>\n"
+             "</scene>\n");
+  lmc_warn_set_quiet(1);
+  int before = lmc_warning_count();
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status st = scene_load_xml("/tmp/lmc_loader_warn.xml", NULL, 0, &s, &err);
+  int warnings = lmc_warning_count() - before;
+  lmc_warn_set_quiet(0);
+  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  assert_non_null(s);
+  assert_int_equal(warnings, 6);
+  /* Two cubes loaded, the hair skipped; the unknown BSDF became diffuse 0.5. */
+  assert_int_equal(s->n_meshes, 2);
+  int found = 0;
+  for (int i = 0; i < s->n_bsdfs; i++)
+    if (strcmp(s->bsdfs[i].id, "w") == 0) {
+      found = 1;
+      assert_int_equal(s->bsdfs[i].type, BSDF_DIFFUSE);
+      assert_true(near(s->bsdfs[i].diffuse.value.g, 0.5, 1e-12));
+    }
+  assert_true(found);
+  /* 400:1 .. 700:2 linear: band means at 450, 550, 650 nm = 1 + (lambda-400)/300. */
+  assert_int_equal(s->n_lights, 1);
+  rgb v = s->lights[0].value;
+  assert_true(near(v.b, 1.0 + 50.0 / 300.0, 1e-9));
+  assert_true(near(v.g, 1.0 + 150.0 / 300.0, 1e-9));
+  assert_true(near(v.r, 1.0 + 250.0 / 300.0, 1e-9));
+  scene_destroy(s);
+}
+
+/* ---- The happy path. ---------------------------------------------------- */
+
+static const bsdf *find_bsdf(const scene *s, const char *id) {
+  for (int i = 0; i < s->n_bsdfs; i++)
+    if (strcmp(s->bsdfs[i].id, id) == 0) return &s->bsdfs[i];
+  print_error("no bsdf with id %s\n", id);
+  fail();
+  return NULL;
+}
+
+static int find_light(const scene *s, light_type t) {
+  for (int i = 0; i < s->n_lights; i++)
+    if (s->lights[i].type == t) return i;
+  print_error("no light of type %d\n", (int)t);
+  fail();
+  return -1;
+}
+
+static void test_happy(void **state) {
+  (void)state;
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  int before = lmc_warning_count();
+  lmc_status st = scene_load_xml(DATA "happy.xml", NULL, 0, &s, &err);
+  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  assert_int_equal(lmc_warning_count() - before, 0);
+  assert_true(s->finalized);
+
+  /* Counts: 9 shapes; 7 top-level BSDFs + the included one + the default. */
+  assert_int_equal(s->n_meshes, 9);
+  assert_int_equal(s->n_bsdfs, 9);
+  assert_int_equal(s->n_lights, 6);
+  assert_int_equal(s->n_images, 1);
+  assert_int_equal(s->n_infinite, 2);
+
+  /* Sensor, film and filter; the default fov (45) and width (64). */
+  assert_int_equal(s->cam.width, 64);
+  assert_int_equal(s->cam.height, 48);
+  assert_true(near(s->cam.fov_deg, 45.0, 1e-12));
+  assert_string_equal(s->cam.fov_axis, "y");
+  assert_true(near(s->cam.tan_half_y, tan(22.5 * 3.14159265358979323846 / 180.0), 1e-12));
+  assert_true(near(s->cam.near_clip, 0.1, 1e-15) && near(s->cam.far_clip, 500.0, 1e-12));
+  assert_true(near(s->cam.pos.z, 10.0, 1e-12) && near(s->cam.forward.z, -1.0, 1e-12));
+  assert_int_equal(s->filter.type, FILTER_TENT);
+
+  /* Settings: pssmlt with its own maxDepth; rrDepth from the nested path. */
+  const render_settings *r = &s->settings;
+  assert_string_equal(r->integrator, "pssmlt");
+  assert_int_equal(r->maxdepth, 7);
+  assert_int_equal(r->rrdepth, 3);
+  assert_true(near(r->largestep, 0.25, 1e-15));
+  assert_int_equal((int)r->spp, 32);
+  unsigned want = SET_INTEGRATOR | SET_MAXDEPTH | SET_RRDEPTH | SET_LARGESTEP | SET_SPP;
+  assert_int_equal(r->set, want);
+
+  /* BSDFs. */
+  const bsdf *d = find_bsdf(s, "d");
+  assert_int_equal(d->type, BSDF_DIFFUSE);
+  assert_int_equal(d->diffuse.type, TEX_BITMAP);
+  assert_ptr_equal(d->diffuse.image, &s->images[0]);
+  assert_int_equal(s->images[0].channels, 3);
+  assert_true(near(d->diffuse.uscale, 2.0, 0) && near(d->diffuse.vscale, 1.0, 0));
+  assert_true(near(d->diffuse.voffset, 0.5, 0));
+  const bsdf *ph = find_bsdf(s, "ph");
+  assert_int_equal(ph->type, BSDF_PHONG);
+  assert_true(near(ph->exponent, 40.0, 0));
+  assert_true(near(ph->specular.value.r, 0.3, 1e-15));
+  assert_int_equal(ph->diffuse.type, TEX_CHECKERBOARD);
+  assert_true(near(ph->diffuse.color0.r, 0.4, 1e-15) && near(ph->diffuse.color1.r, 0.2, 1e-15));
+  assert_true(near(ph->diffuse.uscale, 3.0, 0));
+  const bsdf *rc = find_bsdf(s, "rc");
+  assert_int_equal(rc->type, BSDF_ROUGHCONDUCTOR);
+  assert_int_equal(rc->dist, MF_GGX);
+  assert_true(near(rc->alpha, 0.2, 1e-15));
+  assert_true(near(rc->cond_eta.r, 0.1, 1e-15) && near(rc->cond_eta.b, 0.55, 1e-15));
+  assert_true(near(rc->cond_k.g, 1.25, 1e-15));
+  assert_int_equal(rc->specular.type, TEX_CHECKERBOARD);
+  assert_true(near(rc->specular.color0.r, 0.9, 1e-15) && near(rc->specular.uscale, 4.0, 0));
+  const bsdf *gl = find_bsdf(s, "gl");
+  double water = 0.0;
+  assert_true(ior_lookup("water", &water));
+  assert_int_equal(gl->type, BSDF_DIELECTRIC);
+  assert_true(near(gl->eta, water, 1e-12));
+  const bsdf *rg = find_bsdf(s, "rg");
+  assert_int_equal(rg->type, BSDF_ROUGHDIELECTRIC);
+  assert_int_equal(rg->dist, MF_BECKMANN);
+  assert_true(near(rg->eta, 1.2, 1e-12) && near(rg->alpha, 0.3, 1e-15));
+  assert_int_equal(rg->sample_visible, 0);
+  const bsdf *pl = find_bsdf(s, "pl");
+  assert_int_equal(pl->type, BSDF_PLASTIC);
+  assert_true(near(pl->eta, 1.5, 1e-15));
+  assert_int_equal(pl->nonlinear, 1);
+  /* sRGB 128/255 decodes to 0.2158605. */
+  assert_true(near(pl->diffuse.value.g, 0.2158605, 1e-6));
+  const bsdf *ts = find_bsdf(s, "ts");
+  assert_int_equal(ts->type, BSDF_DIFFUSE);
+  assert_int_equal(ts->twosided, 1);
+  assert_true(near(ts->diffuse.value.b, 0.6, 1e-15));
+  const bsdf *incl = find_bsdf(s, "incl");
+  rgb au_eta, au_k;
+  assert_true(conductor_lookup("Au", &au_eta, &au_k));
+  assert_int_equal(incl->type, BSDF_CONDUCTOR);
+  assert_true(near(incl->cond_eta.r, au_eta.r, 1e-12) && near(incl->cond_k.b, au_k.b, 1e-12));
+
+  /* Shapes: names, flags, transforms, default BSDF, the area light. */
+  int checked = 0;
+  for (int i = 0; i < s->n_meshes; i++) {
+    const mesh *m = &s->meshes[i];
+    const bsdf *b = &s->bsdfs[m->bsdf];
+    if (strcmp(m->name, "the_obj") == 0) {
+      /* Scaled by 2 then moved by x+1: the quad spans x in [1, 3]. */
+      double xmin = 1e9, xmax = -1e9;
+      for (int64_t v = 0; v < m->n_vertices; v++) {
+        xmin = fmin(xmin, m->p[3 * v]);
+        xmax = fmax(xmax, m->p[3 * v]);
+      }
+      assert_true(near(xmin, 1.0, 1e-6) && near(xmax, 3.0, 1e-6));
+      assert_ptr_equal(b, d);
+      checked++;
+    } else if (strcmp(m->name, "lamp") == 0) {
+      assert_true(m->light >= 0);
+      const light *l = &s->lights[m->light];
+      assert_int_equal(l->type, LIGHT_AREA);
+      assert_int_equal(l->mesh, i);
+      assert_true(near(l->value.r, 5.0, 0) && near(l->value.b, 3.0, 0));
+      /* rotate x 90 maps the rectangle's +z normal to -y, then y += 3. */
+      assert_true(near(mesh_face_normal(m, 0).y, -1.0, 1e-6));
+      assert_true(near(m->p[1], 3.0, 1e-6));
+      assert_ptr_equal(b, rc);
+      checked++;
+    } else if (strcmp(m->name, "plain") == 0) {
+      assert_int_equal(b->type, BSDF_DIFFUSE);
+      assert_true(near(b->diffuse.value.r, 0.5, 0));
+      assert_int_equal(m->light, -1);
+      assert_true(near(m->p[2], 7.0, 1e-6)); /* the <matrix> moved it to z = 7 */
+      checked++;
+    } else if (strcmp(m->name, "quad.ply") == 0) {
+      assert_int_equal(m->flip_normals, 1);
+      assert_ptr_equal(b, ph);
+      checked++;
+    } else if (b == pl) {
+      assert_int_equal(m->face_normals, 1);
+      checked++;
+    }
+  }
+  assert_int_equal(checked, 5);
+
+  /* Emitters. */
+  const light *pt = &s->lights[find_light(s, LIGHT_POINT)];
+  assert_true(near(pt->pos.x, 1, 0) && near(pt->pos.y, 2, 0) && near(pt->pos.z, 3, 0));
+  assert_true(near(pt->value.g, 10.0, 0));
+  const light *sp = &s->lights[find_light(s, LIGHT_SPOT)];
+  assert_true(near(sp->pos.y, 5.0, 1e-12) && near(sp->frm.n.y, -1.0, 1e-12));
+  assert_true(near(sp->cutoff, 40.0 * 3.14159265358979323846 / 180.0, 1e-12));
+  assert_true(near(sp->beam_width, 30.0 * 3.14159265358979323846 / 180.0, 1e-12));
+  assert_true(near(sp->cos_cutoff, cos(sp->cutoff), 1e-15));
+  const light *dl = &s->lights[find_light(s, LIGHT_DIRECTIONAL)];
+  assert_true(near(dl->frm.n.y, -1.0, 1e-12) && near(dl->value.r, 2.0, 0));
+  const light *cl = &s->lights[find_light(s, LIGHT_CONSTANT)];
+  assert_true(near(cl->value.g, 0.1, 1e-15));
+  const light *el = &s->lights[find_light(s, LIGHT_ENVMAP)];
+  assert_true(near(el->scale, 3.0, 0));
+  assert_int_equal(el->image.width, 4);
+  assert_int_equal(el->image.channels, 3);
+  scene_destroy(s);
+}
+
+/* -D overrides a <default>. */
+static void test_define_override(void **state) {
+  (void)state;
+  const char *defs[] = {"fov=30", "width=80"};
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status st = scene_load_xml(DATA "happy.xml", defs, 2, &s, &err);
+  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  assert_true(near(s->cam.fov_deg, 30.0, 1e-12));
+  assert_int_equal(s->cam.width, 80);
+  scene_destroy(s);
+  /* A malformed define is refused. */
+  const char *bad[] = {"novalue"};
+  assert_int_equal(scene_load_xml(DATA "happy.xml", bad, 1, &s, &err), LMC_EINVAL);
+  assert_null(s);
+}
+
+/* ---- The LMC reference scene. ------------------------------------------- */
+
+static void check_torus(const char *name, int h2mc) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/scenes/torus/%s", LMC_SHARED_DIR, name);
+  FILE *f = fopen(path, "rb");
+  if (!f) skip();
+  fclose(f);
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_warn_set_quiet(1);
+  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
+  lmc_warn_set_quiet(0);
+  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  assert_int_equal(s->n_meshes, 5);
+  assert_int_equal(s->n_lights, 1);
+  assert_int_equal(s->lights[0].type, LIGHT_ENVMAP);
+  assert_true(near(s->cam.fov_deg, 34.6222, 1e-9));
+  assert_int_equal(s->cam.width, 1024);
+  assert_int_equal(s->cam.height, 768);
+  assert_int_equal(s->filter.type, FILTER_BOX);
+  assert_string_equal(s->settings.integrator, "lmc");
+  assert_int_equal(s->settings.maxdepth, 8);
+  assert_int_equal(s->settings.mindepth, -1);
+  assert_int_equal((int)s->settings.spp, h2mc ? 67 : 245);
+  assert_int_equal(s->settings.h2mc, h2mc);
+  assert_int_equal(s->settings.mala, !h2mc);
+  /* The floor's phong uses the checker bitmap with uvscale 100. */
+  int bitmaps = 0;
+  for (int i = 0; i < s->n_bsdfs; i++)
+    if (s->bsdfs[i].diffuse.type == TEX_BITMAP) {
+      bitmaps++;
+      assert_true(near(s->bsdfs[i].diffuse.uscale, 100.0, 0));
+      assert_non_null(s->bsdfs[i].diffuse.image);
+    }
+  assert_int_equal(bitmaps, 1);
+  scene_destroy(s);
+}
+
+static void test_torus_lmc(void **state) {
+  (void)state;
+  check_torus("lmc.xml", 0);
+}
+
+static void test_torus_h2mc(void **state) {
+  (void)state;
+  check_torus("h2mc.xml", 1);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_malformed),       cmocka_unit_test(test_error_in_include),
+      cmocka_unit_test(test_warnings),        cmocka_unit_test(test_happy),
+      cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
+      cmocka_unit_test(test_torus_h2mc),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
