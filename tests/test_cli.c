@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "render/image.h"
+#include "render/vec3.h"
 
 #define SCENE "data/analytic/diffuse_sphere.xml"
 #define TMP "/tmp/lmc_test_cli"

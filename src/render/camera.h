@@ -7,10 +7,11 @@
  *
  * Importance is normalised per pixel: for a direction w through raster point
  * r, camera_we returns W * H / (A cos^4 theta), where A is the area of the
- * image rectangle at distance 1 and theta the angle to the optical axis.
- * Splatting (film_splat) a light path's contribution with this We, and
- * dividing by the number of light paths per pixel, estimates the same pixel
- * values as tracing camera rays.
+ * image rectangle at distance 1 and theta the angle to the optical axis
+ * (W * H / A is the number of pixels per unit of image-plane area). One
+ * light path, splatted (film_splat) with this We, estimates every pixel at
+ * once; the mean of N such splats (film splat_scale = 1/N) estimates the
+ * same pixel values as tracing camera rays.
  */
 #ifndef LMC_RENDER_CAMERA_H
 #define LMC_RENDER_CAMERA_H

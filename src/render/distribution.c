@@ -103,16 +103,17 @@ void distrib1d_free(distrib1d *d) {
 /* The cell i in [0, n-1] with cdf[i] <= u < cdf[i+1] (the largest i with
  * cdf[i] <= u, so zero-width cells are skipped). */
 static int distrib1d__find(const distrib1d *d, double u) {
-  int lo = 0, hi = d->n - 1;
-  /* Invariant: cdf[lo] <= u (or lo = 0), answer in [lo, hi]. */
-  while (lo < hi) {
-    int mid = lo + (hi - lo + 1) / 2;
-    if (d->cdf[mid] <= u)
-      lo = mid;
-    else
-      hi = mid - 1;
+  /* The last i in [0, n-1] with cdf[i] <= u, by a branchless binary search
+   * (the comparison becomes a conditional move, so the ~log2(n) steps do
+   * not mispredict). Invariant: the answer lies in [base, base + len - 1]. */
+  const double *base = d->cdf;
+  int len = d->n;
+  while (len > 1) {
+    int half = len / 2;
+    base = (base[half] <= u) ? base + half : base;
+    len -= half;
   }
-  return lo;
+  return (int)(base - d->cdf);
 }
 
 double distrib1d_sample_cont(const distrib1d *d, double u, double *pdf, int *index) {

@@ -179,25 +179,25 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
                        int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt);
 
 /* Evaluates the single strategy (s, t): the first t vertices of cam joined
- * with the first s of light (for s = 1 the light is sampled afresh from
+ * with the first s of lp (for s = 1 the light is sampled afresh from
  * u_connect, which may be NULL otherwise). Returns the MIS-weighted
  * contribution (0 when the strategy cannot produce a path); for t = 1 it
  * is a film splat at (*OUT_rx, *OUT_ry). OUT_weight (may be NULL) gets the
  * MIS weight. This is what multiplexed MLT evaluates per state. */
-rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *light, int s,
+rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
                  const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
                  render_counters *cnt);
 
 /* The power-heuristic MIS weight of strategy (s, t) for the full path made
- * of cam[0..t-1] and light[0..s-1] (pbrt's ratio walk). `sampled` replaces
- * light[0] when s = 1 (may be NULL). The densities of the four vertices
+ * of cam[0..t-1] and lp[0..s-1] (pbrt's ratio walk). `sampled` replaces
+ * lp[0] when s = 1 (may be NULL). The densities of the four vertices
  * next to the connection are recomputed here; the arrays are not changed. */
-double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *light,
+double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                        int s, const bdpt_vertex *sampled);
 
 /* Recomputes pdf_fwd and pdf_rev of every vertex of the full path
- * cam[0..t-1] + light[0..s-1] from its geometry (tests use it to check the
+ * cam[0..t-1] + lp[0..s-1] from its geometry (tests use it to check the
  * bookkeeping of the random walks and to re-split a path). */
-void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *light, int s);
+void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, int s);
 
 #endif

@@ -12,8 +12,8 @@
  *
  * Stopping: the spp budget, the time limit, or render_request_stop (from
  * SIGINT/SIGTERM) end the render at the next row. Pixels keep their own
- * sample counts and splats are normalised by the number of camera samples
- * actually taken (each traces one light subpath), so an interrupted render
+ * sample counts and splats are normalised by the number of light subpaths
+ * actually traced (one per camera sample), so an interrupted render
  * is still a correct image of the samples it has.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -175,7 +175,9 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
   if (stop == 2) st->timed_out = 1;
   progress_finish(&bar);
 
-  /* Totals, and the splat normalisation: one light subpath per sample. */
+  /* Totals, and the splat normalisation: one light subpath per sample, and
+   * each light subpath (with the per-pixel importance of camera.h) is an
+   * estimate of every pixel, so splats are divided by their total number. */
   for (int t = 0; t < nthreads; t++) {
     st->rays += counters[t].rays;
     st->samples += counters[t].samples;
@@ -187,7 +189,7 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
       film_merge(out, &splats[t]);
       film_free(&splats[t]);
     }
-    out->splat_scale = st->samples > 0 ? (double)W * H / (double)st->samples : 0.0;
+    out->splat_scale = st->samples > 0 ? 1.0 / (double)st->samples : 0.0;
   }
   free(splats);
   free(counters);

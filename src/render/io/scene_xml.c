@@ -1277,6 +1277,7 @@ static lmc_status xml__build(builder *B, pset *root) {
     bsdf *b = &B->s->bsdfs[f->bsdf];
     texture *t = f->which == 0 ? &b->diffuse : f->which == 1 ? &b->specular : &b->transmittance;
     t->image = &B->s->images[f->image];
+    tex_update_mean(t); /* BSDFs choose lobes by the mean; cache it once */
   }
   return scene_finalize(B->s, B->err);
 }

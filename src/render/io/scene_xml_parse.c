@@ -841,7 +841,7 @@ static lmc_status parse__file(parse_ctx *c, const char *path, pset *parent) {
   const char *file = parse__intern(c->doc, path);
   if (!file) return lmc_error_set(c->err, LMC_ENOMEM, path, 0, "out of memory");
   FILE *fp = fopen(path, "rb");
-  if (!fp) return lmc_error_set(c->err, LMC_EIO, path, 0, "cannot open the scene file");
+  if (!fp) return lmc_error_set(c->err, LMC_EIO, path, 0, "cannot open the scene file: %s", strerror(errno));
   XML_Parser p = XML_ParserCreate(NULL);
   if (!p) {
     fclose(fp);
@@ -902,7 +902,10 @@ lmc_status pdoc_parse(pdoc *doc, const char *path, const char *const *defines, i
       break;
     }
   }
-  if (c.status == LMC_OK) parse__file(&c, path, NULL);
+  if (c.status == LMC_OK) {
+    lmc_status fst = parse__file(&c, path, NULL);
+    if (c.status == LMC_OK) c.status = fst;
+  }
   for (int i = 0; i < c.n_params; i++) {
     free(c.params[i].name);
     free(c.params[i].value);

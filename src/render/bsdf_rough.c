@@ -1,0 +1,180 @@
+/*
+ * bsdf_rough.c: the microfacet models of Walter, Marschner, Li and Torrance
+ * 2007, "Microfacet Models for Refraction through Rough Surfaces", with the
+ * distributions of microfacet.h, as Mitsuba 0.6's roughconductor and
+ * roughdielectric define them.
+ *
+ * roughconductor (one-sided). With h = normalize(wo + wi):
+ *   f = F_cond(wo . h) D(h) G(wo, wi, h) / (4 cos_o cos_i) * specularReflectance.
+ * Sampling draws a normal m (visible normals of wo, or D(m) cos(theta_m))
+ * and reflects wo about it; the density of wi is
+ *   pdf = p_m(h) / (4 |wi . h|).
+ *
+ * roughdielectric (both sides; wo.z < 0 means wo is inside, where the IOR
+ * is eta = intIOR / extIOR). Let e = eta_i / eta_o be the IOR of wi's side
+ * over the IOR of wo's side (e = eta when wo is outside, 1/eta inside).
+ *   reflection (cos_o cos_i > 0):  h = normalize(wo + wi),
+ *     f_r = F D G / (4 |cos_o| |cos_i|) * specularReflectance;
+ *   refraction (cos_o cos_i < 0):  h = normalize(wo + e wi) (the generalised
+ *     half vector), flipped to the upper hemisphere,
+ *     f_t = (1 - F) D G e^2 |wo.h| |wi.h| / (|cos_o| |cos_i| (wo.h + e wi.h)^2)
+ *           * specularTransmittance,
+ *     times 1/e^2 in radiance mode (radiance is compressed when it enters a
+ *     denser medium), so that f_imp(wo, wi) = f_rad(wi, wo).
+ * F = fresnel_dielectric(wo . h, eta). Sampling: a normal m is drawn as for
+ * the conductor (from the side of wo, i.e. with wo mirrored to the upper
+ * hemisphere), reflection is chosen with probability F(wo . m), refraction
+ * otherwise. Densities of wi:
+ *   reflection  F p_m(h) / (4 |wi.h|),
+ *   refraction  (1 - F) p_m(h) e^2 |wi.h| / (wo.h + e wi.h)^2.
+ * Without visible-normal sampling, Mitsuba samples a slightly wider
+ * distribution, alpha (1.2 - 0.2 sqrt(|cos_o|)) (Walter et al.'s trick to
+ * lower the weights at grazing angles); the pdf uses the same alpha.
+ *
+ * Sample weights are computed as f |cos_i| / pdf from the same eval and pdf
+ * functions, so the three can never disagree.
+ */
+#include <math.h>
+#include <stddef.h>
+
+#include "render/bsdf_internal.h"
+#include "render/microfacet.h"
+
+/* ---- roughconductor ------------------------------------------------------ */
+
+rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                              transport_mode mode) {
+  (void)mode;
+  if (wo.z <= 0.0 || wi.z <= 0.0) return rgb_zero();
+  vec3 h = v3_normalize(v3_add(wo, wi));
+  double d = mf_D(b->dist, b->alpha, h);
+  if (d == 0.0) return rgb_zero();
+  double g = mf_G(b->dist, b->alpha, wi, wo, h);
+  if (g == 0.0) return rgb_zero();
+  rgb fr = fresnel_conductor(v3_dot(wo, h), b->cond_eta, b->cond_k);
+  rgb ks = tex_eval(&b->specular, tu, tv);
+  return rgb_scale(rgb_mul(fr, ks), d * g / (4.0 * wo.z * wi.z));
+}
+
+double bsdf__roughconductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
+  (void)tu, (void)tv;
+  if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
+  vec3 h = v3_normalize(v3_add(wo, wi));
+  double wih = v3_dot(wi, h);
+  if (wih <= 0.0) return 0.0;
+  return mf_pdf(b->dist, b->alpha, wo, h, b->sample_visible) / (4.0 * wih);
+}
+
+int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
+                                double u1, double u2, transport_mode mode, bsdf_sample *out) {
+  (void)u_lobe;
+  if (wo.z <= 0.0) return 0;
+  vec3 m = mf_sample(b->dist, b->alpha, wo, b->sample_visible, u1, u2);
+  double wom = v3_dot(wo, m);
+  if (wom <= 0.0) return 0;
+  vec3 wi = v3_normalize(v3_reflect(wo, m));
+  if (wi.z <= 0.0) return 0;
+  return bsdf__finish(out, wi, bsdf__roughconductor_eval(b, tu, tv, wo, wi, mode),
+                      bsdf__roughconductor_pdf(b, tu, tv, wo, wi), 1.0,
+                      BSDF_REFLECTION | BSDF_GLOSSY);
+}
+
+/* ---- roughdielectric ----------------------------------------------------- */
+
+/* The roughness the sampler uses (Walter's widening without visible normals). */
+static double bsdf__rd_sample_alpha(const bsdf *b, double cos_o) {
+  if (b->sample_visible) return b->alpha;
+  return b->alpha * (1.2 - 0.2 * sqrt(fabs(cos_o)));
+}
+
+/* The half vector of (wo, wi) in the upper hemisphere and e (1 for
+ * reflection); returns 0 when it is degenerate. */
+static int bsdf__rd_half(const bsdf *b, vec3 wo, vec3 wi, vec3 *h, double *e, int *reflect) {
+  *reflect = wo.z * wi.z > 0.0;
+  *e = *reflect ? 1.0 : (wo.z > 0.0 ? b->eta : 1.0 / b->eta);
+  vec3 hh = v3_add(wo, v3_scale(wi, *e));
+  double l = v3_len(hh);
+  if (!(l > 0.0)) return 0;
+  hh = v3_scale(hh, 1.0 / l);
+  if (hh.z < 0.0) hh = v3_neg(hh);
+  if (hh.z == 0.0) return 0;
+  *h = hh;
+  return 1;
+}
+
+rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                               transport_mode mode) {
+  if (wo.z == 0.0 || wi.z == 0.0) return rgb_zero();
+  vec3 h;
+  double e;
+  int reflect;
+  if (!bsdf__rd_half(b, wo, wi, &h, &e, &reflect)) return rgb_zero();
+  double d = mf_D(b->dist, b->alpha, h);
+  if (d == 0.0) return rgb_zero();
+  double g = mf_G(b->dist, b->alpha, wi, wo, h);
+  if (g == 0.0) return rgb_zero();
+  double woh = v3_dot(wo, h), wih = v3_dot(wi, h);
+  double fr = fresnel_dielectric(woh, b->eta, NULL);
+  if (reflect) {
+    rgb ks = tex_eval(&b->specular, tu, tv);
+    return rgb_scale(ks, fr * d * g / (4.0 * fabs(wo.z) * fabs(wi.z)));
+  }
+  /* Refraction: (1 - F) D G e^2 |wo.h wi.h| / (|cos_o cos_i| (wo.h + e wi.h)^2). */
+  double den = woh + e * wih;
+  if (den == 0.0) return rgb_zero();
+  double v = (1.0 - fr) * d * g * e * e * fabs(woh * wih) / (fabs(wo.z * wi.z) * den * den);
+  if (mode == TRANSPORT_RADIANCE) v /= e * e;
+  return rgb_scale(tex_eval(&b->transmittance, tu, tv), v);
+}
+
+double bsdf__roughdielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
+  (void)tu, (void)tv;
+  if (wo.z == 0.0 || wi.z == 0.0) return 0.0;
+  vec3 h;
+  double e;
+  int reflect;
+  if (!bsdf__rd_half(b, wo, wi, &h, &e, &reflect)) return 0.0;
+  double woh = v3_dot(wo, h), wih = v3_dot(wi, h);
+  /* A valid configuration has wo and wi on the sides of h their z says. */
+  if (woh * wo.z <= 0.0 || wih * wi.z <= 0.0) return 0.0;
+  vec3 v = wo.z > 0.0 ? wo : v3_neg(wo);
+  double pm = mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wo.z), v, h, b->sample_visible);
+  if (pm == 0.0) return 0.0;
+  double fr = fresnel_dielectric(woh, b->eta, NULL);
+  if (reflect) return fr * pm / (4.0 * fabs(wih));
+  double den = woh + e * wih;
+  if (den == 0.0) return 0.0;
+  return (1.0 - fr) * pm * e * e * fabs(wih) / (den * den);
+}
+
+int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
+                                 double u1, double u2, transport_mode mode, bsdf_sample *out) {
+  if (wo.z == 0.0) return 0;
+  /* Draw a normal from the side of wo. */
+  vec3 v = wo.z > 0.0 ? wo : v3_neg(wo);
+  vec3 m = mf_sample(b->dist, bsdf__rd_sample_alpha(b, wo.z), v, b->sample_visible, u1, u2);
+  double wom = v3_dot(wo, m);
+  if (wom * wo.z <= 0.0) return 0;
+  double cos_t;
+  double fr = fresnel_dielectric(wom, b->eta, &cos_t);
+  vec3 wi;
+  int flags;
+  double eta_out;
+  if (u_lobe < fr) {
+    /* Reflection about m. */
+    wi = v3_normalize(v3_reflect(wo, m));
+    if (wi.z * wo.z <= 0.0) return 0;
+    flags = BSDF_REFLECTION | BSDF_GLOSSY;
+    eta_out = 1.0;
+  } else {
+    /* Refraction through m: wi = m (wo.m s + cos_t) - wo s, s = eta_o / eta_i. */
+    if (cos_t == 0.0) return 0;
+    double s = wom > 0.0 ? 1.0 / b->eta : b->eta;
+    wi = v3_normalize(v3_sub(v3_scale(m, wom * s + cos_t), v3_scale(wo, s)));
+    if (wi.z * wo.z >= 0.0) return 0;
+    flags = BSDF_TRANSMISSION | BSDF_GLOSSY;
+    eta_out = cos_t < 0.0 ? b->eta : 1.0 / b->eta;
+  }
+  return bsdf__finish(out, wi, bsdf__roughdielectric_eval(b, tu, tv, wo, wi, mode),
+                      bsdf__roughdielectric_pdf(b, tu, tv, wo, wi), eta_out, flags);
+}

@@ -1,0 +1,621 @@
+/*
+ * integrator_bdpt.c: bidirectional path tracing (Veach and Guibas 1995;
+ * Veach 1997, chapter 10) with multiple importance sampling over all
+ * strategies, power heuristic.
+ *
+ * A camera subpath z_0 (the pinhole) ... z_{t-1} and a light subpath
+ * y_0 (on a light) ... y_{s-1} are traced once per pixel sample; every
+ * prefix pair (s, t) then makes one full path:
+ *   s = 0        z_{t-1} is itself on an emitter (area light, or the ray
+ *                escaped to the infinite lights);
+ *   s = 1        next-event estimation: a fresh light sample joined to
+ *                z_{t-1} (scene_sample_light + light_sample_li);
+ *   t = 1        light tracing: y_{s-1} joined to the pinhole and splatted
+ *                at the raster point camera_we returns;
+ *   s, t >= 2    y_{s-1} and z_{t-1} joined by a shadow ray.
+ * (s = 1, t = 1) is not used: lights seen directly come from s = 0.
+ *
+ * Contributions. With beta the subpath throughputs (products of BSDF
+ * sample weights over the emission or camera densities) and f_s the BSDF
+ * including the shading cosine,
+ *   C(s,t) = beta_y f_s(y_{s-2} -> y_{s-1} -> z_{t-1}) G f_s(y_{s-1} -> z_{t-1} -> z_{t-2}) beta_z,
+ *   G = 1 / |y_{s-1} - z_{t-1}|^2 (visibility tested by a shadow ray).
+ * For t = 1 the camera factor is We cos_cam / d^2 with We = camera_we
+ * (normalised per pixel, see camera.h); the driver scales splats by
+ * W H / samples.
+ *
+ * Light subpaths carry importance (TRANSPORT_IMPORTANCE) and Veach's
+ * shading-normal correction (thesis section 5.3; pbrt's
+ * CorrectShadingNormal): at a light-subpath vertex with wo towards the
+ * light and wi onward, f is multiplied by
+ *   |wo . n_s| |wi . n_g| / (|wo . n_g| |wi . n_s|),
+ * so that both subpaths estimate the same integrand as pt_li. Mitsuba's
+ * rule that a direction is used only when it lies on the same side of the
+ * geometric and the shading surface applies to every direction at every
+ * scattering vertex, on both subpaths and at connections (as in pt_li).
+ *
+ * MIS weights. Each vertex keeps pdf_fwd (its density under its own
+ * subpath's sampling) and pdf_rev (its density when sampled from the other
+ * end), per unit area; vertices at infinity (escaped rays, infinite and
+ * directional lights) use solid angle, and the vertex after them is
+ * sampled with the planar density 1/(pi r^2) |cos| of light_sample_le's
+ * disk. The power-heuristic weight is
+ *   w(s,t) = 1 / (1 + sum_{s' != s} (p_{s'} / p_s)^2),
+ * and the ratios p_{s'}/p_s follow from a walk outwards from the
+ * connection, multiplying pdf_rev / pdf_fwd of one vertex per step (pbrt's
+ * MISWeight, with zero densities of delta lobes read as one, so the delta
+ * factors cancel). The four vertices next to the connection get their
+ * pdf_rev recomputed for the joined path. A strategy s' is skipped when
+ * its connection would touch a vertex that scattered through a delta lobe,
+ * when s' = 0 and the light is a delta light, and when s' = 1 and t' = 1.
+ * Infinite lights are one emitter for the s = 0 strategy: their densities
+ * are summed over all infinite lights (each weighted by its selection
+ * probability). Russian roulette is not part of the densities.
+ *
+ * Random numbers: the layout of integrator.h (camera, light and connect
+ * streams, a fixed number per vertex). Russian roulette, as pt_li, from
+ * rrdepth segments on with survival min(0.95, max(throughput)): on the
+ * camera subpath the throughput includes the eta^2 of refractions; on the
+ * light subpath it is the product of the BSDF weights only (the emitted
+ * power is not a probability).
+ */
+#include "render/integrator.h"
+
+#include <string.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* ---------------------------------------------------------------------------
+ * Vertex queries.
+ */
+
+static double bdpt__remap0(double x) { return x != 0.0 ? x : 1.0; }
+
+/* The light a vertex acts as when it is a path's light endpoint, or -1. */
+static int bdpt__light_index(const bdpt_vertex *v) {
+  return v->type == BDPT_VERTEX_LIGHT || v->type == BDPT_VERTEX_SURFACE ? v->light : -1;
+}
+
+/* Light endpoint standing for the infinite lights (escaped ray, constant, envmap). */
+static int bdpt__is_infinite(const scene *sc, const bdpt_vertex *v) {
+  if (v->type != BDPT_VERTEX_LIGHT) return 0;
+  return v->light < 0 || light_is_infinite(&sc->lights[v->light]);
+}
+
+/* Light endpoint whose position is at infinity (infinite or directional). */
+static int bdpt__at_infinity(const scene *sc, const bdpt_vertex *v) {
+  if (v->type != BDPT_VERTEX_LIGHT) return 0;
+  return bdpt__is_infinite(sc, v) || sc->lights[v->light].type == LIGHT_DIRECTIONAL;
+}
+
+static int bdpt__is_delta_light(const scene *sc, const bdpt_vertex *v) {
+  return v->type == BDPT_VERTEX_LIGHT && v->light >= 0 && light_is_delta(&sc->lights[v->light]);
+}
+
+static int bdpt__has_normal(const bdpt_vertex *v) { return v3_len2(v->n) > 0.0; }
+
+/* Scattering vertex whose BSDF has a non-delta part (can be connected). */
+static int bdpt__connectible(const bdpt_vertex *v) {
+  return v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf);
+}
+
+/* Unit direction from vertex a towards vertex b (either may be at infinity). */
+static vec3 bdpt__dir_to(const scene *sc, const bdpt_vertex *a, const bdpt_vertex *b) {
+  if (bdpt__at_infinity(sc, b)) return v3_neg(b->dir);
+  if (bdpt__at_infinity(sc, a)) return a->dir;
+  return v3_normalize(v3_sub(b->p, a->p));
+}
+
+/* Local direction of w at a surface, and whether w lies on the same side
+ * of the geometric and the shading surface (Mitsuba's rule). */
+static int bdpt__side_ok(const surface_hit *h, vec3 w, vec3 *OUT_local) {
+  *OUT_local = frame_to_local(&h->sh, w);
+  return v3_dot(w, h->ng) * OUT_local->z > 0.0;
+}
+
+/* Veach's shading-normal correction for importance transport:
+ *   |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|). */
+static double bdpt__shading_correction(const surface_hit *h, vec3 wo, vec3 wi) {
+  double num = fabs(v3_dot(wo, h->sh.n)) * fabs(v3_dot(wi, h->ng));
+  double den = fabs(v3_dot(wo, h->ng)) * fabs(v3_dot(wi, h->sh.n));
+  return den > 0.0 ? num / den : 0.0;
+}
+
+/* f(wo, wi) |wi . n_s| at a surface vertex, towards the unit direction wi,
+ * with the correction above in importance mode; 0 when a direction breaks
+ * the side rule. */
+static rgb bdpt__f_cos(const bdpt_vertex *v, vec3 wi, transport_mode mode) {
+  const surface_hit *h = &v->hit;
+  vec3 wo_l, wi_l;
+  if (!bdpt__side_ok(h, v->wo, &wo_l) || !bdpt__side_ok(h, wi, &wi_l)) return rgb_zero();
+  rgb f = bsdf_eval(h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
+  double c = fabs(wi_l.z);
+  if (mode == TRANSPORT_IMPORTANCE) c *= bdpt__shading_correction(h, v->wo, wi);
+  return rgb_scale(f, c);
+}
+
+/* ---------------------------------------------------------------------------
+ * Densities (pbrt's Vertex::ConvertDensity, Pdf, PdfLight, PdfLightOrigin).
+ */
+
+/* Solid-angle density at `from` of the direction to `to`, as a density of
+ * `to`: per unit area (times |cos| at `to` over the squared distance), or
+ * unchanged when `to` is at infinity. */
+static double bdpt__convert(const scene *sc, double pdf_sa, const bdpt_vertex *from,
+                            const bdpt_vertex *to) {
+  if (bdpt__at_infinity(sc, to)) return pdf_sa;
+  vec3 d = v3_sub(to->p, from->p);
+  double d2 = v3_len2(d);
+  if (!(d2 > 0.0)) return 0.0;
+  double pdf = pdf_sa / d2;
+  if (bdpt__has_normal(to)) pdf *= fabs(v3_dot(to->n, d)) / sqrt(d2);
+  return pdf;
+}
+
+/* Density of `next` when emitted from the light endpoint v. */
+static double bdpt__pdf_light(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *next) {
+  int li = bdpt__light_index(v);
+  if (bdpt__at_infinity(sc, v)) {
+    /* Planar density of light_sample_le's disk: 1/(pi r^2) |cos|. */
+    double pdf = 1.0 / (M_PI * sc->radius * sc->radius);
+    if (bdpt__has_normal(next)) pdf *= fabs(v3_dot(next->n, v->dir));
+    return pdf;
+  }
+  if (li < 0) return 0.0;
+  vec3 d = v3_sub(next->p, v->p);
+  double d2 = v3_len2(d);
+  if (!(d2 > 0.0)) return 0.0;
+  vec3 w = v3_scale(d, 1.0 / sqrt(d2));
+  double pdf_pos, pdf_dir;
+  light_pdf_le(&sc->lights[li], sc, v->p, v->n, w, &pdf_pos, &pdf_dir);
+  double pdf = pdf_dir / d2;
+  if (bdpt__has_normal(next)) pdf *= fabs(v3_dot(next->n, w));
+  return pdf;
+}
+
+/* Density of choosing v as the light endpoint (with the light selection
+ * probability); `next` is the vertex it connects to. Infinite lights: the
+ * solid-angle density summed over all infinite lights. Delta positions
+ * and directional lights: the selection probability alone. */
+static double bdpt__pdf_light_origin(const scene *sc, const bdpt_vertex *v,
+                                     const bdpt_vertex *next) {
+  if (bdpt__is_infinite(sc, v)) {
+    vec3 w_env = v3_neg(v->dir);
+    double pdf = 0.0;
+    for (int k = 0; k < sc->n_infinite; k++) {
+      int li = sc->infinite_lights[k];
+      pdf += scene_light_pmf(sc, li) *
+             light_pdf_li(&sc->lights[li], sc, next->p, w_env, next->p, next->n);
+    }
+    return pdf;
+  }
+  int li = bdpt__light_index(v);
+  if (li < 0) return 0.0;
+  const light *l = &sc->lights[li];
+  double pmf = scene_light_pmf(sc, li);
+  if (light_is_delta(l)) return pmf;
+  double pdf_pos, pdf_dir;
+  light_pdf_le(l, sc, v->p, v->n, bdpt__dir_to(sc, v, next), &pdf_pos, &pdf_dir);
+  return pmf * pdf_pos;
+}
+
+/* Density of `next` when sampled at v, which was reached from `prev`
+ * (pbrt's Vertex::Pdf). Light endpoints use bdpt__pdf_light. */
+static double bdpt__pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *prev,
+                        const bdpt_vertex *next) {
+  if (v->type == BDPT_VERTEX_LIGHT) return bdpt__pdf_light(sc, v, next);
+  vec3 wi = bdpt__dir_to(sc, v, next);
+  double pdf_sa;
+  if (v->type == BDPT_VERTEX_CAMERA) {
+    pdf_sa = camera_pdf_dir(&sc->cam, wi);
+  } else {
+    if (!prev) return 0.0;
+    const surface_hit *h = &v->hit;
+    vec3 wo = bdpt__dir_to(sc, v, prev);
+    pdf_sa = bsdf_pdf(h->bsdf, h->tu, h->tv, frame_to_local(&h->sh, wo), frame_to_local(&h->sh, wi));
+  }
+  return bdpt__convert(sc, pdf_sa, v, next);
+}
+
+/* ---------------------------------------------------------------------------
+ * Random walks.
+ */
+
+/* Extends path (n vertices so far) from org along dir. pdf_dir is the
+ * density of dir at the last vertex: solid angle, or (planar) the disk
+ * density of an infinite/directional light. beta includes that density.
+ * Returns the new vertex count. */
+static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                      transport_mode mode, vec3 org, vec3 dir, double tmin, rgb beta,
+                      double pdf_dir, int planar, bdpt_vertex *path, int n, int max_vertices,
+                      render_counters *cnt) {
+  double eta_scale = 1.0; /* radiance compression undone for Russian roulette */
+  while (n < max_vertices) {
+    bdpt_vertex *prev = &path[n - 1];
+    bdpt_vertex *v = &path[n];
+    memset(v, 0, sizeof *v);
+    v->beta = beta;
+
+    /* Find the next vertex; a camera ray that escapes ends on the
+     * infinite lights. */
+    cnt->rays++;
+    if (!scene_intersect(sc, org, dir, tmin, INFINITY, &v->hit)) {
+      if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
+        v->type = BDPT_VERTEX_LIGHT;
+        v->light = -1;
+        v->dir = v3_neg(dir);
+        v->p = v3_fma(org, dir, 2.0 * sc->radius + v3_len(v3_sub(org, sc->center)));
+        v->pdf_fwd = pdf_dir; /* solid angle: the vertex is at infinity */
+        n++;
+      }
+      break;
+    }
+    v->type = BDPT_VERTEX_SURFACE;
+    v->light = v->hit.light;
+    v->p = v->hit.p;
+    v->n = v->hit.ng;
+    v->wo = v3_neg(dir);
+    if (planar) {
+      v->pdf_fwd = pdf_dir * fabs(v3_dot(v->n, dir));
+    } else {
+      v->pdf_fwd = bdpt__convert(sc, pdf_dir, prev, v);
+    }
+    n++;
+
+    /* This vertex's numbers (always taken), then stop if long enough. */
+    double u_lobe = sampler_next(smp), u1 = sampler_next(smp), u2 = sampler_next(smp);
+    double u_rr = sampler_next(smp);
+    if (n >= max_vertices) break;
+
+    /* Sample the BSDF for the next direction. */
+    const surface_hit *h = &v->hit;
+    vec3 wo_l, wi_l;
+    if (!bdpt__side_ok(h, v->wo, &wo_l)) break;
+    bsdf_sample bs;
+    if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) break;
+    vec3 wi = frame_to_world(&h->sh, bs.wi);
+    if (!bdpt__side_ok(h, wi, &wi_l)) break;
+    double pdf_fwd_sa = bs.pdf;
+    double pdf_rev_sa = bsdf_pdf(h->bsdf, h->tu, h->tv, bs.wi, wo_l);
+    if (bs.flags & BSDF_DELTA) {
+      /* Delta lobes: densities read as one in the MIS walk (remap0). */
+      v->delta = 1;
+      pdf_fwd_sa = pdf_rev_sa = 0.0;
+    }
+    rgb weight = bs.weight;
+    if (mode == TRANSPORT_IMPORTANCE) weight = rgb_scale(weight, bdpt__shading_correction(h, v->wo, wi));
+    beta = rgb_mul(beta, weight);
+    if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
+    prev->pdf_rev = bdpt__convert(sc, pdf_rev_sa, v, prev);
+    if (rgb_is_black(beta)) break;
+
+    /* Russian roulette on the scattering throughput (n - 1 segments so
+     * far); on light subpaths relative to the throughput at y_1. */
+    if (n - 1 >= rs->rrdepth) {
+      double thr = mode == TRANSPORT_RADIANCE ? rgb_max(beta) * eta_scale
+                                              : rgb_max(rgb_div(beta, path[1].beta));
+      double q = fmin(0.95, thr);
+      if (!(u_rr < q)) break;
+      beta = rgb_scale(beta, 1.0 / q);
+    }
+    org = v->p;
+    dir = wi;
+    tmin = scene_ray_eps(sc, v->p);
+    pdf_dir = pdf_fwd_sa;
+    planar = 0;
+  }
+  return n;
+}
+
+void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OUT_max_light) {
+  int maxdepth = BDPT_MAX_VERTICES - 1;
+  if (rs->maxdepth >= 0 && rs->maxdepth < maxdepth) maxdepth = rs->maxdepth;
+  *OUT_max_camera = maxdepth + 1;
+  *OUT_max_light = maxdepth;
+}
+
+int bdpt_camera_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                        double ry, int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt) {
+  if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
+  if (max_vertices < 1) return 0;
+  bdpt_vertex *z0 = &OUT_path[0];
+  memset(z0, 0, sizeof *z0);
+  z0->type = BDPT_VERTEX_CAMERA;
+  z0->light = -1;
+  z0->p = sc->cam.pos;
+  z0->beta = rgb_gray(1.0);
+  z0->pdf_fwd = 1.0;
+  vec3 org, dir;
+  camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
+  double pdf_dir = camera_pdf_dir(&sc->cam, dir);
+  return bdpt__walk(sc, rs, smp, TRANSPORT_RADIANCE, org, dir, 0.0, rgb_gray(1.0), pdf_dir, 0,
+                    OUT_path, 1, max_vertices, cnt);
+}
+
+int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                       int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt) {
+  /* The emitter's numbers (always taken). */
+  double u_light = sampler_next(smp);
+  double u1 = sampler_next(smp), u2 = sampler_next(smp);
+  double u3 = sampler_next(smp), u4 = sampler_next(smp);
+  if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
+  if (max_vertices < 1 || sc->n_lights == 0) return 0;
+
+  /* Choose a light and an emitted ray. */
+  double pmf, u_remap;
+  int li = scene_sample_light(sc, u_light, &pmf, &u_remap);
+  if (li < 0 || !(pmf > 0.0)) return 0;
+  const light *l = &sc->lights[li];
+  light_le_sample les;
+  if (!light_sample_le(l, sc, u1, u2, u3, u4, &les)) return 0;
+  if (!(les.pdf_pos > 0.0) || !(les.pdf_dir > 0.0) || rgb_is_black(les.le)) return 0;
+
+  /* The light endpoint y_0. */
+  bdpt_vertex *y0 = &OUT_path[0];
+  memset(y0, 0, sizeof *y0);
+  y0->type = BDPT_VERTEX_LIGHT;
+  y0->light = li;
+  y0->p = les.p;
+  int far = light_is_infinite(l) || l->type == LIGHT_DIRECTIONAL;
+  y0->n = (l->type == LIGHT_AREA) ? les.n : v3(0.0, 0.0, 0.0);
+  y0->dir = les.dir;
+  y0->beta = rgb_scale(les.le, 1.0 / (pmf * les.pdf_pos));
+
+  /* y_0's density: selection times position (area lights), selection alone
+   * (delta positions, directional), or the summed solid-angle density of
+   * the direction (infinite lights). y_1 is then sampled per solid angle,
+   * or with the planar disk density for lights at infinity. */
+  double cos0 = l->type == LIGHT_AREA ? fabs(v3_dot(les.n, les.dir)) : 1.0;
+  rgb beta = rgb_scale(les.le, cos0 / (pmf * les.pdf_pos * les.pdf_dir));
+  double pdf_next;
+  if (far) {
+    bdpt_vertex tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.type = BDPT_VERTEX_SURFACE;
+    tmp.p = v3_fma(les.p, les.dir, 1.0);
+    y0->pdf_fwd = light_is_infinite(l) ? bdpt__pdf_light_origin(sc, y0, &tmp) : pmf;
+    pdf_next = les.pdf_pos;
+  } else {
+    y0->pdf_fwd = light_is_delta(l) ? pmf : pmf * les.pdf_pos;
+    pdf_next = les.pdf_dir;
+  }
+  double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, les.p) : 0.0;
+  return bdpt__walk(sc, rs, smp, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far,
+                    OUT_path, 1, max_vertices, cnt);
+}
+
+/* ---------------------------------------------------------------------------
+ * MIS weights.
+ */
+
+double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
+                       int s, const bdpt_vertex *sampled) {
+  if (t < 1 || s + t < 2) return 0.0;
+  /* The connection vertices and their predecessors. */
+  const bdpt_vertex *qs = s > 0 ? ((s == 1 && sampled) ? sampled : &lp[s - 1]) : NULL;
+  const bdpt_vertex *pt = &cam[t - 1];
+  const bdpt_vertex *qsm = s > 1 ? &lp[s - 2] : NULL;
+  const bdpt_vertex *ptm = t > 1 ? &cam[t - 2] : NULL;
+
+  /* Reverse densities of the joined path next to the connection. */
+  double pt_rev = s > 0 ? bdpt__pdf(sc, qs, qsm, pt) : bdpt__pdf_light_origin(sc, pt, ptm);
+  double ptm_rev = 0.0, qs_rev = 0.0, qsm_rev = 0.0;
+  if (ptm) ptm_rev = s > 0 ? bdpt__pdf(sc, pt, qs, ptm) : bdpt__pdf_light(sc, pt, ptm);
+  if (qs) qs_rev = bdpt__pdf(sc, pt, ptm, qs);
+  if (qsm) qsm_rev = bdpt__pdf(sc, qs, pt, qsm);
+
+  double sum = 0.0;
+
+  /* Walking the camera subpath towards the camera, vertex i moves to the
+   * light side: strategy (s + t - i, i) joins cam[i-1] and cam[i]. */
+  double ri = 1.0;
+  for (int i = t - 1; i >= 1; i--) {
+    double rev = i == t - 1 ? pt_rev : (i == t - 2 ? ptm_rev : cam[i].pdf_rev);
+    ri *= bdpt__remap0(rev) / bdpt__remap0(cam[i].pdf_fwd);
+    int delta_i = i == t - 1 ? 0 : cam[i].delta;
+    int ok = !delta_i && !cam[i - 1].delta;
+    if (i == 1 && s + t - 1 < 2) ok = 0; /* (s', t') = (1, 1) is not used */
+    if (ok) sum += ri * ri;
+  }
+
+  /* Walking the light subpath towards the light, vertex i moves to the
+   * camera side: strategy (i, s + t - i) joins lp[i-1] and lp[i]. */
+  ri = 1.0;
+  for (int i = s - 1; i >= 0; i--) {
+    const bdpt_vertex *v = i == s - 1 ? qs : &lp[i];
+    double rev = i == s - 1 ? qs_rev : (i == s - 2 ? qsm_rev : lp[i].pdf_rev);
+    ri *= bdpt__remap0(rev) / bdpt__remap0(v->pdf_fwd);
+    int delta_i = i == s - 1 ? 0 : lp[i].delta;
+    int delta_prev = i > 0 ? lp[i - 1].delta
+                           : bdpt__is_delta_light(sc, s == 1 ? qs : &lp[0]);
+    if (!delta_i && !delta_prev) sum += ri * ri;
+  }
+  return 1.0 / (1.0 + sum);
+}
+
+void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, int s) {
+  int n = s + t;
+  if (n < 2 || t < 1) return;
+  /* The full path from the light end: F[i] = lp[i] (i < s), cam[n-1-i] after. */
+  bdpt_vertex *f[2 * BDPT_MAX_VERTICES];
+  for (int i = 0; i < s; i++) f[i] = &lp[i];
+  for (int j = 0; j < t; j++) f[s + j] = &cam[t - 1 - j];
+  for (int i = 0; i < n; i++) {
+    /* Density from the light side (sampled by F[i-1], reached from F[i-2]). */
+    double from_light;
+    if (i == 0)
+      from_light = bdpt__pdf_light_origin(sc, f[0], f[1]);
+    else if (i == 1)
+      from_light = bdpt__pdf_light(sc, f[0], f[1]);
+    else
+      from_light = f[i - 1]->delta ? 0.0 : bdpt__pdf(sc, f[i - 1], f[i - 2], f[i]);
+    /* Density from the camera side. */
+    double from_cam;
+    if (i == n - 1)
+      from_cam = 1.0;
+    else if (i == n - 2)
+      from_cam = bdpt__pdf(sc, f[n - 1], NULL, f[i]);
+    else
+      from_cam = f[i + 1]->delta ? 0.0 : bdpt__pdf(sc, f[i + 1], f[i + 2], f[i]);
+    if (i < s) {
+      f[i]->pdf_fwd = from_light;
+      f[i]->pdf_rev = from_cam;
+    } else {
+      f[i]->pdf_fwd = from_cam;
+      f[i]->pdf_rev = from_light;
+    }
+  }
+}
+
+/* ---------------------------------------------------------------------------
+ * One strategy.
+ */
+
+rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
+                 const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
+                 render_counters *cnt) {
+  if (OUT_weight) *OUT_weight = 0.0;
+  if (t < 1 || s + t < 2 || (s == 1 && t == 1)) return rgb_zero();
+  /* An escaped camera ray is only an emitter (s = 0). */
+  if (t > 1 && s != 0 && cam[t - 1].type == BDPT_VERTEX_LIGHT) return rgb_zero();
+  rgb L = rgb_zero();
+  bdpt_vertex sampled;
+  const bdpt_vertex *samp = NULL;
+
+  if (s == 0) {
+    /* The camera subpath ends on an emitter. */
+    const bdpt_vertex *pt = &cam[t - 1];
+    if (pt->type == BDPT_VERTEX_SURFACE) {
+      if (pt->light < 0) return rgb_zero();
+      L = rgb_mul(pt->beta, light_le_area(&sc->lights[pt->light], pt->n, pt->wo));
+    } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
+      vec3 w_env = v3_neg(pt->dir);
+      rgb le = rgb_zero();
+      for (int k = 0; k < sc->n_infinite; k++)
+        le = rgb_add(le, light_le_infinite(&sc->lights[sc->infinite_lights[k]], w_env));
+      L = rgb_mul(pt->beta, le);
+    } else {
+      return rgb_zero();
+    }
+  } else if (t == 1) {
+    /* Light tracing: join y_{s-1} to the pinhole, splat at its raster point. */
+    const bdpt_vertex *qs = &lp[s - 1];
+    if (!bdpt__connectible(qs)) return rgb_zero();
+    vec3 d = v3_sub(qs->p, sc->cam.pos);
+    double d2 = v3_len2(d);
+    if (!(d2 > 0.0)) return rgb_zero();
+    vec3 dir = v3_scale(d, 1.0 / sqrt(d2));
+    double rx, ry;
+    double we = camera_we(&sc->cam, dir, &rx, &ry);
+    if (!(we > 0.0)) return rgb_zero();
+    double cos_cam = v3_dot(dir, sc->cam.forward);
+    rgb f = bdpt__f_cos(qs, v3_neg(dir), TRANSPORT_IMPORTANCE);
+    /* qs.beta f We cos_cam / d^2 */
+    L = rgb_scale(rgb_mul(qs->beta, f), we * cos_cam / d2);
+    if (rgb_is_black(L)) return rgb_zero();
+    cnt->rays++;
+    if (scene_occluded_segment(sc, sc->cam.pos, qs->p)) return rgb_zero();
+    if (OUT_rx) *OUT_rx = rx;
+    if (OUT_ry) *OUT_ry = ry;
+  } else if (s == 1) {
+    /* Next-event estimation from z_{t-1} with a fresh light sample. */
+    const bdpt_vertex *pt = &cam[t - 1];
+    if (!bdpt__connectible(pt) || !u_connect || sc->n_lights == 0) return rgb_zero();
+    double pmf, u_remap;
+    int li = scene_sample_light(sc, u_connect[0], &pmf, &u_remap);
+    if (li < 0 || !(pmf > 0.0)) return rgb_zero();
+    const light *l = &sc->lights[li];
+    light_li_sample ls;
+    if (!light_sample_li(l, sc, pt->p, u_connect[1], u_connect[2], &ls)) return rgb_zero();
+    if (!(ls.pdf > 0.0) || rgb_is_black(ls.li)) return rgb_zero();
+    rgb f = bdpt__f_cos(pt, ls.wi, TRANSPORT_RADIANCE);
+    /* pt.beta f Li / (pmf pdf) */
+    L = rgb_scale(rgb_mul(pt->beta, rgb_mul(f, ls.li)), 1.0 / (pmf * ls.pdf));
+    if (rgb_is_black(L)) return rgb_zero();
+    cnt->rays++;
+    int blocked = isinf(ls.dist) ? scene_occluded_ray(sc, pt->p, ls.wi)
+                                 : scene_occluded_segment(sc, pt->p, ls.p);
+    if (blocked) return rgb_zero();
+    memset(&sampled, 0, sizeof sampled);
+    sampled.type = BDPT_VERTEX_LIGHT;
+    sampled.light = li;
+    sampled.p = ls.p;
+    sampled.n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+    sampled.dir = v3_neg(ls.wi);
+    sampled.beta = rgb_scale(ls.li, 1.0 / (pmf * ls.pdf));
+    sampled.pdf_fwd = bdpt__pdf_light_origin(sc, &sampled, pt);
+    samp = &sampled;
+  } else {
+    /* Join y_{s-1} and z_{t-1} with a shadow ray. */
+    const bdpt_vertex *qs = &lp[s - 1], *pt = &cam[t - 1];
+    if (!bdpt__connectible(qs) || !bdpt__connectible(pt)) return rgb_zero();
+    vec3 d = v3_sub(pt->p, qs->p);
+    double d2 = v3_len2(d);
+    if (!(d2 > 0.0)) return rgb_zero();
+    vec3 w = v3_scale(d, 1.0 / sqrt(d2));
+    rgb fq = bdpt__f_cos(qs, w, TRANSPORT_IMPORTANCE);
+    rgb fp = bdpt__f_cos(pt, v3_neg(w), TRANSPORT_RADIANCE);
+    /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
+    L = rgb_scale(rgb_mul(rgb_mul(qs->beta, fq), rgb_mul(fp, pt->beta)), 1.0 / d2);
+    if (rgb_is_black(L)) return rgb_zero();
+    cnt->rays++;
+    if (scene_occluded_segment(sc, qs->p, pt->p)) return rgb_zero();
+  }
+  if (rgb_is_black(L)) return rgb_zero();
+  double w = bdpt_mis_weight(sc, cam, t, lp, s, samp);
+  if (OUT_weight) *OUT_weight = w;
+  return rgb_scale(L, w);
+}
+
+/* ---------------------------------------------------------------------------
+ * The per-pixel-sample driver.
+ */
+
+static int bdpt__counts(const render_settings *rs, int length) {
+  if (rs->maxdepth >= 0 && length > rs->maxdepth) return 0;
+  return rs->mindepth <= 0 || length >= rs->mindepth;
+}
+
+rgb bdpt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, double rx, double ry,
+            film *splat, render_counters *cnt) {
+  const scene *sc = s;
+  bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
+  int max_cam, max_light;
+  bdpt_subpath_limits(rs, &max_cam, &max_light);
+
+  /* The two subpaths, each from its own stream. */
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  int nc = bdpt_camera_subpath(sc, rs, smp, rx, ry, max_cam, cam, cnt);
+  sampler_use_stream(smp, LMC_STREAM_LIGHT);
+  int nl = bdpt_light_subpath(sc, rs, smp, max_light, lp, cnt);
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+
+  /* Every strategy (s, t); t = 1 goes to the splat film. */
+  rgb L = rgb_zero();
+  for (int t = 1; t <= nc; t++) {
+    double u[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
+    if (t >= 2)
+      for (int k = 0; k < BDPT_DIMS_CONNECT; k++) u[k] = sampler_next(smp);
+    int s_max = nl > 1 ? nl : 1;
+    for (int st = 0; st <= s_max; st++) {
+      int length = st + t - 1;
+      if (length < 1 || (st == 1 && t == 1)) continue;
+      if (st >= 2 && st > nl) break;
+      if (!bdpt__counts(rs, length)) continue;
+      double prx = 0.0, pry = 0.0;
+      rgb c = bdpt_connect(sc, cam, t, lp, st, u, &prx, &pry, NULL, cnt);
+      if (rgb_is_black(c)) continue;
+      if (t == 1) {
+        if (rgb_isfinite(c))
+          film_splat(splat, &sc->filter, prx, pry, c);
+        else
+          cnt->nan_samples++;
+      } else {
+        L = rgb_add(L, c);
+      }
+    }
+  }
+  return L;
+}

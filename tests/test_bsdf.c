@@ -1,0 +1,917 @@
+/*
+ * test_bsdf.c: the BSDF models of src/render/bsdf*.c and the microfacet
+ * distributions of src/render/microfacet.c.
+ *
+ * What is checked:
+ *   - chi-square goodness of fit of every non-delta sampler against its pdf
+ *     (diffuse, phong at three exponents, roughconductor and
+ *     roughdielectric for both distributions, two roughnesses, visible
+ *     normals on and off, normal / oblique / grazing wo, both sides for the
+ *     dielectric, the diffuse part of plastic), each at the Sidak level of
+ *     an overall 1% (fixed seeds), plus the visible-normal sampler alone;
+ *   - the pdf integrates to the fraction of samples the sampler accepts
+ *     (the total probability of its non-delta lobes), and to 1 - P(specular)
+ *     for plastic; D(m) cos(theta_m) and the visible-normal density
+ *     integrate to 1;
+ *   - sample consistency: f and pdf of a sample equal bsdf_eval and
+ *     bsdf_pdf at that direction, and weight = f |cos| / pdf;
+ *   - energy: diffuse albedo = reflectance, plastic albedo in closed form
+ *     (F_i + (1 - F_i) kd, linear mode), phong and rough models at most 1,
+ *     a perfect mirror ("none") reflects exactly 1;
+ *   - reciprocity of the reflection models, and for rough refraction the
+ *     generalised reciprocity f_rad(a, b) eta_b^2 = f_rad(b, a) eta_a^2 and
+ *     the adjoint f_imp(a, b) = f_rad(b, a);
+ *   - delta lobes: dielectric reflect + refract probabilities sum to 1 and
+ *     equal F, Snell's law, total internal reflection, radiance scaling;
+ *   - one-sidedness and the twosided flip; Fresnel identities; tables and
+ *     defaults.
+ * Each test counts its checks and asserts the count.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "chi2.h"
+#include "render/bsdf.h"
+#include "render/microfacet.h"
+#include "render/rng.h"
+#include "render/warp.h"
+
+/* |a - b| <= tol, printing both values when it fails. */
+#define assert_near(a, b, tol)                                                    \
+  do {                                                                            \
+    double a_ = (a), b_ = (b), t_ = (tol);                                        \
+    if (!(fabs(a_ - b_) <= t_)) {                                                 \
+      print_error("%s = %.17g, %s = %.17g, tolerance %g\n", #a, a_, #b, b_, t_); \
+      fail();                                                                     \
+    }                                                                             \
+  } while (0)
+
+/* a <= b, printing both values when it fails. */
+#define assert_le(a, b)                                                \
+  do {                                                                 \
+    double a_ = (a), b_ = (b);                                         \
+    if (!(a_ <= b_)) {                                                 \
+      print_error("%s = %.17g > %s = %.17g\n", #a, a_, #b, b_);        \
+      fail();                                                          \
+    }                                                                  \
+  } while (0)
+
+/* A direction with cos(theta) = z at azimuth phi. */
+static vec3 dir(double z, double phi) {
+  double s = sqrt(fmax(0.0, 1.0 - z * z));
+  return v3(s * cos(phi), s * sin(phi), z);
+}
+
+static double rel_err(double a, double b) { return fabs(a - b) / fmax(1e-300, fmax(fabs(a), fabs(b))); }
+
+static double rgb_rel_err(rgb a, rgb b) {
+  return fmax(rel_err(a.r, b.r), fmax(rel_err(a.g, b.g), rel_err(a.b, b.b)));
+}
+
+/* ---- The configurations under test --------------------------------------- */
+
+typedef struct config {
+  char name[96];
+  bsdf b;
+  vec3 wo;
+  transport_mode mode;
+  int n_theta, n_phi; /* chi-square grid (finer for the sharpest lobes) */
+} config;
+
+#define MAX_CONFIGS 96
+
+/* Every non-delta configuration of the chi-square and consistency tests. */
+static int make_configs(config *c) {
+  int n = 0;
+  const double phi0 = 0.7;
+  /* Diffuse. */
+  const double diff_z[] = {1.0, 0.6, 0.05};
+  for (int i = 0; i < 3; i++) {
+    bsdf_init_defaults(&c[n].b, BSDF_DIFFUSE);
+    c[n].wo = dir(diff_z[i], phi0);
+    snprintf(c[n].name, sizeof c[n].name, "diffuse wo.z=%.2f", diff_z[i]);
+    n++;
+  }
+  /* Phong: three exponents, three angles. */
+  const double exps[] = {3.0, 30.0, 80.0};
+  const double ph_z[] = {0.95, 0.5, 0.1};
+  for (int e = 0; e < 3; e++)
+    for (int i = 0; i < 3; i++) {
+      bsdf_init_defaults(&c[n].b, BSDF_PHONG);
+      c[n].b.exponent = exps[e];
+      c[n].wo = dir(ph_z[i], phi0);
+      snprintf(c[n].name, sizeof c[n].name, "phong n=%g wo.z=%.2f", exps[e], ph_z[i]);
+      n++;
+    }
+  /* Rough conductor and dielectric: distribution x alpha x visible x wo.
+   * GGX's rough refraction has a jump of its pdf where the generalised half
+   * vector becomes horizontal, the plane wi.z = -wo.z / e; the wo chosen
+   * here put that plane on a boundary of the chi-square bands (multiples
+   * of 1/30 in z), so no cell straddles the jump. */
+  const double eta = 1.5046 / 1.000277;
+  const double alphas[] = {0.2, 0.6};
+  const double rc_z[] = {0.9, 0.4, 0.1};
+  const double rd_z[] = {0.6 * eta, 0.1 * eta, -0.7, -0.3 / eta};
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 2; a++)
+      for (int v = 0; v < 2; v++) {
+        for (int i = 0; i < 3; i++) {
+          if (a == 1 && i == 1) continue; /* keep the count down */
+          bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+          c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
+          c[n].b.alpha = alphas[a];
+          c[n].b.sample_visible = v;
+          c[n].wo = dir(rc_z[i], phi0);
+          snprintf(c[n].name, sizeof c[n].name, "roughconductor %s a=%g vis=%d wo.z=%.2f",
+                   d ? "ggx" : "beckmann", alphas[a], v, rc_z[i]);
+          n++;
+        }
+        for (int i = 0; i < 4; i++) {
+          bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIELECTRIC);
+          c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
+          c[n].b.alpha = alphas[a];
+          c[n].b.sample_visible = v;
+          c[n].wo = dir(rd_z[i], phi0);
+          c[n].mode = (i & 1) ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE;
+          snprintf(c[n].name, sizeof c[n].name, "roughdielectric %s a=%g vis=%d wo.z=%.2f",
+                   d ? "ggx" : "beckmann", alphas[a], v, rd_z[i]);
+          n++;
+        }
+      }
+  /* Mitsuba's default roughness 0.1 on a finer grid (150 x 300 cells). */
+  for (int d = 0; d < 2; d++) {
+    bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+    c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
+    c[n].wo = dir(0.7, phi0);
+    c[n].n_theta = 150;
+    c[n].n_phi = 300;
+    snprintf(c[n].name, sizeof c[n].name, "roughconductor %s a=0.1 wo.z=0.70", d ? "ggx" : "beckmann");
+    n++;
+    bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIELECTRIC);
+    c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
+    c[n].b.sample_visible = d;
+    c[n].wo = dir(d ? -0.8 : 0.6 * eta, phi0);
+    c[n].n_theta = 150;
+    c[n].n_phi = 300;
+    snprintf(c[n].name, sizeof c[n].name, "roughdielectric %s a=0.1 vis=%d wo.z=%.2f",
+             d ? "ggx" : "beckmann", d, c[n].wo.z);
+    n++;
+  }
+  /* Plastic (the diffuse lobe; specular samples count as rejected). */
+  const double pl_z[] = {0.9, 0.2};
+  for (int i = 0; i < 2; i++) {
+    bsdf_init_defaults(&c[n].b, BSDF_PLASTIC);
+    c[n].b.nonlinear = i;
+    c[n].wo = dir(pl_z[i], phi0);
+    snprintf(c[n].name, sizeof c[n].name, "plastic nonlinear=%d wo.z=%.2f", i, pl_z[i]);
+    n++;
+  }
+  /* A twosided rough conductor seen from below. */
+  bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+  c[n].b.twosided = 1;
+  c[n].b.alpha = 0.3;
+  c[n].b.dist = MF_GGX;
+  c[n].wo = dir(-0.5, phi0);
+  snprintf(c[n].name, sizeof c[n].name, "twosided roughconductor ggx a=0.3 wo.z=-0.50");
+  n++;
+  for (int i = 0; i < n; i++)
+    if (!c[i].n_theta) {
+      c[i].n_theta = 60;
+      c[i].n_phi = 120;
+    }
+  return n;
+}
+
+/* ---- chi-square ------------------------------------------------------------ */
+
+/* chi2_sphere of chi2.h with one change: the cell of rejected samples
+ * always gets a positive expectation, max(1 - integral, 1e-9) N. The
+ * midpoint integral of a sharp lobe can exceed 1 by more than the true
+ * rejected mass (e.g. 6e-5 of the reflections of a smooth conductor go
+ * below the horizon), which chi2_sphere turns into a p-value of 0; here
+ * that cell is pooled with the other small cells instead. */
+static chi2_result bsdf_chi2_sphere(chi2_sample_fn sample, chi2_pdf_fn pdf, void *ctx, int n_theta,
+                                    int n_phi, int sub, int64_t n_samples, uint64_t seed) {
+  int cells = n_theta * n_phi;
+  double *obs = calloc((size_t)cells + 1, sizeof(double));
+  double *expct = calloc((size_t)cells + 1, sizeof(double));
+  chi2_result res = {0};
+  res.pvalue = -1.0;
+  if (!obs || !expct) {
+    free(obs);
+    free(expct);
+    return res;
+  }
+  /* Histogram the samples; rejected ones go to the last cell. */
+  rng r;
+  rng_seed(&r, seed, 7);
+  for (int64_t i = 0; i < n_samples; i++) {
+    double u1 = rng_uniform(&r), u2 = rng_uniform(&r), u3 = rng_uniform(&r);
+    vec3 w;
+    if (!sample(ctx, u1, u2, u3, &w) || !v3_isfinite(w)) {
+      obs[cells] += 1.0;
+      continue;
+    }
+    res.accepted++;
+    double z = fmin(1.0, fmax(-1.0, w.z));
+    int it = (int)((1.0 - z) * 0.5 * n_theta);
+    if (it >= n_theta) it = n_theta - 1;
+    double phi = atan2(w.y, w.x);
+    if (phi < 0.0) phi += 2.0 * M_PI;
+    int ip = (int)(phi / (2.0 * M_PI) * n_phi);
+    if (ip >= n_phi) ip = n_phi - 1;
+    obs[it * n_phi + ip] += 1.0;
+  }
+  /* Integrate the pdf over each cell (midpoints of a sub-grid). */
+  double dz = 2.0 / n_theta / sub, dphi = 2.0 * M_PI / n_phi / sub, total = 0.0;
+  for (int it = 0; it < n_theta; it++)
+    for (int ip = 0; ip < n_phi; ip++) {
+      double acc = 0.0;
+      for (int a = 0; a < sub; a++)
+        for (int b = 0; b < sub; b++) {
+          double z = 1.0 - (it * sub + a + 0.5) * dz;
+          double phi = (ip * sub + b + 0.5) * dphi;
+          double s = sqrt(fmax(0.0, 1.0 - z * z));
+          acc += pdf(ctx, v3(s * cos(phi), s * sin(phi), z));
+        }
+      acc *= dz * dphi;
+      expct[it * n_phi + ip] = acc * (double)n_samples;
+      total += acc;
+    }
+  expct[cells] = fmax(1e-9, 1.0 - total) * (double)n_samples;
+  res.pdf_integral = total;
+  res.pvalue = chi2_pvalue(obs, expct, cells + 1, 5.0, &res.dof, &res.stat);
+  free(obs);
+  free(expct);
+  return res;
+}
+
+static int chi2_bsdf_sample(void *ctx, double u1, double u2, double u3, vec3 *w) {
+  const config *c = ctx;
+  bsdf_sample s;
+  if (!bsdf_sample_f(&c->b, 0.5, 0.5, c->wo, u1, u2, u3, c->mode, &s)) return 0;
+  if (s.flags & BSDF_DELTA) return 0;
+  *w = s.wi;
+  return 1;
+}
+
+/* The chi-square helper integrates the pdf over each cell by a midpoint
+ * rule and fails outright when a cell with zero expectation receives a
+ * sample. Where the pdf falls continuously to zero at a curved boundary
+ * (the edge of the refraction cone, where 1 - F -> 0, or v.m -> 0 for
+ * visible normals) a cell can straddle the boundary with all its midpoints
+ * outside. A floor of 1e-9 per steradian (total mass 1.3e-8, i.e. 0.003 of
+ * a sample at N = 2e5) gives such cells a tiny expectation so they are
+ * pooled; a sampler that really puts mass where the pdf is zero still
+ * fails through the pooled cell, and test_sample_consistency checks that
+ * every sample has pdf > 0. */
+#define PDF_FLOOR 1e-9
+
+static double chi2_bsdf_pdf(void *ctx, vec3 w) {
+  const config *c = ctx;
+  return fmax(PDF_FLOOR, bsdf_pdf(&c->b, 0.5, 0.5, c->wo, w));
+}
+
+/* Samples per chi-square test; with 60 x 120 cells the expected counts of
+ * the lobes are in the hundreds to thousands (cells expecting fewer than 5
+ * are pooled by chi2_pvalue). */
+#define CHI2_SAMPLES 200000
+
+static void test_chi2_sampling(void **state) {
+  (void)state;
+  static config cfg[MAX_CONFIGS];
+  int n = make_configs(cfg);
+  assert_true(n <= MAX_CONFIGS);
+  double level = chi2_sidak(0.01, n);
+  int passed = 0, integral_ok = 0;
+  for (int i = 0; i < n; i++) {
+    chi2_result r = bsdf_chi2_sphere(chi2_bsdf_sample, chi2_bsdf_pdf, &cfg[i], cfg[i].n_theta, cfg[i].n_phi, 6, CHI2_SAMPLES,
+                                1000 + (uint64_t)i);
+    if (r.pvalue > level)
+      passed++;
+    else
+      print_error("chi2 FAILED %s: p = %g (level %g), stat %g, dof %d\n", cfg[i].name, r.pvalue,
+                  level, r.stat, r.dof);
+    /* The pdf integrates to the accepted fraction: binomial standard error
+     * sqrt(p (1 - p) / N) <= 1.2e-3 at N = 2e5; allow 5 of them plus 3e-3
+     * for the midpoint integration of the sharpest lobes. */
+    double acc = (double)r.accepted / CHI2_SAMPLES;
+    double tol = 5.0 * sqrt(fmax(acc * (1.0 - acc), 1e-6) / CHI2_SAMPLES) + 3e-3;
+    if (fabs(r.pdf_integral - acc) <= tol && r.pdf_integral <= 1.0 + 3e-3)
+      integral_ok++;
+    else
+      print_error("pdf integral %s: %g, accepted fraction %g\n", cfg[i].name, r.pdf_integral, acc);
+  }
+  assert_int_equal(passed, n);
+  assert_int_equal(integral_ok, n);
+}
+
+/* The visible-normal and D cos samplers of microfacet.c on their own. */
+typedef struct mf_ctx {
+  mf_dist dist;
+  double alpha;
+  vec3 v;
+  int visible;
+} mf_ctx;
+
+static int chi2_mf_sample(void *ctx, double u1, double u2, double u3, vec3 *w) {
+  const mf_ctx *c = ctx;
+  (void)u3;
+  *w = mf_sample(c->dist, c->alpha, c->v, c->visible, u1, u2);
+  return 1;
+}
+
+static double chi2_mf_pdf(void *ctx, vec3 w) {
+  const mf_ctx *c = ctx;
+  return fmax(PDF_FLOOR, mf_pdf(c->dist, c->alpha, c->v, w, c->visible));
+}
+
+static void test_chi2_microfacet(void **state) {
+  (void)state;
+  const double alphas[] = {0.3, 0.8};
+  const double vz[] = {0.99, 0.5, 0.05};
+  int k = 0, passed = 0;
+  double level = chi2_sidak(0.01, 2 * 2 * 2 * 3);
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 2; a++)
+      for (int vis = 0; vis < 2; vis++)
+        for (int i = 0; i < 3; i++) {
+          mf_ctx c = {d ? MF_GGX : MF_BECKMANN, alphas[a], dir(vz[i], 2.0), vis};
+          chi2_result r = bsdf_chi2_sphere(chi2_mf_sample, chi2_mf_pdf, &c, 100, 100, 8, 100000,
+                                      77 + (uint64_t)k);
+          k++;
+          /* Normalisation: these densities integrate to exactly 1. */
+          if (r.pvalue > level && fabs(r.pdf_integral - 1.0) < 5e-3)
+            passed++;
+          else
+            print_error("mf chi2 %d a=%g vis=%d vz=%g: p=%g integral=%g\n", d, alphas[a], vis, vz[i],
+                        r.pvalue, r.pdf_integral);
+        }
+  assert_int_equal(k, 24);
+  assert_int_equal(passed, k);
+}
+
+/* ---- pdf / eval / sample consistency --------------------------------------- */
+
+static void test_sample_consistency(void **state) {
+  (void)state;
+  static config cfg[MAX_CONFIGS];
+  int n = make_configs(cfg);
+  rng r;
+  rng_seed(&r, 4242, 1);
+  long checked = 0, bad = 0;
+  for (int i = 0; i < n; i++) {
+    const config *c = &cfg[i];
+    for (int j = 0; j < 2000; j++) {
+      bsdf_sample s;
+      double ul = rng_uniform(&r), u1 = rng_uniform(&r), u2 = rng_uniform(&r);
+      if (!bsdf_sample_f(&c->b, 0.5, 0.5, c->wo, ul, u1, u2, c->mode, &s)) continue;
+      if (s.flags & BSDF_DELTA) continue;
+      rgb f = bsdf_eval(&c->b, 0.5, 0.5, c->wo, s.wi, c->mode);
+      double pdf = bsdf_pdf(&c->b, 0.5, 0.5, c->wo, s.wi);
+      rgb w = rgb_scale(f, fabs(s.wi.z) / pdf);
+      int ok = fabs(v3_len(s.wi) - 1.0) < 1e-12 && rgb_rel_err(f, s.f) < 1e-9 &&
+               rel_err(pdf, s.pdf) < 1e-9 && rgb_rel_err(w, s.weight) < 1e-9 && pdf > 0.0;
+      /* The flags say which side wi is on. */
+      int side_ok = (s.flags & BSDF_TRANSMISSION) ? (s.wi.z * c->wo.z < 0.0) : 1;
+      if (!(s.flags & BSDF_TRANSMISSION) && !c->b.twosided) side_ok = s.wi.z * c->wo.z > 0.0;
+      if (c->b.twosided) side_ok = s.wi.z < 0.0;
+      if (!ok || !side_ok) {
+        if (bad < 5)
+          print_error("%s: wi (%g %g %g) f %g/%g pdf %g/%g w %g/%g\n", c->name, s.wi.x, s.wi.y,
+                      s.wi.z, f.r, s.f.r, pdf, s.pdf, w.r, s.weight.r);
+        bad++;
+      }
+      checked++;
+    }
+  }
+  assert_true(checked > 100000);
+  assert_int_equal(bad, 0);
+}
+
+/* ---- energy ---------------------------------------------------------------- */
+
+/* Integral of f |cos wi| over the sphere by the midpoint rule in (cos theta, phi). */
+static rgb integrate_f_cos(const bsdf *b, vec3 wo, transport_mode mode, int nt, int np) {
+  rgb acc = rgb_zero();
+  double dz = 2.0 / nt, dp = 2.0 * M_PI / np;
+  for (int i = 0; i < nt; i++)
+    for (int j = 0; j < np; j++) {
+      vec3 wi = dir(1.0 - (i + 0.5) * dz, (j + 0.5) * dp);
+      acc = rgb_add(acc, rgb_scale(bsdf_eval(b, 0.5, 0.5, wo, wi, mode), fabs(wi.z)));
+    }
+  return rgb_scale(acc, dz * dp);
+}
+
+/* Monte Carlo albedo: mean sample weight (delta lobes included), and its
+ * standard error. */
+static double mc_albedo(const bsdf *b, vec3 wo, transport_mode mode, int n, uint64_t seed,
+                        double *stderr_out) {
+  rng r;
+  rng_seed(&r, seed, 3);
+  double s = 0.0, s2 = 0.0;
+  for (int i = 0; i < n; i++) {
+    bsdf_sample smp;
+    double ul = rng_uniform(&r), u1 = rng_uniform(&r), u2 = rng_uniform(&r);
+    double w = 0.0;
+    if (bsdf_sample_f(b, 0.5, 0.5, wo, ul, u1, u2, mode, &smp)) w = rgb_max(smp.weight);
+    s += w;
+    s2 += w * w;
+  }
+  double mean = s / n;
+  *stderr_out = sqrt(fmax(0.0, s2 / n - mean * mean) / n);
+  return mean;
+}
+
+static void test_energy(void **state) {
+  (void)state;
+  int checks = 0;
+  /* Diffuse: the albedo is the reflectance at every angle (the midpoint
+   * rule in cos theta integrates the linear cosine exactly). */
+  bsdf b;
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  b.diffuse = tex_constant(rgb_make(0.2, 0.5, 0.9));
+  for (int i = 0; i < 3; i++) {
+    rgb a = integrate_f_cos(&b, dir(0.2 + 0.35 * i, 0.3), TRANSPORT_RADIANCE, 200, 64);
+    assert_near(a.r, 0.2, 1e-12);
+    assert_near(a.g, 0.5, 1e-12);
+    assert_near(a.b, 0.9, 1e-12);
+    checks += 3;
+  }
+  /* Diffuse sample weights are the reflectance exactly. */
+  bsdf_sample s;
+  assert_true(bsdf_sample_f(&b, 0, 0, dir(0.7, 0), 0.3, 0.4, 0.6, TRANSPORT_RADIANCE, &s));
+  assert_near(s.weight.g, 0.5, 1e-14);
+  checks += 2;
+
+  /* Plastic: albedo = F_i ks + (1 - F_i) kd in linear mode, because
+   * 1 - F_dr(eta) = eta^2 (1 - F_dr(1/eta)); nonlinear mode:
+   * F_i + (1 - F_i) kd (1 - F_dr_int) / (1 - kd F_dr_int). */
+  for (int nl = 0; nl < 2; nl++)
+    for (int i = 0; i < 3; i++) {
+      bsdf_init_defaults(&b, BSDF_PLASTIC);
+      b.nonlinear = nl;
+      b.diffuse = tex_constant(rgb_gray(0.8));
+      vec3 wo = dir(0.15 + 0.4 * i, 1.1);
+      double fi = fresnel_dielectric(wo.z, b.eta, NULL);
+      rgb diff = integrate_f_cos(&b, wo, TRANSPORT_RADIANCE, 2000, 8);
+      double expect;
+      if (!nl) {
+        expect = (1.0 - fi) * 0.8;
+      } else {
+        /* F_dr(1/eta) from the identity with the exterior one, integrated here. */
+        double fdr_int = 0.0;
+        const int m = 200000;
+        for (int k = 0; k < m; k++) {
+          double c = (k + 0.5) / m;
+          fdr_int += fresnel_dielectric(c, 1.0 / b.eta, NULL) * 2.0 * c / m;
+        }
+        expect = (1.0 - fi) * 0.8 * (1.0 - fdr_int) / (1.0 - 0.8 * fdr_int);
+      }
+      assert_near(diff.r, expect, 2e-4);
+      checks++;
+      /* The specular lobe: weight F_i / P(spec) with probability P(spec). */
+      assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.0, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+      assert_true(s.flags & BSDF_DELTA);
+      assert_near(s.weight.r * s.pdf, fi, 1e-12);
+      /* P(spec) + the integral of the diffuse pdf = 1. */
+      double pint = 0.0;
+      for (int k = 0; k < 2000; k++) {
+        vec3 wi = dir(1.0 - (k + 0.5) / 2000.0, 0.0);
+        pint += bsdf_pdf(&b, 0, 0, wo, wi) * 2.0 * M_PI / 2000.0;
+      }
+      assert_near(pint + s.pdf, 1.0, 1e-6);
+      checks += 4;
+    }
+
+  /* Phong, kd + ks <= 1: albedo <= 1 (grid integration). */
+  const double exps[] = {1.0, 10.0, 100.0};
+  for (int e = 0; e < 3; e++)
+    for (int i = 0; i < 3; i++) {
+      bsdf_init_defaults(&b, BSDF_PHONG);
+      b.exponent = exps[e];
+      b.diffuse = tex_constant(rgb_gray(0.3));
+      b.specular = tex_constant(rgb_gray(0.7));
+      rgb a = integrate_f_cos(&b, dir(0.05 + 0.45 * i, 0.0), TRANSPORT_RADIANCE, 800, 800);
+      assert_le(a.r, 1.0 + 1e-3);
+      assert_true(a.r > 0.29);
+      checks += 2;
+    }
+
+  /* Rough conductor with a perfect mirror ("none"): albedo <= 1, close to
+   * 1 for a smooth surface at normal incidence (Smith's masking takes a
+   * little); rough dielectric in importance mode: R + T <= 1. Tolerance:
+   * 4 standard errors of the Monte Carlo mean. */
+  const mf_dist dists[] = {MF_BECKMANN, MF_GGX};
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 2; a++) {
+      double se;
+      bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+      conductor_lookup("none", &b.cond_eta, &b.cond_k);
+      b.dist = dists[d];
+      b.alpha = a ? 0.6 : 0.05;
+      double alb = mc_albedo(&b, dir(0.95, 0.2), TRANSPORT_RADIANCE, 50000, 9 + d, &se);
+      assert_le(alb, 1.0 + 4.0 * se + 1e-9);
+      if (!a) assert_true(alb > 0.98);
+      checks += 2;
+      bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+      b.dist = dists[d];
+      b.alpha = a ? 0.6 : 0.05;
+      for (int side = 0; side < 2; side++) {
+        alb = mc_albedo(&b, dir(side ? -0.8 : 0.8, 0.2), TRANSPORT_IMPORTANCE, 50000, 19 + d, &se);
+        assert_le(alb, 1.0 + 4.0 * se + 1e-9);
+        if (!a) assert_true(alb > 0.97);
+        checks += 2;
+      }
+    }
+  assert_int_equal(checks, 3 * 3 + 2 + 6 * 5 + 9 * 2 + 4 * 6);
+}
+
+/* ---- reciprocity --------------------------------------------------------- */
+
+static void test_reciprocity(void **state) {
+  (void)state;
+  rng r;
+  rng_seed(&r, 99, 5);
+  int checks = 0, bad = 0;
+  /* Reflection models: f(a, b) = f(b, a). */
+  for (int t = 0; t < 6; t++) {
+    bsdf b;
+    const bsdf_type types[] = {BSDF_DIFFUSE, BSDF_PHONG, BSDF_ROUGHCONDUCTOR,
+                               BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC, BSDF_ROUGHDIELECTRIC};
+    bsdf_init_defaults(&b, types[t]);
+    if (t == 3) b.dist = MF_GGX;
+    b.alpha = 0.4;
+    b.exponent = 12.0;
+    for (int k = 0; k < 300; k++) {
+      vec3 a = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      vec3 c = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      if (t == 5 && (k & 1)) {
+        a.z = -a.z; /* reflection inside the dielectric */
+        c.z = -c.z;
+      }
+      rgb f1 = bsdf_eval(&b, 0, 0, a, c, TRANSPORT_RADIANCE);
+      rgb f2 = bsdf_eval(&b, 0, 0, c, a, TRANSPORT_RADIANCE);
+      if (!(rgb_rel_err(f1, f2) < 1e-9) && !(rgb_is_black(f1) && rgb_is_black(f2))) bad++;
+      if (rgb_is_black(f1) && (t == 0 || t == 4)) bad++; /* nonzero everywhere above */
+      checks++;
+    }
+  }
+  /* Rough refraction: f_rad(a, b) eta_b^2 = f_rad(b, a) eta_a^2 and
+   * f_imp(a, b) = f_rad(b, a), a outside and b inside. */
+  for (int d = 0; d < 2; d++) {
+    bsdf b;
+    bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+    b.dist = d ? MF_GGX : MF_BECKMANN;
+    b.alpha = 0.5;
+    int nonzero = 0;
+    for (int k = 0; k < 300; k++) {
+      /* a outside; c inside, drawn by refracting a through the model (a
+       * random pair would mostly be an impossible refraction). */
+      vec3 a = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      bsdf_sample smp;
+      vec3 c = v3(0.0, 0.0, -1.0);
+      if (bsdf_sample_f(&b, 0, 0, a, 1.0 - 1e-12, rng_uniform(&r), rng_uniform(&r),
+                        TRANSPORT_RADIANCE, &smp) &&
+          smp.wi.z < 0.0)
+        c = smp.wi;
+      double eta_a = 1.0, eta_c = b.eta;
+      rgb fac = bsdf_eval(&b, 0, 0, a, c, TRANSPORT_RADIANCE);
+      rgb fca = bsdf_eval(&b, 0, 0, c, a, TRANSPORT_RADIANCE);
+      rgb iac = bsdf_eval(&b, 0, 0, a, c, TRANSPORT_IMPORTANCE);
+      rgb ica = bsdf_eval(&b, 0, 0, c, a, TRANSPORT_IMPORTANCE);
+      if (!rgb_is_black(fac)) nonzero++;
+      if (!(rel_err(fac.r * eta_c * eta_c, fca.r * eta_a * eta_a) < 1e-9) && !(fac.r == 0 && fca.r == 0)) {
+        print_error("a (%g %g %g) c (%g %g %g): f(a,c) %g f(c,a) %g\n", a.x, a.y, a.z, c.x, c.y, c.z, fac.r, fca.r);
+        bad++;
+      }
+      if (!(rel_err(iac.r, fca.r) < 1e-9) && !(iac.r == 0 && fca.r == 0)) bad++;
+      if (!(rel_err(ica.r, fac.r) < 1e-9) && !(ica.r == 0 && fac.r == 0)) bad++;
+      checks++;
+    }
+    assert_true(nonzero > 250);
+    checks++;
+  }
+  assert_int_equal(bad, 0);
+  assert_int_equal(checks, 6 * 300 + 2 * 301);
+}
+
+/* ---- delta lobes ----------------------------------------------------------- */
+
+static void test_dielectric_delta(void **state) {
+  (void)state;
+  int checks = 0;
+  bsdf b;
+  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  assert_true(bsdf_is_delta(&b));
+  checks++;
+  const double zs[] = {1.0, 0.7, 0.2, 0.01, -1.0, -0.8, -0.75, -0.5, -0.1};
+  for (int i = 0; i < 9; i++) {
+    vec3 wo = dir(zs[i], 0.4);
+    bsdf_sample sr, st;
+    double cos_t;
+    double fr = fresnel_dielectric(wo.z, b.eta, &cos_t);
+    int okr = bsdf_sample_f(&b, 0, 0, wo, 0.0, 0.5, 0.5, TRANSPORT_RADIANCE, &sr);
+    int okt = bsdf_sample_f(&b, 0, 0, wo, 1.0 - 1e-12, 0.5, 0.5, TRANSPORT_RADIANCE, &st);
+    /* Reflection: mirror direction, probability F, weight 1. */
+    assert_true(okr);
+    assert_true((sr.flags & (BSDF_REFLECTION | BSDF_DELTA)) == (BSDF_REFLECTION | BSDF_DELTA));
+    assert_near(sr.pdf, fr, 1e-15);
+    assert_near(sr.weight.r, 1.0, 1e-12);
+    assert_near(sr.wi.z, wo.z, 0);
+    checks += 5;
+    if (cos_t == 0.0) {
+      /* Total internal reflection: always reflect. */
+      assert_near(fr, 1.0, 0);
+      assert_true(okt && (st.flags & BSDF_REFLECTION));
+      checks += 2;
+      continue;
+    }
+    /* Refraction: probabilities sum to 1, Snell's law, unit direction,
+     * other side; weight (eta_o/eta_i)^2 in radiance mode, 1 in importance. */
+    assert_true(okt);
+    assert_true(st.flags & BSDF_TRANSMISSION);
+    assert_near(sr.pdf + st.pdf, 1.0, 1e-14);
+    double e = wo.z > 0 ? b.eta : 1.0 / b.eta; /* eta_i / eta_o */
+    double sin_o = sqrt(1.0 - wo.z * wo.z), sin_i = sqrt(fmax(0.0, 1.0 - st.wi.z * st.wi.z));
+    assert_near(sin_i * e, sin_o, 1e-12);
+    assert_near(v3_len(st.wi), 1.0, 1e-12);
+    assert_true(st.wi.z * wo.z < 0.0);
+    assert_near(st.weight.r, 1.0 / (e * e), 1e-12);
+    assert_near(st.eta, e, 1e-15);
+    assert_near(st.f.r * fabs(st.wi.z) / st.pdf, st.weight.r, 1e-12);
+    bsdf_sample si;
+    assert_true(bsdf_sample_f(&b, 0, 0, wo, 1.0 - 1e-12, 0.5, 0.5, TRANSPORT_IMPORTANCE, &si));
+    assert_near(si.weight.r, 1.0, 1e-12);
+    /* Energy in importance mode: F * 1 + (1 - F) * 1 = 1. */
+    assert_near(sr.pdf * sr.weight.r + st.pdf * si.weight.r, 1.0, 1e-12);
+    /* Fresnel is the same from both sides of a refraction pair. */
+    assert_near(fresnel_dielectric(st.wi.z, b.eta, NULL), fr, 1e-12);
+    checks += 12;
+  }
+  /* The lobe choice follows u_lobe: the fraction of reflections is F. */
+  vec3 wo = dir(0.3, 0.0);
+  double fr = fresnel_dielectric(wo.z, b.eta, NULL);
+  int refl = 0;
+  for (int k = 0; k < 10000; k++) {
+    bsdf_sample s;
+    bsdf_sample_f(&b, 0, 0, wo, (k + 0.5) / 10000.0, 0.5, 0.5, TRANSPORT_RADIANCE, &s);
+    refl += (s.flags & BSDF_REFLECTION) != 0;
+  }
+  assert_near(refl / 10000.0, fr, 1.5e-4);
+  /* eval and pdf are zero for delta models. */
+  assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, wo, v3(-wo.x, -wo.y, wo.z), TRANSPORT_RADIANCE)));
+  assert_true(bsdf_pdf(&b, 0, 0, wo, v3(-wo.x, -wo.y, wo.z)) == 0.0);
+  checks += 3;
+  /* Smooth conductor: weight = F_cond * specularReflectance; "none" = 1. */
+  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  bsdf_sample s;
+  assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.5, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+  rgb fc = fresnel_conductor(wo.z, b.cond_eta, b.cond_k);
+  assert_near(s.weight.r, fc.r, 1e-14);
+  assert_near(s.pdf, 1.0, 0);
+  assert_true(s.flags & BSDF_DELTA);
+  conductor_lookup("none", &b.cond_eta, &b.cond_k);
+  for (int i = 0; i < 5; i++) {
+    assert_true(bsdf_sample_f(&b, 0, 0, dir(0.01 + 0.24 * i, 1.0), 0.5, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+    assert_near(s.weight.r, 1.0, 1e-14);
+    assert_near(s.weight.b, 1.0, 1e-14);
+    checks += 3;
+  }
+  checks += 4;
+  assert_int_equal(checks, 1 + 9 * 5 + 2 * 2 + 7 * 12 + 3 + 4 + 15);
+}
+
+/* ---- Fresnel, tables, defaults -------------------------------------------- */
+
+static void test_fresnel(void **state) {
+  (void)state;
+  int checks = 0;
+  /* Normal incidence: ((eta - 1)/(eta + 1))^2 from both sides. */
+  const double etas[] = {1.33, 1.5, 2.4};
+  for (int i = 0; i < 3; i++) {
+    double e = etas[i], r0 = (e - 1) * (e - 1) / ((e + 1) * (e + 1)), ct;
+    assert_near(fresnel_dielectric(1.0, e, &ct), r0, 1e-14);
+    assert_near(ct, -1.0, 1e-14);
+    assert_near(fresnel_dielectric(-1.0, e, &ct), r0, 1e-14);
+    assert_near(ct, 1.0, 1e-14);
+    /* Grazing: 1. Past the critical angle from inside: 1, cos_t = 0. */
+    assert_near(fresnel_dielectric(1e-9, e, NULL), 1.0, 1e-8);
+    double cc = sqrt(1.0 - 1.0 / (e * e));
+    assert_near(fresnel_dielectric(-0.99 * cc, e, &ct), 1.0, 0);
+    assert_near(ct, 0.0, 0);
+    /* A conductor with k = 0 is a dielectric (from outside). */
+    for (int k = 0; k < 5; k++) {
+      double c = 0.05 + 0.2 * k;
+      rgb fc = fresnel_conductor(c, rgb_gray(e), rgb_gray(0.0));
+      assert_near(fc.g, fresnel_dielectric(c, e, NULL), 1e-12);
+      checks++;
+    }
+    checks += 7;
+  }
+  /* eta = 1: no reflection. */
+  double ct;
+  assert_near(fresnel_dielectric(0.3, 1.0, &ct), 0.0, 0);
+  assert_near(ct, -0.3, 0);
+  /* Conductor limits: grazing 1; "none" exactly 1 everywhere; Cu at normal
+   * incidence ((n-1)^2 + k^2) / ((n+1)^2 + k^2). */
+  rgb eta, k;
+  assert_true(conductor_lookup("Cu", &eta, &k));
+  assert_near(fresnel_conductor(0.0, eta, k).r, 1.0, 1e-12);
+  rgb f0 = fresnel_conductor(1.0, eta, k);
+  double n = eta.r, kk = k.r;
+  assert_near(f0.r, ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk), 1e-12);
+  assert_true(conductor_lookup("none", &eta, &k));
+  for (int i = 0; i <= 10; i++) assert_near(fresnel_conductor(i / 10.0, eta, k).g, 1.0, 1e-15);
+  checks += 4 + 11;
+  assert_int_equal(checks, 3 * 12 + 15);
+}
+
+static void test_tables_defaults(void **state) {
+  (void)state;
+  int checks = 0;
+  static const struct {
+    const char *name;
+    double v;
+  } iors[] = {{"vacuum", 1.0},          {"helium", 1.000036},    {"hydrogen", 1.000132},
+              {"air", 1.000277},        {"carbon dioxide", 1.00045}, {"water", 1.3330},
+              {"acetone", 1.36},        {"ethanol", 1.361},      {"carbon tetrachloride", 1.461},
+              {"glycerol", 1.4729},     {"benzene", 1.501},      {"silicone oil", 1.52045},
+              {"bromine", 1.661},       {"water ice", 1.31},     {"fused quartz", 1.458},
+              {"pyrex", 1.470},         {"acrylic glass", 1.49}, {"polypropylene", 1.49},
+              {"bk7", 1.5046},          {"sodium chloride", 1.544}, {"amber", 1.55},
+              {"pet", 1.5750},          {"diamond", 2.419}};
+  for (size_t i = 0; i < sizeof iors / sizeof iors[0]; i++) {
+    double v = 0.0;
+    assert_true(ior_lookup(iors[i].name, &v));
+    assert_near(v, iors[i].v, 0);
+    checks++;
+  }
+  double v;
+  assert_true(ior_lookup("BK7", &v)); /* case insensitive, as Mitsuba */
+  assert_false(ior_lookup("unobtainium", &v));
+  assert_false(ior_lookup(NULL, &v));
+  checks += 3;
+  const char *metals[] = {"Cu", "Au", "Ag", "Al", "Cr", "none"};
+  for (int i = 0; i < 6; i++) {
+    rgb e, k;
+    assert_true(conductor_lookup(metals[i], &e, &k));
+    assert_true(k.r > 0.9 && e.r >= 0.0);
+    checks++;
+  }
+  rgb e, k;
+  assert_false(conductor_lookup("Kryptonite", &e, &k));
+  assert_true(conductor_lookup("Cu", &e, &k));
+  assert_near(e.r, 0.200438, 1e-6);
+  assert_near(k.b, 2.14219, 1e-5);
+  checks += 3;
+
+  /* Mitsuba's defaults. */
+  bsdf b;
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  assert_near(b.diffuse.value.g, 0.5, 0);
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE);
+  bsdf_init_defaults(&b, BSDF_PHONG);
+  assert_near(b.exponent, 30.0, 0);
+  assert_near(b.specular.value.r, 0.2, 0);
+  assert_near(b.diffuse.value.r, 0.5, 0);
+  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  assert_near(b.eta, 1.5046 / 1.000277, 1e-15);
+  assert_true(bsdf_is_delta(&b));
+  bsdf_init_defaults(&b, BSDF_PLASTIC);
+  assert_near(b.eta, 1.49 / 1.000277, 1e-15);
+  assert_near(b.diffuse.value.r, 0.5, 0);
+  assert_near(b.specular.value.r, 1.0, 0);
+  assert_false(bsdf_is_delta(&b));
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DELTA | BSDF_DIFFUSE_LOBE);
+  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  assert_near(b.alpha, 0.1, 0);
+  assert_int_equal(b.dist, MF_BECKMANN);
+  assert_int_equal(b.sample_visible, 1);
+  assert_near(b.cond_eta.r, 0.2004376970 / 1.000277, 1e-12);
+  bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+  assert_near(b.alpha, 0.1, 0);
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY);
+  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  assert_true(bsdf_is_delta(&b));
+  checks += 21;
+  assert_int_equal(checks, 23 + 3 + 6 + 3 + 21);
+}
+
+/* ---- one-sidedness and twosided ------------------------------------------- */
+
+static void test_sidedness(void **state) {
+  (void)state;
+  int checks = 0;
+  const bsdf_type one_sided[] = {BSDF_DIFFUSE, BSDF_PHONG, BSDF_CONDUCTOR, BSDF_ROUGHCONDUCTOR,
+                                 BSDF_PLASTIC};
+  vec3 up = dir(0.6, 0.5), up2 = dir(0.7, 2.5), down = dir(-0.6, 0.5), down2 = dir(-0.7, 2.5);
+  for (int t = 0; t < 5; t++) {
+    bsdf b;
+    bsdf_init_defaults(&b, one_sided[t]);
+    b.alpha = 0.5;
+    bsdf_sample s;
+    /* Black from below, and for directions through the surface. */
+    assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, down, down2, TRANSPORT_RADIANCE)));
+    assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, up, down2, TRANSPORT_RADIANCE)));
+    assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, down, up2, TRANSPORT_RADIANCE)));
+    assert_true(bsdf_pdf(&b, 0, 0, down, down2) == 0.0);
+    int absorbed = 0;
+    for (int k = 0; k < 50; k++)
+      absorbed += !bsdf_sample_f(&b, 0, 0, down, k / 50.0, 0.3, 0.6, TRANSPORT_RADIANCE, &s);
+    assert_int_equal(absorbed, 50);
+    checks += 5;
+    /* Twosided: from below it is the mirror image of the upper side. */
+    b.twosided = 1;
+    rgb f_dn = bsdf_eval(&b, 0, 0, down, down2, TRANSPORT_RADIANCE);
+    rgb f_up = bsdf_eval(&b, 0, 0, up, up2, TRANSPORT_RADIANCE);
+    assert_true(rgb_rel_err(f_dn, f_up) < 1e-15 || (rgb_is_black(f_dn) && rgb_is_black(f_up)));
+    assert_near(bsdf_pdf(&b, 0, 0, down, down2), bsdf_pdf(&b, 0, 0, up, up2), 1e-15);
+    assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, down, up2, TRANSPORT_RADIANCE)));
+    bsdf_sample s_up, s_dn;
+    int ok_up = bsdf_sample_f(&b, 0, 0, up, 0.9, 0.3, 0.6, TRANSPORT_RADIANCE, &s_up);
+    int ok_dn = bsdf_sample_f(&b, 0, 0, down, 0.9, 0.3, 0.6, TRANSPORT_RADIANCE, &s_dn);
+    assert_int_equal(ok_up, ok_dn);
+    assert_true(ok_up);
+    assert_near(s_dn.wi.z, -s_up.wi.z, 1e-15);
+    assert_near(s_dn.wi.x, s_up.wi.x, 1e-15);
+    assert_near(s_dn.weight.r, s_up.weight.r, 1e-15);
+    checks += 8;
+  }
+  /* Dielectrics ignore the flag (they have two sides already). */
+  bsdf b;
+  bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+  rgb f0 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);
+  b.twosided = 1;
+  rgb f1 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);
+  assert_true(rgb_rel_err(f0, f1) == 0.0);
+  checks++;
+  assert_int_equal(checks, 5 * 13 + 1);
+}
+
+/* ---- microfacet internals ---------------------------------------------------- */
+
+static void test_microfacet(void **state) {
+  (void)state;
+  int checks = 0;
+  /* D(m) cos(theta_m) integrates to 1 over the hemisphere; the visible
+   * normal density to 1 for every v (exact Smith G1). Midpoint rule on a
+   * fine grid in (cos theta, phi). */
+  const double alphas[] = {0.05, 0.3, 1.0};
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 3; a++) {
+      mf_dist dist = d ? MF_GGX : MF_BECKMANN;
+      const int nt = 20000, np = 64;
+      double s = 0.0, sv = 0.0;
+      vec3 v = dir(0.3, 0.4);
+      for (int i = 0; i < nt; i++) {
+        /* Denser near the pole: cos theta = 1 - t^2 substitution. */
+        double t = (i + 0.5) / nt, z = 1.0 - t * t, jac = 2.0 * t / nt;
+        for (int j = 0; j < np; j++) {
+          vec3 m = dir(z, (j + 0.5) * 2.0 * M_PI / np);
+          s += mf_D(dist, alphas[a], m) * m.z * jac * 2.0 * M_PI / np;
+          sv += mf_pdf(dist, alphas[a], v, m, 1) * jac * 2.0 * M_PI / np;
+        }
+      }
+      assert_near(s, 1.0, 2e-4);
+      assert_near(sv, 1.0, 2e-4);
+      /* Lambda is even in v.z; G1 vanishes for backfacing microfacets. */
+      assert_near(mf_lambda(dist, alphas[a], v), mf_lambda(dist, alphas[a], v3(v.x, v.y, -v.z)), 0);
+      assert_true(mf_G1(dist, alphas[a], v, v3(0, 0, 1)) > 0.0);
+      assert_true(mf_G1(dist, alphas[a], v, v3_normalize(v3(-v.x, -v.y, 0.05))) == 0.0);
+      checks += 5;
+    }
+  /* Beckmann Smith G1 against Walter's rational approximation (within its 0.4%). */
+  for (int i = 1; i < 20; i++) {
+    vec3 v = dir(i / 20.0, 0.0);
+    double alpha = 0.3, a = v.z / (alpha * sqrt(1.0 - v.z * v.z));
+    double approx = a >= 1.6 ? 1.0 : (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+    assert_near(mf_G1(MF_BECKMANN, alpha, v, v3(0, 0, 1)), approx, 4e-3);
+    checks++;
+  }
+  /* erfinv inverts erf. */
+  for (int i = -9; i <= 9; i++) {
+    double x = i / 10.0 * 0.999999;
+    assert_near(erf(mf_erfinv(x)), x, 1e-14);
+    checks++;
+  }
+  assert_int_equal(checks, 6 * 5 + 19 + 19);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_tables_defaults),   cmocka_unit_test(test_fresnel),
+      cmocka_unit_test(test_microfacet),        cmocka_unit_test(test_sidedness),
+      cmocka_unit_test(test_dielectric_delta),  cmocka_unit_test(test_reciprocity),
+      cmocka_unit_test(test_sample_consistency), cmocka_unit_test(test_energy),
+      cmocka_unit_test(test_chi2_microfacet),   cmocka_unit_test(test_chi2_sampling),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
