@@ -41,6 +41,7 @@ static const char *lmc_usage =
     "  render SCENE.xml [flags]        render a Mitsuba XML scene\n"
     "  compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
     "                                  print mse, relmse and mean_ratio\n"
+    "  merge A.exr B.exr ... -o OUT.exr  average independent renders of one scene\n"
     "  --help, -h                      this text (lmc render --help: the render flags)\n"
     "  --version                       the version\n"
     "\n"
@@ -493,6 +494,63 @@ static int lmc_cmd_compare(int argc, char **argv) {
   return status;
 }
 
+/* --- lmc merge ------------------------------------------------------------------ */
+
+/* Averages renders of the same scene made with different seeds (equal
+ * weights: give each the same sample count). */
+static int lmc_cmd_merge(int argc, char **argv) {
+  const char *out = NULL;
+  lmc_image acc = {0}, img = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  char msg[2048];
+  int n = 0, status = EXIT_OK;
+  lmc_args a = {argc, 2, argv, NULL};
+  for (a.i = 2; a.i < argc && status == EXIT_OK; a.i++) {
+    if (lmc_flag_is(&a, "-o") || lmc_flag_is(&a, "--output")) {
+      if (!(out = lmc_flag_value(&a))) status = EXIT_BADINPUT;
+      continue;
+    }
+    if (argv[a.i][0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc merge A.exr B.exr ... -o OUT.exr)\n",
+              argv[a.i]);
+      status = EXIT_BADINPUT;
+      continue;
+    }
+    if (image_read(argv[a.i], 0, &img, &err) || image_to_rgb(&img, &err)) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: %s\n", msg);
+      status = EXIT_BADINPUT;
+    } else if (n == 0) {
+      acc = img;
+      memset(&img, 0, sizeof img);
+      n = 1;
+    } else if (img.width != acc.width || img.height != acc.height) {
+      fprintf(stderr, "lmc: %s is %dx%d, the first image %dx%d\n", argv[a.i], img.width,
+              img.height, acc.width, acc.height);
+      status = EXIT_BADINPUT;
+    } else {
+      /* Running mean, in place. */
+      n++;
+      for (size_t k = 0; k < (size_t)acc.width * acc.height * 3; k++)
+        acc.data[k] += (img.data[k] - acc.data[k]) / (float)n;
+    }
+    image_free(&img);
+  }
+  if (status == EXIT_OK && (n < 1 || !out)) {
+    fprintf(stderr, "usage: lmc merge A.exr B.exr ... -o OUT.exr\n");
+    status = EXIT_BADINPUT;
+  }
+  if (status == EXIT_OK && image_write_exr(out, &acc, &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    status = EXIT_FAIL;
+  }
+  if (status == EXIT_OK) printf("wrote %s (mean of %d images)\n", out, n);
+  image_free(&acc);
+  return status;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fputs(lmc_usage, stderr);
@@ -508,6 +566,7 @@ int main(int argc, char **argv) {
   }
   if (!strcmp(argv[1], "render")) return lmc_cmd_render(argc, argv);
   if (!strcmp(argv[1], "compare")) return lmc_cmd_compare(argc, argv);
+  if (!strcmp(argv[1], "merge")) return lmc_cmd_merge(argc, argv);
   fprintf(stderr, "lmc: unknown command '%s'\n%s", argv[1], lmc_usage);
   return EXIT_BADINPUT;
 }

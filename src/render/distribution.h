@@ -17,6 +17,7 @@ typedef struct distrib1d {
   double *func; /* n values (non-negative) */
   double *cdf;  /* n + 1 values, cdf[0] = 0, cdf[n] = 1 */
   double integral; /* sum(func) / n */
+  int *guide;      /* n cutpoints: guide[k] = the cell of u = k / n (Chen and Asau 1974) */
 } distrib1d;
 
 lmc_status distrib1d_init(distrib1d *d, const double *f, int n, lmc_error *err);
