@@ -11,7 +11,7 @@
  *                  compares with the integral of the claimed pdf over each
  *                  cell (midpoint rule on a sub-grid). Samples the routine
  *                  rejects count as absorbed; so does the missing mass of
- *                  the pdf, which is one more cell.
+ *                  the pdf, which is one more cell (pooled when small).
  *
  * Significance: a suite of k tests at overall level alpha uses the Sidak
  * level 1 - (1 - alpha)^(1/k) per test: chi2_sidak.
@@ -167,7 +167,11 @@ static inline chi2_result chi2_sphere(chi2_sample_fn sample, chi2_pdf_fn pdf, vo
       expct[it * n_phi + ip] = acc * (double)n_samples;
       total += acc;
     }
-  expct[cells] = fmax(0.0, 1.0 - total) * (double)n_samples;
+  /* The rejected cell always has a (tiny) positive expectation: the
+   * midpoint integral of a sharp lobe can exceed 1 by more than the true
+   * rejected mass, and a zero expectation with observed rejections would
+   * make the p-value 0; a tiny one is pooled with the other small cells. */
+  expct[cells] = fmax(1e-9, 1.0 - total) * (double)n_samples;
   res.pdf_integral = total;
   res.pvalue = chi2_pvalue(obs, expct, cells + 1, 5.0, &res.dof, &res.stat);
   free(obs);

@@ -16,6 +16,8 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "test_util.h"
+
 #include <string.h>
 
 #include "chi2.h"
@@ -46,12 +48,12 @@ static void test_ray_raster_round_trip(void **state) {
     vec3 o, d;
     camera_generate_ray(&c, rx, ry, &o, &d);
     double we = camera_we(&c, d, &qx, &qy);
-    assert_float_equal(qx, rx, 1e-8);
-    assert_float_equal(qy, ry, 1e-8);
+    assert_near(qx, rx, 1e-8);
+    assert_near(qy, ry, 1e-8);
     double cos_t = v3_dot(d, c.forward);
     double expect = c.width * c.height / (A * pow(cos_t, 4.0));
-    assert_float_equal(we, expect, 1e-9 * expect);
-    assert_float_equal(camera_pdf_dir(&c, d), 1.0 / (A * pow(cos_t, 3.0)), 1e-9 * expect);
+    assert_near(we, expect, 1e-9 * expect);
+    assert_near(camera_pdf_dir(&c, d), 1.0 / (A * pow(cos_t, 3.0)), 1e-9 * expect);
     checked++;
   }
   assert_int_equal(checked, 10000);
@@ -123,7 +125,7 @@ static void test_direction_density(void **state) {
       double l = v3_len(d), cos3 = 1.0 / (l * l * l);
       total += camera_pdf_dir(&c, v3_scale(d, 1.0 / l)) * cos3 * hx * hy;
     }
-  assert_float_equal(total, 1.0, 1e-9);
+  assert_near(total, 1.0, 1e-9);
 }
 
 static void test_fov_axes(void **state) {
@@ -133,22 +135,22 @@ static void test_fov_axes(void **state) {
   c.to_world = xform_identity();
   double t = tan(30.0 * M_PI / 180.0);
   assert_true(camera_set_fov(&c, 60.0, "x", 40, 20));
-  assert_float_equal(c.tan_half_x, t, 1e-12);
-  assert_float_equal(c.tan_half_y, t / 2.0, 1e-12);
+  assert_near(c.tan_half_x, t, 1e-12);
+  assert_near(c.tan_half_y, t / 2.0, 1e-12);
   assert_true(camera_set_fov(&c, 60.0, "y", 40, 20));
-  assert_float_equal(c.tan_half_y, t, 1e-12);
-  assert_float_equal(c.tan_half_x, 2.0 * t, 1e-12);
+  assert_near(c.tan_half_y, t, 1e-12);
+  assert_near(c.tan_half_x, 2.0 * t, 1e-12);
   assert_true(camera_set_fov(&c, 60.0, "smaller", 40, 20));
-  assert_float_equal(c.tan_half_y, t, 1e-12);
+  assert_near(c.tan_half_y, t, 1e-12);
   assert_true(camera_set_fov(&c, 60.0, "larger", 40, 20));
-  assert_float_equal(c.tan_half_x, t, 1e-12);
+  assert_near(c.tan_half_x, t, 1e-12);
   assert_true(camera_set_fov(&c, 60.0, "diagonal", 30, 40));
-  assert_float_equal(hypot(c.tan_half_x, c.tan_half_y), t, 1e-12);
+  assert_near(hypot(c.tan_half_x, c.tan_half_y), t, 1e-12);
   /* A new resolution keeps the fov of the axis used. */
   assert_true(camera_set_fov(&c, 60.0, "x", 40, 20));
   camera_set_resolution(&c, 80, 80);
-  assert_float_equal(c.tan_half_x, t, 1e-12);
-  assert_float_equal(c.tan_half_y, t, 1e-12);
+  assert_near(c.tan_half_x, t, 1e-12);
+  assert_near(c.tan_half_y, t, 1e-12);
   assert_false(camera_set_fov(&c, 180.0, "x", 40, 20));
   assert_false(camera_set_fov(&c, 0.0, "x", 40, 20));
   assert_false(camera_set_fov(&c, 60.0, "z", 40, 20));
@@ -178,7 +180,7 @@ static void test_filters(void **state) {
         expct[iy * N + ix] = acc * n;
         obs[iy * N + ix] = 0.0;
       }
-    assert_float_equal(total, 1.0, 1e-3);
+    assert_near(total, 1.0, 1e-3);
     rng g;
     rng_seed(&g, 4, (uint64_t)k);
     for (int64_t i = 0; i < n; i++) {
@@ -204,9 +206,9 @@ static void test_filters(void **state) {
     for (int i = 0; i < 16 * 16; i++)
       for (int ch = 0; ch < 3; ch++) s[ch] += fm.splat[3 * i + ch];
     double tol = types[k] == FILTER_GAUSSIAN ? 1e-2 : 1e-12;
-    assert_float_equal(s[0], 1.0, tol);
-    assert_float_equal(s[1], 2.0, 2.0 * tol);
-    assert_float_equal(s[2], 3.0, 3.0 * tol);
+    assert_near(s[0], 1.0, tol);
+    assert_near(s[1], 2.0, 2.0 * tol);
+    assert_near(s[2], 3.0, 3.0 * tol);
     film_free(&fm);
     tested++;
   }

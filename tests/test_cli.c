@@ -12,6 +12,8 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+
+#include "test_util.h"
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -109,6 +111,25 @@ static lmc_image read_exr(const char *path) {
   return img;
 }
 
+/* A malformed scene: exit 2, and the message names the file and the line. */
+static void test_malformed_scene_names_file_and_line(void **state) {
+  (void)state;
+  FILE *f = fopen(TMP "/bad.xml", "w");
+  assert_non_null(f);
+  fputs("<?xml version=\"1.0\"?>\n<scene version=\"0.6.0\">\n  <shape type=\"sphere\">\n"
+        "    <float name=\"radius\" value=\"1.2.3\"/>\n  </shape>\n</scene>\n",
+        f);
+  fclose(f);
+  assert_int_equal(run_lmc("render " TMP "/bad.xml -q"), 2);
+  if (!strstr(err_text, "bad.xml:4")) fail_msg("no file:line in: %s", err_text);
+  f = fopen(TMP "/bad.xml", "w");
+  assert_non_null(f);
+  fputs("<scene version=\"0.6.0\">\n  <shape type=\"sphere\">\n</scene>\n", f);
+  fclose(f);
+  assert_int_equal(run_lmc("render " TMP "/bad.xml -q"), 2);
+  if (!strstr(err_text, "bad.xml:3")) fail_msg("no file:line in: %s", err_text);
+}
+
 static void test_flag_syntax_and_determinism(void **state) {
   (void)state;
   assert_int_equal(run_lmc("render " SCENE " --spp 4 --threads 2 --seed 3 -q -o " TMP "/a.exr"), 0);
@@ -172,17 +193,17 @@ static void test_compare_metrics(void **state) {
     lr += rgb_luminance(rgb_make(rv[3 * p], rv[3 * p + 1], rv[3 * p + 2]));
   }
   assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/R.exr --heatmap=" TMP "/h.png"), 0);
-  assert_float_equal(metric("mse"), mse, 1e-7 * mse);
-  assert_float_equal(metric("relmse"), rel, 1e-7 * rel);
-  assert_float_equal(metric("mean_ratio"), li / lr, 1e-7);
+  assert_near(metric("mse"), mse, 1e-7 * mse);
+  assert_near(metric("relmse"), rel, 1e-7 * rel);
+  assert_near(metric("mean_ratio"), li / lr, 1e-7);
   lmc_image h = {0};
   assert_int_equal(image_read(TMP "/h.png", 0, &h, &err), LMC_OK);
   assert_int_equal(h.width, 2);
   image_free(&h);
   /* Identical images: zero error. */
   assert_int_equal(run_lmc("compare " TMP "/R.exr " TMP "/R.exr"), 0);
-  assert_float_equal(metric("mse"), 0.0, 0.0);
-  assert_float_equal(metric("mean_ratio"), 1.0, 1e-12);
+  assert_near(metric("mse"), 0.0, 0.0);
+  assert_near(metric("mean_ratio"), 1.0, 1e-12);
   /* Different sizes: exit 2. */
   assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/S.exr"), 2);
   assert_non_null(strstr(err_text, "3x1"));
@@ -255,6 +276,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_help_lists_every_flag),
       cmocka_unit_test(test_bad_flags_exit_2_naming_the_flag),
+      cmocka_unit_test(test_malformed_scene_names_file_and_line),
       cmocka_unit_test(test_flag_syntax_and_determinism),
       cmocka_unit_test(test_resolution_override),
       cmocka_unit_test(test_compare_metrics),

@@ -20,20 +20,12 @@
 
 #include <cmocka.h>
 
+#include "test_util.h"
+
 #include "chi2.h"
 #include "render/distribution.h"
 #include "render/rng.h"
 
-/* |a - b| <= tol, printing both values when it fails (cmocka 1.1.5 has no
- * double comparison). */
-#define assert_near(a, b, tol)                                                        \
-  do {                                                                                \
-    double a_ = (a), b_ = (b), t_ = (tol);                                            \
-    if (!(fabs(a_ - b_) <= t_)) {                                                     \
-      print_error("%s = %.17g, %s = %.17g, tolerance %g\n", #a, a_, #b, b_, t_);     \
-      fail();                                                                         \
-    }                                                                                 \
-  } while (0)
 
 /* Number of chi-square tests in this file (for the Sidak level). */
 #define N_CHI2_TESTS 4

@@ -24,6 +24,8 @@
 
 #include <cmocka.h>
 
+#include "test_util.h"
+
 #include "render/image.h"
 
 /* 16x8 RGB (200, 100, 50) and 8x8 grey 128, libjpeg quality 100. */
@@ -173,13 +175,13 @@ static void test_srgb_curve(void **state) {
   int n = 0;
   for (int i = 0; i <= 1000; i++) {
     double v = i / 1000.0;
-    assert_float_equal(linear_to_srgb(srgb_to_linear(v)), v, 1e-12);
+    assert_near(linear_to_srgb(srgb_to_linear(v)), v, 1e-12);
     n++;
   }
   assert_int_equal(n, 1001);
-  assert_float_equal(srgb_to_linear(1.0), 1.0, 1e-15);
-  assert_float_equal(srgb_to_linear(0.5), 0.21404114048223255, 1e-12);
-  assert_float_equal(linear_to_srgb(0.001), 0.01292, 1e-12);
+  assert_near(srgb_to_linear(1.0), 1.0, 1e-15);
+  assert_near(srgb_to_linear(0.5), 0.21404114048223255, 1e-12);
+  assert_near(linear_to_srgb(0.001), 0.01292, 1e-12);
 }
 
 /* ---- EXR ------------------------------------------------------------------- */
@@ -207,7 +209,7 @@ static void test_exr_roundtrip(void **state) {
   img.data[5] = 42.0f;
   check_ok(image_write_exr(path, &img, &err), &err);
   check_ok(image_read_exr(path, &back, &err), &err);
-  assert_float_equal(back.data[5], 42.0, 0.0);
+  assert_near(back.data[5], 42.0, 0.0);
   image_free(&back);
   assert_int_equal(count_files("/tmp", "lmc_test_imageio.exr.tmp"), 0);
 
@@ -272,7 +274,7 @@ static void test_exr_tiled_half_rgba(void **state) {
   assert_int_equal(n_ok, 60);
   check_ok(image_to_rgb(&img, &err), &err);
   assert_int_equal(img.channels, 3);
-  assert_float_equal(img.data[3 * 7 + 2], 3.0 + 7.0 / 16.0, 0.0);
+  assert_near(img.data[3 * 7 + 2], 3.0 + 7.0 / 16.0, 0.0);
   image_free(&img);
   remove(path);
 }
@@ -301,20 +303,20 @@ static void test_png_roundtrip(void **state) {
     if (d <= 0.5 / 255 + 1e-6) n_ok++;
   }
   assert_int_equal(n_ok, 29 * 17 * 3 - 3);
-  assert_float_equal(back.data[0], 0.0, 0.0);
-  assert_float_equal(back.data[1], 1.0, 1e-7);
-  assert_float_equal(back.data[2], 0.0, 0.0);
+  assert_near(back.data[0], 0.0, 0.0);
+  assert_near(back.data[1], 1.0, 1e-7);
+  assert_near(back.data[2], 0.0, 0.0);
   image_free(&back);
 
   /* The scale multiplies first: 0.25 * 2 reads back as ~0.5. */
   for (int i = 0; i < 29 * 17 * 3; i++) img.data[i] = 0.25f;
   check_ok(image_write_png(path, &img, 2.0, &err), &err);
   check_ok(image_read_png(path, 1, &back, &err), &err);
-  assert_float_equal(linear_to_srgb(back.data[7]), linear_to_srgb(0.5), 0.5 / 255 + 1e-6);
+  assert_near(linear_to_srgb(back.data[7]), linear_to_srgb(0.5), 0.5 / 255 + 1e-6);
   image_free(&back);
   /* Read without decoding: the stored sRGB code value. */
   check_ok(image_read_png(path, 0, &back, &err), &err);
-  assert_float_equal(back.data[7], round(linear_to_srgb(0.5) * 255) / 255, 1e-6);
+  assert_near(back.data[7], round(linear_to_srgb(0.5) * 255) / 255, 1e-6);
   image_free(&back);
   assert_int_equal(count_files("/tmp", "lmc_test_imageio.png.tmp"), 0);
 
@@ -413,7 +415,7 @@ static void test_png_types(void **state) {
           } else {
             expect = png_sample(x, y, c, cases[k].depth) / max;
           }
-          assert_float_equal(img.data[(y * 4 + x) * img.channels + c], expect, 1e-6);
+          assert_near(img.data[(y * 4 + x) * img.channels + c], expect, 1e-6);
           n_checked++;
         }
     image_free(&img);
@@ -425,7 +427,7 @@ static void test_png_types(void **state) {
                      : png_sample(x, y, cases[k].color == PNG_COLOR_TYPE_GRAY_ALPHA ? 1 : c,
                                   cases[k].depth) / max;
     double expect = img.channels == 4 ? raw : srgb_to_linear(raw);
-    assert_float_equal(img.data[(y * 4 + x) * img.channels + c], expect, 1e-6);
+    assert_near(img.data[(y * 4 + x) * img.channels + c], expect, 1e-6);
     image_free(&img);
   }
   assert_int_equal(n_checked, 12 * (1 + 1 + 4 + 3 + 3 + 4 + 4 + 3));
@@ -478,16 +480,16 @@ static void test_jpeg(void **state) {
   assert_int_equal(n_ok, 16 * 8 * 3);
   image_free(&img);
   check_ok(image_read_jpeg(path, 1, &img, &err), &err);
-  assert_float_equal(img.data[0], srgb_to_linear(200 / 255.0), 0.01);
+  assert_near(img.data[0], srgb_to_linear(200 / 255.0), 0.01);
   image_free(&img);
   /* Grey. */
   assert_true(write_file(path, grey_jpg, sizeof grey_jpg));
   check_ok(image_read(path, 0, &img, &err), &err);
   assert_int_equal(img.channels, 1);
-  assert_float_equal(img.data[10] * 255.0, 128.0, 2.0);
+  assert_near(img.data[10] * 255.0, 128.0, 2.0);
   check_ok(image_to_rgb(&img, &err), &err);
   assert_int_equal(img.channels, 3);
-  assert_float_equal(img.data[3 * 10 + 2] * 255.0, 128.0, 2.0);
+  assert_near(img.data[3 * 10 + 2] * 255.0, 128.0, 2.0);
   image_free(&img);
   /* Truncated: an error (libjpeg only warns; we do not accept it). */
   int n_err = 0, n_cut = 0;

@@ -18,6 +18,8 @@
 
 #include <cmocka.h>
 
+#include "test_util.h"
+
 #include "render/io/io.h"
 #include "render/mesh.h"
 
@@ -84,15 +86,15 @@ static void test_obj_quad(void **state) {
   int found = 0;
   for (int64_t i = 0; i < m.n_vertices; i++) {
     if (m.p[3 * i] == 1.0f && m.p[3 * i + 1] == 1.0f) {
-      assert_float_equal(m.uv[2 * i], 1.0, 1e-7);
-      assert_float_equal(m.uv[2 * i + 1], 0.75, 1e-7);
+      assert_near(m.uv[2 * i], 1.0, 1e-7);
+      assert_near(m.uv[2 * i + 1], 0.75, 1e-7);
       found++;
     }
-    assert_float_equal(m.n[3 * i + 2], 1.0, 0.0);
+    assert_near(m.n[3 * i + 2], 1.0, 0.0);
   }
   assert_int_equal(found, 1);
   for (int64_t t = 0; t < m.n_triangles; t++) assert_true(mesh_face_normal(&m, t).z > 0.99);
-  assert_float_equal(total_area(&m), 1.5, 1e-12);
+  assert_near(total_area(&m), 1.5, 1e-12);
   assert_string_equal(m.name, "quad.obj");
   mesh_free(&m);
 }
@@ -106,7 +108,7 @@ static void test_obj_cube_dedup(void **state) {
   assert_int_equal(m.n_triangles, 12);
   assert_null(m.n); /* no corner references a normal */
   assert_null(m.uv);
-  assert_float_equal(volume(&m), 8.0, 1e-12);
+  assert_near(volume(&m), 8.0, 1e-12);
   assert_int_equal(count_outward(&m, v3(0, 0, 0)), 12);
   mesh_free(&m);
 }
@@ -150,14 +152,14 @@ static void test_obj_errors(void **state) {
 static void check_quad_ply(const mesh *m, int with_uv) {
   assert_int_equal(m->n_vertices, 4);
   assert_int_equal(m->n_triangles, 2);
-  assert_float_equal(total_area(m), 1.0, 1e-12);
+  assert_near(total_area(m), 1.0, 1e-12);
   for (int64_t t = 0; t < m->n_triangles; t++) assert_true(mesh_face_normal(m, t).z > 0.99);
-  assert_float_equal(m->p[3 * 2], 1.0, 0.0);
-  assert_float_equal(m->p[3 * 2 + 1], 1.0, 0.0);
+  assert_near(m->p[3 * 2], 1.0, 0.0);
+  assert_near(m->p[3 * 2 + 1], 1.0, 0.0);
   if (with_uv) {
     assert_non_null(m->uv);
-    assert_float_equal(m->uv[2 * 1], 1.0, 0.0);
-    assert_float_equal(m->uv[2 * 3 + 1], 1.0, 0.0);
+    assert_near(m->uv[2 * 1], 1.0, 0.0);
+    assert_near(m->uv[2 * 3 + 1], 1.0, 0.0);
   }
 }
 
@@ -168,7 +170,7 @@ static void test_ply_ascii(void **state) {
   check_ok(mesh_read_ply("data/mesh/quad_ascii.ply", &m, &err), &err);
   check_quad_ply(&m, 1);
   assert_non_null(m.n);
-  assert_float_equal(m.n[2], 1.0, 0.0);
+  assert_near(m.n[2], 1.0, 0.0);
   mesh_free(&m);
 }
 
@@ -339,7 +341,7 @@ static void test_serialized_generated(void **state) {
       check_quad_ply(&m, version == 4);
       if (version == 4) {
         assert_non_null(m.n);
-        assert_float_equal(m.n[2], 1.0, 0.0);
+        assert_near(m.n[2], 1.0, 0.0);
         assert_string_equal(m.name, "quad");
       }
       mesh_free(&m);
@@ -446,21 +448,21 @@ static void test_shape_cube_rect_disk_cylinder(void **state) {
   assert_int_equal(m.n_vertices, 24);
   assert_int_equal(m.n_triangles, 12);
   assert_true(m.face_normals);
-  assert_float_equal(volume(&m), 8.0, 1e-12);
-  assert_float_equal(total_area(&m), 24.0, 1e-12);
+  assert_near(volume(&m), 8.0, 1e-12);
+  assert_near(total_area(&m), 24.0, 1e-12);
   assert_int_equal(count_outward(&m, v3(0, 0, 0)), 12);
   mesh_free(&m);
 
   check_ok(shape_rectangle(&m, &err), &err);
-  assert_float_equal(total_area(&m), 4.0, 1e-12);
-  for (int64_t t = 0; t < m.n_triangles; t++) assert_float_equal(mesh_face_normal(&m, t).z, 1.0, 1e-12);
+  assert_near(total_area(&m), 4.0, 1e-12);
+  for (int64_t t = 0; t < m.n_triangles; t++) assert_near(mesh_face_normal(&m, t).z, 1.0, 1e-12);
   m.flip_normals = 1;
-  assert_float_equal(mesh_face_normal(&m, 0).z, -1.0, 1e-12);
+  assert_near(mesh_face_normal(&m, 0).z, -1.0, 1e-12);
   mesh_free(&m);
 
   /* Disk: inscribed 128-gon, area (N/2) sin(2 pi/N) exactly. */
   check_ok(shape_disk(&m, &err), &err);
-  assert_float_equal(total_area(&m), 64.0 * sin(2 * PI / 128), 1e-6);
+  assert_near(total_area(&m), 64.0 * sin(2 * PI / 128), 1e-6);
   for (int64_t t = 0; t < m.n_triangles; t++) assert_true(mesh_face_normal(&m, t).z > 0.999999);
   mesh_free(&m);
 
@@ -468,7 +470,7 @@ static void test_shape_cube_rect_disk_cylinder(void **state) {
   vec3 p0 = v3(1, 2, 3), p1 = v3(2, 0, 5);
   double r = 0.5, L = v3_len(v3_sub(p1, p0));
   check_ok(shape_cylinder(p0, p1, r, &m, &err), &err);
-  assert_float_equal(total_area(&m), 128.0 * 2.0 * r * sin(PI / 128) * L, 1e-5);
+  assert_near(total_area(&m), 128.0 * 2.0 * r * sin(PI / 128) * L, 1e-5);
   /* Outward: away from the nearest axis point. */
   int64_t out = 0;
   vec3 z = v3_scale(v3_sub(p1, p0), 1.0 / L);
@@ -503,12 +505,12 @@ static void test_transform_mirror(void **state) {
   for (int64_t f = 0; f < m.n_triangles; f++) {
     uint32_t i = m.idx[3 * f];
     vec3 n = v3(m.n[3 * i], m.n[3 * i + 1], m.n[3 * i + 2]);
-    assert_float_equal(v3_len(n), 1.0, 1e-6);
+    assert_near(v3_len(n), 1.0, 1e-6);
     if (v3_dot(n, mesh_face_normal(&m, f)) > 0.0) agree++;
   }
   assert_int_equal(agree, m.n_triangles);
   /* Volume scales by |det| = 1. */
-  assert_float_equal(volume(&m), 4.0 / 3.0 * PI, 0.01);
+  assert_near(volume(&m), 4.0 / 3.0 * PI, 0.01);
   mesh_free(&m);
 }
 
@@ -557,7 +559,7 @@ static void test_validate(void **state) {
   check_ok(mesh_validate(&m, "scene.xml", 10, &err), &err);
   assert_int_equal(lmc_warning_count(), w0 + 1);
   assert_non_null(m.n);
-  assert_float_equal(m.n[3 * 2 + 2], 1.0, 1e-7);
+  assert_near(m.n[3 * 2 + 2], 1.0, 1e-7);
   mesh_free(&m);
 
   /* Empty mesh: a warning and zero triangles. */

@@ -18,16 +18,10 @@
 
 #include <cmocka.h>
 
+#include "test_util.h"
+
 #include "render/texture.h"
 
-#define assert_near(a, b, tol)                                                    \
-  do {                                                                            \
-    double a_ = (a), b_ = (b), t_ = (tol);                                        \
-    if (!(fabs(a_ - b_) <= t_)) {                                                 \
-      print_error("%s = %.17g, %s = %.17g, tolerance %g\n", #a, a_, #b, b_, t_); \
-      fail();                                                                     \
-    }                                                                             \
-  } while (0)
 
 /* A w x h image whose pixel (x, y) has red = x + 10 y, green = 100 + x,
  * blue = 200 + y (owned by the caller: free img->data). */
