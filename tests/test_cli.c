@@ -148,6 +148,13 @@ static void test_flag_syntax_and_determinism(void **state) {
   image_free(&a);
   image_free(&b);
   image_free(&c);
+  /* bdpt too: its light-tracing splats are merged in thread order. */
+  assert_int_equal(run_lmc("render " SCENE " --integrator bdpt --spp 2 --threads 2 -q -o " TMP "/d.exr"), 0);
+  assert_int_equal(run_lmc("render " SCENE " --integrator=bdpt --spp=2 --threads=2 -q -o " TMP "/e.exr"), 0);
+  lmc_image d = read_exr(TMP "/d.exr"), e = read_exr(TMP "/e.exr");
+  assert_memory_equal(d.data, e.data, sizeof(float) * (size_t)(d.width * d.height * 3));
+  image_free(&d);
+  image_free(&e);
 }
 
 static void test_resolution_override(void **state) {
