@@ -50,7 +50,7 @@ case "$mode" in
     build build
     ctest --test-dir build --output-on-failure -j "$jobs"
     build build-sanitize -DLMC_SANITIZE=ON
-    ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
+    ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -L fast
     ;;
   *)
