@@ -42,6 +42,7 @@ static const char *lmc_usage =
     "  compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
     "                                  print mse, relmse and mean_ratio\n"
     "  merge A.exr B.exr ... -o OUT.exr  average independent renders of one scene\n"
+    "  convert IN.exr OUT.png [--exposure S]  sRGB preview (default: the render's)\n"
     "  --help, -h                      this text (lmc render --help: the render flags)\n"
     "  --version                       the version\n"
     "\n"
@@ -551,6 +552,54 @@ static int lmc_cmd_merge(int argc, char **argv) {
   return status;
 }
 
+/* --- lmc convert ---------------------------------------------------------------- */
+
+static int lmc_cmd_convert(int argc, char **argv) {
+  const char *paths[2] = {NULL, NULL};
+  int n = 0;
+  double exposure = 0.0;
+  lmc_args a = {argc, 2, argv, NULL};
+  for (a.i = 2; a.i < argc; a.i++) {
+    const char *v;
+    if (lmc_flag_is(&a, "--exposure")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--exposure", v, 1e-30, 1e30, &exposure))
+        return EXIT_BADINPUT;
+    } else if (argv[a.i][0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc convert IN.exr OUT.png [--exposure S])\n",
+              argv[a.i]);
+      return EXIT_BADINPUT;
+    } else if (n < 2) {
+      paths[n++] = argv[a.i];
+    } else {
+      fprintf(stderr, "lmc convert: too many arguments\n");
+      return EXIT_BADINPUT;
+    }
+  }
+  if (n != 2) {
+    fprintf(stderr, "usage: lmc convert IN.exr OUT.png [--exposure S]\n");
+    return EXIT_BADINPUT;
+  }
+  lmc_image img = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  char msg[2048];
+  int status = EXIT_OK;
+  if (image_read(paths[0], 0, &img, &err) || image_to_rgb(&img, &err)) {
+    status = EXIT_BADINPUT;
+  } else if (image_write_png(paths[1], &img, exposure > 0.0 ? exposure : lmc_preview_scale(&img),
+                             &err)) {
+    status = EXIT_FAIL;
+  }
+  if (status != EXIT_OK) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+  } else {
+    printf("wrote %s\n", paths[1]);
+  }
+  image_free(&img);
+  return status;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fputs(lmc_usage, stderr);
@@ -567,6 +616,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "render")) return lmc_cmd_render(argc, argv);
   if (!strcmp(argv[1], "compare")) return lmc_cmd_compare(argc, argv);
   if (!strcmp(argv[1], "merge")) return lmc_cmd_merge(argc, argv);
+  if (!strcmp(argv[1], "convert")) return lmc_cmd_convert(argc, argv);
   fprintf(stderr, "lmc: unknown command '%s'\n%s", argv[1], lmc_usage);
   return EXIT_BADINPUT;
 }

@@ -219,6 +219,41 @@ static void test_compare_metrics(void **state) {
   image_free(&S);
 }
 
+/* merge averages; convert writes a PNG of the same size. */
+static void test_merge_and_convert(void **state) {
+  (void)state;
+  lmc_image A, B;
+  lmc_error err;
+  assert_int_equal(image_init(&A, 3, 2, 3, &err), LMC_OK);
+  assert_int_equal(image_init(&B, 3, 2, 3, &err), LMC_OK);
+  for (int i = 0; i < 18; i++) {
+    A.data[i] = (float)i;
+    B.data[i] = (float)(3 * i + 1);
+  }
+  assert_int_equal(image_write_exr(TMP "/mA.exr", &A, &err), LMC_OK);
+  assert_int_equal(image_write_exr(TMP "/mB.exr", &B, &err), LMC_OK);
+  assert_int_equal(run_lmc("merge " TMP "/mA.exr " TMP "/mB.exr -o " TMP "/mM.exr"), 0);
+  lmc_image M = read_exr(TMP "/mM.exr");
+  int checked = 0;
+  for (int i = 0; i < 18; i++, checked++) assert_near(M.data[i], 0.5 * (i + 3 * i + 1), 1e-5);
+  assert_int_equal(checked, 18);
+  assert_int_equal(run_lmc("convert " TMP "/mM.exr " TMP "/mM.png --exposure 0.01"), 0);
+  lmc_image P = {0};
+  assert_int_equal(image_read(TMP "/mM.png", 0, &P, &err), LMC_OK);
+  assert_int_equal(P.width, 3);
+  assert_int_equal(P.height, 2);
+  /* Different sizes cannot be merged. */
+  lmc_image C;
+  assert_int_equal(image_init(&C, 2, 2, 3, &err), LMC_OK);
+  assert_int_equal(image_write_exr(TMP "/mC.exr", &C, &err), LMC_OK);
+  assert_int_equal(run_lmc("merge " TMP "/mA.exr " TMP "/mC.exr -o " TMP "/mX.exr"), 2);
+  image_free(&A);
+  image_free(&B);
+  image_free(&C);
+  image_free(&M);
+  image_free(&P);
+}
+
 /* SIGINT during a long render: exit 130 within seconds, and the image of
  * what was rendered is written and valid. */
 static void test_interrupt_writes_image(void **state) {
@@ -287,6 +322,7 @@ int main(void) {
       cmocka_unit_test(test_flag_syntax_and_determinism),
       cmocka_unit_test(test_resolution_override),
       cmocka_unit_test(test_compare_metrics),
+      cmocka_unit_test(test_merge_and_convert),
       cmocka_unit_test(test_interrupt_writes_image),
       cmocka_unit_test(test_time_limit),
   };
