@@ -219,6 +219,33 @@ static void test_compare_metrics(void **state) {
   image_free(&S);
 }
 
+/* The LMC reference implementation's torus scenes render unmodified (with
+ * their own settings but a small film), giving a finite, lit image. */
+static void test_torus_renders_unmodified(void **state) {
+  (void)state;
+  const char *names[2] = {"lmc.xml", "h2mc.xml"};
+  char path[1024], args[2048];
+  int rendered = 0;
+  for (int k = 0; k < 2; k++) {
+    snprintf(path, sizeof path, "%s/scenes/torus/%s", LMC_SHARED_DIR, names[k]);
+    if (access(path, R_OK) != 0) skip();
+    snprintf(args, sizeof args, "render '%s' --spp 2 --resolution 64x48 -q -o " TMP "/torus.exr", path);
+    int rc = run_lmc(args);
+    if (rc != 0) fail_msg("lmc %s: exit %d: %s", args, rc, err_text);
+    lmc_image img = read_exr(TMP "/torus.exr");
+    assert_int_equal(img.width, 64);
+    double sum = 0.0;
+    for (int i = 0; i < 64 * 48 * 3; i++) {
+      assert_true(isfinite(img.data[i]));
+      sum += img.data[i];
+    }
+    assert_true(sum > 0.0);
+    image_free(&img);
+    rendered++;
+  }
+  assert_int_equal(rendered, 2);
+}
+
 /* merge averages; convert writes a PNG of the same size. */
 static void test_merge_and_convert(void **state) {
   (void)state;
@@ -323,6 +350,7 @@ int main(void) {
       cmocka_unit_test(test_resolution_override),
       cmocka_unit_test(test_compare_metrics),
       cmocka_unit_test(test_merge_and_convert),
+      cmocka_unit_test(test_torus_renders_unmodified),
       cmocka_unit_test(test_interrupt_writes_image),
       cmocka_unit_test(test_time_limit),
   };
