@@ -237,13 +237,29 @@ static int find_light(const scene *s, light_type t) {
   return -1;
 }
 
+/* The bitmap texture of happy.xml: a 4x4 grey ramp written at run time (no
+ * image in the repository), passed in with -D texfile=... */
+#define TEXFILE "/tmp/lmc_loader_tex.png"
+static const char *happy_defs[] = {"texfile=" TEXFILE};
+
+static int write_texture(void **state) {
+  (void)state;
+  lmc_image img;
+  lmc_error err;
+  if (image_init(&img, 4, 4, 3, &err)) return -1;
+  for (int i = 0; i < 4 * 4 * 3; i++) img.data[i] = (float)(i % 12) / 12.0f;
+  lmc_status st = image_write_png(TEXFILE, &img, 1.0, &err);
+  image_free(&img);
+  return st == LMC_OK ? 0 : -1;
+}
+
 static void test_happy(void **state) {
   (void)state;
   scene *s = NULL;
   lmc_error err;
   lmc_error_clear(&err);
   int before = lmc_warning_count();
-  lmc_status st = scene_load_xml(DATA "happy.xml", NULL, 0, &s, &err);
+  lmc_status st = scene_load_xml(DATA "happy.xml", happy_defs, 1, &s, &err);
   if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
   assert_int_equal(st, LMC_OK);
   assert_int_equal(lmc_warning_count() - before, 0);
@@ -391,11 +407,11 @@ static void test_happy(void **state) {
 /* -D overrides a <default>. */
 static void test_define_override(void **state) {
   (void)state;
-  const char *defs[] = {"fov=30", "width=80"};
+  const char *defs[] = {"fov=30", "width=80", "texfile=" TEXFILE};
   scene *s = NULL;
   lmc_error err;
   lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(DATA "happy.xml", defs, 2, &s, &err);
+  lmc_status st = scene_load_xml(DATA "happy.xml", defs, 3, &s, &err);
   if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
   assert_int_equal(st, LMC_OK);
   assert_true(near(s->cam.fov_deg, 30.0, 1e-12));
@@ -465,5 +481,5 @@ int main(void) {
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
       cmocka_unit_test(test_torus_h2mc),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return cmocka_run_group_tests(tests, write_texture, NULL);
 }
