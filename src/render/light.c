@@ -86,6 +86,22 @@ static void light__triangle(const mesh *m, int64_t tri, vec3 *a, vec3 *b, vec3 *
   *c = mesh_position(m, idx[2]);
 }
 
+/* A point on an area light, uniform by area: a triangle chosen by area
+ * with u1 (reused inside the cell), a uniform point on it with (u1', u2).
+ * *n is the emitting side's normal. */
+static void light__sample_area_point(const light *l, const struct scene *s, double u1, double u2,
+                                     vec3 *p, vec3 *n) {
+  const mesh *m = &s->meshes[l->mesh];
+  double pmf, u1r;
+  int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
+  double b1, b2;
+  warp_square_to_triangle(u1r, u2, &b1, &b2);
+  vec3 a, b, c;
+  light__triangle(m, tri, &a, &b, &c);
+  *p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
+  *n = mesh_face_normal(m, tri);
+}
+
 /* Mitsuba's spot falloff as a function of the cosine to the axis. */
 static double light__spot_falloff(const light *l, double cos_theta) {
   if (cos_theta <= l->cos_cutoff) return 0.0;
@@ -316,15 +332,8 @@ int light_sample_li(const light *l, const struct scene *s, vec3 ref, double u1, 
   switch (l->type) {
   case LIGHT_AREA: {
     /* Choose a triangle by area, then a uniform point on it. */
-    const mesh *m = &s->meshes[l->mesh];
-    double pmf, u1r;
-    int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
-    double b1, b2;
-    warp_square_to_triangle(u1r, u2, &b1, &b2);
-    vec3 a, b, c;
-    light__triangle(m, tri, &a, &b, &c);
-    vec3 p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
-    vec3 n = mesh_face_normal(m, tri);
+    vec3 p, n;
+    light__sample_area_point(l, s, u1, u2, &p, &n);
     /* Convert the area density 1/A to solid angle: d^2 / cos_l. */
     vec3 d = v3_sub(p, ref);
     double dist2 = v3_len2(d);
@@ -445,15 +454,7 @@ int light_sample_le(const light *l, const struct scene *s, double u1, double u2,
   switch (l->type) {
   case LIGHT_AREA: {
     /* Position by area (u1, u2), direction cosine-weighted (u3, u4). */
-    const mesh *m = &s->meshes[l->mesh];
-    double pmf, u1r;
-    int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
-    double b1, b2;
-    warp_square_to_triangle(u1r, u2, &b1, &b2);
-    vec3 a, b, c;
-    light__triangle(m, tri, &a, &b, &c);
-    out->p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
-    out->n = mesh_face_normal(m, tri);
+    light__sample_area_point(l, s, u1, u2, &out->p, &out->n);
     vec3 local = warp_square_to_cosine_hemisphere(u3, u4);
     frame f = frame_from_z(out->n);
     out->dir = v3_normalize(frame_to_world(&f, local));
