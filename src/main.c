@@ -19,6 +19,7 @@
 
 #include "render/error.h"
 #include "render/image.h"
+#include "lmc/mcmc.h"
 #include "render/integrator.h"
 #include "render/io/io.h"
 #include "render/scene.h"
@@ -54,7 +55,8 @@ static const char *lmc_render_usage =
     "\n"
     "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
     "                           (default: the scene's name in the current folder)\n"
-    "  --integrator NAME        pt | bdpt (default: the scene's <integrator>/<dpt>, else pt)\n"
+    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc\n"
+    "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
     "  --spp N                  samples per pixel (default: the scene's, else 16)\n"
     "  --time SECONDS           stop after this long (with --spp: whichever comes first)\n"
     "  --threads N              worker threads (default: all cores)\n"
@@ -63,8 +65,46 @@ static const char *lmc_render_usage =
     "  --rrdepth N              Russian roulette from this length on (default 5)\n"
     "  --resolution WxH         film size (keeps the field of view)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
+    "  --snapshot S             also write OUT-<seconds>s.exr every S seconds\n"
+    "\n"
+    "MCMC (pssmlt, mmlt, lmc; --spp counts mutations per pixel):\n"
+    "  --largestep P            large-step probability (default 0.3)\n"
+    "  --sigma S                Kelemen small-step scale (default 1/64)\n"
+    "  --bootstrap N            independent paths used to estimate b (default: enough for 1%)\n"
+    "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
+    "\n"
+    "LMC (--integrator lmc):\n"
+    "  --adapt MODE             none | adam | diminish | cache (default cache; adam is biased)\n"
+    "  --step S                 Langevin step s: y ~ N(x + s/2 M g, s M) (default 1e-4)\n"
+    "  --adam-eps E             M = clamp(1 / (E + sqrt(v)), LO, HI) (default 1e-8)\n"
+    "  --precond-clamp LO,HI    the clamp of M (default 1e-3,1e3)\n"
+    "  --grad-bound B           truncate |grad log f| to B (default 1e3)\n"
+    "  --cache-fraction F       --adapt cache: share of the budget for stage 1 (default 0.1)\n"
+    "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.1)\n"
     "  -q, --quiet              no progress bar\n"
     "  -h, --help               this text\n";
+
+/* Integrators `--integrator` accepts. */
+static int lmc_integrator_known(const char *name) {
+  return !strcmp(name, "pt") || !strcmp(name, "bdpt") || mcmc_is_integrator(name);
+}
+
+/* --adapt values. */
+static int lmc_parse_adapt(const char *v, lmc_adapt *out) {
+  static const struct {
+    const char *name;
+    lmc_adapt mode;
+  } modes[] = {{"none", LMC_ADAPT_NONE},
+               {"adam", LMC_ADAPT_ADAM},
+               {"diminish", LMC_ADAPT_DIMINISH},
+               {"cache", LMC_ADAPT_CACHE}};
+  for (size_t i = 0; i < sizeof modes / sizeof modes[0]; i++)
+    if (!strcmp(v, modes[i].name)) {
+      *out = modes[i].mode;
+      return 1;
+    }
+  return 0;
+}
 
 /* --- flag parsing ------------------------------------------------------------ */
 
@@ -247,8 +287,11 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(output = lmc_flag_value(&a))) goto bad;
     } else if (lmc_flag_is(&a, "--integrator")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
-      if (strcmp(v, "pt") && strcmp(v, "bdpt")) {
-        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt)\n", v);
+      if (!lmc_integrator_known(v)) {
+        fprintf(stderr,
+                "lmc: flag --integrator: unknown integrator '%s' "
+                "(valid: pt, bdpt, pssmlt, mmlt, lmc)\n",
+                v);
         goto bad;
       }
       snprintf(cli.integrator, sizeof cli.integrator, "%s", v);
@@ -290,6 +333,63 @@ static int lmc_cmd_render(int argc, char **argv) {
         goto bad;
       }
       defines[n_defines++] = d;
+    } else if (lmc_flag_is(&a, "--snapshot")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--snapshot", v, 1e-3, 1e9, &cli.snapshot))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--largestep")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--largestep", v, 0, 1, &cli.largestep))
+        goto bad;
+      cli.set |= SET_LARGESTEP;
+    } else if (lmc_flag_is(&a, "--sigma")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--sigma", v, 1e-9, 1, &cli.sigma))
+        goto bad;
+      cli.set |= SET_SIGMA;
+    } else if (lmc_flag_is(&a, "--bootstrap")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_int64("--bootstrap", v, 1, INT64_MAX / 2, &cli.bootstrap))
+        goto bad;
+      cli.set |= SET_BOOTSTRAP;
+    } else if (lmc_flag_is(&a, "--direct")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "separate") && strcmp(v, "mcmc")) {
+        fprintf(stderr, "lmc: flag --direct: '%s' is not one of separate, mcmc\n", v);
+        goto bad;
+      }
+      cli.direct_separate = strcmp(v, "separate") == 0;
+      cli.set |= SET_DIRECT;
+    } else if (lmc_flag_is(&a, "--adapt")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (!lmc_parse_adapt(v, &cli.adapt)) {
+        fprintf(stderr, "lmc: flag --adapt: '%s' is not one of none, adam, diminish, cache\n", v);
+        goto bad;
+      }
+      cli.set |= SET_ADAPT;
+    } else if (lmc_flag_is(&a, "--step")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--step", v, 1e-12, 1, &cli.lmc_step))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--adam-eps")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--adam-eps", v, 0, 1e6, &cli.adam_eps))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--precond-clamp")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      char tail;
+      if (sscanf(v, "%lf,%lf%c", &cli.precond_lo, &cli.precond_hi, &tail) != 2 ||
+          !(cli.precond_lo > 0) || !(cli.precond_hi >= cli.precond_lo) ||
+          !isfinite(cli.precond_hi)) {
+        fprintf(stderr, "lmc: flag --precond-clamp: '%s' is not LO,HI with 0 < LO <= HI\n", v);
+        goto bad;
+      }
+    } else if (lmc_flag_is(&a, "--grad-bound")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--grad-bound", v, 1e-9, 1e300, &cli.grad_bound))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--cache-fraction")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--cache-fraction", v, 0, 0.99, &cli.cache_fraction))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--iso-prob")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
+        goto bad;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
     } else if (arg[0] == '-') {
@@ -334,17 +434,32 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_MAXDEPTH) rs.maxdepth = cli.maxdepth;
   if (cli.set & SET_RRDEPTH) rs.rrdepth = cli.rrdepth;
   if ((cli.set & SET_TIME) && !(cli.set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
+  if (cli.set & SET_LARGESTEP) rs.largestep = cli.largestep;
+  if (cli.set & SET_SIGMA) rs.sigma = cli.sigma;
+  if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
+  if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
+  if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
+  rs.snapshot = cli.snapshot;
+  rs.lmc_step = cli.lmc_step;
+  rs.adam_eps = cli.adam_eps;
+  rs.precond_lo = cli.precond_lo;
+  rs.precond_hi = cli.precond_hi;
+  rs.grad_bound = cli.grad_bound;
+  rs.cache_fraction = cli.cache_fraction;
+  rs.iso_prob = cli.iso_prob;
   rs.set |= cli.set;
   rs.threads = cli.threads;
   rs.seed = cli.seed;
   rs.quiet = cli.quiet;
-  if (strcmp(rs.integrator, "pt") && strcmp(rs.integrator, "bdpt")) {
+  if (!lmc_integrator_known(rs.integrator)) {
     lmc_warn(scene_path, 0,
-             "the scene asks for integrator '%s', which this build does not have yet; "
+             "the scene asks for integrator '%s', which lmc does not have; "
              "rendering with bdpt (choose with --integrator)",
              rs.integrator);
     snprintf(rs.integrator, sizeof rs.integrator, "bdpt");
   }
+  if ((cli.set & SET_ADAPT) && strcmp(rs.integrator, "lmc"))
+    lmc_warn(NULL, 0, "--adapt only applies to --integrator lmc; ignored for %s", rs.integrator);
 
   /* Render, then write what we have even when interrupted. */
   char out_exr[1024], out_png[1100];
@@ -355,7 +470,9 @@ static int lmc_cmd_render(int argc, char **argv) {
   lmc_install_signals();
   film f;
   render_stats st;
-  if (render_run(s, &rs, &f, &st, &err)) {
+  lmc_status rst = mcmc_is_integrator(rs.integrator) ? mcmc_render_run(s, &rs, &f, &st, &err)
+                                                       : render_run(s, &rs, &f, &st, &err);
+  if (rst) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);

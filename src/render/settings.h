@@ -18,8 +18,17 @@ enum {
   SET_SIGMA = 1 << 6,
   SET_MINDEPTH = 1 << 7,
   SET_ADAPT = 1 << 8,
-  SET_BOOTSTRAP = 1 << 9
+  SET_BOOTSTRAP = 1 << 9,
+  SET_DIRECT = 1 << 10
 };
+
+/* LMC preconditioner adaptation (--adapt). */
+typedef enum lmc_adapt {
+  LMC_ADAPT_NONE = 0, /* plain MALA, M = I */
+  LMC_ADAPT_ADAM,     /* Adam along the chain, used directly (biased; for comparison) */
+  LMC_ADAPT_DIMINISH, /* Adam whose influence fades as 1/t (asymptotically unbiased) */
+  LMC_ADAPT_CACHE     /* Adam in stage 1, frozen k-d tree cache in stage 2 (default) */
+} lmc_adapt;
 
 typedef struct render_settings {
   unsigned set;          /* SET_* bits of the fields chosen explicitly */
@@ -35,7 +44,16 @@ typedef struct render_settings {
   double largestep;      /* large-step probability */
   double sigma;          /* Kelemen small-step scale */
   int64_t bootstrap;     /* bootstrap paths */
-  char adapt[16];        /* LMC preconditioner adaptation */
+  int direct_separate;   /* --direct separate: pt renders direct light, MCMC the rest */
+  double snapshot;       /* seconds between intermediate images (0: none) */
+  /* LMC (src/lmc/mala.c, adam.c, gcache.c) */
+  lmc_adapt adapt;       /* preconditioner adaptation */
+  double lmc_step;       /* s: proposal N(x + s/2 M g, s M) */
+  double adam_eps;       /* M = clamp(1 / (eps + sqrt(v)), lo, hi) */
+  double precond_lo, precond_hi;
+  double grad_bound;     /* |g| is truncated to this norm */
+  double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
+  double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
   int mala;              /* the <dpt> block asked for MALA */
   int h2mc;              /* the <dpt> block asked for H2MC */
   int quiet;             /* no progress bar */
@@ -53,6 +71,14 @@ static inline render_settings render_settings_default(void) {
   s.largestep = 0.3;
   s.sigma = 1.0 / 64.0;
   s.bootstrap = 0;
+  s.adapt = LMC_ADAPT_CACHE;
+  s.lmc_step = 1e-4;
+  s.adam_eps = 1e-8;
+  s.precond_lo = 1e-3;
+  s.precond_hi = 1e3;
+  s.grad_bound = 1e3;
+  s.cache_fraction = 0.1;
+  s.iso_prob = 0.1;
   return s;
 }
 

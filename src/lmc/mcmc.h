@@ -1,0 +1,26 @@
+/*
+ * mcmc.h: the Markov chain Monte Carlo integrators (pssmlt, mmlt, lmc) as
+ * the command line sees them.
+ */
+#ifndef LMC_MCMC_MCMC_H
+#define LMC_MCMC_MCMC_H
+
+#include "render/film.h"
+#include "render/integrator.h"
+#include "render/scene.h"
+#include "render/settings.h"
+
+/* 1 when `name` is one of the MCMC integrators: pssmlt, mmlt, lmc. */
+int mcmc_is_integrator(const char *name);
+
+/* Renders s with the MCMC integrator rs->integrator into `out` (created
+ * here), as render_run does for pt and bdpt: bootstrap, chains, splats,
+ * the image scaled by b / (mutations per pixel). Stops at rs->spp
+ * mutations per pixel, at rs->time_limit, or when render_request_stop()
+ * is called; the film then holds a correctly normalised image of all
+ * mutations so far. Prints one statistics line per proposal type unless
+ * rs->quiet. */
+lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
+                           render_stats *st, lmc_error *err);
+
+#endif

@@ -1,0 +1,68 @@
+/*
+ * target.h: what a Markov chain samples, as an interface.
+ *
+ * The kernels of src/lmc (large step, Kelemen's small step, MALA/LMC with
+ * its preconditioners) never see a scene: they see an mc_target, a function
+ * that maps a primary sample vector u in [0,1)^dim to a non-negative target
+ * value f(u) and, on request, its gradient. A scene target (the path
+ * sampler of src/render behind it) also reports what the state adds to the
+ * image: an RGB value at a raster position. Tests drive the same kernels
+ * with toy densities in a few dimensions.
+ *
+ * Coordinates. A state has `dim` coordinates, split into consecutive blocks,
+ * one per sampler stream (LMC_STREAM_CAMERA, _LIGHT, _CONNECT of
+ * render/sampler.h); stream_dim[k] is the size of block k and the blocks
+ * sum to dim. The target draws its numbers from an lmc_sampler: the j-th
+ * number it draws from stream k is coordinate stream_offset(k) + j. A toy
+ * target puts everything in stream 0. Drawing from the sampler (rather than
+ * reading an array) lets a chain create coordinates lazily, as Kelemen et
+ * al. 2002 do, and tells the chain how many coordinates a path used.
+ *
+ * Gradient. When `grad` is not NULL, eval also writes grad[i] = df/du_i
+ * for every coordinate i < dim (0 where f does not depend on u_i), and sets
+ * *OUT_grad_ok to 1; it sets 0 when no gradient exists at this state
+ * (f = 0, or the derivative capacity overflowed), in which case the chain
+ * falls back to a gradient-free proposal. The gradient of log f is grad / f.
+ *
+ * Thread safety: eval is called concurrently from several threads, each
+ * with its own scratch (from scratch_create), its own sampler and its own
+ * grad buffer; the target itself is read-only.
+ */
+#ifndef LMC_MCMC_TARGET_H
+#define LMC_MCMC_TARGET_H
+
+#include <stdint.h>
+
+#include "render/sampler.h"
+#include "render/vec3.h"
+
+/* What one evaluation of a state gives. */
+typedef struct mc_value {
+  double f;      /* the target value (>= 0, finite); scenes: luminance of `value` */
+  rgb value;     /* what the state adds to the image (scenes; toy targets: f, f, f) */
+  double rx, ry; /* raster position of that contribution (scenes) */
+} mc_value;
+
+typedef struct mc_target mc_target;
+struct mc_target {
+  int dim;                           /* coordinates of a state */
+  int stream_dim[LMC_STREAM_COUNT];  /* block sizes per stream, summing to dim */
+  void *ctx;                         /* borrowed: the target's own data */
+  /* Evaluates the state drawn from smp (see above). Returns 0 on success. */
+  int (*eval)(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
+              double *OUT_grad, int *OUT_grad_ok);
+  /* Per-thread scratch (may be NULL functions: no scratch). */
+  void *(*scratch_create)(const mc_target *t);
+  void (*scratch_destroy)(void *scratch);
+  /* Optional counter of rays traced in `scratch` since it was created (NULL: none). */
+  int64_t (*scratch_rays)(const void *scratch);
+};
+
+/* First coordinate of stream k. */
+static inline int mc_target_stream_offset(const mc_target *t, int k) {
+  int off = 0;
+  for (int i = 0; i < k; i++) off += t->stream_dim[i];
+  return off;
+}
+
+#endif

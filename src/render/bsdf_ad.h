@@ -1,0 +1,68 @@
+/*
+ * bsdf_ad.h: the BSDFs, textures and Fresnel terms in dual arithmetic, for
+ * the differentiable path sampler (render/path.h).
+ *
+ * Every function here is the same formula as its plain counterpart in
+ * bsdf.h / texture.h / microfacet.h, written once over dual numbers
+ * (src/ad): with an arena of tangent length 0 it computes the plain value,
+ * with tangent length n it also carries the derivatives with respect to the
+ * n primary sample coordinates the inputs depend on. Branches (lobe choice,
+ * total internal reflection, which side of the surface) look at values
+ * only, so the derivative is that of the branch taken: the path sampler
+ * holds that choice fixed, and MCMC acceptance handles the discontinuity.
+ *
+ * Conventions are those of bsdf.h (local shading frame, z-up, unit
+ * directions pointing away from the surface, f without the cosine, a
+ * sample's weight is f |cos wi| / pdf, delta lobes only from sampling).
+ */
+#ifndef LMC_RENDER_BSDF_AD_H
+#define LMC_RENDER_BSDF_AD_H
+
+#include "ad/dual.h"
+#include "ad/dual_math.h"
+#include "ad/dual_vec3.h"
+#include "render/bsdf.h"
+#include "render/texture.h"
+
+/* RGB of duals. */
+typedef struct adrgb {
+  ad r, g, b;
+} adrgb;
+
+static inline adrgb adrgb_const(const ad_arena *A, rgb c) {
+  return (adrgb){ad_const(A, c.r), ad_const(A, c.g), ad_const(A, c.b)};
+}
+static inline rgb adrgb_value(adrgb c) { return rgb_make(c.r.v, c.g.v, c.b.v); }
+static inline adrgb adrgb_mul(ad_arena *A, adrgb a, adrgb b) {
+  return (adrgb){ad_mul(A, a.r, b.r), ad_mul(A, a.g, b.g), ad_mul(A, a.b, b.b)};
+}
+static inline adrgb adrgb_scale(ad_arena *A, adrgb a, ad s) {
+  return (adrgb){ad_mul(A, a.r, s), ad_mul(A, a.g, s), ad_mul(A, a.b, s)};
+}
+static inline adrgb adrgb_add(ad_arena *A, adrgb a, adrgb b) {
+  return (adrgb){ad_add(A, a.r, b.r), ad_add(A, a.g, b.g), ad_add(A, a.b, b.b)};
+}
+/* Luminance with the weights of rgb_luminance (vec3.h). */
+ad adrgb_luminance(ad_arena *A, adrgb c);
+
+/* A BSDF sample in duals (see bsdf_sample in bsdf.h). */
+typedef struct bsdf_sample_ad {
+  adv3 wi;      /* sampled direction, local frame */
+  adrgb f;      /* BSDF value (delta convention of bsdf.h) */
+  ad pdf;       /* solid-angle density (lobe probability for delta lobes) */
+  adrgb weight; /* f |cos wi| / pdf */
+  double eta;   /* relative IOR crossed (1 for reflection) */
+  int flags;    /* the lobe sampled (BSDF_REFLECTION/TRANSMISSION | DIFFUSE/GLOSSY/DELTA) */
+} bsdf_sample_ad;
+
+/* Texture value at (u, v), bilinear for bitmaps (differentiable in u, v). */
+adrgb tex_eval_ad(ad_arena *A, const texture *t, ad u, ad v);
+
+/* bsdf_eval, bsdf_pdf and bsdf_sample_f of bsdf.h in duals. */
+adrgb bsdf_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
+                   transport_mode mode);
+ad bsdf_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi);
+int bsdf_sample_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, ad u_lobe, ad u1, ad u2,
+                   transport_mode mode, bsdf_sample_ad *OUT_sample);
+
+#endif
