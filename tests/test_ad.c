@@ -214,6 +214,7 @@ UNARY(fabs, fabs(a), ad_fabs(A, a))
 UNARY(clamp, fmin(fmax(a, -0.5), 0.75), ad_clamp(A, a, -0.5, 0.75))
 UNARY(floor, floor(a), ad_floor(A, a))
 UNARY(erf, erf(a), ad_erf(A, a))
+UNARY(erfc, erfc(a), ad_erfc(A, a))
 UNARY(erfinv, ad_erfinv_scalar(a), ad_erfinv(A, a))
 
 /* Samplers: bulk points and points near the edges of each domain. */
@@ -308,6 +309,7 @@ static void test_unary(void **state) {
       CASE1(asin, s_pm1),          CASE1(acos, s_pm1),         CASE1(atan, s_atan),
       CASE1(fabs, s_nonzero),      CASE1(clamp, s_clamp),      CASE1(floor, s_floor),
       CASE1(erf, s_erf),           CASE1(erfinv, s_pm1),
+      CASE1(erfc, s_erf),
   };
   run_cases(cases, (int)(sizeof cases / sizeof cases[0]), 1001);
 }

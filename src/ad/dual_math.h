@@ -152,6 +152,12 @@ static inline ad ad_erf(ad_arena *A, ad a) {
   return ad__lin1(A, erf(a.v), AD_2_SQRTPI * exp(-a.v * a.v), a);
 }
 
+/* erfc(a) = 1 - erf(a), without the cancellation for large a:
+ * d = -2/sqrt(pi) exp(-a^2) d_a */
+static inline ad ad_erfc(ad_arena *A, ad a) {
+  return ad__lin1(A, erfc(a.v), -AD_2_SQRTPI * exp(-a.v * a.v), a);
+}
+
 /* Inverse error function of a double: erf(x) = y for y in [-1, 1]
  * (+-inf at +-1, NaN outside). Accurate to a few ulp. */
 static inline double ad_erfinv_scalar(double y) {

@@ -58,11 +58,14 @@ typedef struct bsdf_sample_ad {
 /* Texture value at (u, v), bilinear for bitmaps (differentiable in u, v). */
 adrgb tex_eval_ad(ad_arena *A, const texture *t, ad u, ad v);
 
-/* bsdf_eval, bsdf_pdf and bsdf_sample_f of bsdf.h in duals. */
+/* bsdf_eval, bsdf_pdf and bsdf_sample_f of bsdf.h in duals. (The sampler is
+ * bsdf_sample_f_ad, after bsdf_sample_f: C cannot have a function named
+ * like the typedef bsdf_sample_ad.) Each call rewinds the arena to where it
+ * found it, keeping only the duals it returns. */
 adrgb bsdf_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
                    transport_mode mode);
 ad bsdf_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi);
-int bsdf_sample_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, ad u_lobe, ad u1, ad u2,
-                   transport_mode mode, bsdf_sample_ad *OUT_sample);
+int bsdf_sample_f_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, ad u_lobe, ad u1, ad u2,
+                     transport_mode mode, bsdf_sample_ad *OUT_sample);
 
 #endif

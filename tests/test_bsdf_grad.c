@@ -1,0 +1,499 @@
+/*
+ * test_bsdf_grad.c: the dual BSDFs, Fresnel terms and textures of
+ * src/render/bsdf_ad.h against their plain counterparts (bsdf.h,
+ * texture.h).
+ *
+ * What is checked:
+ *   (a) values: with an arena of tangent length 0 (and again with length
+ *       9), bsdf_eval_ad, bsdf_pdf_ad, bsdf_sample_f_ad and tex_eval_ad
+ *       give the values of bsdf_eval, bsdf_pdf, bsdf_sample_f and tex_eval
+ *       (relative 1e-12) with the same success, lobe flags and eta, at
+ *       thousands of random inputs per model (both hemispheres, every lobe);
+ *   (b) derivatives: with the 9 independent variables
+ *         theta_o, phi_o (wo), u_lobe, u1, u2, tu, tv, theta_i, phi_i (wi,
+ *         for eval and pdf),
+ *       every AD derivative of the sample's wi, f, pdf and weight and of
+ *       bsdf_eval / bsdf_pdf is compared with central differences of the
+ *       plain functions. A component is checked where the branch (success,
+ *       lobe, sides of wo and wi) is the same at x +- h and x +- h/2 and
+ *       the two central differences agree (|D_h - D_h/2| within the
+ *       tolerance below): a kink within h (a texel edge, the phong cut-off,
+ *       a clamp) makes them disagree, and the point is skipped. The AD
+ *       derivative then has to match the Richardson value (4 D_h/2 - D_h)/3
+ *       to relative 1e-5, or absolute 1e-8 of the magnitude (max(|f|, 1)).
+ *       Per model, at least 99.9% of the checked components must pass and
+ *       the count must exceed a stated minimum.
+ * Fixed seeds; the sampled points are a deterministic function of them.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "test_util.h"
+
+#include "render/bsdf.h"
+#include "render/bsdf_ad.h"
+#include "render/rng.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define NVAR 9
+enum { V_THO, V_PHO, V_ULOBE, V_U1, V_U2, V_TU, V_TV, V_THI, V_PHI };
+
+/* ---- A small bitmap texture (5 x 4, RGB) with a uv transform. ------------ */
+
+static float g_pixels[5 * 4 * 3];
+static lmc_image g_image = {5, 4, 3, g_pixels};
+
+static texture make_bitmap(double uscale, double uoffset) {
+  texture t = tex_bitmap(&g_image);
+  t.uscale = uscale;
+  t.vscale = 0.5 * uscale + 0.25;
+  t.uoffset = uoffset;
+  t.voffset = -0.37;
+  return t;
+}
+
+static void init_image(void) {
+  rng r;
+  rng_seed(&r, 77, 1);
+  for (int i = 0; i < 5 * 4 * 3; i++) g_pixels[i] = (float)(0.05 + 0.9 * rng_uniform(&r));
+}
+
+/* ---- The models under test. ------------------------------------------------- */
+
+enum { M_DIFFUSE, M_PHONG, M_CONDUCTOR, M_ROUGHCOND, M_DIELECTRIC, M_ROUGHDIEL, M_PLASTIC, M_TWOSIDED, M_COUNT };
+static const char *const g_model_names[M_COUNT] = {
+    "diffuse", "phong", "conductor", "roughconductor", "dielectric", "roughdielectric", "plastic", "twosided"};
+
+typedef struct config {
+  char name[64];
+  int model;
+  bsdf b;
+} config;
+
+#define MAX_CONFIGS 40
+
+static int make_configs(config *c) {
+  int n = 0;
+  bsdf b;
+
+  /* Diffuse: textured, and the constant default. */
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  b.diffuse = make_bitmap(1.0, 0.0);
+  c[n++] = (config){"diffuse bitmap", M_DIFFUSE, b};
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  c[n++] = (config){"diffuse constant", M_DIFFUSE, b};
+
+  /* Phong at two exponents, textured diffuse and specular. */
+  const double exps[] = {8.0, 150.0};
+  for (int i = 0; i < 2; i++) {
+    bsdf_init_defaults(&b, BSDF_PHONG);
+    b.exponent = exps[i];
+    b.diffuse = make_bitmap(2.0, 0.3);
+    b.specular = make_bitmap(1.0, 0.1);
+    c[n] = (config){"", M_PHONG, b};
+    snprintf(c[n].name, sizeof c[n].name, "phong n=%g", exps[i]);
+    n++;
+  }
+
+  /* Smooth conductor: Cu (textured) and a perfect mirror. */
+  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  b.specular = make_bitmap(1.5, 0.2);
+  c[n++] = (config){"conductor Cu", M_CONDUCTOR, b};
+  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  conductor_lookup("Au", &b.cond_eta, &b.cond_k);
+  c[n++] = (config){"conductor Au", M_CONDUCTOR, b};
+
+  /* Rough conductor: both distributions, visible normals on and off, two roughnesses. */
+  const double alphas[] = {0.15, 0.5};
+  for (int d = 0; d < 2; d++)
+    for (int vis = 0; vis < 2; vis++)
+      for (int a = 0; a < 2; a++) {
+        bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+        b.dist = d ? MF_GGX : MF_BECKMANN;
+        b.sample_visible = vis;
+        b.alpha = alphas[a];
+        b.specular = make_bitmap(1.0, 0.6);
+        c[n] = (config){"", M_ROUGHCOND, b};
+        snprintf(c[n].name, sizeof c[n].name, "roughconductor %s vis=%d a=%g", d ? "ggx" : "beckmann",
+                 vis, alphas[a]);
+        n++;
+      }
+
+  /* Smooth dielectric (textured transmittance). */
+  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  b.transmittance = make_bitmap(1.0, 0.0);
+  b.specular = make_bitmap(2.0, 0.5);
+  c[n++] = (config){"dielectric", M_DIELECTRIC, b};
+
+  /* Rough dielectric: both distributions, visible normals on and off, two roughnesses. */
+  for (int d = 0; d < 2; d++)
+    for (int vis = 0; vis < 2; vis++)
+      for (int a = 0; a < 2; a++) {
+        bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+        b.dist = d ? MF_GGX : MF_BECKMANN;
+        b.sample_visible = vis;
+        b.alpha = alphas[a];
+        b.transmittance = make_bitmap(1.0, 0.2);
+        c[n] = (config){"", M_ROUGHDIEL, b};
+        snprintf(c[n].name, sizeof c[n].name, "roughdielectric %s vis=%d a=%g",
+                 d ? "ggx" : "beckmann", vis, alphas[a]);
+        n++;
+      }
+
+  /* Plastic, linear and nonlinear. */
+  for (int nl = 0; nl < 2; nl++) {
+    bsdf_init_defaults(&b, BSDF_PLASTIC);
+    b.nonlinear = nl;
+    b.diffuse = make_bitmap(1.0, 0.4);
+    c[n] = (config){"", M_PLASTIC, b};
+    snprintf(c[n].name, sizeof c[n].name, "plastic nonlinear=%d", nl);
+    n++;
+  }
+
+  /* Twosided: diffuse, rough conductor, plastic. */
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  b.twosided = 1;
+  b.diffuse = make_bitmap(1.0, 0.0);
+  c[n++] = (config){"twosided diffuse", M_TWOSIDED, b};
+  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  b.twosided = 1;
+  b.dist = MF_GGX;
+  b.alpha = 0.3;
+  c[n++] = (config){"twosided roughconductor", M_TWOSIDED, b};
+  bsdf_init_defaults(&b, BSDF_PLASTIC);
+  b.twosided = 1;
+  c[n++] = (config){"twosided plastic", M_TWOSIDED, b};
+  assert_true(n <= MAX_CONFIGS);
+  return n;
+}
+
+/* 1 when the model answers queries from below the surface. */
+static int both_sides(const bsdf *b) {
+  return b->twosided || b->type == BSDF_DIELECTRIC || b->type == BSDF_ROUGHDIELECTRIC;
+}
+
+/* ---- Evaluation of everything at one point x[NVAR]. ----------------------- */
+
+/* Outputs: the sample's wi (3), f (3), pdf, weight (3); then eval f (3), pdf. */
+#define NOUT 14
+#define NSAMPLE_OUT 10
+
+typedef struct outputs {
+  int ok, flags, eval_key;
+  double eta;
+  double v[NOUT];
+  double d[NOUT][NVAR]; /* AD derivatives (dual evaluation only) */
+} outputs;
+
+static vec3 sph(double theta, double phi) {
+  return v3(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
+}
+
+/* The side pattern of (wo, wi): the branch eval and pdf take. */
+static int side_key(vec3 wo, vec3 wi) { return (wo.z > 0.0) * 2 + (wi.z > 0.0); }
+
+static void eval_plain(const bsdf *b, transport_mode mode, const double *x, outputs *o) {
+  memset(o, 0, sizeof *o);
+  vec3 wo = sph(x[V_THO], x[V_PHO]), wi = sph(x[V_THI], x[V_PHI]);
+  bsdf_sample s;
+  o->ok = bsdf_sample_f(b, x[V_TU], x[V_TV], wo, x[V_ULOBE], x[V_U1], x[V_U2], mode, &s);
+  o->flags = s.flags;
+  o->eta = s.eta;
+  double sv[NSAMPLE_OUT] = {s.wi.x, s.wi.y, s.wi.z, s.f.r, s.f.g, s.f.b, s.pdf, s.weight.r, s.weight.g, s.weight.b};
+  memcpy(o->v, sv, sizeof sv);
+  rgb f = bsdf_eval(b, x[V_TU], x[V_TV], wo, wi, mode);
+  o->v[10] = f.r;
+  o->v[11] = f.g;
+  o->v[12] = f.b;
+  o->v[13] = bsdf_pdf(b, x[V_TU], x[V_TV], wo, wi);
+  o->eval_key = side_key(wo, wi);
+}
+
+/* The dual evaluation; the arena's tangent length says whether derivatives
+ * are recorded (9) or not (0). */
+static void eval_dual(ad_arena *A, const bsdf *b, transport_mode mode, const double *x, outputs *o) {
+  memset(o, 0, sizeof *o);
+  ad_arena_reset(A);
+  ad var[NVAR];
+  for (int i = 0; i < NVAR; i++) var[i] = ad_var(A, x[i], i);
+  adv3 wo = adv3_make(ad_mul(A, ad_sin(A, var[V_THO]), ad_cos(A, var[V_PHO])),
+                      ad_mul(A, ad_sin(A, var[V_THO]), ad_sin(A, var[V_PHO])), ad_cos(A, var[V_THO]));
+  adv3 wi = adv3_make(ad_mul(A, ad_sin(A, var[V_THI]), ad_cos(A, var[V_PHI])),
+                      ad_mul(A, ad_sin(A, var[V_THI]), ad_sin(A, var[V_PHI])), ad_cos(A, var[V_THI]));
+  bsdf_sample_ad s;
+  o->ok = bsdf_sample_f_ad(A, b, var[V_TU], var[V_TV], wo, var[V_ULOBE], var[V_U1], var[V_U2], mode, &s);
+  o->flags = s.flags;
+  o->eta = s.eta;
+  adrgb f = bsdf_eval_ad(A, b, var[V_TU], var[V_TV], wo, wi, mode);
+  ad pdf = bsdf_pdf_ad(A, b, var[V_TU], var[V_TV], wo, wi);
+  ad all[NOUT] = {s.wi.x, s.wi.y, s.wi.z, s.f.r, s.f.g, s.f.b, s.pdf, s.weight.r, s.weight.g, s.weight.b,
+                  f.r, f.g, f.b, pdf};
+  for (int k = 0; k < NOUT; k++) {
+    o->v[k] = all[k].v;
+    for (int j = 0; j < NVAR; j++) o->d[k][j] = ad_deriv(A, all[k], j);
+  }
+  o->eval_key = side_key(v3(wo.x.v, wo.y.v, wo.z.v), v3(wi.x.v, wi.y.v, wi.z.v));
+}
+
+/* A random point: wo anywhere (lower hemisphere only for models that see
+ * both sides, unless `any_side`), random numbers away from 0 and 1, texture
+ * coordinates anywhere in [-2, 3), and wi either random or the direction the
+ * plain sampler picks (so that glossy peaks are evaluated too). */
+static void random_point(rng *r, const bsdf *b, transport_mode mode, int any_side, double *x) {
+  double top = (both_sides(b) || any_side) ? M_PI - 0.02 : 0.5 * M_PI - 0.02;
+  x[V_THO] = 0.02 + (top - 0.02) * rng_uniform(r);
+  x[V_PHO] = 2.0 * M_PI * rng_uniform(r);
+  x[V_ULOBE] = 0.001 + 0.998 * rng_uniform(r);
+  x[V_U1] = 0.001 + 0.998 * rng_uniform(r);
+  x[V_U2] = 0.001 + 0.998 * rng_uniform(r);
+  x[V_TU] = -2.0 + 5.0 * rng_uniform(r);
+  x[V_TV] = -2.0 + 5.0 * rng_uniform(r);
+  x[V_THI] = 0.02 + (M_PI - 0.04) * rng_uniform(r);
+  x[V_PHI] = 2.0 * M_PI * rng_uniform(r);
+  if (rng_uniform(r) < 0.5) {
+    bsdf_sample s;
+    vec3 wo = sph(x[V_THO], x[V_PHO]);
+    double ul = rng_uniform(r), v1 = rng_uniform(r), v2 = rng_uniform(r);
+    if (bsdf_sample_f(b, x[V_TU], x[V_TV], wo, ul, v1, v2, mode, &s) && !(s.flags & BSDF_DELTA)) {
+      x[V_THI] = acos(fmax(-1.0, fmin(1.0, s.wi.z)));
+      x[V_PHI] = atan2(s.wi.y, s.wi.x);
+    }
+  }
+}
+
+/* Relative difference; values both below 1e-30 count as equal. Such values
+ * only occur far in the tails of the Beckmann exp(-tan^2 / alpha^2), where
+ * one ulp of the direction moves the exponent by hundreds of ulps. */
+static double rel_err(double a, double b) {
+  if (a == b || (fabs(a) < 1e-30 && fabs(b) < 1e-30)) return 0.0;
+  return fabs(a - b) / fmax(fabs(a), fabs(b));
+}
+
+/* ---- (a) value agreement ----------------------------------------------------- */
+
+static double g_buf0[64];
+static double g_buf9[1 << 16];
+
+static void test_values(void **state) {
+  (void)state;
+  init_image();
+  config cfg[MAX_CONFIGS];
+  int nc = make_configs(cfg);
+  ad_arena A0, A9;
+  assert_int_equal(ad_arena_init(&A0, g_buf0, 64, 0), 0);
+  assert_int_equal(ad_arena_init(&A9, g_buf9, sizeof g_buf9 / sizeof g_buf9[0], NVAR), 0);
+  long per_model[M_COUNT] = {0};
+  long ok_per_model[M_COUNT] = {0};
+  const int points = 1500;
+  long mismatches = 0;
+  for (int c = 0; c < nc; c++) {
+    rng r;
+    rng_seed(&r, 1000 + (uint64_t)c, 3);
+    for (int mode = 0; mode < 2; mode++)
+      for (int i = 0; i < points; i++) {
+        double x[NVAR];
+        random_point(&r, &cfg[c].b, (transport_mode)mode, 1, x);
+        outputs p, d0, d9;
+        eval_plain(&cfg[c].b, (transport_mode)mode, x, &p);
+        eval_dual(&A0, &cfg[c].b, (transport_mode)mode, x, &d0);
+        eval_dual(&A9, &cfg[c].b, (transport_mode)mode, x, &d9);
+        assert_true(ad_arena_ok(&A9));
+        const outputs *ds[2] = {&d0, &d9};
+        for (int k = 0; k < 2; k++) {
+          const outputs *d = ds[k];
+          int bad = d->ok != p.ok || (p.ok && (d->flags != p.flags || d->eta != p.eta));
+          /* The sample's values count when it succeeded; eval and pdf always. */
+          for (int o = p.ok ? 0 : NSAMPLE_OUT; o < NOUT; o++) {
+            per_model[cfg[c].model]++;
+            if (rel_err(p.v[o], d->v[o]) > 1e-12) {
+              bad = 1;
+            } else {
+              ok_per_model[cfg[c].model]++;
+            }
+          }
+          if (bad) {
+            if (mismatches < 10)
+              print_error("%s (n=%d): ok %d/%d flags %d/%d; f %.17g/%.17g pdf %.17g/%.17g "
+                          "eval %.17g/%.17g pdf %.17g/%.17g\n",
+                          cfg[c].name, k ? NVAR : 0, p.ok, d->ok, p.flags, d->flags, p.v[3], d->v[3],
+                          p.v[6], d->v[6], p.v[10], d->v[10], p.v[13], d->v[13]);
+            mismatches++;
+          }
+        }
+      }
+  }
+  for (int m = 0; m < M_COUNT; m++) {
+    print_message("values %-16s %8ld compared, %8ld equal\n", g_model_names[m], per_model[m],
+                  ok_per_model[m]);
+    /* Each model has at least 1500 points x 2 modes x 2 arenas x 4 outputs. */
+    assert_true(per_model[m] >= 24000);
+  }
+  assert_int_equal(mismatches, 0);
+}
+
+/* Textures alone: constant, bitmap (all wrap cases), checkerboard. */
+static void test_texture_values(void **state) {
+  (void)state;
+  init_image();
+  ad_arena A0, A9;
+  assert_int_equal(ad_arena_init(&A0, g_buf0, 64, 0), 0);
+  assert_int_equal(ad_arena_init(&A9, g_buf9, sizeof g_buf9 / sizeof g_buf9[0], 2), 0);
+  texture tex[4] = {tex_constant(rgb_make(0.1, 0.2, 0.3)), make_bitmap(1.0, 0.0), make_bitmap(3.7, -1.3),
+                    tex_checkerboard(rgb_gray(0.4), rgb_gray(0.2))};
+  tex[3].uscale = 3.0;
+  tex[3].voffset = 0.1;
+  rng r;
+  rng_seed(&r, 5, 5);
+  long compared = 0, checked_d = 0;
+  for (int t = 0; t < 4; t++)
+    for (int i = 0; i < 4000; i++) {
+      double u = -5.0 + 10.0 * rng_uniform(&r), v = -5.0 + 10.0 * rng_uniform(&r);
+      rgb p = tex_eval(&tex[t], u, v);
+      ad_arena_reset(&A0);
+      adrgb q0 = tex_eval_ad(&A0, &tex[t], ad_var(&A0, u, 0), ad_var(&A0, v, 1));
+      ad_arena_reset(&A9);
+      adrgb q9 = tex_eval_ad(&A9, &tex[t], ad_var(&A9, u, 0), ad_var(&A9, v, 1));
+      const adrgb *qs[2] = {&q0, &q9};
+      for (int k = 0; k < 2; k++) {
+        assert_le(rel_err(p.r, qs[k]->r.v), 1e-12);
+        assert_le(rel_err(p.g, qs[k]->g.v), 1e-12);
+        assert_le(rel_err(p.b, qs[k]->b.v), 1e-12);
+        compared += 3;
+      }
+      /* Derivative in u of the red channel vs central differences away
+       * from texel edges (bilinear: exact up to rounding inside a texel). */
+      const double h = 1e-7;
+      double fd = (tex_eval(&tex[t], u + h, v).r - tex_eval(&tex[t], u - h, v).r) / (2.0 * h);
+      double fd2 = (tex_eval(&tex[t], u + 2 * h, v).r - tex_eval(&tex[t], u - 2 * h, v).r) / (4.0 * h);
+      if (fabs(fd - fd2) < 1e-6) {
+        assert_near(ad_deriv(&A9, q9.r, 0), fd, 1e-6 * fmax(1.0, fabs(fd)));
+        checked_d++;
+      }
+    }
+  print_message("texture values compared %ld, derivatives checked %ld\n", compared, checked_d);
+  assert_true(compared == 4 * 4000 * 6);
+  assert_true(checked_d >= 15000);
+}
+
+/* ---- (b) derivatives ----------------------------------------------------------- */
+
+typedef struct grad_stats {
+  long checked, passed, skipped_branch, skipped_kink;
+  double worst;
+} grad_stats;
+
+static void test_gradients(void **state) {
+  (void)state;
+  init_image();
+  config cfg[MAX_CONFIGS];
+  int nc = make_configs(cfg);
+  ad_arena A;
+  assert_int_equal(ad_arena_init(&A, g_buf9, sizeof g_buf9 / sizeof g_buf9[0], NVAR), 0);
+  grad_stats st[M_COUNT];
+  memset(st, 0, sizeof st);
+  const double h = 1e-6;
+  const int points = 300;
+  int printed = 0;
+  for (int c = 0; c < nc; c++) {
+    grad_stats *s = &st[cfg[c].model];
+    rng r;
+    rng_seed(&r, 5000 + (uint64_t)c, 7);
+    for (int mode = 0; mode < 2; mode++)
+      for (int i = 0; i < points; i++) {
+        double x[NVAR];
+        random_point(&r, &cfg[c].b, (transport_mode)mode, 0, x);
+        outputs d;
+        eval_dual(&A, &cfg[c].b, (transport_mode)mode, x, &d);
+        assert_true(ad_arena_ok(&A));
+        /* Central differences with steps h and h/2 in every variable. */
+        double fd1[NVAR][NOUT], fd2[NVAR][NOUT];
+        int same[NVAR][2];
+        for (int j = 0; j < NVAR; j++) {
+          outputs o[4];
+          const double steps[4] = {h, -h, 0.5 * h, -0.5 * h};
+          for (int k = 0; k < 4; k++) {
+            double xp[NVAR];
+            memcpy(xp, x, sizeof xp);
+            xp[j] += steps[k];
+            eval_plain(&cfg[c].b, (transport_mode)mode, xp, &o[k]);
+          }
+          same[j][0] = same[j][1] = 1;
+          for (int k = 0; k < 4; k++) {
+            same[j][0] &= o[k].ok == d.ok && o[k].flags == d.flags;
+            same[j][1] &= o[k].eval_key == d.eval_key;
+          }
+          for (int out = 0; out < NOUT; out++) {
+            fd1[j][out] = (o[0].v[out] - o[1].v[out]) / (2.0 * h);
+            fd2[j][out] = (o[2].v[out] - o[3].v[out]) / h;
+          }
+        }
+        for (int out = 0; out < NOUT; out++) {
+          int is_sample = out < NSAMPLE_OUT;
+          if (is_sample && !d.ok) continue;
+          /* The magnitude: max(|f|, |grad f|) with the finite-difference
+           * gradient over the variables where the branch holds. */
+          double g2 = 0.0;
+          for (int j = 0; j < NVAR; j++)
+            if (same[j][is_sample ? 0 : 1]) g2 += fd1[j][out] * fd1[j][out];
+          double mag = fmax(fabs(d.v[out]), sqrt(g2));
+          double tol_abs = 1e-8 * mag;
+          for (int j = 0; j < NVAR; j++) {
+            double ad_d = d.d[out][j];
+            if (d.v[out] == 0.0 && ad_d == 0.0 && fd1[j][out] == 0.0 && fd2[j][out] == 0.0)
+              continue; /* identically zero here: nothing to check */
+            if (!same[j][is_sample ? 0 : 1]) {
+              s->skipped_branch++;
+              continue;
+            }
+            double a1 = fd1[j][out], a2 = fd2[j][out];
+            if (fabs(a1 - a2) > fmax(1e-5 * fmax(fabs(a1), fabs(a2)), tol_abs)) {
+              s->skipped_kink++;
+              continue;
+            }
+            double err = fabs(ad_d - a1);
+            s->checked++;
+            if (err <= 1e-5 * fmax(fabs(ad_d), fabs(a1)) || err <= tol_abs) {
+              s->passed++;
+            } else {
+              s->worst = fmax(s->worst, err / fmax(fabs(a1), tol_abs));
+              if (printed < 12) {
+                print_message("  mismatch %s mode %d out %d var %d: ad %.12g fd %.12g (fd_h/2 %.12g) "
+                              "value %.6g mag %.3g\n",
+                              cfg[c].name, mode, out, j, ad_d, a1, a2, d.v[out], mag);
+                printed++;
+              }
+            }
+          }
+        }
+      }
+  }
+  for (int m = 0; m < M_COUNT; m++) {
+    grad_stats *s = &st[m];
+    print_message("gradients %-16s checked %7ld passed %7ld (skipped: branch %6ld, kink %6ld) worst %.3g\n",
+                  g_model_names[m], s->checked, s->passed, s->skipped_branch, s->skipped_kink,
+                  s->worst);
+    /* At least 2000 checked components per model (each model has at least
+     * one configuration x 600 points x 9 variables x its nonzero outputs). */
+    assert_true(s->checked >= 2000);
+    assert_true((double)s->passed >= 0.999 * (double)s->checked);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_texture_values),
+      cmocka_unit_test(test_values),
+      cmocka_unit_test(test_gradients),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
