@@ -51,5 +51,15 @@ static inline vec3 mesh_position(const mesh *m, uint32_t i) {
 /* Unit geometric normal of triangle `tri` (with flip_normals applied). */
 vec3 mesh_face_normal(const mesh *m, int64_t tri);
 double mesh_triangle_area(const mesh *m, int64_t tri);
+/* Ray-triangle intersection in double (Moller and Trumbore 1997) with
+ * triangle `tri`, no bounds on t or the barycentrics: the hit Embree found
+ * in float, recomputed to double precision. With e1 = p1 - p0,
+ * e2 = p2 - p0, pv = dir x e2, det = e1 . pv, tv = org - p0, qv = tv x e1:
+ *   b1 = (tv . pv) / det,  b2 = (dir . qv) / det,  t = (e2 . qv) / det,
+ * each division a product with 1 / det. The differentiable path sampler
+ * (path.c) evaluates this same formula in dual numbers. Returns 0 when the
+ * ray is parallel to the triangle (det = 0). */
+int mesh_intersect_triangle(const mesh *m, int64_t tri, vec3 org, vec3 dir, double *OUT_t,
+                            double *OUT_b1, double *OUT_b2);
 
 #endif

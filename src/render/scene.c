@@ -151,6 +151,15 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   accel_hit ah;
   if (!accel_intersect(s->accel, org, dir, tmin, tmax, &ah)) return 0;
   const mesh *m = &s->meshes[ah.mesh];
+  /* Refine Embree's float hit to double on the same triangle (the formula
+   * the differentiable path sampler re-evaluates, see path.h). */
+  double rt, rb1, rb2;
+  if (mesh_intersect_triangle(m, ah.prim, org, dir, &rt, &rb1, &rb2) && isfinite(rb1) &&
+      isfinite(rb2) && isfinite(rt)) {
+    ah.t = rt;
+    ah.b1 = rb1;
+    ah.b2 = rb2;
+  }
   surface_hit *h = OUT_hit;
   h->t = ah.t;
   h->mesh = ah.mesh;

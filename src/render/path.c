@@ -1,0 +1,900 @@
+/*
+ * path.c: the differentiable path sampler (see path.h): pt_li's estimator
+ * written once in dual arithmetic, run twice ("locate, then re-evaluate").
+ *
+ * Pass 1 (tangent length 0) traces rays with Embree on the values and
+ * records, in order, every number drawn, every closest-hit result (mesh and
+ * triangle, or a miss) and every shadow-ray result. Pass 2 replays the
+ * same code with one tangent slot per continuous coordinate; instead of
+ * tracing, it reads the record. Since values never depend on tangents,
+ * pass 2 computes exactly the values of pass 1 and takes the same
+ * branches, and its tangents are the derivatives of that very formula.
+ *
+ * What depends on u, and how (the chain the tangents follow):
+ *  camera      rx = u0 W, ry = u1 H; the pinhole ray direction
+ *              normalize(to_world (x, y, 1)) with x = -(2 rx / W - 1) tan_half_x
+ *              (camera.c's formula).
+ *  vertices    Moller-Trumbore on the recorded triangle (the formula of
+ *              mesh_intersect_triangle, which scene_intersect uses too):
+ *              b1, b2 from the dual ray, p = b0 p0 + b1 p1 + b2 p2, the
+ *              shading normal normalize(b0 n0 + b1 n1 + b2 n2) (turned to the
+ *              geometric side), its frame (Duff et al. 2017) and the texture
+ *              coordinates, all as in scene_intersect.
+ *  lights      light.c's sampling routines: an area light's triangle is
+ *              chosen by the discrete part of u1 (fixed), the remapped u1'
+ *              = (u1 - cdf_i) / width_i keeps derivative 1 / width_i; the
+ *              envmap's pixel is fixed and the position inside it moves
+ *              with derivative 1 / (n width) per axis (inverse CDF of a
+ *              piecewise-constant density); radiance is piecewise constant
+ *              (derivative 0) and the solid-angle density 1 / sin(theta)
+ *              inside a pixel is differentiated through theta.
+ *  BSDFs       bsdf_ad.h (bsdf_eval_ad, bsdf_pdf_ad, bsdf_sample_f_ad).
+ *  MIS         the power heuristic a^2 / (a^2 + b^2) on dual densities.
+ *  roulette    the survival probability q = min(0.95, max(beta) eta^2) is a
+ *              dual: the estimator divides by it.
+ *
+ * Where a value comes from a plain routine whose derivative is known in
+ * closed form (a scalar remap), the dual is built as (plain value, chain
+ * rule tangent), so values agree with the plain integrators to rounding.
+ *
+ * Arena: each bounce rewinds the arena, keeping only the duals the next
+ * bounce needs (radiance, throughput, previous density and position, the
+ * ray), so memory is bounded by one bounce and stays in cache.
+ */
+#include "render/path.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "ad/dual.h"
+#include "ad/dual_math.h"
+#include "ad/dual_vec3.h"
+#include "render/bsdf_ad.h"
+#include "render/warp.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define PATH__MAX_HITS 1024
+#define PATH__MAX_VIS 1024
+#define PATH__ARENA_DUALS 16384 /* duals of length AD_CAPACITY one bounce may hold */
+#define PATH__KEEP 48           /* duals carried from one bounce to the next */
+
+struct path_scratch {
+  double *arena_buf; /* owned */
+  size_t arena_cap;
+  ad_arena A;
+  /* The record of pass 1. */
+  int n_draw;
+  double du[PATH_MAX_DRAWS];
+  signed char dstream[PATH_MAX_DRAWS];
+  int dpos[PATH_MAX_DRAWS];
+  int dvar[PATH_MAX_DRAWS]; /* tangent slot, or -1 */
+  int n_hit;
+  int hit_mesh[PATH__MAX_HITS];
+  int64_t hit_prim[PATH__MAX_HITS];
+  int n_vis;
+  unsigned char vis[PATH__MAX_VIS];
+  /* Output and temporaries. */
+  path_coord coords[PATH_MAX_DRAWS];
+  double keep_tmp[PATH__KEEP * AD_CAPACITY];
+};
+
+lmc_status path_scratch_create(path_scratch **OUT_scratch, lmc_error *err) {
+  path_scratch *ps = calloc(1, sizeof *ps);
+  if (!ps) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for a path scratch");
+  ps->arena_cap = ad_arena_size(AD_CAPACITY, PATH__ARENA_DUALS);
+  ps->arena_buf = malloc(ps->arena_cap * sizeof(double));
+  if (!ps->arena_buf) {
+    free(ps);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for a path arena");
+  }
+  *OUT_scratch = ps;
+  return LMC_OK;
+}
+
+void path_scratch_destroy(path_scratch *ps) {
+  if (!ps) return;
+  free(ps->arena_buf);
+  free(ps);
+}
+
+/* ---------------------------------------------------------------------------
+ * The evaluation context: pass 1 (record) or pass 2 (replay).
+ */
+
+typedef struct path__ctx {
+  const scene *sc;
+  const render_settings *rs;
+  path_scratch *ps;
+  ad_arena *A;
+  int replay;       /* 0: trace and record; 1: read the record */
+  lmc_sampler *smp; /* pass 1 only */
+  int stream;
+  int spos[LMC_STREAM_COUNT];
+  int k_draw, k_hit, k_vis; /* replay cursors */
+  int n_var;                /* tangent slots handed out (pass 1) */
+  int lost;                 /* a record overflowed: no gradient */
+  int64_t rays;
+  uint64_t topo; /* hash of the discrete choices (path_eval.topology) */
+  unsigned flags;
+  int length;
+} path__ctx;
+
+/* Mixes a discrete choice into the topology hash. */
+static void path__topo(path__ctx *c, int64_t x) {
+  c->topo = rng_hash64(c->topo ^ (uint64_t)x) + 0x9e3779b97f4a7c15ull;
+}
+
+static void path__use_stream(path__ctx *c, int stream) {
+  if (!c->replay) sampler_use_stream(c->smp, stream);
+  c->stream = stream;
+}
+
+/* The next number of the current stream; `diff` asks for a tangent slot
+ * (continuous use). */
+static ad path__draw(path__ctx *c, int diff) {
+  path_scratch *ps = c->ps;
+  if (c->replay) {
+    int k = c->k_draw++;
+    if (k >= ps->n_draw) return ad_const(c->A, 0.5); /* unreachable: replay only when complete */
+    return ps->dvar[k] >= 0 ? ad_var(c->A, ps->du[k], ps->dvar[k]) : ad_const(c->A, ps->du[k]);
+  }
+  double u = sampler_next(c->smp);
+  int k = ps->n_draw;
+  if (k < PATH_MAX_DRAWS) {
+    ps->du[k] = u;
+    ps->dstream[k] = (signed char)c->stream;
+    ps->dpos[k] = c->spos[c->stream];
+    int var = -1;
+    if (diff) {
+      if (c->n_var < AD_CAPACITY)
+        var = c->n_var++;
+      else
+        c->lost = 1;
+    }
+    ps->dvar[k] = var;
+    ps->n_draw++;
+  } else {
+    c->lost = 1;
+  }
+  c->spos[c->stream]++;
+  return ad_const(c->A, u);
+}
+
+/* Carries duals over an arena rewind to `mark`: their tangents are copied
+ * out, the arena rewinds, and they are remade at the bottom. */
+static void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
+  ad_arena *A = c->A;
+  size_t lanes = A->lanes;
+  if (lanes == 0 || n > PATH__KEEP) {
+    if (lanes == 0) ad_arena_rewind(A, mark);
+    return;
+  }
+  double *tmp = c->ps->keep_tmp;
+  for (int i = 0; i < n; i++) memcpy(tmp + (size_t)i * lanes, v[i]->d, lanes * sizeof(double));
+  ad_arena_rewind(A, mark);
+  for (int i = 0; i < n; i++) *v[i] = ad_make(A, v[i]->v, tmp + (size_t)i * lanes);
+}
+
+/* A dual with the given value and the tangent coef * d_a (the chain rule
+ * for a scalar map whose value comes from plain code). */
+static ad path__chain(ad_arena *A, double value, double coef, ad a) {
+  ad r = ad_mul_s(A, a, coef);
+  r.v = value;
+  return r;
+}
+
+static vec3 path__val(adv3 a) { return v3(a.x.v, a.y.v, a.z.v); }
+
+static adv3 path__cv(const ad_arena *A, vec3 a) { return adv3_const(A, a.x, a.y, a.z); }
+
+/* m v for the upper 3x3 of a row-major matrix (xform_vector's order). */
+static adv3 path__mat_vec(ad_arena *A, const double (*m)[4], adv3 v) {
+  adv3 r;
+  r.x = ad_add(A, ad_lincomb(A, m[0][0], v.x, m[0][1], v.y), ad_mul_s(A, v.z, m[0][2]));
+  r.y = ad_add(A, ad_lincomb(A, m[1][0], v.x, m[1][1], v.y), ad_mul_s(A, v.z, m[1][2]));
+  r.z = ad_add(A, ad_lincomb(A, m[2][0], v.x, m[2][1], v.y), ad_mul_s(A, v.z, m[2][2]));
+  return r;
+}
+
+/* b0 p0 + b1 p1 + b2 p2 in scene_intersect's order. */
+static adv3 path__bary(ad_arena *A, vec3 p0, vec3 p1, vec3 p2, ad b0, ad b1, ad b2) {
+  adv3 r;
+  r.x = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.x), ad_mul_s(A, b1, p1.x)), ad_mul_s(A, b2, p2.x));
+  r.y = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.y), ad_mul_s(A, b1, p1.y)), ad_mul_s(A, b2, p2.y));
+  r.z = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.z), ad_mul_s(A, b1, p1.z)), ad_mul_s(A, b2, p2.z));
+  return r;
+}
+
+/* a x e for a constant e: x = a_y e_z - a_z e_y (two-term combinations). */
+static adv3 path__cross_c(ad_arena *A, adv3 a, vec3 e) {
+  adv3 r;
+  r.x = ad_lincomb(A, e.z, a.y, -e.y, a.z);
+  r.y = ad_lincomb(A, e.x, a.z, -e.z, a.x);
+  r.z = ad_lincomb(A, e.y, a.x, -e.x, a.y);
+  return r;
+}
+
+/* e . a for a constant e, summed in v3_dot's order. */
+static ad path__dot_c(ad_arena *A, vec3 e, adv3 a) {
+  return ad_add(A, ad_lincomb(A, e.x, a.x, e.y, a.y), ad_mul_s(A, a.z, e.z));
+}
+
+static adrgb path__rgb_fma(ad_arena *A, adrgb acc, adrgb a, adrgb b) {
+  return (adrgb){ad_fma(A, a.r, b.r, acc.r), ad_fma(A, a.g, b.g, acc.g), ad_fma(A, a.b, b.b, acc.b)};
+}
+
+static adrgb path__rgb_scale_c(ad_arena *A, rgb c, ad s) {
+  return (adrgb){ad_mul_s(A, s, c.r), ad_mul_s(A, s, c.g), ad_mul_s(A, s, c.b)};
+}
+
+static int path__rgb_black(adrgb c) { return c.r.v == 0.0 && c.g.v == 0.0 && c.b.v == 0.0; }
+
+/* The power heuristic of integrator.h (mis_power) on duals. */
+static ad path__mis(ad_arena *A, ad a, ad b) {
+  if (!(a.v > 0.0)) return ad_const(A, 0.0);
+  if (!isfinite(a.v)) return ad_const(A, 1.0);
+  ad a2 = ad_sqr(A, a), b2 = ad_sqr(A, b);
+  ad r = ad_div(A, a2, ad_add(A, a2, b2));
+  r.v = a2.v / (a2.v + b2.v);
+  return r;
+}
+
+/* ---------------------------------------------------------------------------
+ * Vertices: locate (Embree, pass 1) or read the record (pass 2), then
+ * re-evaluate on the triangle in duals.
+ */
+
+typedef struct path__hit {
+  int mesh;
+  int64_t prim;
+  adv3 p;
+  vec3 ng;
+  ad_frame sh;
+  ad tu, tv;
+  const bsdf *bsdf;
+  int light;
+} path__hit;
+
+/* The surface point of triangle `prim` of mesh `mi` hit by the dual ray
+ * (org, dir): scene_intersect's formulas on Moller-Trumbore barycentrics. */
+static void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
+                           path__hit *h) {
+  ad_arena *A = c->A;
+  const mesh *m = &c->sc->meshes[mi];
+  const uint32_t *tri = m->idx + 3 * prim;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+
+  /* Barycentrics: b1 = (tv . pv) / det, b2 = (dir . qv) / det. */
+  adv3 pv = path__cross_c(A, dir, e2);
+  ad det = path__dot_c(A, e1, pv);
+  ad inv = ad_inv(A, det);
+  adv3 tv = {ad_sub_s(A, org.x, p0.x), ad_sub_s(A, org.y, p0.y), ad_sub_s(A, org.z, p0.z)};
+  /* qv = tv x e1 */
+  adv3 qv = path__cross_c(A, tv, e1);
+  ad b1 = ad_mul(A, adv3_dot(A, tv, pv), inv);
+  ad b2 = ad_mul(A, adv3_dot(A, dir, qv), inv);
+  ad b0 = ad_sub(A, ad_s_sub(A, 1.0, b1), b2);
+
+  h->mesh = mi;
+  h->prim = prim;
+  h->p = path__bary(A, p0, p1, p2, b0, b1, b2);
+  h->ng = mesh_face_normal(m, prim);
+
+  /* Shading normal: interpolated, normalised, turned to the geometric side. */
+  adv3 ns = path__cv(A, h->ng);
+  if (m->n && !m->face_normals) {
+    const float *n = m->n;
+    vec3 n0 = v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]);
+    vec3 n1 = v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]);
+    vec3 n2 = v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]);
+    adv3 ni = path__bary(A, n0, n1, n2, b0, b1, b2);
+    double l = v3_len(path__val(ni));
+    if (l > 1e-12) {
+      ns = adv3_normalize(A, ni);
+      if (v3_dot(path__val(ns), h->ng) < 0.0) ns = adv3_neg(A, ns);
+    }
+  }
+  h->sh = adv3_frame_from_z(A, ns);
+
+  /* Texture coordinates (the barycentrics when the mesh has none). */
+  if (m->uv) {
+    const float *uv = m->uv;
+    h->tu = ad_add(A, ad_add(A, ad_mul_s(A, b0, uv[2 * tri[0]]), ad_mul_s(A, b1, uv[2 * tri[1]])),
+                   ad_mul_s(A, b2, uv[2 * tri[2]]));
+    h->tv = ad_add(A,
+                   ad_add(A, ad_mul_s(A, b0, uv[2 * tri[0] + 1]), ad_mul_s(A, b1, uv[2 * tri[1] + 1])),
+                   ad_mul_s(A, b2, uv[2 * tri[2] + 1]));
+  } else {
+    h->tu = b1;
+    h->tv = b2;
+  }
+  h->bsdf = &c->sc->bsdfs[m->bsdf];
+  h->light = m->light;
+}
+
+/* Closest hit along the dual ray; 0 on a miss. */
+static int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h) {
+  path_scratch *ps = c->ps;
+  int mi;
+  int64_t prim;
+  if (c->replay) {
+    int k = c->k_hit++;
+    if (k >= ps->n_hit) return 0;
+    mi = ps->hit_mesh[k];
+    prim = ps->hit_prim[k];
+  } else {
+    surface_hit sh;
+    c->rays++;
+    int hit = scene_intersect(c->sc, path__val(org), path__val(dir), tmin, INFINITY, &sh);
+    mi = hit ? sh.mesh : -1;
+    prim = hit ? sh.prim : -1;
+    if (ps->n_hit < PATH__MAX_HITS) {
+      ps->hit_mesh[ps->n_hit] = mi;
+      ps->hit_prim[ps->n_hit] = prim;
+      ps->n_hit++;
+    } else {
+      c->lost = 1;
+    }
+  }
+  path__topo(c, mi);
+  path__topo(c, prim);
+  if (mi < 0) return 0;
+  path__hit_eval(c, mi, prim, org, dir, h);
+  return 1;
+}
+
+/* Shadow ray: 1 when blocked (recorded in pass 1, read in pass 2). */
+static int path__blocked(path__ctx *c, vec3 p, vec3 wi, vec3 lp, int infinite) {
+  path_scratch *ps = c->ps;
+  if (c->replay) {
+    int k = c->k_vis++;
+    return k < ps->n_vis ? ps->vis[k] : 1;
+  }
+  path__topo(c, 1000);
+  c->rays++;
+  int blocked = infinite ? scene_occluded_ray(c->sc, p, wi) : scene_occluded_segment(c->sc, p, lp);
+  if (ps->n_vis < PATH__MAX_VIS)
+    ps->vis[ps->n_vis++] = (unsigned char)blocked;
+  else
+    c->lost = 1;
+  path__topo(c, blocked);
+  return blocked;
+}
+
+/* ---------------------------------------------------------------------------
+ * Lights in duals (light.c's formulas).
+ */
+
+typedef struct path__li {
+  adv3 wi;     /* towards the light */
+  double dist; /* INFINITY for infinite and directional lights */
+  vec3 p;      /* value of the light point (for the shadow ray) */
+  adrgb li;
+  ad pdf;      /* solid angle (1 for delta lights) */
+  int delta;
+} path__li;
+
+/* Pixel of the envmap containing (u, v) (light.c's rule: u wraps, v clamps). */
+static rgb path__env_eval_uv(const light *l, double u, double v) {
+  const lmc_image *img = &l->image;
+  double fx = floor(u * img->width), fy = floor(v * img->height);
+  int ix = isfinite(fx) ? (int)fmod(fx, (double)img->width) : 0;
+  if (ix < 0) ix += img->width;
+  int iy = fy < 0.0 || !isfinite(fy) ? 0 : (fy > img->height - 1 ? img->height - 1 : (int)fy);
+  const float *p =
+      img->data + ((size_t)iy * (size_t)img->width + (size_t)ix) * (size_t)img->channels;
+  rgb c = img->channels >= 3 ? rgb_make(p[0], p[1], p[2]) : rgb_gray(p[0]);
+  return rgb_scale(c, l->scale);
+}
+
+/* sin(theta) of world direction w in the envmap's frame, as a dual. */
+static ad path__env_sin_theta(ad_arena *A, const light *l, adv3 w) {
+  adv3 d = adv3_normalize(A, path__mat_vec(A, (const double (*)[4])l->to_world.inv, w));
+  ad y = ad_clamp(A, d.y, -1.0, 1.0);
+  return ad_safe_sqrt(A, ad_s_sub(A, 1.0, ad_sqr(A, y)));
+}
+
+/* light_pdf_li for direction w leaving ref towards an infinite light or an
+ * area light point p with normal n (value from light.c, tangent here). */
+static ad path__pdf_li(path__ctx *c, const light *l, adv3 ref, adv3 w, adv3 p, vec3 n) {
+  ad_arena *A = c->A;
+  switch (l->type) {
+  case LIGHT_AREA: {
+    adv3 d = adv3_sub(A, p, ref);
+    ad dist2 = adv3_len2(A, d);
+    ad cos_l = ad_neg(A, path__dot_c(A, n, w));
+    if (!(cos_l.v > 0.0) || !(dist2.v > 0.0) || !(l->area > 0.0)) return ad_const(A, 0.0);
+    ad r = ad_div(A, dist2, ad_mul_s(A, cos_l, l->area));
+    r.v = dist2.v / (cos_l.v * l->area);
+    return r;
+  }
+  case LIGHT_CONSTANT:
+    return ad_const(A, 1.0 / (4.0 * M_PI));
+  case LIGHT_ENVMAP: {
+    vec3 rv = path__val(ref);
+    double pdf = light_pdf_li(l, c->sc, rv, path__val(w), rv, rv);
+    if (!(pdf > 0.0)) return ad_const(A, pdf);
+    /* Inside one pixel pdf = C / sin(theta). */
+    ad st = path__env_sin_theta(A, l, w);
+    ad r = ad_mul_s(A, ad_s_div(A, st.v, st), pdf);
+    r.v = pdf;
+    return r;
+  }
+  default:
+    return ad_const(A, 0.0);
+  }
+}
+
+/* Mitsuba's spot falloff (light.c) of the dual cosine to the axis. */
+static ad path__spot_falloff(ad_arena *A, const light *l, ad cos_theta) {
+  if (cos_theta.v <= l->cos_cutoff) return ad_const(A, 0.0);
+  if (cos_theta.v >= l->cos_beam) return ad_const(A, 1.0);
+  double width = l->cutoff - l->beam_width;
+  if (!(width > 0.0)) return ad_const(A, 1.0);
+  ad theta = ad_acos(A, ad_clamp(A, cos_theta, -1.0, 1.0));
+  ad f = ad_div_s(A, ad_s_sub(A, l->cutoff, theta), width);
+  f.v = (l->cutoff - theta.v) / width;
+  return ad_clamp(A, f, 0.0, 1.0);
+}
+
+/* A uniform point on an area light from (u1, u2) (light.c's
+ * light__sample_area_point): position and the emitting side's normal. */
+static void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p, vec3 *n) {
+  ad_arena *A = c->A;
+  const mesh *m = &c->sc->meshes[l->mesh];
+  double pmf, u1r;
+  int tri = distrib1d_sample_discrete(&l->tri_dist, u1.v, &pmf, &u1r);
+  path__topo(c, tri);
+  double width = l->tri_dist.cdf[tri + 1] - l->tri_dist.cdf[tri];
+  ad ur = path__chain(A, u1r, width > 0.0 ? 1.0 / width : 0.0, u1);
+  /* warp_square_to_triangle: b1 = 1 - sqrt(u1'), b2 = u2 sqrt(u1'). */
+  ad s = ad_safe_sqrt(A, ur);
+  ad b1 = ad_s_sub(A, 1.0, s);
+  ad b2 = ad_mul(A, u2, s);
+  ad b0 = ad_sub(A, ad_s_sub(A, 1.0, b1), b2);
+  const uint32_t *idx = m->idx + 3 * tri;
+  *p = path__bary(A, mesh_position(m, idx[0]), mesh_position(m, idx[1]), mesh_position(m, idx[2]),
+                  b0, b1, b2);
+  *n = mesh_face_normal(m, tri);
+}
+
+/* Envmap importance sampling (light.c): the pixel is chosen by the discrete
+ * part of (u1, u2), the point inside it moves with them. Writes the lat-long
+ * coordinates and the sampling density with respect to them. */
+static int path__env_sample_uv(path__ctx *c, const light *l, ad u1, ad u2, ad *uu, ad *vv,
+                               double *pdf_uv, double uv[2]) {
+  ad_arena *A = c->A;
+  const distrib2d *d2 = &l->env_dist;
+  distrib2d_sample(d2, u1.v, u2.v, uv, pdf_uv);
+  /* distrib2d_sample: the row (v) from u2 on the marginal, u from u1 in that row. */
+  double pdf_v;
+  int row, col;
+  distrib1d_sample_cont(&d2->marginal, u2.v, &pdf_v, &row);
+  distrib1d_sample_cont(&d2->conditional[row], u1.v, NULL, &col);
+  path__topo(c, row);
+  path__topo(c, col);
+  const distrib1d *mv = &d2->marginal, *cu = &d2->conditional[row];
+  double wv = mv->cdf[row + 1] - mv->cdf[row], wu = cu->cdf[col + 1] - cu->cdf[col];
+  *vv = path__chain(A, uv[1], wv > 0.0 ? 1.0 / (wv * mv->n) : 0.0, u2);
+  *uu = path__chain(A, uv[0], wu > 0.0 ? 1.0 / (wu * cu->n) : 0.0, u1);
+  return 1;
+}
+
+/* Lat-long (u, v) to a world direction and sin(theta) (light.c). */
+static adv3 path__env_uv_to_dir(ad_arena *A, const light *l, ad uu, ad vv, ad *sin_theta) {
+  ad phi = ad_mul_s(A, uu, 2.0 * M_PI);
+  phi.v = 2.0 * M_PI * uu.v;
+  ad theta = ad_mul_s(A, vv, M_PI);
+  theta.v = M_PI * vv.v;
+  ad st = ad_sin(A, theta), ct = ad_cos(A, theta);
+  *sin_theta = st;
+  adv3 d = {ad_mul(A, ad_sin(A, phi), st), ct, ad_neg(A, ad_mul(A, ad_cos(A, phi), st))};
+  return adv3_normalize(A, path__mat_vec(A, (const double (*)[4])l->to_world.m, d));
+}
+
+/* light_sample_li in duals. */
+static int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2, path__li *out) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  out->delta = 0;
+  switch (l->type) {
+  case LIGHT_AREA: {
+    adv3 p;
+    vec3 n;
+    path__area_point(c, l, u1, u2, &p, &n);
+    adv3 d = adv3_sub(A, p, ref);
+    ad dist2 = adv3_len2(A, d);
+    if (!(dist2.v > 0.0)) return 0;
+    ad dist = ad_sqrt(A, dist2);
+    ad inv = ad_inv(A, dist);
+    adv3 wi = adv3_scale(A, d, inv);
+    ad cos_l = ad_neg(A, path__dot_c(A, n, wi));
+    if (!(cos_l.v > 0.0)) return 0;
+    out->wi = wi;
+    out->dist = dist.v;
+    out->p = path__val(p);
+    out->li = adrgb_const(A, l->value);
+    out->pdf = ad_div(A, dist2, ad_mul_s(A, cos_l, l->area));
+    out->pdf.v = dist2.v / (cos_l.v * l->area);
+    return isfinite(out->pdf.v) && out->pdf.v > 0.0;
+  }
+  case LIGHT_POINT:
+  case LIGHT_SPOT: {
+    adv3 d = {ad_s_sub(A, l->pos.x, ref.x), ad_s_sub(A, l->pos.y, ref.y),
+              ad_s_sub(A, l->pos.z, ref.z)};
+    ad dist2 = adv3_len2(A, d);
+    if (!(dist2.v > 0.0)) return 0;
+    ad dist = ad_sqrt(A, dist2);
+    adv3 wi = adv3_scale(A, d, ad_inv(A, dist));
+    ad falloff = ad_const(A, 1.0);
+    if (l->type == LIGHT_SPOT) {
+      falloff = path__spot_falloff(A, l, ad_neg(A, path__dot_c(A, l->frm.n, wi)));
+      if (!(falloff.v > 0.0)) return 0;
+    }
+    ad s = ad_div(A, falloff, dist2);
+    s.v = falloff.v / dist2.v;
+    out->wi = wi;
+    out->dist = dist.v;
+    out->p = l->pos;
+    out->li = path__rgb_scale_c(A, l->value, s);
+    out->pdf = ad_const(A, 1.0);
+    out->delta = 1;
+    return 1;
+  }
+  case LIGHT_DIRECTIONAL:
+    out->wi = path__cv(A, v3_neg(l->frm.n));
+    out->dist = INFINITY;
+    out->p = v3_fma(path__val(ref), v3_neg(l->frm.n), 2.0 * sc->radius);
+    out->li = adrgb_const(A, l->value);
+    out->pdf = ad_const(A, 1.0);
+    out->delta = 1;
+    return 1;
+  case LIGHT_CONSTANT: {
+    /* warp_square_to_uniform_sphere: z = 1 - 2 u1, phi = 2 pi u2. */
+    ad z = ad_s_sub(A, 1.0, ad_mul_s(A, u1, 2.0));
+    ad r = ad_safe_sqrt(A, ad_s_sub(A, 1.0, ad_sqr(A, z)));
+    ad phi = ad_mul_s(A, u2, 2.0 * M_PI);
+    phi.v = 2.0 * M_PI * u2.v;
+    out->wi = (adv3){ad_mul(A, r, ad_cos(A, phi)), ad_mul(A, r, ad_sin(A, phi)), z};
+    out->dist = INFINITY;
+    out->p = v3_fma(path__val(ref), path__val(out->wi), 2.0 * sc->radius);
+    out->li = adrgb_const(A, l->value);
+    out->pdf = ad_const(A, 1.0 / (4.0 * M_PI));
+    return 1;
+  }
+  case LIGHT_ENVMAP: {
+    ad uu, vv, st;
+    double pdf_uv, uv[2];
+    path__env_sample_uv(c, l, u1, u2, &uu, &vv, &pdf_uv, uv);
+    adv3 wi = path__env_uv_to_dir(A, l, uu, vv, &st);
+    if (!(st.v > 0.0) || !(pdf_uv > 0.0)) return 0;
+    out->wi = wi;
+    out->dist = INFINITY;
+    out->p = v3_fma(path__val(ref), path__val(wi), 2.0 * sc->radius);
+    out->li = adrgb_const(A, path__env_eval_uv(l, uv[0], uv[1]));
+    out->pdf = ad_s_div(A, pdf_uv, ad_mul_s(A, st, 2.0 * M_PI * M_PI));
+    out->pdf.v = pdf_uv / (2.0 * M_PI * M_PI * st.v);
+    return isfinite(out->pdf.v);
+  }
+  }
+  return 0;
+}
+
+static unsigned path__emit_flag(const light *l) {
+  switch (l->type) {
+  case LIGHT_AREA:
+    return PATH_EMIT_AREA;
+  case LIGHT_CONSTANT:
+    return PATH_EMIT_INFINITE;
+  case LIGHT_ENVMAP:
+    return PATH_EMIT_INFINITE | PATH_EMIT_ENVMAP;
+  default:
+    return PATH_EMIT_DELTA;
+  }
+}
+
+static unsigned path__lobe_flag(int bsdf_flags) {
+  unsigned f = 0;
+  if (bsdf_flags & BSDF_DIFFUSE_LOBE) f |= PATH_LOBE_DIFFUSE;
+  if (bsdf_flags & BSDF_GLOSSY) f |= PATH_LOBE_GLOSSY;
+  if (bsdf_flags & BSDF_DELTA) f |= PATH_LOBE_DELTA;
+  if (bsdf_flags & BSDF_TRANSMISSION) f |= PATH_LOBE_TRANSMISSION;
+  return f;
+}
+
+/* ---------------------------------------------------------------------------
+ * The unidirectional estimator: pt_li (integrator_pt.c), step for step.
+ */
+
+static int path__pt_counts(const render_settings *rs, int length) {
+  return rs->mindepth <= 0 || length >= rs->mindepth;
+}
+
+/* Adds beta * c to L and notes what contributed. */
+static void path__add(path__ctx *c, adrgb *L, adrgb beta, adrgb contrib, unsigned emit,
+                      unsigned lobes, int length) {
+  if (path__rgb_black(contrib) || path__rgb_black(beta)) return;
+  *L = path__rgb_fma(c->A, *L, beta, contrib);
+  c->flags |= emit | lobes;
+  if (length > c->length) c->length = length;
+}
+
+static void path__pt(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
+  const scene *s = c->sc;
+  const render_settings *rs = c->rs;
+  const camera *cam = &s->cam;
+
+  /* The film position and the camera ray (camera.c's formulas). */
+  path__use_stream(c, LMC_STREAM_CAMERA);
+  ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
+  double rxv = u0.v * cam->width, ryv = u1.v * cam->height;
+  *OUT_rx = path__chain(A, rxv, cam->width, u0);
+  *OUT_ry = path__chain(A, ryv, cam->height, u1);
+  double xv = -(2.0 * rxv / cam->width - 1.0) * cam->tan_half_x;
+  double yv = -(2.0 * ryv / cam->height - 1.0) * cam->tan_half_y;
+  adv3 dloc = {path__chain(A, xv, -2.0 * cam->tan_half_x, u0),
+               path__chain(A, yv, -2.0 * cam->tan_half_y, u1), ad_const(A, 1.0)};
+  adv3 dir = adv3_normalize(A, path__mat_vec(A, (const double (*)[4])cam->to_world.m, dloc));
+  adv3 org = path__cv(A, cam->pos);
+
+  adrgb L = adrgb_const(A, rgb_zero()), beta = adrgb_const(A, rgb_gray(1.0));
+  int prev_delta = 1;
+  ad prev_pdf = ad_const(A, 0.0);
+  adv3 prev_p = org;
+  double tmin = 0.0, eta_scale = 1.0;
+  unsigned lobes = 0; /* lobes sampled so far */
+  size_t mark = ad_arena_mark(A);
+
+  for (int depth = 1;; depth++) {
+    /* Find the next vertex; on a miss, add the infinite lights. */
+    path__hit h;
+    if (!path__intersect(c, org, dir, tmin, &h)) {
+      if (!path__pt_counts(rs, depth)) break;
+      for (int k = 0; k < s->n_infinite; k++) {
+        int li = s->infinite_lights[k];
+        const light *l = &s->lights[li];
+        rgb le = light_le_infinite(l, path__val(dir));
+        if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(le))); /* the pixel */
+        if (rgb_is_black(le)) continue;
+        ad w = ad_const(A, 1.0);
+        if (!prev_delta) {
+          ad pdf_l = ad_mul_s(A, path__pdf_li(c, l, prev_p, dir, prev_p, v3(0, 0, 0)),
+                              scene_light_pmf(s, li));
+          w = path__mis(A, prev_pdf, pdf_l);
+        }
+        path__add(c, &L, beta, path__rgb_scale_c(A, le, w), path__emit_flag(l), lobes, depth);
+      }
+      break;
+    }
+    adv3 wo = adv3_neg(A, dir);
+
+    /* Emission of an area light that the path hit. */
+    if (h.light >= 0 && path__pt_counts(rs, depth)) {
+      const light *l = &s->lights[h.light];
+      rgb le = light_le_area(l, h.ng, path__val(wo));
+      if (!rgb_is_black(le)) {
+        ad w = ad_const(A, 1.0);
+        if (!prev_delta) {
+          ad pdf_l = ad_mul_s(A, path__pdf_li(c, l, prev_p, dir, h.p, h.ng),
+                              scene_light_pmf(s, h.light));
+          w = path__mis(A, prev_pdf, pdf_l);
+        }
+        path__add(c, &L, beta, path__rgb_scale_c(A, le, w), PATH_EMIT_AREA, lobes, depth);
+      }
+    }
+
+    /* Take this bounce's numbers (fixed layout), then stop if too long. */
+    ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
+    ad u_lobe = path__draw(c, 0), ub1 = path__draw(c, 1), ub2 = path__draw(c, 1);
+    ad u_rr = path__draw(c, 0);
+    if (rs->maxdepth >= 0 && depth >= rs->maxdepth) break;
+
+    const bsdf *b = h.bsdf;
+    adv3 wo_l = adv3_to_local(A, &h.sh, wo);
+    int wo_ok = v3_dot(path__val(wo), h.ng) * wo_l.z.v > 0.0;
+    path__topo(c, wo_ok);
+    if (!wo_ok) break;
+
+    /* Next-event estimation: sample a light, weight by MIS. `nee` counts
+     * how far it got (part of the topology: each step is a branch of f). */
+    int nee = 0;
+    if (!bsdf_is_delta(b) && s->n_lights > 0 && path__pt_counts(rs, depth + 1)) {
+      double pmf, u_rem;
+      int li = scene_sample_light(s, u_light.v, &pmf, &u_rem);
+      path__topo(c, li);
+      path__li ls;
+      if (li >= 0 && pmf > 0.0 && path__sample_li(c, &s->lights[li], h.p, ul1, ul2, &ls) &&
+          ls.pdf.v > 0.0 && !path__rgb_black(ls.li)) {
+        nee = 1;
+        adv3 wi_l = adv3_to_local(A, &h.sh, ls.wi);
+        if (v3_dot(path__val(ls.wi), h.ng) * wi_l.z.v > 0.0) {
+          nee = 2;
+          adrgb f = bsdf_eval_ad(A, b, h.tu, h.tv, wo_l, wi_l, TRANSPORT_RADIANCE);
+          if (!path__rgb_black(f)) {
+            nee = 3;
+            vec3 pv = path__val(h.p);
+            if (!path__blocked(c, pv, path__val(ls.wi), ls.p, isinf(ls.dist))) {
+              ad pdf_l = ad_mul_s(A, ls.pdf, pmf);
+              ad w = ls.delta ? ad_const(A, 1.0)
+                              : path__mis(A, pdf_l, bsdf_pdf_ad(A, b, h.tu, h.tv, wo_l, wi_l));
+              ad sc = ad_div(A, ad_mul(A, ad_fabs(A, wi_l.z), w), pdf_l);
+              adrgb contrib = adrgb_scale(A, adrgb_mul(A, f, ls.li), sc);
+              path__add(c, &L, beta, contrib, path__emit_flag(&s->lights[li]),
+                        lobes | path__lobe_flag(bsdf_flags(b) & ~BSDF_DELTA), depth + 1);
+            }
+          }
+        }
+      }
+    }
+
+    path__topo(c, nee);
+
+    /* Sample the BSDF for the next direction. */
+    bsdf_sample_ad bs;
+    int sampled = bsdf_sample_f_ad(A, b, h.tu, h.tv, wo_l, u_lobe, ub1, ub2, TRANSPORT_RADIANCE, &bs);
+    path__topo(c, sampled ? bs.flags : -1);
+    if (!sampled) break;
+    adv3 wi = adv3_to_world(A, &h.sh, bs.wi);
+    int side_ok = v3_dot(path__val(wi), h.ng) * bs.wi.z.v > 0.0;
+    path__topo(c, side_ok);
+    if (!side_ok) break;
+    beta = adrgb_mul(A, beta, bs.weight);
+    if (path__rgb_black(beta)) break;
+    lobes |= path__lobe_flag(bs.flags);
+    prev_delta = (bs.flags & BSDF_DELTA) != 0;
+    prev_pdf = bs.pdf;
+    prev_p = h.p;
+    if (bs.flags & BSDF_TRANSMISSION) eta_scale *= bs.eta * bs.eta;
+
+    /* Russian roulette; q is a dual since the estimator divides by it. */
+    if (depth >= rs->rrdepth) {
+      ad mx = ad_fmax(A, beta.r, ad_fmax(A, beta.g, beta.b));
+      ad q = ad_fmin(A, ad_const(A, 0.95), ad_mul_s(A, mx, eta_scale));
+      path__topo(c, u_rr.v < q.v);
+      if (!(u_rr.v < q.v)) break;
+      beta = adrgb_scale(A, beta, ad_inv(A, q));
+    }
+    org = h.p;
+    dir = wi;
+    tmin = scene_ray_eps(s, path__val(h.p));
+
+    /* Keep what the next bounce needs and drop the rest of this one. */
+    ad *keep[] = {&L.r,      &L.g,      &L.b,      &beta.r,   &beta.g, &beta.b,
+                  &prev_pdf, &prev_p.x, &prev_p.y, &prev_p.z, &org.x,  &org.y,
+                  &org.z,    &dir.x,    &dir.y,    &dir.z,    OUT_rx,  OUT_ry};
+    path__keep(c, mark, keep, (int)(sizeof keep / sizeof keep[0]));
+  }
+  *OUT_L = L;
+}
+
+/* ---------------------------------------------------------------------------
+ * The two passes.
+ */
+
+typedef void (*path__estimator)(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry);
+
+static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings *rs,
+                           path_scratch *ps, lmc_sampler *smp, int replay) {
+  memset(c, 0, sizeof *c);
+  c->sc = sc;
+  c->rs = rs;
+  c->ps = ps;
+  c->A = &ps->A;
+  c->smp = smp;
+  c->replay = replay;
+}
+
+static void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                      int want_grad, path_scratch *ps, path_eval *ev, int64_t *rays,
+                      path__estimator est) {
+  memset(ev, 0, sizeof *ev);
+  ps->n_draw = ps->n_hit = ps->n_vis = 0;
+
+  /* Pass 1: values, with Embree, recording the topology. */
+  path__ctx c;
+  path__ctx_init(&c, sc, rs, ps, smp, 0);
+  ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, 0);
+  adrgb L;
+  ad rx, ry;
+  est(&c, &L, &rx, &ry);
+  if (rays) *rays += c.rays;
+  ev->value = adrgb_value(L);
+  ev->lum = rgb_luminance(ev->value);
+  ev->rx = rx.v;
+  ev->ry = ry.v;
+  ev->flags = c.flags;
+  ev->length = c.length;
+  ev->topology = c.topo;
+  ev->n_coords = ps->n_draw;
+  ev->coords = ps->coords;
+  for (int k = 0; k < ps->n_draw; k++) {
+    path_coord *pc = &ps->coords[k];
+    memset(pc, 0, sizeof *pc);
+    pc->stream = ps->dstream[k];
+    pc->pos = ps->dpos[k];
+    pc->u = ps->du[k];
+    pc->diff = ps->dvar[k] >= 0;
+  }
+  if (!want_grad || c.lost || !(ev->lum > 0.0) || !isfinite(ev->lum)) return;
+
+  /* Pass 2: the same function on the record, with tangents. */
+  int n_var = c.n_var;
+  path__ctx_init(&c, sc, rs, ps, NULL, 1);
+  ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
+  est(&c, &L, &rx, &ry);
+  ev->n_diff = n_var;
+  if (!ad_arena_ok(&ps->A)) return;
+  ad lum = adrgb_luminance(&ps->A, L);
+  for (int k = 0; k < ps->n_draw; k++) {
+    int j = ps->dvar[k];
+    if (j < 0) continue;
+    path_coord *pc = &ps->coords[k];
+    pc->dlum = lum.d[j];
+    pc->drgb = rgb_make(L.r.d[j], L.g.d[j], L.b.d[j]);
+    pc->drx = rx.d[j];
+    pc->dry = ry.d[j];
+  }
+  ev->grad_ok = ad_arena_ok(&ps->A);
+}
+
+lmc_status path_eval_pt(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                        int want_grad, path_scratch *ps, path_eval *OUT_eval, int64_t *rays) {
+  path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, path__pt);
+  return LMC_OK;
+}
+
+/* ---------------------------------------------------------------------------
+ * The vector sampler.
+ */
+
+static double path__vec_next(lmc_sampler *self) {
+  path_vec_sampler *s = (path_vec_sampler *)self;
+  int k = s->stream;
+  if (s->pos[k] < s->n[k]) return s->u[k][s->pos[k]++];
+  double u = rng_uniform(&s->r);
+  if (s->n[k] == s->cap[k]) {
+    int ncap = s->cap[k] ? 2 * s->cap[k] : 256;
+    double *nu = realloc(s->u[k], (size_t)ncap * sizeof(double));
+    if (!nu) return u; /* not stored: the next replay draws afresh */
+    s->u[k] = nu;
+    s->cap[k] = ncap;
+  }
+  s->u[k][s->n[k]++] = u;
+  s->pos[k]++;
+  return u;
+}
+
+static void path__vec_use_stream(lmc_sampler *self, int stream) {
+  path_vec_sampler *s = (path_vec_sampler *)self;
+  if (stream >= 0 && stream < LMC_STREAM_COUNT) s->stream = stream;
+}
+
+lmc_status path_vec_sampler_init(path_vec_sampler *s, uint64_t seed, lmc_error *err) {
+  (void)err;
+  memset(s, 0, sizeof *s);
+  s->base.next = path__vec_next;
+  s->base.use_stream = path__vec_use_stream;
+  rng_seed(&s->r, rng_hash64(seed), 0x9e3779b97f4a7c15ull);
+  return LMC_OK;
+}
+
+void path_vec_sampler_free(path_vec_sampler *s) {
+  if (!s) return;
+  for (int k = 0; k < LMC_STREAM_COUNT; k++) free(s->u[k]);
+  memset(s->u, 0, sizeof s->u);
+}
+
+void path_vec_sampler_clear(path_vec_sampler *s) {
+  for (int k = 0; k < LMC_STREAM_COUNT; k++) s->n[k] = s->pos[k] = 0;
+  s->stream = LMC_STREAM_CAMERA;
+}
+
+void path_vec_sampler_rewind(path_vec_sampler *s) {
+  for (int k = 0; k < LMC_STREAM_COUNT; k++) s->pos[k] = 0;
+  s->stream = LMC_STREAM_CAMERA;
+}
