@@ -10,7 +10,12 @@
  *  - gradient: d luminance / du and d rgb / du against central differences
  *    with Richardson-extrapolated central differences (the best converged of
  *    h = 1e-4 ... 1e-7) wherever the topology hash is the same at u + h
- *    and u - h.
+ *    and u - h;
+ *  - the same two checks for path_eval_bdpt: random strategies (s, t) of
+ *    every length up to maxdepth against bdpt_connect (value and, for
+ *    t = 1, splat position), and their gradients (for t = 1 also d rx/du,
+ *    d ry/du), counted per group of strategies (s = 0, s = 1, t = 1,
+ *    s, t >= 2).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -26,6 +31,7 @@
 #include "render/io/io.h"
 #include "render/path.h"
 #include "test_util.h"
+#include "path_grad_util.h"
 
 static const char *scene_xml =
     "<scene version=\"0.6.0\">\n"
@@ -89,10 +95,6 @@ static int teardown(void **state) {
   return 0;
 }
 
-static int rel_equal(double a, double b, double tol) {
-  return fabs(a - b) <= tol * fmax(fabs(a), fabs(b)) || (a == 0.0 && b == 0.0);
-}
-
 /* For the same numbers, path_eval_pt gives pt_li's value. */
 static void test_pt_value_matches_pt_li(void **state) {
   fixture *fx = *state;
@@ -115,8 +117,7 @@ static void test_pt_value_matches_pt_li(void **state) {
     rgb L = pt_li(fx->sc, &rs, &vs.base, org, dir, &cnt);
     assert_int_equal(vs.pos[LMC_STREAM_CAMERA], ev.n_coords);
     assert_near(ev.rx, u0 * fx->sc->cam.width, 0.0);
-    if (!rel_equal(L.r, ev.value.r, 1e-9) || !rel_equal(L.g, ev.value.g, 1e-9) ||
-        !rel_equal(L.b, ev.value.b, 1e-9)) {
+    if (!pg_rgb_rel_equal(L, ev.value, 1e-9)) {
       mismatched++;
       print_message("path %d: pt_li (%.17g %.17g %.17g) path_eval_pt (%.17g %.17g %.17g)\n", i,
                     L.r, L.g, L.b, ev.value.r, ev.value.g, ev.value.b);
@@ -129,93 +130,13 @@ static void test_pt_value_matches_pt_li(void **state) {
   assert_true(nonzero > n / 4);
 }
 
-/* Result of a central-difference check over many paths. */
-typedef struct fd_stats {
-  int paths, components, passed, skipped_topology;
-  int nontrivial; /* components whose derivative is not negligible (|fd| > 1e-3 f) */
-} fd_stats;
-
-/* Checks the gradient of the current path of vs (already evaluated into
- * ev with want_grad) against central differences. */
-static void fd_check(fixture *fx, const render_settings *rs, path_vec_sampler *vs,
-                     const path_eval *ev0, fd_stats *st) {
-  int n = ev0->n_coords;
-  path_coord coords[512];
-  if (n > 512) return;
-  memcpy(coords, ev0->coords, (size_t)n * sizeof *coords);
-  uint64_t topo = ev0->topology;
-  double f0 = ev0->lum;
-  st->paths++;
-  for (int k = 0; k < n; k++) {
-    if (!coords[k].diff) continue;
-    double *slot = &vs->u[coords[k].stream][coords[k].pos];
-    double u = *slot;
-    /* Central differences at steps h, h/2 (Richardson extrapolation,
-     * error O(h^4)) for h = 1e-4, 1e-5, 1e-6, 1e-7; the estimate used is
-     * the one that agrees best with the next smaller h (light-triangle and
-     * envmap remaps stretch u by 1 / width, so no single h suits all
-     * coordinates). The topology must be the same at every point used. */
-    double rich[4][4];
-    int same = 1;
-    double hk = 1e-4;
-    for (int lev = 0; lev < 4 && same; lev++, hk *= 0.1) {
-      const double steps[4] = {hk, -hk, 0.5 * hk, -0.5 * hk};
-      double y[4][4];
-      for (int e = 0; e < 4; e++) {
-        path_eval ev;
-        *slot = u + steps[e];
-        if (*slot < 0.0 || *slot >= 1.0) {
-          same = 0;
-          break;
-        }
-        path_vec_sampler_rewind(vs);
-        path_eval_pt(fx->sc, rs, &vs->base, 0, fx->ps, &ev, NULL);
-        same = same && ev.topology == topo;
-        y[0][e] = ev.lum;
-        y[1][e] = ev.value.r;
-        y[2][e] = ev.value.g;
-        y[3][e] = ev.value.b;
-      }
-      if (!same) break;
-      for (int q = 0; q < 4; q++) {
-        double d1 = (y[q][0] - y[q][1]) / (2.0 * hk), d2 = (y[q][2] - y[q][3]) / hk;
-        rich[lev][q] = (4.0 * d2 - d1) / 3.0;
-      }
-    }
-    *slot = u;
-    if (!same) {
-      st->skipped_topology++;
-      continue;
-    }
-    double fd[4];
-    for (int q = 0; q < 4; q++) {
-      int best = 0;
-      for (int lev = 1; lev < 3; lev++)
-        if (fabs(rich[lev][q] - rich[lev + 1][q]) < fabs(rich[best][q] - rich[best + 1][q]))
-          best = lev;
-      fd[q] = rich[best][q];
-    }
-    double ad[4] = {coords[k].dlum, coords[k].drgb.r, coords[k].drgb.g, coords[k].drgb.b};
-    for (int q = 0; q < 4; q++) {
-      double err = fabs(fd[q] - ad[q]);
-      int ok = err <= 1e-4 * fabs(fd[q]) || err <= 1e-6 * f0;
-      st->components++;
-      st->passed += ok;
-      st->nontrivial += fabs(fd[q]) > 1e-3 * f0;
-      if (!ok && st->components - st->passed < 10)
-        print_message("coord %d (stream %d pos %d) comp %d: ad %.10g fd %.10g f %.6g\n", k,
-                      coords[k].stream, coords[k].pos, q, ad[q], fd[q], f0);
-    }
-  }
-}
-
 static void test_pt_gradient_matches_fd(void **state) {
   fixture *fx = *state;
   render_settings rs = fx->sc->settings;
   rs.rrdepth = 3;
   path_vec_sampler vs;
   path_vec_sampler_init(&vs, 11, NULL);
-  fd_stats st = {0};
+  pg_fd_stats st = {0};
   int tries = 0;
   while (st.paths < 300 && tries < 20000) {
     tries++;
@@ -226,7 +147,7 @@ static void test_pt_gradient_matches_fd(void **state) {
     /* The gradient is reported for exactly the continuous coordinates. */
     assert_int_equal(ev.n_diff, 2 + 4 * ((ev.n_coords - 2) / PT_DIMS_PER_BOUNCE));
     assert_near(ev.coords[0].drx, fx->sc->cam.width, 0.0);
-    fd_check(fx, &rs, &vs, &ev, &st);
+    pg_fd_check(fx->sc, fx->ps, &rs, &vs, PG_PT, &ev, &st);
   }
   path_vec_sampler_free(&vs);
   print_message("gradient: %d paths, %d components (%d non-trivial), %d passed, %d skipped "
@@ -241,10 +162,109 @@ static void test_pt_gradient_matches_fd(void **state) {
   assert_true(st.passed >= 0.995 * st.components);
 }
 
+/* For the same numbers, path_eval_bdpt gives bdpt_connect's MIS-weighted
+ * value (and, for t = 1, its splat position), over random strategies of
+ * every length up to maxdepth. */
+static void test_bdpt_value_matches_bdpt_connect(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.rrdepth = 3;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 17, NULL);
+  rng r;
+  rng_seed(&r, 5, 1);
+  /* Most light subpaths start on the sky and leave this open scene, so
+   * strategies with s >= 2 or t = 1 are rarely non-zero: draw until every
+   * group has 100 non-zero paths (about 30000 paths, 1 s). */
+  int n = 0, mismatched = 0, nonzero[PG_GROUPS] = {0}, tried[PG_GROUPS] = {0};
+  for (int i = 0; i < 100000; i++) {
+    int done = 1;
+    for (int g = 0; g < PG_GROUPS; g++) done = done && nonzero[g] >= 100;
+    if (done) break;
+    pg_strategy st = pg_random_strategy(&r, rs.maxdepth);
+    if (nonzero[pg_group(st)] >= 100) continue;
+    n++;
+    path_vec_sampler_clear(&vs);
+    path_eval ev;
+    path_eval_bdpt(fx->sc, &rs, &vs.base, st.s, st.t, 0, fx->ps, &ev, NULL);
+    double rx, ry;
+    rgb L = pg_bdpt_reference(fx->sc, &rs, &vs, st, &rx, &ry);
+    int ok = pg_rgb_rel_equal(L, ev.value, 1e-9);
+    if (st.t == 1 && !rgb_is_black(L))
+      ok = ok && pg_rel_equal(rx, ev.rx, 1e-9) && pg_rel_equal(ry, ev.ry, 1e-9);
+    if (!ok) {
+      mismatched++;
+      print_message("path %d (s,t) = (%d,%d): bdpt_connect (%.17g %.17g %.17g) at (%g %g), "
+                    "path_eval_bdpt (%.17g %.17g %.17g) at (%g %g)\n",
+                    i, st.s, st.t, L.r, L.g, L.b, rx, ry, ev.value.r, ev.value.g, ev.value.b,
+                    ev.rx, ev.ry);
+    }
+    tried[pg_group(st)]++;
+    nonzero[pg_group(st)] += !rgb_is_black(L);
+  }
+  path_vec_sampler_free(&vs);
+  print_message("bdpt value agreement: %d paths, %d mismatched\n", n, mismatched);
+  for (int g = 0; g < PG_GROUPS; g++)
+    print_message("    %-22s %5d paths, %5d non-zero\n", pg_group_names[g], tried[g], nonzero[g]);
+  assert_int_equal(mismatched, 0);
+  /* Every kind of strategy contributed often enough to mean something. */
+  for (int g = 0; g < PG_GROUPS; g++) assert_true(nonzero[g] >= 100);
+}
+
+/* Gradients of bidirectional strategies against central differences, per
+ * group of strategies; for t = 1 also the splat's raster position. */
+static void test_bdpt_gradient_matches_fd(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.rrdepth = 3;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 23, NULL);
+  rng r;
+  rng_seed(&r, 9, 3);
+  pg_fd_stats st = {0};
+  int paths[PG_GROUPS] = {0}, comps[PG_GROUPS] = {0};
+  int tries = 0;
+  while (st.paths < 300 && tries < 200000) {
+    tries++;
+    pg_strategy sg = pg_random_strategy(&r, rs.maxdepth);
+    if (paths[pg_group(sg)] >= 75) continue; /* 75 paths per group */
+    path_vec_sampler_clear(&vs);
+    path_eval ev;
+    path_eval_bdpt(fx->sc, &rs, &vs.base, sg.s, sg.t, 1, fx->ps, &ev, NULL);
+    if (!ev.grad_ok) continue;
+    /* Exactly the continuous coordinates got a tangent slot. */
+    int escaped = sg.s == 0 && (ev.flags & PATH_EMIT_INFINITE);
+    assert_int_equal(ev.n_diff, pg_bdpt_n_diff(sg, escaped));
+    assert_int_equal(ev.length, sg.s + sg.t - 1);
+    int before = st.components;
+    pg_fd_check(fx->sc, fx->ps, &rs, &vs, sg, &ev, &st);
+    paths[pg_group(sg)]++;
+    comps[pg_group(sg)] += st.components - before;
+  }
+  path_vec_sampler_free(&vs);
+  print_message("bdpt gradient: %d paths, %d components (%d non-trivial, %d raster), %d passed, "
+                "%d skipped (topology)\n",
+                st.paths, st.components, st.nontrivial, st.raster, st.passed,
+                st.skipped_topology);
+  for (int g = 0; g < PG_GROUPS; g++)
+    print_message("    %-22s %5d paths, %6d components\n", pg_group_names[g], paths[g], comps[g]);
+  assert_int_equal(st.paths, 300);
+  assert_true(st.components > 3000);
+  assert_true(st.nontrivial > st.components / 4);
+  assert_true(st.raster >= 200);
+  for (int g = 0; g < PG_GROUPS; g++) {
+    assert_int_equal(paths[g], 75);
+    assert_true(comps[g] >= 500);
+  }
+  assert_true(st.passed >= 0.995 * st.components);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_pt_value_matches_pt_li),
       cmocka_unit_test(test_pt_gradient_matches_fd),
+      cmocka_unit_test(test_bdpt_value_matches_bdpt_connect),
+      cmocka_unit_test(test_bdpt_gradient_matches_fd),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -37,6 +37,10 @@
  * closed form (a scalar remap), the dual is built as (plain value, chain
  * rule tangent), so values agree with the plain integrators to rounding.
  *
+ * What this file shares with path_bdpt.c (the bidirectional strategies)
+ * is declared in path_internal.h: the context, the record, the vertex
+ * re-evaluation, the camera ray, the emitters in duals and the driver.
+ *
  * Arena: each bounce rewinds the arena, keeping only the duals the next
  * bounce needs (radiance, throughput, previous density and position, the
  * ray), so memory is bounded by one bounce and stays in cache.
@@ -46,40 +50,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ad/dual.h"
-#include "ad/dual_math.h"
-#include "ad/dual_vec3.h"
-#include "render/bsdf_ad.h"
+#include "render/path_internal.h"
 #include "render/warp.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
 
-#define PATH__MAX_HITS 1024
-#define PATH__MAX_VIS 1024
-#define PATH__ARENA_DUALS 16384 /* duals of length AD_CAPACITY one bounce may hold */
-#define PATH__KEEP 48           /* duals carried from one bounce to the next */
-
-struct path_scratch {
-  double *arena_buf; /* owned */
-  size_t arena_cap;
-  ad_arena A;
-  /* The record of pass 1. */
-  int n_draw;
-  double du[PATH_MAX_DRAWS];
-  signed char dstream[PATH_MAX_DRAWS];
-  int dpos[PATH_MAX_DRAWS];
-  int dvar[PATH_MAX_DRAWS]; /* tangent slot, or -1 */
-  int n_hit;
-  int hit_mesh[PATH__MAX_HITS];
-  int64_t hit_prim[PATH__MAX_HITS];
-  int n_vis;
-  unsigned char vis[PATH__MAX_VIS];
-  /* Output and temporaries. */
-  path_coord coords[PATH_MAX_DRAWS];
-  double keep_tmp[PATH__KEEP * AD_CAPACITY];
-};
 
 lmc_status path_scratch_create(path_scratch **OUT_scratch, lmc_error *err) {
   path_scratch *ps = calloc(1, sizeof *ps);
@@ -104,37 +81,20 @@ void path_scratch_destroy(path_scratch *ps) {
  * The evaluation context: pass 1 (record) or pass 2 (replay).
  */
 
-typedef struct path__ctx {
-  const scene *sc;
-  const render_settings *rs;
-  path_scratch *ps;
-  ad_arena *A;
-  int replay;       /* 0: trace and record; 1: read the record */
-  lmc_sampler *smp; /* pass 1 only */
-  int stream;
-  int spos[LMC_STREAM_COUNT];
-  int k_draw, k_hit, k_vis; /* replay cursors */
-  int n_var;                /* tangent slots handed out (pass 1) */
-  int lost;                 /* a record overflowed: no gradient */
-  int64_t rays;
-  uint64_t topo; /* hash of the discrete choices (path_eval.topology) */
-  unsigned flags;
-  int length;
-} path__ctx;
 
 /* Mixes a discrete choice into the topology hash. */
-static void path__topo(path__ctx *c, int64_t x) {
+void path__topo(path__ctx *c, int64_t x) {
   c->topo = rng_hash64(c->topo ^ (uint64_t)x) + 0x9e3779b97f4a7c15ull;
 }
 
-static void path__use_stream(path__ctx *c, int stream) {
+void path__use_stream(path__ctx *c, int stream) {
   if (!c->replay) sampler_use_stream(c->smp, stream);
   c->stream = stream;
 }
 
 /* The next number of the current stream; `diff` asks for a tangent slot
  * (continuous use). */
-static ad path__draw(path__ctx *c, int diff) {
+ad path__draw(path__ctx *c, int diff) {
   path_scratch *ps = c->ps;
   if (c->replay) {
     int k = c->k_draw++;
@@ -165,7 +125,7 @@ static ad path__draw(path__ctx *c, int diff) {
 
 /* Carries duals over an arena rewind to `mark`: their tangents are copied
  * out, the arena rewinds, and they are remade at the bottom. */
-static void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
+void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
   ad_arena *A = c->A;
   size_t lanes = A->lanes;
   if (lanes == 0 || n > PATH__KEEP) {
@@ -178,89 +138,16 @@ static void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
   for (int i = 0; i < n; i++) *v[i] = ad_make(A, v[i]->v, tmp + (size_t)i * lanes);
 }
 
-/* A dual with the given value and the tangent coef * d_a (the chain rule
- * for a scalar map whose value comes from plain code). */
-static ad path__chain(ad_arena *A, double value, double coef, ad a) {
-  ad r = ad_mul_s(A, a, coef);
-  r.v = value;
-  return r;
-}
-
-static vec3 path__val(adv3 a) { return v3(a.x.v, a.y.v, a.z.v); }
-
-static adv3 path__cv(const ad_arena *A, vec3 a) { return adv3_const(A, a.x, a.y, a.z); }
-
-/* m v for the upper 3x3 of a row-major matrix (xform_vector's order). */
-static adv3 path__mat_vec(ad_arena *A, const double (*m)[4], adv3 v) {
-  adv3 r;
-  r.x = ad_add(A, ad_lincomb(A, m[0][0], v.x, m[0][1], v.y), ad_mul_s(A, v.z, m[0][2]));
-  r.y = ad_add(A, ad_lincomb(A, m[1][0], v.x, m[1][1], v.y), ad_mul_s(A, v.z, m[1][2]));
-  r.z = ad_add(A, ad_lincomb(A, m[2][0], v.x, m[2][1], v.y), ad_mul_s(A, v.z, m[2][2]));
-  return r;
-}
-
-/* b0 p0 + b1 p1 + b2 p2 in scene_intersect's order. */
-static adv3 path__bary(ad_arena *A, vec3 p0, vec3 p1, vec3 p2, ad b0, ad b1, ad b2) {
-  adv3 r;
-  r.x = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.x), ad_mul_s(A, b1, p1.x)), ad_mul_s(A, b2, p2.x));
-  r.y = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.y), ad_mul_s(A, b1, p1.y)), ad_mul_s(A, b2, p2.y));
-  r.z = ad_add(A, ad_add(A, ad_mul_s(A, b0, p0.z), ad_mul_s(A, b1, p1.z)), ad_mul_s(A, b2, p2.z));
-  return r;
-}
-
-/* a x e for a constant e: x = a_y e_z - a_z e_y (two-term combinations). */
-static adv3 path__cross_c(ad_arena *A, adv3 a, vec3 e) {
-  adv3 r;
-  r.x = ad_lincomb(A, e.z, a.y, -e.y, a.z);
-  r.y = ad_lincomb(A, e.x, a.z, -e.z, a.x);
-  r.z = ad_lincomb(A, e.y, a.x, -e.x, a.y);
-  return r;
-}
-
-/* e . a for a constant e, summed in v3_dot's order. */
-static ad path__dot_c(ad_arena *A, vec3 e, adv3 a) {
-  return ad_add(A, ad_lincomb(A, e.x, a.x, e.y, a.y), ad_mul_s(A, a.z, e.z));
-}
-
-static adrgb path__rgb_fma(ad_arena *A, adrgb acc, adrgb a, adrgb b) {
-  return (adrgb){ad_fma(A, a.r, b.r, acc.r), ad_fma(A, a.g, b.g, acc.g), ad_fma(A, a.b, b.b, acc.b)};
-}
-
-static adrgb path__rgb_scale_c(ad_arena *A, rgb c, ad s) {
-  return (adrgb){ad_mul_s(A, s, c.r), ad_mul_s(A, s, c.g), ad_mul_s(A, s, c.b)};
-}
-
-static int path__rgb_black(adrgb c) { return c.r.v == 0.0 && c.g.v == 0.0 && c.b.v == 0.0; }
-
-/* The power heuristic of integrator.h (mis_power) on duals. */
-static ad path__mis(ad_arena *A, ad a, ad b) {
-  if (!(a.v > 0.0)) return ad_const(A, 0.0);
-  if (!isfinite(a.v)) return ad_const(A, 1.0);
-  ad a2 = ad_sqr(A, a), b2 = ad_sqr(A, b);
-  ad r = ad_div(A, a2, ad_add(A, a2, b2));
-  r.v = a2.v / (a2.v + b2.v);
-  return r;
-}
 
 /* ---------------------------------------------------------------------------
  * Vertices: locate (Embree, pass 1) or read the record (pass 2), then
  * re-evaluate on the triangle in duals.
  */
 
-typedef struct path__hit {
-  int mesh;
-  int64_t prim;
-  adv3 p;
-  vec3 ng;
-  ad_frame sh;
-  ad tu, tv;
-  const bsdf *bsdf;
-  int light;
-} path__hit;
 
 /* The surface point of triangle `prim` of mesh `mi` hit by the dual ray
  * (org, dir): scene_intersect's formulas on Moller-Trumbore barycentrics. */
-static void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
+void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
                            path__hit *h) {
   ad_arena *A = c->A;
   const mesh *m = &c->sc->meshes[mi];
@@ -317,7 +204,7 @@ static void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 di
 }
 
 /* Closest hit along the dual ray; 0 on a miss. */
-static int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h) {
+int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h) {
   path_scratch *ps = c->ps;
   int mi;
   int64_t prim;
@@ -348,7 +235,7 @@ static int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__
 }
 
 /* Shadow ray: 1 when blocked (recorded in pass 1, read in pass 2). */
-static int path__blocked(path__ctx *c, vec3 p, vec3 wi, vec3 lp, int infinite) {
+int path__blocked(path__ctx *c, vec3 p, vec3 wi, vec3 lp, int infinite) {
   path_scratch *ps = c->ps;
   if (c->replay) {
     int k = c->k_vis++;
@@ -369,17 +256,9 @@ static int path__blocked(path__ctx *c, vec3 p, vec3 wi, vec3 lp, int infinite) {
  * Lights in duals (light.c's formulas).
  */
 
-typedef struct path__li {
-  adv3 wi;     /* towards the light */
-  double dist; /* INFINITY for infinite and directional lights */
-  vec3 p;      /* value of the light point (for the shadow ray) */
-  adrgb li;
-  ad pdf;      /* solid angle (1 for delta lights) */
-  int delta;
-} path__li;
 
 /* Pixel of the envmap containing (u, v) (light.c's rule: u wraps, v clamps). */
-static rgb path__env_eval_uv(const light *l, double u, double v) {
+rgb path__env_eval_uv(const light *l, double u, double v) {
   const lmc_image *img = &l->image;
   double fx = floor(u * img->width), fy = floor(v * img->height);
   int ix = isfinite(fx) ? (int)fmod(fx, (double)img->width) : 0;
@@ -392,7 +271,7 @@ static rgb path__env_eval_uv(const light *l, double u, double v) {
 }
 
 /* sin(theta) of world direction w in the envmap's frame, as a dual. */
-static ad path__env_sin_theta(ad_arena *A, const light *l, adv3 w) {
+ad path__env_sin_theta(ad_arena *A, const light *l, adv3 w) {
   adv3 d = adv3_normalize(A, path__mat_vec(A, (const double (*)[4])l->to_world.inv, w));
   ad y = ad_clamp(A, d.y, -1.0, 1.0);
   return ad_safe_sqrt(A, ad_s_sub(A, 1.0, ad_sqr(A, y)));
@@ -400,7 +279,7 @@ static ad path__env_sin_theta(ad_arena *A, const light *l, adv3 w) {
 
 /* light_pdf_li for direction w leaving ref towards an infinite light or an
  * area light point p with normal n (value from light.c, tangent here). */
-static ad path__pdf_li(path__ctx *c, const light *l, adv3 ref, adv3 w, adv3 p, vec3 n) {
+ad path__pdf_li(path__ctx *c, const light *l, adv3 ref, adv3 w, adv3 p, vec3 n) {
   ad_arena *A = c->A;
   switch (l->type) {
   case LIGHT_AREA: {
@@ -430,7 +309,7 @@ static ad path__pdf_li(path__ctx *c, const light *l, adv3 ref, adv3 w, adv3 p, v
 }
 
 /* Mitsuba's spot falloff (light.c) of the dual cosine to the axis. */
-static ad path__spot_falloff(ad_arena *A, const light *l, ad cos_theta) {
+ad path__spot_falloff(ad_arena *A, const light *l, ad cos_theta) {
   if (cos_theta.v <= l->cos_cutoff) return ad_const(A, 0.0);
   if (cos_theta.v >= l->cos_beam) return ad_const(A, 1.0);
   double width = l->cutoff - l->beam_width;
@@ -443,7 +322,7 @@ static ad path__spot_falloff(ad_arena *A, const light *l, ad cos_theta) {
 
 /* A uniform point on an area light from (u1, u2) (light.c's
  * light__sample_area_point): position and the emitting side's normal. */
-static void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p, vec3 *n) {
+void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p, vec3 *n) {
   ad_arena *A = c->A;
   const mesh *m = &c->sc->meshes[l->mesh];
   double pmf, u1r;
@@ -465,7 +344,7 @@ static void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p
 /* Envmap importance sampling (light.c): the pixel is chosen by the discrete
  * part of (u1, u2), the point inside it moves with them. Writes the lat-long
  * coordinates and the sampling density with respect to them. */
-static int path__env_sample_uv(path__ctx *c, const light *l, ad u1, ad u2, ad *uu, ad *vv,
+int path__env_sample_uv(path__ctx *c, const light *l, ad u1, ad u2, ad *uu, ad *vv,
                                double *pdf_uv, double uv[2]) {
   ad_arena *A = c->A;
   const distrib2d *d2 = &l->env_dist;
@@ -485,7 +364,7 @@ static int path__env_sample_uv(path__ctx *c, const light *l, ad u1, ad u2, ad *u
 }
 
 /* Lat-long (u, v) to a world direction and sin(theta) (light.c). */
-static adv3 path__env_uv_to_dir(ad_arena *A, const light *l, ad uu, ad vv, ad *sin_theta) {
+adv3 path__env_uv_to_dir(ad_arena *A, const light *l, ad uu, ad vv, ad *sin_theta) {
   ad phi = ad_mul_s(A, uu, 2.0 * M_PI);
   phi.v = 2.0 * M_PI * uu.v;
   ad theta = ad_mul_s(A, vv, M_PI);
@@ -496,11 +375,11 @@ static adv3 path__env_uv_to_dir(ad_arena *A, const light *l, ad uu, ad vv, ad *s
   return adv3_normalize(A, path__mat_vec(A, (const double (*)[4])l->to_world.m, d));
 }
 
-/* light_sample_li in duals. */
-static int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2, path__li *out) {
+/* light_sample_li in duals, per light type (path__sample_li completes pd). */
+static int path__sample_li_any(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2,
+                               path__li *out) {
   ad_arena *A = c->A;
   const scene *sc = c->sc;
-  out->delta = 0;
   switch (l->type) {
   case LIGHT_AREA: {
     adv3 p;
@@ -517,6 +396,8 @@ static int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2,
     out->wi = wi;
     out->dist = dist.v;
     out->p = path__val(p);
+    out->pd = p;
+    out->n = n;
     out->li = adrgb_const(A, l->value);
     out->pdf = ad_div(A, dist2, ad_mul_s(A, cos_l, l->area));
     out->pdf.v = dist2.v / (cos_l.v * l->area);
@@ -584,7 +465,16 @@ static int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2,
   return 0;
 }
 
-static unsigned path__emit_flag(const light *l) {
+/* light_sample_li in duals. */
+int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2, path__li *out) {
+  out->delta = 0;
+  out->n = v3(0.0, 0.0, 0.0);
+  int ok = path__sample_li_any(c, l, ref, u1, u2, out);
+  if (ok && l->type != LIGHT_AREA) out->pd = path__cv(c->A, out->p);
+  return ok;
+}
+
+unsigned path__emit_flag(const light *l) {
   switch (l->type) {
   case LIGHT_AREA:
     return PATH_EMIT_AREA;
@@ -597,13 +487,34 @@ static unsigned path__emit_flag(const light *l) {
   }
 }
 
-static unsigned path__lobe_flag(int bsdf_flags) {
+unsigned path__lobe_flag(int bsdf_flags) {
   unsigned f = 0;
   if (bsdf_flags & BSDF_DIFFUSE_LOBE) f |= PATH_LOBE_DIFFUSE;
   if (bsdf_flags & BSDF_GLOSSY) f |= PATH_LOBE_GLOSSY;
   if (bsdf_flags & BSDF_DELTA) f |= PATH_LOBE_DELTA;
   if (bsdf_flags & BSDF_TRANSMISSION) f |= PATH_LOBE_TRANSMISSION;
   return f;
+}
+
+/* ---------------------------------------------------------------------------
+ * The camera (camera.c's formulas): rx = u0 W, ry = u1 H, and the pinhole
+ * ray normalize(to_world (x, y, 1)) with x = -(2 rx / W - 1) tan_half_x,
+ * y = -(2 ry / H - 1) tan_half_y.
+ */
+
+void path__camera_ray(path__ctx *c, ad u0, ad u1, ad *OUT_rx, ad *OUT_ry, adv3 *OUT_org,
+                      adv3 *OUT_dir) {
+  ad_arena *A = c->A;
+  const camera *cam = &c->sc->cam;
+  double rxv = u0.v * cam->width, ryv = u1.v * cam->height;
+  *OUT_rx = path__chain(A, rxv, cam->width, u0);
+  *OUT_ry = path__chain(A, ryv, cam->height, u1);
+  double xv = -(2.0 * rxv / cam->width - 1.0) * cam->tan_half_x;
+  double yv = -(2.0 * ryv / cam->height - 1.0) * cam->tan_half_y;
+  adv3 dloc = {path__chain(A, xv, -2.0 * cam->tan_half_x, u0),
+               path__chain(A, yv, -2.0 * cam->tan_half_y, u1), ad_const(A, 1.0)};
+  *OUT_dir = adv3_normalize(A, path__mat_vec(A, (const double (*)[4])cam->to_world.m, dloc));
+  *OUT_org = path__cv(A, cam->pos);
 }
 
 /* ---------------------------------------------------------------------------
@@ -627,20 +538,12 @@ static void path__pt(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   ad_arena *A = c->A;
   const scene *s = c->sc;
   const render_settings *rs = c->rs;
-  const camera *cam = &s->cam;
 
-  /* The film position and the camera ray (camera.c's formulas). */
+  /* The film position and the camera ray. */
   path__use_stream(c, LMC_STREAM_CAMERA);
   ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
-  double rxv = u0.v * cam->width, ryv = u1.v * cam->height;
-  *OUT_rx = path__chain(A, rxv, cam->width, u0);
-  *OUT_ry = path__chain(A, ryv, cam->height, u1);
-  double xv = -(2.0 * rxv / cam->width - 1.0) * cam->tan_half_x;
-  double yv = -(2.0 * ryv / cam->height - 1.0) * cam->tan_half_y;
-  adv3 dloc = {path__chain(A, xv, -2.0 * cam->tan_half_x, u0),
-               path__chain(A, yv, -2.0 * cam->tan_half_y, u1), ad_const(A, 1.0)};
-  adv3 dir = adv3_normalize(A, path__mat_vec(A, (const double (*)[4])cam->to_world.m, dloc));
-  adv3 org = path__cv(A, cam->pos);
+  adv3 org, dir;
+  path__camera_ray(c, u0, u1, OUT_rx, OUT_ry, &org, &dir);
 
   adrgb L = adrgb_const(A, rgb_zero()), beta = adrgb_const(A, rgb_gray(1.0));
   int prev_delta = 1;
@@ -776,8 +679,6 @@ static void path__pt(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
  * The two passes.
  */
 
-typedef void (*path__estimator)(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry);
-
 static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings *rs,
                            path_scratch *ps, lmc_sampler *smp, int replay) {
   memset(c, 0, sizeof *c);
@@ -789,15 +690,16 @@ static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings 
   c->replay = replay;
 }
 
-static void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp,
-                      int want_grad, path_scratch *ps, path_eval *ev, int64_t *rays,
-                      path__estimator est) {
+void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int want_grad,
+               path_scratch *ps, path_eval *ev, int64_t *rays, path__estimator est,
+               const void *arg) {
   memset(ev, 0, sizeof *ev);
   ps->n_draw = ps->n_hit = ps->n_vis = 0;
 
   /* Pass 1: values, with Embree, recording the topology. */
   path__ctx c;
   path__ctx_init(&c, sc, rs, ps, smp, 0);
+  c.arg = arg;
   ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, 0);
   adrgb L;
   ad rx, ry;
@@ -825,6 +727,7 @@ static void path__run(const scene *sc, const render_settings *rs, lmc_sampler *s
   /* Pass 2: the same function on the record, with tangents. */
   int n_var = c.n_var;
   path__ctx_init(&c, sc, rs, ps, NULL, 1);
+  c.arg = arg;
   ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
   est(&c, &L, &rx, &ry);
   ev->n_diff = n_var;
@@ -844,7 +747,7 @@ static void path__run(const scene *sc, const render_settings *rs, lmc_sampler *s
 
 lmc_status path_eval_pt(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                         int want_grad, path_scratch *ps, path_eval *OUT_eval, int64_t *rays) {
-  path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, path__pt);
+  path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, path__pt, NULL);
   return LMC_OK;
 }
 

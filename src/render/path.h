@@ -39,6 +39,10 @@
  * continuous coordinates get a tangent slot, which keeps n small
  * (2 + 4 per bounce); the discrete ones are reported with derivative 0.
  *
+ * path_eval_bdpt evaluates one bidirectional strategy (s, t) with the
+ * BDPT layout of integrator.h (camera, light and connect streams; see its
+ * declaration below).
+ *
  * Conventions: those of integrator.h (path length in segments, mindepth,
  * maxdepth, rrdepth; Russian roulette as pt_li) and bsdf.h.
  *
@@ -111,6 +115,34 @@ void path_scratch_destroy(path_scratch *ps);
  * incremented by the rays traced. Returns LMC_OK. */
 lmc_status path_eval_pt(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                         int want_grad, path_scratch *ps, path_eval *OUT_eval, int64_t *rays);
+
+/* One strategy (s, t) of bidirectional path tracing, as bdpt_connect
+ * (integrator.h) for the same numbers, with its power-heuristic MIS weight
+ * over all strategies (bdpt_mis_weight), in duals: the camera subpath of t
+ * vertices and the light subpath of s vertices are traced (path_bdpt.c)
+ * and joined. The BDPT layout of integrator.h:
+ *   LMC_STREAM_CAMERA   t >= 2: 2 film numbers (rx = u0 W, ry = u1 H), then
+ *                       BDPT_DIMS_PER_VERTEX per camera-subpath surface
+ *                       vertex: lobe (discrete), direction (2), roulette
+ *                       (discrete); nothing for t = 1.
+ *   LMC_STREAM_LIGHT    s >= 2: BDPT_DIMS_LIGHT_START (light choice, discrete;
+ *                       position (2); direction (2)), then
+ *                       BDPT_DIMS_PER_VERTEX per light-subpath surface vertex;
+ *                       nothing for s <= 1.
+ *   LMC_STREAM_CONNECT  s = 1: positions 3 (t - 2) .. 3 (t - 2) + 2, the
+ *                       light choice (discrete) and the point on the light of
+ *                       camera vertex t (the 3 (t - 2) before are drawn and
+ *                       unused, so each t keeps bdpt_li's coordinates).
+ * s = 0 is a camera subpath ending on an emitter (area light, or escaped to
+ * the infinite lights); t = 1 is light tracing: value and gradient are
+ * those of the film splat at (rx, ry), which depend on u (path_coord.drx,
+ * dry). The (s, t) BDPT does not use ((1, 1); lengths s + t - 1 outside
+ * [mindepth, maxdepth]; t > maxdepth + 1) give 0 and draw nothing. With
+ * want_grad the derivatives of path_coord are filled as path_eval_pt's.
+ * Returns LMC_OK. */
+lmc_status path_eval_bdpt(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
+                          int t, int want_grad, path_scratch *ps, path_eval *OUT_eval,
+                          int64_t *rays);
 
 /* ---- A sampler over stored vectors, for replaying and perturbing paths ---
  * Each stream is a growable array; reading past its end draws a fresh

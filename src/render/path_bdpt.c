@@ -1,0 +1,887 @@
+/*
+ * path_bdpt.c: one bidirectional strategy (s, t) of BDPT (Veach and Guibas
+ * 1995; Veach 1997, chapter 10) in dual arithmetic, with its
+ * power-heuristic MIS weight over all strategies: the per-state
+ * contribution of multiplexed MLT (Hachisuka et al. 2014) and its exact
+ * gradient in primary sample space, for Langevin Monte Carlo (Luan et al.
+ * 2020).
+ *
+ * This is integrator_bdpt.c's bdpt_camera_subpath, bdpt_light_subpath,
+ * bdpt_connect and bdpt_mis_weight, step for step, over duals: for the same
+ * numbers the value is bdpt_connect's (tests/test_path_grad*.c check it to
+ * 1e-9 relative). It runs on the machinery of path.c (path_internal.h):
+ * numbers are drawn and recorded by path__draw, closest hits and shadow
+ * rays are traced in pass 1 and replayed in pass 2 (path__intersect,
+ * path__blocked), each vertex is re-evaluated on its recorded triangle
+ * (path__hit_eval), the camera ray and the emitters' direct sampling and
+ * densities are path.c's (path__camera_ray, path__sample_li, path__pdf_li,
+ * path__area_point, the envmap routines). What only BDPT needs lives here:
+ * emission sampling (light_sample_le, with the concentric disk and the
+ * sphere, cone and cosine warps), emission densities (light_pdf_le), the
+ * camera's importance and direction density, and the random walks with
+ * their forward and reverse densities.
+ *
+ * Numbers (integrator.h's BDPT layout):
+ *   LMC_STREAM_CAMERA   t >= 2 only: 2 for the film position (rx = u0 W,
+ *                       ry = u1 H, as path_eval_pt), then per camera-subpath
+ *                       surface vertex: lobe (discrete), direction (2),
+ *                       roulette (discrete). t = 1 draws nothing here: the
+ *                       splat's raster position is that of the light vertex.
+ *   LMC_STREAM_LIGHT    s >= 2 only: light choice (discrete), position (2),
+ *                       direction (2), then per light-subpath surface vertex
+ *                       as the camera's.
+ *   LMC_STREAM_CONNECT  s = 1 only: the triple of camera vertex t, i.e.
+ *                       positions 3 (t - 2) ... 3 (t - 2) + 2 (light choice,
+ *                       point on the light); the 3 (t - 2) numbers before it
+ *                       are drawn too (they belong to other t) and do not
+ *                       change f.
+ * Tangent slots go to the continuous numbers only: 2 + 2 per camera vertex
+ * after z_0, 4 + 2 per light vertex after y_0, 2 for a connection.
+ *
+ * Differentiated: every vertex position (Moller-Trumbore on its triangle,
+ * or the emitter's sampled point: area-light triangle points, the disk of
+ * lights at infinity), direction, shading frame and texture coordinate;
+ * BSDF values and densities (bsdf_ad.h); emission densities (cosine of an
+ * area light, the envmap's 1 / sin theta inside its pixel, the camera's
+ * 1 / cos^3); the spot falloff; geometry terms; the importance We and the
+ * raster position of a t = 1 splat; roulette divisors; and every pdf_fwd /
+ * pdf_rev ratio of the MIS walk. Not differentiated (held fixed, as
+ * path.h explains): the triangles hit, the lobes, the light and triangle
+ * chosen, the envmap pixel, visibility and roulette decisions; all enter
+ * the topology hash.
+ */
+#include <string.h>
+
+#include "render/path_internal.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* The strategy handed to the estimator through path__ctx.arg. */
+typedef struct pbd__strategy {
+  int s, t;
+} pbd__strategy;
+
+/* ---------------------------------------------------------------------------
+ * Vertex queries (integrator_bdpt.c's, on dual vertices).
+ */
+
+static ad pbd__remap0(const ad_arena *A, ad x) { return x.v != 0.0 ? x : ad_const(A, 1.0); }
+
+static int pbd__light_index(const path__bdv *v) {
+  return v->type == BDPT_VERTEX_LIGHT || v->type == BDPT_VERTEX_SURFACE ? v->light : -1;
+}
+
+static int pbd__is_infinite(const scene *sc, const path__bdv *v) {
+  if (v->type != BDPT_VERTEX_LIGHT) return 0;
+  return v->light < 0 || light_is_infinite(&sc->lights[v->light]);
+}
+
+static int pbd__at_infinity(const scene *sc, const path__bdv *v) {
+  if (v->type != BDPT_VERTEX_LIGHT) return 0;
+  return pbd__is_infinite(sc, v) || sc->lights[v->light].type == LIGHT_DIRECTIONAL;
+}
+
+static int pbd__is_delta_light(const scene *sc, const path__bdv *v) {
+  return v->type == BDPT_VERTEX_LIGHT && v->light >= 0 && light_is_delta(&sc->lights[v->light]);
+}
+
+static int pbd__has_normal(const path__bdv *v) { return v3_len2(v->n) > 0.0; }
+
+static int pbd__connectible(const path__bdv *v) {
+  return v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf);
+}
+
+/* Unit direction from a towards b (either may be at infinity). */
+static adv3 pbd__dir_to(path__ctx *c, const path__bdv *a, const path__bdv *b) {
+  if (pbd__at_infinity(c->sc, b)) return adv3_neg(c->A, b->dir);
+  if (pbd__at_infinity(c->sc, a)) return a->dir;
+  return adv3_normalize(c->A, adv3_sub(c->A, b->p, a->p));
+}
+
+/* Local direction of w and Mitsuba's side rule (w on the same side of the
+ * geometric and the shading surface). */
+static int pbd__side_ok(path__ctx *c, const path__hit *h, adv3 w, adv3 *OUT_local) {
+  *OUT_local = adv3_to_local(c->A, &h->sh, w);
+  return v3_dot(path__val(w), h->ng) * OUT_local->z.v > 0.0;
+}
+
+/* Veach's shading-normal correction for importance transport:
+ *   |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|). */
+static ad pbd__shading_correction(path__ctx *c, const path__hit *h, adv3 wo, adv3 wi) {
+  ad_arena *A = c->A;
+  ad num = ad_mul(A, ad_fabs(A, adv3_dot(A, wo, h->sh.n)), ad_fabs(A, path__dot_c(A, h->ng, wi)));
+  ad den = ad_mul(A, ad_fabs(A, path__dot_c(A, h->ng, wo)), ad_fabs(A, adv3_dot(A, wi, h->sh.n)));
+  return den.v > 0.0 ? ad_div(A, num, den) : ad_const(A, 0.0);
+}
+
+/* f(wo, wi) |wi . ns| at a surface vertex (with the correction above for
+ * importance); 0 when a direction breaks the side rule. */
+static adrgb pbd__f_cos(path__ctx *c, const path__bdv *v, adv3 wi, transport_mode mode) {
+  ad_arena *A = c->A;
+  const path__hit *h = &v->hit;
+  adv3 wo_l, wi_l;
+  if (!pbd__side_ok(c, h, v->wo, &wo_l) || !pbd__side_ok(c, h, wi, &wi_l))
+    return adrgb_const(A, rgb_zero());
+  adrgb f = bsdf_eval_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
+  ad cs = ad_fabs(A, wi_l.z);
+  if (mode == TRANSPORT_IMPORTANCE) cs = ad_mul(A, cs, pbd__shading_correction(c, h, v->wo, wi));
+  return adrgb_scale(A, f, cs);
+}
+
+/* ---------------------------------------------------------------------------
+ * The camera: direction density and importance (camera.c's formulas).
+ */
+
+/* Camera-space unit direction of world direction w. */
+static adv3 pbd__cam_local(path__ctx *c, adv3 w) {
+  const camera *cam = &c->sc->cam;
+  return adv3_normalize(c->A, path__mat_vec(c->A, (const double (*)[4])cam->to_world.inv, w));
+}
+
+/* camera_pdf_dir: 1 / (A cos^3 theta) inside the image, with A = 4 tan_x tan_y. */
+static ad pbd__cam_pdf_dir(path__ctx *c, adv3 w) {
+  ad_arena *A = c->A;
+  const camera *cam = &c->sc->cam;
+  adv3 d = pbd__cam_local(c, w);
+  if (!(d.z.v > 0.0)) return ad_const(A, 0.0);
+  double x = d.x.v / d.z.v, y = d.y.v / d.z.v;
+  if (fabs(x) > cam->tan_half_x || fabs(y) > cam->tan_half_y) return ad_const(A, 0.0);
+  double a = 4.0 * cam->tan_half_x * cam->tan_half_y;
+  ad den = ad_mul(A, ad_mul(A, ad_mul_s(A, d.z, a), d.z), d.z);
+  return ad_s_div(A, 1.0, den);
+}
+
+/* camera_we: We = W H / (A cos^4 theta) and the raster point of direction
+ * w, rx = (1 - x / tan_x) W / 2 with x = d_x / d_z (likewise ry); 0 when w
+ * misses the film. */
+static ad pbd__cam_we(path__ctx *c, adv3 w, ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
+  const camera *cam = &c->sc->cam;
+  adv3 d = pbd__cam_local(c, w);
+  if (!(d.z.v > 0.0)) return ad_const(A, 0.0);
+  ad x = ad_div(A, d.x, d.z), y = ad_div(A, d.y, d.z);
+  ad px = ad_mul_s(A, ad_mul_s(A, ad_s_sub(A, 1.0, ad_div_s(A, x, cam->tan_half_x)), 0.5),
+                   cam->width);
+  ad py = ad_mul_s(A, ad_mul_s(A, ad_s_sub(A, 1.0, ad_div_s(A, y, cam->tan_half_y)), 0.5),
+                   cam->height);
+  if (!(px.v >= 0.0 && px.v < cam->width && py.v >= 0.0 && py.v < cam->height))
+    return ad_const(A, 0.0);
+  *OUT_rx = px;
+  *OUT_ry = py;
+  double a = 4.0 * cam->tan_half_x * cam->tan_half_y;
+  ad cos2 = ad_sqr(A, d.z);
+  return ad_s_div(A, (double)cam->width * cam->height, ad_mul(A, ad_mul_s(A, cos2, a), cos2));
+}
+
+/* ---------------------------------------------------------------------------
+ * Emission sampling (light.c's light_sample_le) in duals.
+ */
+
+/* Concentric map (Shirley and Chiu 1997), warp_square_to_disk_concentric. */
+static void pbd__concentric(ad_arena *A, ad u1, ad u2, ad *OUT_x, ad *OUT_y) {
+  ad a = ad_sub_s(A, ad_mul_s(A, u1, 2.0), 1.0), b = ad_sub_s(A, ad_mul_s(A, u2, 2.0), 1.0);
+  if (a.v == 0.0 && b.v == 0.0) {
+    *OUT_x = *OUT_y = ad_const(A, 0.0);
+    return;
+  }
+  ad r, phi;
+  if (fabs(a.v) > fabs(b.v)) {
+    r = a;
+    phi = ad_mul_s(A, ad_div(A, b, a), M_PI / 4.0); /* (pi/4) b/a */
+  } else {
+    r = b;
+    phi = ad_s_sub(A, M_PI / 2.0, ad_mul_s(A, ad_div(A, a, b), M_PI / 4.0)); /* pi/2 - (pi/4) a/b */
+  }
+  *OUT_x = ad_mul(A, r, ad_cos(A, phi));
+  *OUT_y = ad_mul(A, r, ad_sin(A, phi));
+}
+
+/* Direction with cosine z and azimuth 2 pi u2 (the sphere and cone warps). */
+static adv3 pbd__z_phi(ad_arena *A, ad z, ad u2) {
+  ad r = ad_safe_sqrt(A, ad_s_sub(A, 1.0, ad_sqr(A, z)));
+  ad phi = ad_mul_s(A, u2, 2.0 * M_PI);
+  phi.v = 2.0 * M_PI * u2.v;
+  return (adv3){ad_mul(A, r, ad_cos(A, phi)), ad_mul(A, r, ad_sin(A, phi)), z};
+}
+
+/* frame_to_world for a constant frame: s x + t y + n z. */
+static adv3 pbd__frame_to_world_c(ad_arena *A, const frame *f, adv3 v) {
+  adv3 r;
+  r.x = ad_add(A, ad_lincomb(A, f->s.x, v.x, f->t.x, v.y), ad_mul_s(A, v.z, f->n.x));
+  r.y = ad_add(A, ad_lincomb(A, f->s.y, v.x, f->t.y, v.y), ad_mul_s(A, v.z, f->n.y));
+  r.z = ad_add(A, ad_lincomb(A, f->s.z, v.x, f->t.z, v.y), ad_mul_s(A, v.z, f->n.z));
+  return r;
+}
+
+/* A point on the disk of radius r facing unit dir, just outside the
+ * scene's bounding sphere (light.c's light__disk_point):
+ *   p = center + (s x + t y - dir) r,  (x, y) concentric,  (s, t) frame_from_z(dir). */
+static adv3 pbd__disk_point(path__ctx *c, adv3 dir, ad u1, ad u2) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  ad x, y;
+  pbd__concentric(A, u1, u2, &x, &y);
+  ad_frame f = adv3_frame_from_z(A, dir);
+  adv3 off = {ad_add(A, ad_mul(A, f.s.x, x), ad_mul(A, f.t.x, y)),
+              ad_add(A, ad_mul(A, f.s.y, x), ad_mul(A, f.t.y, y)),
+              ad_add(A, ad_mul(A, f.s.z, x), ad_mul(A, f.t.z, y))};
+  adv3 p;
+  p.x = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.x, dir.x), sc->radius), sc->center.x);
+  p.y = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.y, dir.y), sc->radius), sc->center.y);
+  p.z = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.z, dir.z), sc->radius), sc->center.z);
+  return p;
+}
+
+typedef struct pbd__le {
+  adv3 p;      /* origin */
+  vec3 n;      /* area lights: the emitting side's normal; zero otherwise */
+  adv3 dir;    /* unit emission direction */
+  adrgb le;
+  double pdf_pos; /* constant for every light type */
+  ad pdf_dir;
+} pbd__le;
+
+/* light_sample_le from (u1, u2) (position) and (u3, u4) (direction). */
+static int pbd__sample_le(path__ctx *c, const light *l, ad u1, ad u2, ad u3, ad u4,
+                          pbd__le *out) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  double disk_pdf = 1.0 / (M_PI * sc->radius * sc->radius);
+  out->n = v3(0.0, 0.0, 0.0);
+  switch (l->type) {
+  case LIGHT_AREA: {
+    /* Position by area, direction cosine-weighted (Malley) around n. */
+    path__area_point(c, l, u1, u2, &out->p, &out->n);
+    ad x, y;
+    pbd__concentric(A, u3, u4, &x, &y);
+    ad z = ad_safe_sqrt(A, ad_sub(A, ad_s_sub(A, 1.0, ad_sqr(A, x)), ad_sqr(A, y)));
+    frame f = frame_from_z(out->n);
+    out->dir = adv3_normalize(A, pbd__frame_to_world_c(A, &f, (adv3){x, y, z}));
+    out->le = adrgb_const(A, l->value);
+    out->pdf_pos = 1.0 / l->area;
+    out->pdf_dir = z.v > 0.0 ? ad_div_s(A, z, M_PI) : ad_const(A, 0.0);
+    out->pdf_dir.v = z.v > 0.0 ? z.v / M_PI : 0.0;
+    return out->pdf_dir.v > 0.0;
+  }
+  case LIGHT_POINT:
+    out->p = path__cv(A, l->pos);
+    out->dir = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 2.0)), u4);
+    out->le = adrgb_const(A, l->value);
+    out->pdf_pos = 1.0;
+    out->pdf_dir = ad_const(A, 1.0 / (4.0 * M_PI));
+    return 1;
+  case LIGHT_SPOT: {
+    /* Uniform in the cone cos theta >= cos_cutoff, times the falloff. */
+    adv3 local = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 1.0 - l->cos_cutoff)), u4);
+    out->p = path__cv(A, l->pos);
+    out->dir = adv3_normalize(A, pbd__frame_to_world_c(A, &l->frm, local));
+    out->le = path__rgb_scale_c(A, l->value, path__spot_falloff(A, l, local.z));
+    out->pdf_pos = 1.0;
+    out->pdf_dir = ad_const(A, 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff)));
+    return !path__rgb_black(out->le);
+  }
+  case LIGHT_DIRECTIONAL:
+    out->dir = path__cv(A, l->frm.n);
+    out->p = pbd__disk_point(c, out->dir, u1, u2);
+    out->le = adrgb_const(A, l->value);
+    out->pdf_pos = disk_pdf;
+    out->pdf_dir = ad_const(A, 1.0);
+    return 1;
+  case LIGHT_CONSTANT:
+    out->dir = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 2.0)), u4);
+    out->p = pbd__disk_point(c, out->dir, u1, u2);
+    out->le = adrgb_const(A, l->value);
+    out->pdf_pos = disk_pdf;
+    out->pdf_dir = ad_const(A, 1.0 / (4.0 * M_PI));
+    return 1;
+  case LIGHT_ENVMAP: {
+    /* The direction towards the environment by (u3, u4); the ray travels back. */
+    ad uu, vv, st;
+    double pdf_uv, uv[2];
+    path__env_sample_uv(c, l, u3, u4, &uu, &vv, &pdf_uv, uv);
+    adv3 w_env = path__env_uv_to_dir(A, l, uu, vv, &st);
+    if (!(st.v > 0.0) || !(pdf_uv > 0.0)) return 0;
+    out->dir = adv3_neg(A, w_env);
+    out->p = pbd__disk_point(c, out->dir, u1, u2);
+    out->le = adrgb_const(A, path__env_eval_uv(l, uv[0], uv[1]));
+    out->pdf_pos = disk_pdf;
+    out->pdf_dir = ad_s_div(A, pdf_uv, ad_mul_s(A, st, 2.0 * M_PI * M_PI));
+    out->pdf_dir.v = pdf_uv / (2.0 * M_PI * M_PI * st.v);
+    return isfinite(out->pdf_dir.v);
+  }
+  }
+  return 0;
+}
+
+/* The solid-angle density of light_pdf_le for emission from p (normal n)
+ * along the unit travel direction w. */
+static ad pbd__pdf_le_dir(path__ctx *c, const light *l, adv3 p, vec3 n, adv3 w) {
+  ad_arena *A = c->A;
+  switch (l->type) {
+  case LIGHT_AREA: {
+    ad cs = path__dot_c(A, n, w);
+    if (!(cs.v > 0.0)) return ad_const(A, 0.0);
+    ad r = ad_div_s(A, cs, M_PI);
+    r.v = cs.v / M_PI;
+    return r;
+  }
+  case LIGHT_POINT:
+  case LIGHT_CONSTANT:
+    return ad_const(A, 1.0 / (4.0 * M_PI));
+  case LIGHT_SPOT:
+    return ad_const(A, v3_dot(path__val(w), l->frm.n) >= l->cos_cutoff
+                           ? 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff))
+                           : 0.0);
+  case LIGHT_DIRECTIONAL:
+    return ad_const(A, 1.0);
+  case LIGHT_ENVMAP:
+    return path__pdf_li(c, l, p, adv3_neg(A, w), p, n);
+  }
+  return ad_const(A, 0.0);
+}
+
+/* ---------------------------------------------------------------------------
+ * Densities (integrator_bdpt.c's bdpt__convert, bdpt__pdf_light,
+ * bdpt__pdf_light_origin, bdpt__pdf).
+ */
+
+/* Solid-angle density at `from` towards `to` as a density of `to`. */
+static ad pbd__convert(path__ctx *c, ad pdf_sa, const path__bdv *from, const path__bdv *to) {
+  ad_arena *A = c->A;
+  if (pbd__at_infinity(c->sc, to)) return pdf_sa;
+  adv3 d = adv3_sub(A, to->p, from->p);
+  ad d2 = adv3_len2(A, d);
+  if (!(d2.v > 0.0)) return ad_const(A, 0.0);
+  ad pdf = ad_div(A, pdf_sa, d2);
+  if (pbd__has_normal(to))
+    pdf = ad_mul(A, pdf, ad_div(A, ad_fabs(A, path__dot_c(A, to->n, d)), ad_sqrt(A, d2)));
+  return pdf;
+}
+
+/* Density of `next` when emitted from the light endpoint v. */
+static ad pbd__pdf_light(path__ctx *c, const path__bdv *v, const path__bdv *next) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  int li = pbd__light_index(v);
+  if (pbd__at_infinity(sc, v)) {
+    double pdf = 1.0 / (M_PI * sc->radius * sc->radius);
+    if (!pbd__has_normal(next)) return ad_const(A, pdf);
+    return ad_mul_s(A, ad_fabs(A, path__dot_c(A, next->n, v->dir)), pdf);
+  }
+  if (li < 0) return ad_const(A, 0.0);
+  adv3 d = adv3_sub(A, next->p, v->p);
+  ad d2 = adv3_len2(A, d);
+  if (!(d2.v > 0.0)) return ad_const(A, 0.0);
+  adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
+  ad pdf = ad_div(A, pbd__pdf_le_dir(c, &sc->lights[li], v->p, v->n, w), d2);
+  if (pbd__has_normal(next)) pdf = ad_mul(A, pdf, ad_fabs(A, path__dot_c(A, next->n, w)));
+  return pdf;
+}
+
+/* Density of choosing v as the light endpoint (with the selection
+ * probability); infinite lights: the solid-angle densities summed. */
+static ad pbd__pdf_light_origin(path__ctx *c, const path__bdv *v, const path__bdv *next) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  if (pbd__is_infinite(sc, v)) {
+    adv3 w_env = adv3_neg(A, v->dir);
+    ad pdf = ad_const(A, 0.0);
+    for (int k = 0; k < sc->n_infinite; k++) {
+      int li = sc->infinite_lights[k];
+      ad p = path__pdf_li(c, &sc->lights[li], next->p, w_env, next->p, next->n);
+      pdf = ad_add(A, pdf, ad_mul_s(A, p, scene_light_pmf(sc, li)));
+    }
+    return pdf;
+  }
+  int li = pbd__light_index(v);
+  if (li < 0) return ad_const(A, 0.0);
+  const light *l = &sc->lights[li];
+  double pmf = scene_light_pmf(sc, li);
+  if (light_is_delta(l)) return ad_const(A, pmf);
+  /* The position density does not depend on the direction (nor on u). */
+  double pdf_pos, pdf_dir;
+  (void)next;
+  light_pdf_le(l, sc, path__val(v->p), v->n, v3(0.0, 0.0, 1.0), &pdf_pos, &pdf_dir);
+  return ad_const(A, pmf * pdf_pos);
+}
+
+/* Density of `next` when sampled at v, reached from `prev`. */
+static ad pbd__pdf(path__ctx *c, const path__bdv *v, const path__bdv *prev, const path__bdv *next) {
+  ad_arena *A = c->A;
+  if (v->type == BDPT_VERTEX_LIGHT) return pbd__pdf_light(c, v, next);
+  adv3 wi = pbd__dir_to(c, v, next);
+  ad pdf_sa;
+  if (v->type == BDPT_VERTEX_CAMERA) {
+    pdf_sa = pbd__cam_pdf_dir(c, wi);
+  } else {
+    if (!prev) return ad_const(A, 0.0);
+    const path__hit *h = &v->hit;
+    adv3 wo = pbd__dir_to(c, v, prev);
+    pdf_sa = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, adv3_to_local(A, &h->sh, wo),
+                         adv3_to_local(A, &h->sh, wi));
+  }
+  return pbd__convert(c, pdf_sa, v, next);
+}
+
+/* ---------------------------------------------------------------------------
+ * Random walks (bdpt__walk).
+ */
+
+/* Extends path (n vertices) from org along dir; pdf_dir is the density of
+ * dir at the last vertex (solid angle, or planar for lights at infinity).
+ * Returns the new vertex count. */
+static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, double tmin,
+                     adrgb beta, ad pdf_dir, int planar, path__bdv *path, int n,
+                     int max_vertices) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  double eta_scale = 1.0;
+  while (n < max_vertices) {
+    path__bdv *prev = &path[n - 1];
+    path__bdv *v = &path[n];
+    size_t mark = ad_arena_mark(A);
+    memset(v, 0, sizeof *v);
+    v->beta = beta;
+    v->pdf_rev = ad_const(A, 0.0);
+
+    /* Find the next vertex; a camera ray that escapes ends on the
+     * infinite lights. */
+    if (!path__intersect(c, org, dir, tmin, &v->hit)) {
+      if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
+        v->type = BDPT_VERTEX_LIGHT;
+        v->light = -1;
+        v->dir = adv3_neg(A, dir);
+        vec3 o = path__val(org);
+        v->p = path__cv(A, v3_fma(o, path__val(dir), 2.0 * sc->radius + v3_len(v3_sub(o, sc->center))));
+        v->pdf_fwd = pdf_dir;
+        n++;
+      }
+      break;
+    }
+    v->type = BDPT_VERTEX_SURFACE;
+    v->light = v->hit.light;
+    v->p = v->hit.p;
+    v->n = v->hit.ng;
+    v->wo = adv3_neg(A, dir);
+    if (planar)
+      v->pdf_fwd = ad_mul(A, pdf_dir, ad_fabs(A, path__dot_c(A, v->n, dir)));
+    else
+      v->pdf_fwd = pbd__convert(c, pdf_dir, prev, v);
+    n++;
+
+    /* This vertex's numbers (always taken), then stop if long enough. */
+    ad u_lobe = path__draw(c, 0), u1 = path__draw(c, 1), u2 = path__draw(c, 1);
+    ad u_rr = path__draw(c, 0);
+    if (n >= max_vertices) break;
+
+    /* Sample the BSDF for the next direction. */
+    const path__hit *h = &v->hit;
+    adv3 wo_l, wi_l;
+    int ok = pbd__side_ok(c, h, v->wo, &wo_l);
+    path__topo(c, ok);
+    if (!ok) break;
+    bsdf_sample_ad bs;
+    ok = bsdf_sample_f_ad(A, h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs);
+    path__topo(c, ok ? bs.flags : -1);
+    if (!ok) break;
+    adv3 wi = adv3_to_world(A, &h->sh, bs.wi);
+    ok = pbd__side_ok(c, h, wi, &wi_l);
+    path__topo(c, ok);
+    if (!ok) break;
+    ad pdf_fwd_sa = bs.pdf;
+    ad pdf_rev_sa = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, bs.wi, wo_l);
+    v->lobe = path__lobe_flag(bs.flags);
+    if (bs.flags & BSDF_DELTA) {
+      /* Delta lobes: densities read as one in the MIS walk (remap0). */
+      v->delta = 1;
+      pdf_fwd_sa = pdf_rev_sa = ad_const(A, 0.0);
+    }
+    adrgb weight = bs.weight;
+    if (mode == TRANSPORT_IMPORTANCE)
+      weight = adrgb_scale(A, weight, pbd__shading_correction(c, h, v->wo, wi));
+    beta = adrgb_mul(A, beta, weight);
+    if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
+    prev->pdf_rev = pbd__convert(c, pdf_rev_sa, v, prev);
+    if (path__rgb_black(beta)) break;
+
+    /* Russian roulette on the scattering throughput; on light subpaths
+     * relative to the throughput at y_1. The divisor q is a dual. */
+    if (n - 1 >= c->rs->rrdepth) {
+      ad thr;
+      if (mode == TRANSPORT_RADIANCE) {
+        thr = ad_mul_s(A, ad_fmax(A, beta.r, ad_fmax(A, beta.g, beta.b)), eta_scale);
+      } else {
+        /* rgb_div: a zero denominator gives 0 */
+        const adrgb *b1 = &path[1].beta;
+        ad r = b1->r.v != 0.0 ? ad_div(A, beta.r, b1->r) : ad_const(A, 0.0);
+        ad g = b1->g.v != 0.0 ? ad_div(A, beta.g, b1->g) : ad_const(A, 0.0);
+        ad b = b1->b.v != 0.0 ? ad_div(A, beta.b, b1->b) : ad_const(A, 0.0);
+        thr = ad_fmax(A, r, ad_fmax(A, g, b));
+      }
+      ad q = ad_fmin(A, ad_const(A, 0.95), thr);
+      path__topo(c, u_rr.v < q.v);
+      if (!(u_rr.v < q.v)) break;
+      beta = adrgb_scale(A, beta, ad_inv(A, q));
+    }
+    dir = wi;
+    tmin = scene_ray_eps(sc, path__val(v->p));
+    pdf_dir = pdf_fwd_sa;
+    planar = 0;
+
+    /* Keep this vertex and what the next step needs; drop the rest. */
+    path__hit *vh = &v->hit;
+    ad *keep[] = {&v->beta.r,   &v->beta.g,   &v->beta.b,   &v->pdf_fwd,  &v->p.x,
+                  &v->p.y,      &v->p.z,      &v->wo.x,     &v->wo.y,     &v->wo.z,
+                  &vh->sh.s.x,  &vh->sh.s.y,  &vh->sh.s.z,  &vh->sh.t.x,  &vh->sh.t.y,
+                  &vh->sh.t.z,  &vh->sh.n.x,  &vh->sh.n.y,  &vh->sh.n.z,  &vh->tu,
+                  &vh->tv,      &prev->pdf_rev, &beta.r,    &beta.g,      &beta.b,
+                  &dir.x,       &dir.y,       &dir.z,       &pdf_dir};
+    path__keep(c, mark, keep, (int)(sizeof keep / sizeof keep[0]));
+    vh->p = v->p;
+    v->pdf_rev = ad_const(A, 0.0);
+    org = v->p;
+  }
+  return n;
+}
+
+/* The camera subpath (bdpt_camera_subpath) from the film position (u0, u1). */
+static int pbd__camera_subpath(path__ctx *c, ad u0, ad u1, int max_vertices, path__bdv *path,
+                               ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
+  path__bdv *z0 = &path[0];
+  memset(z0, 0, sizeof *z0);
+  z0->type = BDPT_VERTEX_CAMERA;
+  z0->light = -1;
+  z0->p = path__cv(A, c->sc->cam.pos);
+  z0->beta = adrgb_const(A, rgb_gray(1.0));
+  z0->pdf_fwd = ad_const(A, 1.0);
+  z0->pdf_rev = ad_const(A, 0.0);
+  z0->dir = z0->wo = path__cv(A, v3(0.0, 0.0, 0.0));
+  if (max_vertices < 2) return 1;
+  adv3 org, dir;
+  path__camera_ray(c, u0, u1, OUT_rx, OUT_ry, &org, &dir);
+  ad pdf_dir = pbd__cam_pdf_dir(c, dir);
+  return pbd__walk(c, TRANSPORT_RADIANCE, org, dir, 0.0, adrgb_const(A, rgb_gray(1.0)), pdf_dir,
+                   0, path, 1, max_vertices);
+}
+
+/* The light subpath (bdpt_light_subpath): draws its 5 emitter numbers. */
+static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  /* The emitter's numbers (always taken). */
+  ad u_light = path__draw(c, 0);
+  ad u1 = path__draw(c, 1), u2 = path__draw(c, 1);
+  ad u3 = path__draw(c, 1), u4 = path__draw(c, 1);
+  if (max_vertices < 1 || sc->n_lights == 0) return 0;
+
+  /* Choose a light and an emitted ray. */
+  double pmf, u_remap;
+  int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
+  path__topo(c, li);
+  if (li < 0 || !(pmf > 0.0)) return 0;
+  const light *l = &sc->lights[li];
+  pbd__le les;
+  int ok = pbd__sample_le(c, l, u1, u2, u3, u4, &les) && les.pdf_pos > 0.0 &&
+           les.pdf_dir.v > 0.0 && !path__rgb_black(les.le);
+  path__topo(c, ok);
+  if (!ok) return 0;
+
+  /* The light endpoint y_0. */
+  path__bdv *y0 = &path[0];
+  memset(y0, 0, sizeof *y0);
+  y0->type = BDPT_VERTEX_LIGHT;
+  y0->light = li;
+  y0->p = les.p;
+  int far = light_is_infinite(l) || l->type == LIGHT_DIRECTIONAL;
+  y0->n = l->type == LIGHT_AREA ? les.n : v3(0.0, 0.0, 0.0);
+  y0->dir = les.dir;
+  y0->wo = path__cv(A, v3(0.0, 0.0, 0.0));
+  y0->beta = adrgb_scale(A, les.le, ad_const(A, 1.0 / (pmf * les.pdf_pos)));
+  y0->pdf_rev = ad_const(A, 0.0);
+
+  /* beta = Le cos0 / (pmf pdf_pos pdf_dir); y_0's density: selection
+   * times position, selection alone (delta positions, directional), or the
+   * summed solid-angle density (infinite lights); y_1 per solid angle, or
+   * with the planar disk density for lights at infinity. */
+  ad cos0 = l->type == LIGHT_AREA ? ad_fabs(A, path__dot_c(A, les.n, les.dir)) : ad_const(A, 1.0);
+  ad sc0 = ad_div(A, cos0, ad_mul_s(A, les.pdf_dir, pmf * les.pdf_pos));
+  adrgb beta = adrgb_scale(A, les.le, sc0);
+  ad pdf_next;
+  if (far) {
+    path__bdv tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.type = BDPT_VERTEX_SURFACE;
+    tmp.p = adv3_add(A, les.p, les.dir);
+    y0->pdf_fwd = light_is_infinite(l) ? pbd__pdf_light_origin(c, y0, &tmp) : ad_const(A, pmf);
+    pdf_next = ad_const(A, les.pdf_pos);
+  } else {
+    y0->pdf_fwd = ad_const(A, light_is_delta(l) ? pmf : pmf * les.pdf_pos);
+    pdf_next = les.pdf_dir;
+  }
+  double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, path__val(les.p)) : 0.0;
+  return pbd__walk(c, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
+                   max_vertices);
+}
+
+/* ---------------------------------------------------------------------------
+ * The MIS weight (bdpt_mis_weight: pbrt's ratio walk) in duals.
+ */
+
+static ad pbd__mis_weight(path__ctx *c, const path__bdv *cam, int t, const path__bdv *lp, int s,
+                          const path__bdv *sampled) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  /* The connection vertices and their predecessors. */
+  const path__bdv *qs = s > 0 ? ((s == 1 && sampled) ? sampled : &lp[s - 1]) : NULL;
+  const path__bdv *pt = &cam[t - 1];
+  const path__bdv *qsm = s > 1 ? &lp[s - 2] : NULL;
+  const path__bdv *ptm = t > 1 ? &cam[t - 2] : NULL;
+
+  /* Reverse densities of the joined path next to the connection. */
+  ad pt_rev = s > 0 ? pbd__pdf(c, qs, qsm, pt) : pbd__pdf_light_origin(c, pt, ptm);
+  ad ptm_rev = ad_const(A, 0.0), qs_rev = ad_const(A, 0.0), qsm_rev = ad_const(A, 0.0);
+  if (ptm) ptm_rev = s > 0 ? pbd__pdf(c, pt, qs, ptm) : pbd__pdf_light(c, pt, ptm);
+  if (qs) qs_rev = pbd__pdf(c, pt, ptm, qs);
+  if (qsm) qsm_rev = pbd__pdf(c, qs, pt, qsm);
+
+  ad sum = ad_const(A, 0.0);
+
+  /* Camera side: vertex i moves to the light side, strategy (s + t - i, i). */
+  ad ri = ad_const(A, 1.0);
+  for (int i = t - 1; i >= 1; i--) {
+    ad rev = i == t - 1 ? pt_rev : (i == t - 2 ? ptm_rev : cam[i].pdf_rev);
+    ri = ad_mul(A, ri, ad_div(A, pbd__remap0(A, rev), pbd__remap0(A, cam[i].pdf_fwd)));
+    int delta_i = i == t - 1 ? 0 : cam[i].delta;
+    int ok = !delta_i && !cam[i - 1].delta;
+    if (i == 1 && s + t - 1 < 2) ok = 0; /* (s', t') = (1, 1) is not used */
+    if (ok) sum = ad_add(A, sum, ad_sqr(A, ri));
+  }
+
+  /* Light side: vertex i moves to the camera side, strategy (i, s + t - i). */
+  ri = ad_const(A, 1.0);
+  for (int i = s - 1; i >= 0; i--) {
+    const path__bdv *v = i == s - 1 ? qs : &lp[i];
+    ad rev = i == s - 1 ? qs_rev : (i == s - 2 ? qsm_rev : lp[i].pdf_rev);
+    ri = ad_mul(A, ri, ad_div(A, pbd__remap0(A, rev), pbd__remap0(A, v->pdf_fwd)));
+    int delta_i = i == s - 1 ? 0 : lp[i].delta;
+    int delta_prev = i > 0 ? lp[i - 1].delta : pbd__is_delta_light(sc, s == 1 ? qs : &lp[0]);
+    if (!delta_i && !delta_prev) sum = ad_add(A, sum, ad_sqr(A, ri));
+  }
+  return ad_s_div(A, 1.0, ad_add_s(A, sum, 1.0));
+}
+
+/* ---------------------------------------------------------------------------
+ * One strategy (bdpt_connect).
+ */
+
+/* Lobes of the non-delta part of a connection vertex's BSDF. */
+static unsigned pbd__connect_lobes(const path__bdv *v) {
+  return path__lobe_flag(bsdf_flags(v->hit.bsdf) & ~BSDF_DELTA);
+}
+
+static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  const render_settings *rs = c->rs;
+  const pbd__strategy *st = c->arg;
+  int s = st->s, t = st->t;
+  path__bdv *cam = c->ps->bd_cam, *lp = c->ps->bd_light;
+  adrgb zero = adrgb_const(A, rgb_zero());
+  *OUT_L = zero;
+  *OUT_rx = *OUT_ry = ad_const(A, 0.0);
+
+  /* A strategy BDPT uses, with a length inside [mindepth, maxdepth]. */
+  int max_cam, max_light;
+  bdpt_subpath_limits(rs, &max_cam, &max_light);
+  int length = s + t - 1;
+  if (t < 1 || s < 0 || length < 1 || (s == 1 && t == 1)) return;
+  if (t > max_cam || (s >= 2 && s > max_light)) return;
+  if ((rs->maxdepth >= 0 && length > rs->maxdepth) || (rs->mindepth > 0 && length < rs->mindepth))
+    return;
+
+  /* The camera subpath: t vertices (t = 1: the pinhole alone, no numbers). */
+  int nc = 1;
+  if (t >= 2) {
+    path__use_stream(c, LMC_STREAM_CAMERA);
+    ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
+    nc = pbd__camera_subpath(c, u0, u1, t, cam, OUT_rx, OUT_ry);
+  } else {
+    pbd__camera_subpath(c, ad_const(A, 0.0), ad_const(A, 0.0), 1, cam, NULL, NULL);
+  }
+  path__topo(c, nc);
+  if (nc < t) return;
+
+  /* The light subpath: s vertices (s <= 1 needs none). */
+  if (s >= 2) {
+    path__use_stream(c, LMC_STREAM_LIGHT);
+    int nl = pbd__light_subpath(c, s, lp);
+    path__topo(c, nl);
+    if (nl < s) return;
+  }
+  /* An escaped camera ray is only an emitter (s = 0). */
+  if (t > 1 && s != 0 && cam[t - 1].type == BDPT_VERTEX_LIGHT) return;
+
+  /* The lobes sampled inside both subpaths (the connection vertices' own
+   * lobes are added below). */
+  unsigned lobes = 0;
+  for (int i = 1; i < t - 1; i++) lobes |= cam[i].lobe;
+  for (int i = 1; i < s - 1; i++) lobes |= lp[i].lobe;
+
+  adrgb L = zero;
+  unsigned emit = 0;
+  path__bdv sampled;
+  const path__bdv *samp = NULL;
+  int stage = 0; /* how far the connection got (part of the topology) */
+
+  if (s == 0) {
+    /* The camera subpath ends on an emitter. */
+    const path__bdv *pt = &cam[t - 1];
+    if (pt->type == BDPT_VERTEX_SURFACE) {
+      if (pt->light >= 0) {
+        rgb le = light_le_area(&sc->lights[pt->light], pt->n, path__val(pt->wo));
+        stage = 1 + !rgb_is_black(le);
+        L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
+        emit = PATH_EMIT_AREA;
+      }
+    } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
+      vec3 w_env = v3_neg(path__val(pt->dir));
+      rgb le = rgb_zero();
+      for (int k = 0; k < sc->n_infinite; k++) {
+        const light *l = &sc->lights[sc->infinite_lights[k]];
+        rgb lk = light_le_infinite(l, w_env);
+        if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(lk))); /* the pixel */
+        if (!rgb_is_black(lk)) emit |= path__emit_flag(l);
+        le = rgb_add(le, lk);
+      }
+      stage = 3;
+      L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
+    }
+  } else if (t == 1) {
+    /* Light tracing: join y_{s-1} to the pinhole, splat at its raster point. */
+    const path__bdv *qs = &lp[s - 1];
+    if (pbd__connectible(qs)) {
+      stage = 1;
+      adv3 d = adv3_sub(A, qs->p, cam[0].p);
+      ad d2 = adv3_len2(A, d);
+      if (d2.v > 0.0) {
+        adv3 dir = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
+        ad rx = ad_const(A, 0.0), ry = ad_const(A, 0.0);
+        ad we = pbd__cam_we(c, dir, &rx, &ry);
+        if (we.v > 0.0) {
+          stage = 2;
+          ad cos_cam = path__dot_c(A, sc->cam.forward, dir);
+          adrgb f = pbd__f_cos(c, qs, adv3_neg(A, dir), TRANSPORT_IMPORTANCE);
+          /* qs.beta f We cos_cam / d^2 */
+          L = adrgb_scale(A, adrgb_mul(A, qs->beta, f), ad_div(A, ad_mul(A, we, cos_cam), d2));
+          if (!path__rgb_black(L)) {
+            stage = 3;
+            if (path__blocked(c, sc->cam.pos, path__val(dir), path__val(qs->p), 0)) {
+              L = zero;
+            } else {
+              stage = 4;
+              *OUT_rx = rx;
+              *OUT_ry = ry;
+              emit = path__emit_flag(&sc->lights[lp[0].light]);
+              lobes |= pbd__connect_lobes(qs);
+            }
+          }
+        }
+      }
+    }
+  } else if (s == 1) {
+    /* Next-event estimation from z_{t-1} with a fresh light sample: the
+     * connect triple of this t (the ones of smaller t are drawn, unused). */
+    const path__bdv *pt = &cam[t - 1];
+    path__use_stream(c, LMC_STREAM_CONNECT);
+    for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) path__draw(c, 0);
+    ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
+    if (pbd__connectible(pt) && sc->n_lights > 0) {
+      double pmf, u_remap;
+      int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
+      path__topo(c, li);
+      path__li ls;
+      stage = 1;
+      if (li >= 0 && pmf > 0.0 && path__sample_li(c, &sc->lights[li], pt->p, ul1, ul2, &ls) &&
+          ls.pdf.v > 0.0 && !path__rgb_black(ls.li)) {
+        stage = 2;
+        const light *l = &sc->lights[li];
+        adrgb f = pbd__f_cos(c, pt, ls.wi, TRANSPORT_RADIANCE);
+        /* pt.beta f Li / (pmf pdf) */
+        L = adrgb_scale(A, adrgb_mul(A, pt->beta, adrgb_mul(A, f, ls.li)),
+                        ad_inv(A, ad_mul_s(A, ls.pdf, pmf)));
+        if (!path__rgb_black(L)) {
+          stage = 3;
+          if (path__blocked(c, path__val(pt->p), path__val(ls.wi), ls.p, isinf(ls.dist))) {
+            L = zero;
+          } else {
+            stage = 4;
+            memset(&sampled, 0, sizeof sampled);
+            sampled.type = BDPT_VERTEX_LIGHT;
+            sampled.light = li;
+            sampled.p = ls.pd;
+            sampled.n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+            sampled.dir = adv3_neg(A, ls.wi);
+            sampled.pdf_rev = ad_const(A, 0.0);
+            sampled.pdf_fwd = pbd__pdf_light_origin(c, &sampled, pt);
+            samp = &sampled;
+            emit = path__emit_flag(l);
+            lobes |= pbd__connect_lobes(pt);
+          }
+        }
+      }
+    }
+  } else {
+    /* Join y_{s-1} and z_{t-1} with a shadow ray. */
+    const path__bdv *qs = &lp[s - 1], *pt = &cam[t - 1];
+    if (pbd__connectible(qs) && pbd__connectible(pt)) {
+      stage = 1;
+      adv3 d = adv3_sub(A, pt->p, qs->p);
+      ad d2 = adv3_len2(A, d);
+      if (d2.v > 0.0) {
+        stage = 2;
+        adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
+        adrgb fq = pbd__f_cos(c, qs, w, TRANSPORT_IMPORTANCE);
+        adrgb fp = pbd__f_cos(c, pt, adv3_neg(A, w), TRANSPORT_RADIANCE);
+        /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
+        L = adrgb_scale(A, adrgb_mul(A, adrgb_mul(A, qs->beta, fq), adrgb_mul(A, fp, pt->beta)),
+                        ad_inv(A, d2));
+        if (!path__rgb_black(L)) {
+          stage = 3;
+          if (path__blocked(c, path__val(qs->p), path__val(w), path__val(pt->p), 0)) {
+            L = zero;
+          } else {
+            stage = 4;
+            emit = path__emit_flag(&sc->lights[lp[0].light]);
+            lobes |= pbd__connect_lobes(qs) | pbd__connect_lobes(pt);
+          }
+        }
+      }
+    }
+  }
+  path__topo(c, stage);
+  if (path__rgb_black(L)) {
+    *OUT_L = zero;
+    return;
+  }
+
+  /* The MIS weight over all strategies of this path (its temporaries are
+   * dropped). */
+  size_t mark = ad_arena_mark(A);
+  ad w = ad_arena_rewind_keep(A, mark, pbd__mis_weight(c, cam, t, lp, s, samp));
+  *OUT_L = adrgb_scale(A, L, w);
+  if (!path__rgb_black(*OUT_L)) {
+    c->flags |= emit | lobes;
+    c->length = length;
+  }
+}
+
+lmc_status path_eval_bdpt(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
+                          int t, int want_grad, path_scratch *ps, path_eval *OUT_eval,
+                          int64_t *rays) {
+  pbd__strategy st = {s, t};
+  path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, pbd__estimate, &st);
+  return LMC_OK;
+}

@@ -1,0 +1,210 @@
+/*
+ * path_grad_util.h: what the two path-gradient tests (test_path_grad.c,
+ * test_path_grad_slow.c) share: evaluating a unidirectional path or one
+ * bidirectional strategy (s, t) from a path_vec_sampler, the reference
+ * value of bdpt_connect for the same numbers, and the check of the
+ * gradient against central differences. Include after <cmocka.h>.
+ */
+#ifndef LMC_TESTS_PATH_GRAD_UTIL_H
+#define LMC_TESTS_PATH_GRAD_UTIL_H
+
+#include <math.h>
+#include <string.h>
+
+#include "render/integrator.h"
+#include "render/path.h"
+
+/* Which estimator: s < 0 is path_eval_pt, otherwise strategy (s, t). */
+typedef struct pg_strategy {
+  int s, t;
+} pg_strategy;
+
+static const pg_strategy PG_PT = {-1, 0};
+
+/* Groups of bidirectional strategies, for counting what was checked. */
+enum { PG_S0, PG_S1, PG_T1, PG_ST, PG_GROUPS };
+static const char *pg_group_names[PG_GROUPS] = {"s=0 (emitter hit)", "s=1 (light sample)",
+                                                 "t=1 (light tracing)", "s,t>=2 (connection)"};
+
+static int pg_group(pg_strategy st) {
+  if (st.s == 0) return PG_S0;
+  if (st.t == 1) return PG_T1;
+  if (st.s == 1) return PG_S1;
+  return PG_ST;
+}
+
+/* A strategy for a random path length in [1, maxdepth], uniform over the
+ * strategies of that length that BDPT uses. */
+static pg_strategy pg_random_strategy(rng *r, int maxdepth) {
+  for (;;) {
+    int len = 1 + (int)(rng_uniform(r) * maxdepth);
+    int t = 1 + (int)(rng_uniform(r) * (len + 1));
+    int s = len + 1 - t;
+    if (s == 1 && t == 1) continue;
+    return (pg_strategy){s, t};
+  }
+}
+
+static void pg_eval(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
+                    pg_strategy st, int want_grad, path_scratch *ps, path_eval *ev) {
+  if (st.s < 0)
+    path_eval_pt(sc, rs, &vs->base, want_grad, ps, ev, NULL);
+  else
+    path_eval_bdpt(sc, rs, &vs->base, st.s, st.t, want_grad, ps, ev, NULL);
+}
+
+/* bdpt_connect for the numbers stored in vs (the plain integrator's
+ * subpaths, from the layout of integrator.h); *rx, *ry get the splat's
+ * raster position for t = 1. */
+static rgb pg_bdpt_reference(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
+                             pg_strategy st, double *rx, double *ry) {
+  static bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
+  int s = st.s, t = st.t;
+  render_counters cnt = {0};
+  path_vec_sampler_rewind(vs);
+  *rx = *ry = 0.0;
+  int nc;
+  if (t >= 2) {
+    sampler_use_stream(&vs->base, LMC_STREAM_CAMERA);
+    double u0 = sampler_next(&vs->base), u1 = sampler_next(&vs->base);
+    nc = bdpt_camera_subpath(sc, rs, &vs->base, u0 * sc->cam.width, u1 * sc->cam.height, t, cam,
+                             &cnt);
+  } else {
+    nc = bdpt_camera_subpath(sc, rs, &vs->base, 0.0, 0.0, 1, cam, &cnt);
+  }
+  if (nc < t) return rgb_zero();
+  if (s >= 2) {
+    sampler_use_stream(&vs->base, LMC_STREAM_LIGHT);
+    if (bdpt_light_subpath(sc, rs, &vs->base, s, lp, &cnt) < s) return rgb_zero();
+  }
+  double u[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
+  if (s == 1) {
+    sampler_use_stream(&vs->base, LMC_STREAM_CONNECT);
+    for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) sampler_next(&vs->base);
+    for (int k = 0; k < BDPT_DIMS_CONNECT; k++) u[k] = sampler_next(&vs->base);
+  }
+  return bdpt_connect(sc, cam, t, lp, s, u, rx, ry, NULL, &cnt);
+}
+
+static int pg_rel_equal(double a, double b, double tol) {
+  return fabs(a - b) <= tol * fmax(fabs(a), fabs(b)) || (a == 0.0 && b == 0.0);
+}
+
+static int pg_rgb_rel_equal(rgb a, rgb b, double tol) {
+  return pg_rel_equal(a.r, b.r, tol) && pg_rel_equal(a.g, b.g, tol) && pg_rel_equal(a.b, b.b, tol);
+}
+
+/* Result of a central-difference check over many paths. */
+typedef struct pg_fd_stats {
+  int paths, components, passed, skipped_topology;
+  int nontrivial; /* components whose derivative is not negligible (|fd| > 1e-3 f) */
+  int raster;     /* of which raster-position components (t = 1) */
+  int failed_unconverged; /* failures where no two successive h agreed to 1e-3 */
+} pg_fd_stats;
+
+/* Checks the gradient of the current path of vs (already evaluated into
+ * ev0 with want_grad) against central differences: d luminance/du and
+ * d rgb/du, and for t = 1 also d rx/du and d ry/du of the splat. */
+static void pg_fd_check(const scene *sc, path_scratch *ps, const render_settings *rs,
+                        path_vec_sampler *vs, pg_strategy st, const path_eval *ev0,
+                        pg_fd_stats *fs) {
+  int n = ev0->n_coords;
+  path_coord coords[512];
+  if (n > 512) return;
+  memcpy(coords, ev0->coords, (size_t)n * sizeof *coords);
+  uint64_t topo = ev0->topology;
+  double f0 = ev0->lum;
+  int nq = st.t == 1 ? 6 : 4;
+  /* A raster derivative is judged against the film's size. */
+  double rscale = sc->cam.width + sc->cam.height;
+  fs->paths++;
+  for (int k = 0; k < n; k++) {
+    if (!coords[k].diff) continue;
+    double *slot = &vs->u[coords[k].stream][coords[k].pos];
+    double u = *slot;
+    /* Central differences at steps h, h/2 (Richardson extrapolation,
+     * error O(h^4)) for h = 1e-4, 1e-5, 1e-6, 1e-7; the estimate used is
+     * the one that agrees best with the next smaller h (light-triangle and
+     * envmap remaps stretch u by 1 / width, so no single h suits all
+     * coordinates). The topology must be the same at every point used. */
+    double rich[4][6];
+    int same = 1;
+    double hk = 1e-4;
+    for (int lev = 0; lev < 4 && same; lev++, hk *= 0.1) {
+      const double steps[4] = {hk, -hk, 0.5 * hk, -0.5 * hk};
+      double y[6][4];
+      for (int e = 0; e < 4; e++) {
+        path_eval ev;
+        *slot = u + steps[e];
+        if (*slot < 0.0 || *slot >= 1.0) {
+          same = 0;
+          break;
+        }
+        path_vec_sampler_rewind(vs);
+        pg_eval(sc, rs, vs, st, 0, ps, &ev);
+        same = same && ev.topology == topo;
+        y[0][e] = ev.lum;
+        y[1][e] = ev.value.r;
+        y[2][e] = ev.value.g;
+        y[3][e] = ev.value.b;
+        y[4][e] = ev.rx;
+        y[5][e] = ev.ry;
+      }
+      if (!same) break;
+      for (int q = 0; q < nq; q++) {
+        double d1 = (y[q][0] - y[q][1]) / (2.0 * hk), d2 = (y[q][2] - y[q][3]) / hk;
+        rich[lev][q] = (4.0 * d2 - d1) / 3.0;
+      }
+    }
+    *slot = u;
+    if (!same) {
+      fs->skipped_topology++;
+      continue;
+    }
+    double fd[6];
+    for (int q = 0; q < nq; q++) {
+      int best = 0;
+      for (int lev = 1; lev < 3; lev++)
+        if (fabs(rich[lev][q] - rich[lev + 1][q]) < fabs(rich[best][q] - rich[best + 1][q]))
+          best = lev;
+      fd[q] = rich[best][q];
+    }
+    double ad[6] = {coords[k].dlum, coords[k].drgb.r, coords[k].drgb.g,
+                    coords[k].drgb.b, coords[k].drx,    coords[k].dry};
+    for (int q = 0; q < nq; q++) {
+      double err = fabs(fd[q] - ad[q]);
+      double scale = q < 4 ? f0 : rscale;
+      int ok = err <= 1e-4 * fabs(fd[q]) || err <= 1e-6 * scale;
+      fs->components++;
+      fs->passed += ok;
+      if (!ok) {
+        /* Diagnosis only: did the difference quotients converge at all
+         * (two successive h agreeing to 1e-3)? On very steep paths they do
+         * not, and the AD value then usually matches the smallest h. */
+        int conv = 0;
+        for (int lev = 0; lev < 3; lev++)
+          conv = conv || fabs(rich[lev][q] - rich[lev + 1][q]) <= 1e-3 * fabs(rich[lev + 1][q]);
+        fs->failed_unconverged += !conv;
+      }
+      fs->raster += q >= 4;
+      fs->nontrivial += fabs(fd[q]) > 1e-3 * scale;
+      if (!ok && fs->components - fs->passed < 10)
+        print_message("(s,t) = (%d,%d) coord %d (stream %d pos %d) comp %d: ad %.10g fd %.10g "
+                      "f %.6g\n",
+                      st.s, st.t, k, coords[k].stream, coords[k].pos, q, ad[q], fd[q], f0);
+    }
+  }
+}
+
+/* The tangent length path_eval_bdpt must use for a complete strategy:
+ * 2 film + 2 per camera vertex, 4 emitter + 2 per light vertex, 2 for a
+ * light sample; an escaped camera ray (s = 0) draws nothing at its end. */
+static int pg_bdpt_n_diff(pg_strategy st, int escaped) {
+  int n = 0;
+  if (st.t >= 2) n += 2 + 2 * (st.t - 1 - escaped);
+  if (st.s >= 2) n += 4 + 2 * (st.s - 1);
+  if (st.s == 1) n += 2;
+  return n;
+}
+
+#endif
