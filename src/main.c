@@ -69,13 +69,13 @@ static const char *lmc_render_usage =
     "\n"
     "MCMC (pssmlt, mmlt, lmc; --spp counts mutations per pixel):\n"
     "  --largestep P            large-step probability (default 0.3)\n"
-    "  --sigma S                Kelemen small-step scale (default 1/64)\n"
+    "  --sigma S                Kelemen small-step scale (default 1/64; mmlt 0.2)\n"
     "  --bootstrap N            independent paths used to estimate b (default: enough for 1%)\n"
     "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
     "\n"
     "LMC (--integrator lmc):\n"
     "  --adapt MODE             none | adam | diminish | cache (default cache; adam is biased)\n"
-    "  --step S                 Langevin step s: y ~ N(x + s/2 M g, s M) (default 1e-4)\n"
+    "  --step S                 Langevin step s: y ~ N(x + s/2 M g, s M) (default 1e-5)\n"
     "  --adam-eps E             M = clamp(1 / (E + sqrt(v)), LO, HI) (default 1e-8)\n"
     "  --precond-clamp LO,HI    the clamp of M (default 1e-3,1e3)\n"
     "  --grad-bound B           truncate |grad log f| to B (default 1e3)\n"
@@ -263,6 +263,30 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
   }
   image_free(&img);
   return 1;
+}
+
+/* --snapshot: writes OUTSTEM-<seconds>s.exr (safe write: temporary file
+ * and rename, as the final output). */
+typedef struct lmc_snapshot_ctx {
+  const char *out_exr;
+} lmc_snapshot_ctx;
+
+static void lmc_write_snapshot(void *ctx, const struct film *f, double seconds) {
+  const lmc_snapshot_ctx *sc = ctx;
+  char path[1100], stem[1024];
+  snprintf(stem, sizeof stem, "%s", sc->out_exr);
+  size_t len = strlen(stem);
+  if (len > 4 && strcmp(stem + len - 4, ".exr") == 0) stem[len - 4] = '\0';
+  snprintf(path, sizeof path, "%s-%.1fs.exr", stem, seconds);
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_image img = {0};
+  if (film_develop(f, &img, &err) || image_write_exr(path, &img, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: snapshot: %s\n", msg);
+  }
+  image_free(&img);
 }
 
 static int lmc_cmd_render(int argc, char **argv) {
@@ -468,6 +492,11 @@ static int lmc_cmd_render(int argc, char **argv) {
   else
     lmc_default_output(scene_path, out_exr, sizeof out_exr);
   lmc_install_signals();
+  lmc_snapshot_ctx snap = {out_exr};
+  if (rs.snapshot > 0.0) {
+    rs.snapshot_fn = lmc_write_snapshot;
+    rs.snapshot_ctx = &snap;
+  }
   film f;
   render_stats st;
   lmc_status rst = mcmc_is_integrator(rs.integrator) ? mcmc_render_run(s, &rs, &f, &st, &err)

@@ -158,8 +158,44 @@ void film_clear(film *f) {
   memset(f->splat, 0, 3 * n * sizeof(double));
 }
 
+/* Appends a splat to a log, growing it geometrically (a log is reused, so
+ * it stops growing once it holds a row's worth of splats). */
+static void film__log_add(film_splat_log *log, double rx, double ry, rgb v) {
+  if (log->n == log->cap) {
+    int64_t cap = log->cap ? 2 * log->cap : 256;
+    film_splat_rec *r = realloc(log->rec, (size_t)cap * sizeof *r);
+    if (!r) {
+      log->lost++;
+      return;
+    }
+    log->rec = r;
+    log->cap = cap;
+  }
+  film_splat_rec *r = &log->rec[log->n++];
+  r->rx = rx;
+  r->ry = ry;
+  r->v = v;
+}
+
+void film_splat_log_replay(film *f, const film_filter *filter, film_splat_log *log) {
+  for (int64_t i = 0; i < log->n; i++)
+    film_splat(f, filter, log->rec[i].rx, log->rec[i].ry, log->rec[i].v);
+  log->n = 0;
+}
+
+void film_splat_log_free(film_splat_log *log) {
+  if (!log) return;
+  free(log->rec);
+  log->rec = NULL;
+  log->n = log->cap = 0;
+}
+
 void film_splat(film *f, const film_filter *filter, double rx, double ry, rgb v) {
   if (!rgb_isfinite(v)) return;
+  if (f->log) {
+    film__log_add(f->log, rx, ry, v);
+    return;
+  }
   int x0 = (int)floor(rx - 0.5 - filter->radius), x1 = (int)ceil(rx - 0.5 + filter->radius);
   int y0 = (int)floor(ry - 0.5 - filter->radius), y1 = (int)ceil(ry - 0.5 + filter->radius);
   if (x0 < 0) x0 = 0;

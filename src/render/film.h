@@ -43,12 +43,26 @@ double filter_eval(const film_filter *f, double dx, double dy);
 /* Samples an offset with density filter_eval. */
 void filter_sample(const film_filter *f, double u1, double u2, double *dx, double *dy);
 
+/* A list of splats in the order they were made (render.c gives each row
+ * of the image its own list and replays the lists in row order, so the
+ * sums do not depend on which thread rendered which row). */
+typedef struct film_splat_rec {
+  double rx, ry;
+  rgb v;
+} film_splat_rec;
+typedef struct film_splat_log {
+  film_splat_rec *rec; /* owned */
+  int64_t n, cap;
+  int64_t lost;        /* splats that could not be recorded (out of memory) */
+} film_splat_log;
+
 typedef struct film {
   int width, height;
   double *sum;      /* 3 per pixel */
   double *count;    /* 1 per pixel */
   double *splat;    /* 3 per pixel */
   double splat_scale;
+  film_splat_log *log; /* borrowed; when set, film_splat appends to it instead */
 } film;
 
 lmc_status film_init(film *f, int width, int height, lmc_error *err);
@@ -62,8 +76,12 @@ static inline void film_add(film *f, int x, int y, rgb v) {
   s[2] += v.b;
   f->count[(int64_t)y * f->width + x] += 1.0;
 }
-/* Spreads v around raster point (rx, ry) with the filter's weights. */
+/* Spreads v around raster point (rx, ry) with the filter's weights (or,
+ * when f->log is set, appends the splat to the log). Non-finite v is ignored. */
 void film_splat(film *f, const film_filter *filter, double rx, double ry, rgb v);
+/* Splats every record of the log into f in order, then empties the log. */
+void film_splat_log_replay(film *f, const film_filter *filter, film_splat_log *log);
+void film_splat_log_free(film_splat_log *log);
 /* dst += src (same size). */
 void film_merge(film *dst, const film *src);
 /* The image: sum / count + splat * splat_scale (out is initialised here). */

@@ -3,12 +3,19 @@
  * and the progress bar.
  *
  * The image is rendered in passes of one sample per pixel; OpenMP threads
- * take rows round-robin (static schedule), so the work of a thread is a
- * fixed function of the thread count. Every pixel sample draws from its own
- * random stream, seeded by (seed, pixel, pass): the camera-ray estimates do
- * not depend on the schedule at all. Splats (light tracing) go to
- * per-thread buffers merged in thread order at the end, so the same seed
- * and thread count give the same image bit for bit.
+ * take rows round-robin (static schedule). Every pixel sample draws from
+ * its own random stream, seeded by (seed, pixel, pass), and adds to its own
+ * pixel only, in pass order: the camera-ray estimates do not depend on the
+ * schedule. Splats (bdpt's light tracing) land anywhere on the film, so
+ * they are not added where they are made: each row of the image records
+ * its splats in its own list (film_splat_log), and after every block of
+ * RENDER_SPLAT_ROWS rows the lists are replayed into the film in row
+ * order. Every floating-point sum is therefore taken in an order fixed by
+ * the image alone, and the image is bit for bit the same for any --threads
+ * (tests/test_threads.c checks 1 against 2 threads for pt and bdpt).
+ *
+ * Quarantine: a sample that is NaN, infinite or too large to be stored in
+ * the float EXR (|value| > FLT_MAX) is dropped and counted, never added.
  *
  * Stopping: the spp budget, the time limit, or render_request_stop (from
  * SIGINT/SIGTERM) end the render at the next row. Pixels keep their own
@@ -19,12 +26,18 @@
 #define _POSIX_C_SOURCE 200809L
 #include "render/integrator.h"
 
+#include <float.h>
+#include <math.h>
 #include <omp.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+/* Rows per block of bdpt's splat lists (the memory they hold is about
+ * RENDER_SPLAT_ROWS * width * path length * 40 bytes). */
+#define RENDER_SPLAT_ROWS 32
 
 static volatile sig_atomic_t render__stop_signal;
 static volatile sig_atomic_t render__stop;
@@ -76,6 +89,21 @@ void progress_finish(progress *p) {
   fprintf(stderr, "\n");
 }
 
+/* Hands rs->snapshot_fn the image so far: the camera estimates plus the
+ * splats (already replayed into `out`), normalised as at the end. */
+static void render__snapshot(const render_settings *rs, const film *out, int has_splats,
+                             int nthreads, const render_counters *counters, double seconds) {
+  film tmp;
+  lmc_error err;
+  if (film_init(&tmp, out->width, out->height, &err)) return;
+  film_merge(&tmp, out);
+  int64_t samples = 0;
+  for (int t = 0; t < nthreads; t++) samples += counters[t].samples;
+  if (has_splats) tmp.splat_scale = samples > 0 ? 1.0 / (double)samples : 0.0;
+  rs->snapshot_fn(rs->snapshot_ctx, &tmp, seconds);
+  film_free(&tmp);
+}
+
 /* --- the pass loop ----------------------------------------------------------- */
 
 lmc_status render_run(const scene *s, const render_settings *rs, film *out, render_stats *st,
@@ -90,24 +118,15 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
   if (status) return status;
 
   int nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
-  film *splats = NULL;
-  if (use_bdpt) {
-    splats = calloc((size_t)nthreads, sizeof(film));
-    if (!splats) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for splat buffers");
-    for (int t = 0; t < nthreads; t++) {
-      status = film_init(&splats[t], W, H, err);
-      if (status) {
-        for (int k = 0; k < t; k++) film_free(&splats[k]);
-        free(splats);
-        return status;
-      }
-    }
-  }
+  /* bdpt: one splat list per row of a block; pt needs none and renders a
+   * whole pass as one block. */
+  const int block = use_bdpt ? RENDER_SPLAT_ROWS : H;
+  film_splat_log *logs = use_bdpt ? calloc((size_t)block, sizeof *logs) : NULL;
   render_counters *counters = calloc((size_t)nthreads, sizeof(render_counters));
-  if (!counters) {
-    if (splats)
-      for (int t = 0; t < nthreads; t++) film_free(&splats[t]);
-    free(splats);
+  if (!counters || (use_bdpt && !logs)) {
+    free(logs);
+    free(counters);
+    film_free(out);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
   }
 
@@ -120,55 +139,75 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
 
   /* Render passes until the budget, the clock or a signal says stop. */
   int64_t pass;
+  double next_snapshot = rs->snapshot;
   for (pass = 0; pass < max_passes && !stop; pass++) {
+    /* An intermediate image (--snapshot) between passes. */
+    if (rs->snapshot > 0.0 && rs->snapshot_fn && pass > 0 &&
+        omp_get_wtime() - t0 >= next_snapshot) {
+      render__snapshot(rs, out, use_bdpt, nthreads, counters, omp_get_wtime() - t0);
+      while (next_snapshot <= omp_get_wtime() - t0) next_snapshot += rs->snapshot;
+    }
+    for (int yb = 0; yb < H && !stop; yb += block) {
+      const int ye = yb + block < H ? yb + block : H;
 #pragma omp parallel num_threads(nthreads)
-    {
-      int tid = omp_get_thread_num();
-      render_counters *cnt = &counters[tid];
+      {
+        int tid = omp_get_thread_num();
+        render_counters *cnt = &counters[tid];
 #pragma omp for schedule(static, 1)
-      for (int y = 0; y < H; y++) {
-        if (stop) continue;
-        if (render__stop) {
-          stop = 1;
-          continue;
-        }
-        if (rs->time_limit > 0.0 && omp_get_wtime() - t0 >= rs->time_limit) {
-          stop = 2;
-          continue;
-        }
-        for (int x = 0; x < W; x++) {
-          /* One sample of pixel (x, y) in this pass, from its own stream. */
-          lmc_indep_sampler smp;
-          uint64_t pixel = (uint64_t)y * (uint64_t)W + (uint64_t)x;
-          indep_sampler_init(&smp, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
-          double dx, dy;
-          double u1 = sampler_next(&smp.base), u2 = sampler_next(&smp.base);
-          filter_sample(&s->filter, u1, u2, &dx, &dy);
-          double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
-          rgb L;
-          if (use_bdpt) {
-            L = bdpt_li(s, rs, &smp.base, rx, ry, &splats[tid], cnt);
-          } else {
-            vec3 org, dir;
-            camera_generate_ray(&s->cam, rx, ry, &org, &dir);
-            L = pt_li(s, rs, &smp.base, org, dir, cnt);
+        for (int y = yb; y < ye; y++) {
+          if (stop) continue;
+          if (render__stop) {
+            stop = 1;
+            continue;
           }
-          if (!rgb_isfinite(L)) {
-            cnt->nan_samples++;
-            L = rgb_zero();
+          if (rs->time_limit > 0.0 && omp_get_wtime() - t0 >= rs->time_limit) {
+            stop = 2;
+            continue;
           }
-          film_add(out, x, y, L);
-          cnt->samples++;
-        }
-        if (tid == 0) {
-          double frac;
-          if (max_passes == INT64_MAX)
-            frac = (omp_get_wtime() - t0) / rs->time_limit;
-          else
-            frac = ((double)pass + (double)y / H) / (double)max_passes;
-          progress_update(&bar, frac);
+          /* bdpt's splats of this row go to the row's own list. */
+          film row_splats;
+          memset(&row_splats, 0, sizeof row_splats);
+          row_splats.width = W;
+          row_splats.height = H;
+          row_splats.log = logs ? &logs[y - yb] : NULL;
+          for (int x = 0; x < W; x++) {
+            /* One sample of pixel (x, y) in this pass, from its own stream. */
+            lmc_indep_sampler smp;
+            uint64_t pixel = (uint64_t)y * (uint64_t)W + (uint64_t)x;
+            indep_sampler_init(&smp, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
+            double dx, dy;
+            double u1 = sampler_next(&smp.base), u2 = sampler_next(&smp.base);
+            filter_sample(&s->filter, u1, u2, &dx, &dy);
+            double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
+            rgb L;
+            if (use_bdpt) {
+              L = bdpt_li(s, rs, &smp.base, rx, ry, &row_splats, cnt);
+            } else {
+              vec3 org, dir;
+              camera_generate_ray(&s->cam, rx, ry, &org, &dir);
+              L = pt_li(s, rs, &smp.base, org, dir, cnt);
+            }
+            if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX ||
+                fabs(L.b) > FLT_MAX) {
+              cnt->nan_samples++;
+              L = rgb_zero();
+            }
+            film_add(out, x, y, L);
+            cnt->samples++;
+          }
+          if (tid == 0) {
+            double frac;
+            if (max_passes == INT64_MAX)
+              frac = (omp_get_wtime() - t0) / rs->time_limit;
+            else
+              frac = ((double)pass + (double)y / H) / (double)max_passes;
+            progress_update(&bar, frac);
+          }
         }
       }
+      /* The block's splats, into the film in row order. */
+      if (logs)
+        for (int y = yb; y < ye; y++) film_splat_log_replay(out, &s->filter, &logs[y - yb]);
     }
   }
   if (stop == 1) st->interrupted = 1;
@@ -185,13 +224,17 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
   }
   st->passes = (st->samples == (int64_t)W * H * pass) ? pass : st->samples / ((int64_t)W * H);
   if (use_bdpt) {
-    for (int t = 0; t < nthreads; t++) {
-      film_merge(out, &splats[t]);
-      film_free(&splats[t]);
+    int64_t lost = 0;
+    for (int k = 0; k < block; k++) {
+      lost += logs[k].lost;
+      film_splat_log_free(&logs[k]);
     }
+    if (lost > 0)
+      lmc_warn(NULL, 0, "%lld light-tracing splats lost: out of memory for the splat lists",
+               (long long)lost);
     out->splat_scale = st->samples > 0 ? 1.0 / (double)st->samples : 0.0;
   }
-  free(splats);
+  free(logs);
   free(counters);
   st->seconds = omp_get_wtime() - t0;
   return LMC_OK;

@@ -8,6 +8,8 @@
 
 #include <stdint.h>
 
+struct film; /* render/film.h */
+
 enum {
   SET_INTEGRATOR = 1 << 0,
   SET_MAXDEPTH = 1 << 1,
@@ -46,6 +48,11 @@ typedef struct render_settings {
   int64_t bootstrap;     /* bootstrap paths */
   int direct_separate;   /* --direct separate: pt renders direct light, MCMC the rest */
   double snapshot;       /* seconds between intermediate images (0: none) */
+  /* Called by the render drivers every `snapshot` seconds with the film
+   * normalised as if the render stopped then (borrowed for the call) and
+   * the seconds since the render began; main.c writes it. NULL: none. */
+  void (*snapshot_fn)(void *ctx, const struct film *f, double seconds);
+  void *snapshot_ctx;
   /* LMC (src/lmc/mala.c, adam.c, gcache.c) */
   lmc_adapt adapt;       /* preconditioner adaptation */
   double lmc_step;       /* s: proposal N(x + s/2 M g, s M) */
@@ -72,7 +79,7 @@ static inline render_settings render_settings_default(void) {
   s.sigma = 1.0 / 64.0;
   s.bootstrap = 0;
   s.adapt = LMC_ADAPT_CACHE;
-  s.lmc_step = 1e-4;
+  s.lmc_step = 1e-5;
   s.adam_eps = 1e-8;
   s.precond_lo = 1e-3;
   s.precond_hi = 1e3;

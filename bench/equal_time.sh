@@ -1,0 +1,139 @@
+#!/usr/bin/env bash
+# bench/equal_time.sh: the equal-time benchmark (issue 4).
+#
+# usage: bench/equal_time.sh [-s "SCENE_DIR ..."] [-i "INTEGRATOR ..."] [-t SECONDS]
+#                            [-j THREADS] [-b BUILD_DIR] [-o OUT_DIR]
+#
+# Renders every scene with every integrator for SECONDS (default 60) with
+# the same thread count (default: all cores), writing a snapshot every
+# SECONDS/6 (--snapshot), compares each snapshot and the final image with
+# the scene's reference.exr (lmc compare), and writes
+#   OUT_DIR/table.md                 scene x integrator: relmse, mean ratio,
+#                                    samples or mutations per second, acceptance
+#   OUT_DIR/<scene>-convergence.png  log-log relmse against time (gnuplot)
+#   OUT_DIR/<scene>/<integrator>.*   the renders, their logs and curves
+# Defaults: scenes/ring-caustics, scenes/ring-caustics-glass and, when
+# ../shared/scenes/torus exists, the torus (it has no reference there: one
+# is made with scripts/make_reference.sh's recipe into OUT_DIR/torus-ref
+# when TORUS_REF_MINUTES is set, else the torus is skipped with a message);
+# integrators pt bdpt pssmlt mmlt, plus "lmc:none lmc:diminish lmc:cache"
+# when the build accepts --integrator lmc. An entry NAME:ADAPT means
+# --integrator NAME --adapt ADAPT.
+# Needs BUILD_DIR/lmc (default build/) and gnuplot (gnuplot-nox).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+
+scenes="" integrators="" secs=60 threads="" build=build out=bench-out
+while getopts "s:i:t:j:b:o:h" opt; do
+  case $opt in
+    s) scenes=$OPTARG ;;
+    i) integrators=$OPTARG ;;
+    t) secs=$OPTARG ;;
+    j) threads=$OPTARG ;;
+    b) build=$OPTARG ;;
+    o) out=$OPTARG ;;
+    *) sed -n '2,22p' "$0"; exit 2 ;;
+  esac
+done
+lmc=$build/lmc
+[ -x "$lmc" ] || { echo "equal_time.sh: $lmc not found (build first)" >&2; exit 2; }
+[ -n "$threads" ] || threads=$(nproc)
+mkdir -p "$out"
+
+if [ -z "$scenes" ]; then
+  scenes="scenes/ring-caustics scenes/ring-caustics-glass"
+  [ -d ../shared/scenes/torus ] && scenes="$scenes ../shared/scenes/torus"
+fi
+if [ -z "$integrators" ]; then
+  integrators="pt bdpt pssmlt mmlt"
+  if "$lmc" render scenes/ring-caustics/scene.xml --integrator lmc --spp 1 --resolution 16x12 \
+       -q -o "$out/.probe.exr" >/dev/null 2>&1; then
+    integrators="$integrators lmc:none lmc:diminish lmc:cache"
+  fi
+  rm -f "$out/.probe.exr" "$out/.probe.png"
+fi
+snap=$(awk -v t="$secs" 'BEGIN { s = t / 6; if (s < 1) s = 1; print s }')
+
+echo "equal_time: T=${secs}s, threads=$threads, snapshots every ${snap}s; load: $(cut -d' ' -f1-3 /proc/loadavg)"
+table="$out/table.md"
+{
+  echo "| scene | integrator | relmse | mean ratio | samples or mutations / s | acceptance |"
+  echo "| --- | --- | --- | --- | --- | --- |"
+} >"$table"
+
+for sdir in $scenes; do
+  sname=$(basename "$sdir")
+  ref="$sdir/reference.exr"
+  if [ ! -f "$ref" ]; then
+    if [ "$sname" = torus ] && [ -n "${TORUS_REF_MINUTES:-}" ]; then
+      mkdir -p "$out/torus-ref"
+      for seed in 1 2; do
+        "$lmc" render "$sdir/scene.xml" --integrator bdpt --time $((TORUS_REF_MINUTES * 60)) \
+          --seed $seed -q -o "$out/torus-ref/half$seed.exr" >/dev/null
+      done
+      "$lmc" merge "$out/torus-ref/half1.exr" "$out/torus-ref/half2.exr" -o "$out/torus-ref/reference.exr"
+      ref="$out/torus-ref/reference.exr"
+    else
+      echo "equal_time: $sdir has no reference.exr; skipped (set TORUS_REF_MINUTES to make one for the torus)" >&2
+      continue
+    fi
+  fi
+  mkdir -p "$out/$sname"
+  plot_lines=()
+  for entry in $integrators; do
+    name=${entry%%:*}
+    label=${entry/:/-}
+    flags=(--integrator "$name")
+    [ "$entry" != "$name" ] && flags+=(--adapt "${entry#*:}")
+    stem="$out/$sname/$label"
+    rm -f "$stem"-*s.exr
+    echo "  $sname / $label ..." >&2
+    "$lmc" render "$sdir/scene.xml" "${flags[@]}" --time "$secs" --threads "$threads" \
+      --snapshot "$snap" -o "$stem.exr" >"$stem.log" 2>&1 || {
+      echo "equal_time: $label failed on $sname (see $stem.log)" >&2
+      continue
+    }
+    # The convergence curve: seconds, relmse (snapshots, then the final image).
+    : >"$stem.dat"
+    for f in "$stem"-*s.exr; do
+      [ -f "$f" ] || continue
+      t=${f##*-}
+      t=${t%s.exr}
+      echo "$t $("$lmc" compare "$f" "$ref" | sed -n 's/^relmse: //p')" >>"$stem.dat"
+    done
+    cmp=$("$lmc" compare "$stem.exr" "$ref")
+    rel=$(sed -n 's/^relmse: //p' <<<"$cmp")
+    ratio=$(sed -n 's/^mean_ratio: //p' <<<"$cmp")
+    secs_used=$(sed -n 's/.* in \([0-9.]*\) s (load.*/\1/p' "$stem.log" | tail -1)
+    echo "$secs_used $rel" >>"$stem.dat"
+    sort -g -o "$stem.dat" "$stem.dat"
+    # Throughput: mutations per second (MCMC) or camera samples per second.
+    rate=$(sed -n 's/.* \([0-9.e+]*\) mutations\/s.*/\1 mutations/p' "$stem.log" | tail -1)
+    if [ -z "$rate" ]; then
+      rate=$(sed -n 's/.*spp (\([0-9]*\) samples) in \([0-9.]*\) s.*/\1 \2/p' "$stem.log" |
+        awk '{ printf "%.3g samples", $1 / $2 }')
+    fi
+    acc=$(sed -n 's/^lmc: \([a-z-]*\) *proposed [0-9]*, accepted [0-9]* (\([0-9.]*%\)).*/\1 \2/p' \
+      "$stem.log" | paste -sd, - | sed 's/,/, /g')
+    echo "| $sname | $label | $rel | $ratio | $rate | ${acc:--} |" >>"$table"
+    plot_lines+=("'$stem.dat' using 1:2 with linespoints title '$label'")
+  done
+  if command -v gnuplot >/dev/null && [ ${#plot_lines[@]} -gt 0 ]; then
+    joined=$(printf '%s, ' "${plot_lines[@]}")
+    gnuplot <<EOF
+set terminal pngcairo size 800,560 noenhanced
+set output '$out/$sname-convergence.png'
+set logscale xy
+set xlabel 'seconds'
+set ylabel 'relative MSE'
+set title '$sname: relative MSE against time (${threads} threads)'
+set key outside right
+set grid
+plot ${joined%, }
+EOF
+  elif ! command -v gnuplot >/dev/null; then
+    echo "equal_time: gnuplot not found; no plot (apt-get install gnuplot-nox)" >&2
+  fi
+done
+cat "$table"

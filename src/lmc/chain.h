@@ -1,0 +1,161 @@
+/*
+ * chain.h: one Markov chain over primary sample space, its proposals
+ * (kernels), Metropolis-Hastings acceptance and expected-value splatting.
+ *
+ * The state. A chain's state is a primary sample vector u in [0,1)^dim
+ * (dim and its per-stream blocks come from the mc_target, see target.h)
+ * held lazily as Kelemen et al. 2002 do (pss.h): a coordinate the target
+ * did not read in an iteration is not touched; when it is read again it is
+ * brought up to date, as if every accepted iteration in between had mutated
+ * it (a fresh uniform if a large step was accepted since, else the
+ * accumulated small steps). A rejected proposal restores the coordinates it
+ * changed. So the cost of a step is that of the coordinates the path uses,
+ * not of dim.
+ *
+ * The step (full Metropolis-Hastings). With probability p_k the chain picks
+ * kernel k, draws a proposal y ~ q_k(. | x), evaluates f(y) (with its
+ * gradient when some kernel of the chain needs gradients), and accepts with
+ *
+ *     a = min(1, f(y) q_k(x | y) / (f(x) q_k(y | x))).
+ *
+ * Expected-value splatting (Veach 1997, sec. 11.5): the proposal is splatted
+ * with weight a and the current state with weight 1 - a, each as
+ * value / f (the chain's samples are distributed as f / b, so an image
+ * scaled by b / (number of steps) is an unbiased estimate). Zero weights
+ * are not splatted.
+ *
+ * Kernels. Two are built in and work on the lazy vector: the large step
+ * (every coordinate a fresh uniform; an independence proposal whose
+ * density is 1, so the ratio is f(y) / f(x)) and Kelemen's small step
+ * (each coordinate moves by +-r, r = s2 exp(-log(s2/s1) xi), wrapped into
+ * [0,1); symmetric). Any other kernel is "full": it sees the whole
+ * coordinate vector of x (materialised from the lazy vector), writes all
+ * coordinates of y, and gives the two log densities; see mc_kernel.
+ * The MMLT technique mutation is a third built-in lazy kind: one given
+ * coordinate (the technique choice) is redrawn uniformly and every other
+ * coordinate takes a small step (a product of symmetric proposals; the
+ * lazy vector owes every accepted non-large iteration a small step).
+ *
+ * Coordinates a path reads beyond its stream's block get a fresh uniform
+ * on every evaluation: f(u) is then an unbiased random estimate, and MH
+ * with a stored estimate at the current state is the pseudo-marginal
+ * method (Andrieu and Roberts 2009), still exact. Targets size their blocks
+ * so this is rare (it is counted: mc_chain.overflow).
+ *
+ * Ownership: a chain borrows its target, its kernels and their `self`; it
+ * owns its vectors and scratch. One chain is driven by one thread at a
+ * time. No allocation after mc_chain_create.
+ */
+#ifndef LMC_MCMC_CHAIN_H
+#define LMC_MCMC_CHAIN_H
+
+#include <stdint.h>
+
+#include "lmc/target.h"
+#include "render/error.h"
+#include "render/rng.h"
+
+/* A state as a full kernel sees it. */
+typedef struct mc_state {
+  int dim;
+  double *u;    /* all dim coordinates (owned by the chain) */
+  mc_value v;   /* f, value, raster position */
+  double *grad; /* df/du (owned by the chain; valid when grad_ok) */
+  int grad_ok;  /* 1 when grad holds the gradient of f at u */
+} mc_state;
+
+typedef enum mc_kernel_kind {
+  MC_KERNEL_LARGE = 0, /* built in: independent uniform u */
+  MC_KERNEL_SMALL,     /* built in: Kelemen's small step with s1, s2 */
+  MC_KERNEL_TECHNIQUE, /* built in: coordinate `coord` redrawn uniformly, the rest small steps */
+  MC_KERNEL_FULL       /* propose / log_density below */
+} mc_kernel_kind;
+
+/* A proposal. For MC_KERNEL_FULL:
+ *  propose(self, r, x, OUT_y): draws y ~ q(. | x) with the chain's rng r,
+ *    writes all x->dim coordinates (each in [0,1)) to OUT_y and returns
+ *    log q(y | x). x->grad is valid when x->grad_ok (needs_grad kernels
+ *    get states evaluated with their gradient).
+ *  log_density(self, from, to_u): log q(to_u | from), from a state whose
+ *    gradient is available as above; the chain calls it with from = y and
+ *    to_u = x's coordinates for the reverse density. Return -INFINITY
+ *    where the density is zero (the proposal is then rejected).
+ *  on_step(self, current, accepted) (may be NULL): called after every step
+ *    of the chain, whatever kernel made it, with the state now current
+ *    (coordinates materialised only when the kernel was full; current->u
+ *    may be stale otherwise). For Adam statistics and the like.
+ * The chain treats `self` as opaque and never frees it; a kernel with
+ * per-chain statistics needs one mc_kernel (and self) per chain. */
+typedef struct mc_kernel {
+  const char *name; /* for the statistics lines */
+  mc_kernel_kind kind;
+  int needs_grad;   /* states must be evaluated with their gradient */
+  double s1, s2;    /* MC_KERNEL_SMALL: offsets log-uniform in (s1, s2], s2 < 1/2; all
+                       small steps of one chain share them (default 1/1024, 1/64) */
+  int coord;        /* MC_KERNEL_TECHNIQUE: the coordinate redrawn */
+  void *self;
+  double (*propose)(void *self, rng *r, const mc_state *x, double *OUT_y);
+  double (*log_density)(void *self, const mc_state *from, const double *to_u);
+  void (*on_step)(void *self, const mc_state *current, int accepted);
+} mc_kernel;
+
+/* Built-in kernels. */
+mc_kernel mc_kernel_large(void);
+mc_kernel mc_kernel_small(double s1, double s2);
+mc_kernel mc_kernel_technique(int coord);
+
+#define MC_MAX_KERNELS 8
+
+/* Acceptance statistics of one kernel. */
+typedef struct mc_kernel_stats {
+  int64_t proposed, accepted;
+  double accept_sum; /* sum of acceptance probabilities */
+} mc_kernel_stats;
+
+/* Where a chain's splats go: w * value / f at (rx, ry); for toy targets the
+ * value and raster position are the target's own (see target.h). */
+typedef void (*mc_splat_fn)(void *ctx, const mc_value *v, double weight);
+
+typedef struct mc_pss mc_pss;
+
+typedef struct mc_chain {
+  const mc_target *target;
+  int n_kernels;
+  mc_kernel kernels[MC_MAX_KERNELS];
+  double cdf[MC_MAX_KERNELS]; /* cumulative kernel probabilities */
+  mc_kernel_stats stats[MC_MAX_KERNELS];
+  int with_grad;              /* evaluate every state with its gradient */
+  rng r;                      /* the chain's own random stream */
+  mc_pss *pss;                /* the lazy vector of the current state */
+  mc_state x, y;              /* current and proposed (x.u valid after a full step) */
+  void *scratch;              /* the target's per-chain scratch */
+  int64_t steps;
+  int64_t overflow;           /* coordinates drawn past a stream's block */
+  int64_t eval_failures;      /* target evaluations that returned an error */
+} mc_chain;
+
+/* Creates a chain for `target` with kernels k[0..n-1] chosen with
+ * probabilities prob[] (normalised here). The state is empty until
+ * mc_chain_start. */
+lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const mc_kernel *k,
+                           const double *prob, int n, lmc_error *err);
+void mc_chain_destroy(mc_chain *c);
+
+/* Starts the chain at the state a large step draws from a generator
+ * seeded with (seed, seq): the same (seed, seq) as mc_eval_independent
+ * gives the same state (that is how bootstrap samples become starting
+ * states). Then reseeds the chain's own stream with (seed, chain_seq).
+ * Returns f of the starting state. */
+double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_seq);
+
+/* One Metropolis-Hastings step; splats through splat(ctx, ...) when not
+ * NULL. Returns the kernel index used. */
+int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx);
+
+/* Evaluates one independent uniform sample drawn from (seed, seq), without
+ * a chain (bootstrap). scratch: the target's scratch (may be NULL when the
+ * target has none). OUT_value may be NULL. Returns f. */
+double mc_eval_independent(const mc_target *t, void *scratch, uint64_t seed, uint64_t seq,
+                           mc_value *OUT_value);
+
+#endif
