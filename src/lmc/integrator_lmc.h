@@ -1,0 +1,93 @@
+/*
+ * integrator_lmc.h: `--integrator lmc`, Langevin Monte Carlo rendering
+ * (Luan, Zhao, Bala and Gkioulekas 2020), as a client of the MCMC driver
+ * (mcmc.c) and the chain framework (chain.h).
+ *
+ * The target (lmc_target.c) is the unidirectional path of path_eval_pt
+ * (render/path.h; pt_li's estimator with next-event estimation) over the
+ * camera stream, with the gradient of its luminance per coordinate. Its
+ * film position is uniform over [0, W) x [0, H), so f = W H lum(L).
+ *
+ * Each chain mixes the large step (--largestep), Kelemen's isotropic
+ * small step (--iso-prob) and LMC's preconditioned MALA step (lmc_kernel.h;
+ * the rest). With --adapt cache and LMC_INDEP_PROB > 0 the cache's
+ * independence proposal joins them (in stage 1, where there is no cache
+ * yet, its slot makes a Kelemen step). It is off: on ring-caustics it
+ * accepted 0 of 51291 proposals in a 60 s render (a Gaussian of 0.01
+ * around a cached state in 20 to 65 coordinates, the rest uniform, almost
+ * never lands on a path of similar contribution) and cost 7% of the time.
+ *
+ * --adapt cache runs in two stages. Stage 1 takes --cache-fraction of the
+ * budget (of the time under --time, of the mutations under --spp): the
+ * chains adapt with online Adam and record states; its image is
+ * DISCARDED, since the adapting kernel is biased. Then the per-chain
+ * records are merged and frozen into the k-d trees, the chains restart
+ * from the bootstrap's starting states (the driver's job: stage 1's end
+ * states carry Adam's bias) and stage 2 renders with the frozen,
+ * state-dependent preconditioner. Stage 2 alone makes the image.
+ *
+ * The driver calls, in order: lmc_run_create (the target), lmc_run_set_chains,
+ * lmc_run_chain_kernels per chain, lmc_run_round_limit before and
+ * lmc_run_after_round after every round
+ * (a return of 1 means stage 1 just ended: drop the splats so far, restart
+ * the chains from their starting states, reset the mutation count and take
+ * stage 1's mutations off the --spp budget), lmc_run_report, lmc_run_destroy.
+ */
+#ifndef LMC_MCMC_INTEGRATOR_LMC_H
+#define LMC_MCMC_INTEGRATOR_LMC_H
+
+#include <stdint.h>
+
+#include "lmc/chain.h"
+#include "render/scene.h"
+#include "render/settings.h"
+
+#define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see below) */
+
+/* ---- The scene target (lmc_target.c) ------------------------------------- */
+
+typedef struct lmc_scene_target {
+  const scene *s;     /* borrowed */
+  render_settings rs;
+  double area;        /* W H: 1 / density of the film position */
+} lmc_scene_target;
+
+/* Sets up *OUT_target over ctx (both owned by the caller, ctx must outlive
+ * the target): camera stream of PT_DIMS_CAMERA + PT_DIMS_PER_BOUNCE
+ * (bounces + 1) coordinates, bounces = maxdepth or `unbounded` when -1. */
+void lmc_target_init(mc_target *OUT_target, lmc_scene_target *ctx, const scene *s,
+                     const render_settings *rs, int unbounded);
+/* Gradient evaluations made in a scratch of this target. */
+int64_t lmc_target_scratch_grad_evals(const void *scratch);
+/* The path length (segments) a state's cache key stands for (pt layout):
+ * the deepest differentiated coordinate's bounce + 2, or 1 for the film. */
+int lmc_target_length_of_key(int key);
+
+/* ---- The run ------------------------------------------------------------- */
+
+typedef struct lmc_run lmc_run;
+
+lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
+                          int unbounded, lmc_error *err);
+void lmc_run_destroy(lmc_run *run);
+/* The target the chains sample (owned by run). */
+const mc_target *lmc_run_target(const lmc_run *run);
+/* Allocates per-chain state for n chains. */
+lmc_status lmc_run_set_chains(lmc_run *run, int n, lmc_error *err);
+/* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
+int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p);
+/* After a round: done / budget mutations per chain (budget INT64_MAX under
+ * --time), seconds since the render began. Returns 1 when stage 1 ended
+ * now (see above), 0 otherwise. */
+int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed);
+/* The most mutations per chain the next round may make (stage 1 ends on
+ * its share of an --spp budget exactly; INT64_MAX: no limit). */
+int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t budget);
+/* 1 while stage 1 (cache building) runs. */
+int lmc_run_in_stage1(const lmc_run *run);
+/* Mutations per chain spent in stage 1. */
+int64_t lmc_run_stage1_mutations(const lmc_run *run);
+/* Prints the LMC statistics (stderr) for the chains. */
+void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds);
+
+#endif

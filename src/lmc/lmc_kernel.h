@@ -1,0 +1,134 @@
+/*
+ * lmc_kernel.h: the Langevin Monte Carlo proposal as a kernel of the chain
+ * framework (chain.h), with its preconditioner schedules, and the cache's
+ * independence proposal.
+ *
+ * Luan, Zhao, Bala and Gkioulekas 2020, "Langevin Monte Carlo Rendering
+ * with Gradient-based Adaptation". The kernel is an MC_KERNEL_FULL: at the
+ * current state x it proposes y ~ N(x + (s/2) M(x) g(x), s M(x)) wrapped
+ * into [0,1)^D (mala.h), with g = grad log f = grad f / f truncated to
+ * norm grad_bound, and reports the exact log densities of both directions;
+ * the chain does the Metropolis-Hastings test with them.
+ *
+ * Fallback. A state "has a gradient" when the target returned one, f > 0
+ * and some component of g is non-zero. At a state without one, the kernel
+ * proposes Kelemen's small step instead (s1, s2 as the chain's small
+ * step). The choice is a function of the state, so the reverse density
+ * q(x | y) is MALA's when y has a gradient and Kelemen's when it has not:
+ * the ratio stays exact and no state is ever reset.
+ *
+ * The preconditioner M (lmc_adapt of render/settings.h):
+ *   NONE       M = I.
+ *   ADAM       M = Adam's clamp(1 / (eps + sqrt(v))) of this chain's
+ *              gradients so far, updated after every step of the chain
+ *              (on_step) and used directly: biased (see adam.h).
+ *   DIMINISH   (1 - w_t) I + w_t M_adam with w_t = min(1, t0 / t).
+ *   CACHE      stage 1: as ADAM, and every record_stride-th state this
+ *              kernel proposed is stored in a gcache with its Adam moments
+ *              (the images of stage 1 are the caller's business). Stage 2
+ *              (lmc_mala_begin_stage2): M(x) = gcache_precond(cache, x),
+ *              a pure function of x, evaluated at x for the forward and at
+ *              y for the reverse density.
+ * For ADAM and DIMINISH the M of one step is the same in both directions
+ * (it changes only between steps).
+ *
+ * Cache key. Paths of different lengths use different numbers of
+ * coordinates; the cache keys a state by k(x) = 1 + the index of the last
+ * non-zero gradient component (the coordinates the contribution depends
+ * on), looks up only those k coordinates, and uses M = 1 (clamped) for the
+ * coordinates k .. D-1. A toy target whose gradient is dense has k = D.
+ *
+ * Ownership: an lmc_mala holds one chain's adaptation state (one per
+ * chain); it borrows the cache. No allocation after lmc_mala_init.
+ */
+#ifndef LMC_MCMC_LMC_KERNEL_H
+#define LMC_MCMC_LMC_KERNEL_H
+
+#include <stdint.h>
+
+#include "lmc/adam.h"
+#include "lmc/chain.h"
+#include "lmc/gcache.h"
+#include "render/settings.h"
+
+typedef struct lmc_kernel_params {
+  lmc_adapt adapt;
+  double step;          /* s */
+  double eps, lo, hi;   /* preconditioner: clamp(1 / (eps + sqrt(v)), lo, hi) */
+  double grad_bound;    /* |g| truncated to this norm */
+  double s1, s2;        /* Kelemen fallback offsets */
+  double diminish_t0;   /* DIMINISH: w_t = min(1, t0 / t) */
+  gcache_params cache;  /* CACHE stage 2 lookup */
+  int record_stride;    /* CACHE stage 1: record every n-th own state (0: none) */
+} lmc_kernel_params;
+
+/* The parameters of render settings (rs->lmc_step, adam_eps, precond_lo/hi,
+ * grad_bound, adapt), with s1 = sigma / 16, s2 = sigma and the defaults
+ * below for the rest. */
+lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs);
+lmc_kernel_params lmc_kernel_params_default(void);
+
+#define LMC_STAT_KEYS 64 /* per-key statistics: keys 0 .. 63 (larger ones in the last) */
+
+/* Counters of one chain's kernel. */
+typedef struct lmc_mala_stats {
+  /* Per cache key of the state proposed from (the integrator maps keys to
+   * path lengths), [0]: MALA proposals, [1]: Kelemen fallbacks. */
+  int64_t key_proposed[2][LMC_STAT_KEYS];
+  int64_t key_accepted[2][LMC_STAT_KEYS];
+  int64_t steps;        /* steps of the chain (every one evaluates a proposal with its gradient) */
+  int64_t streak;       /* steps of the chain since its last accepted one */
+  int64_t max_streak;   /* the longest such run (stalls) */
+  int64_t mala;         /* proposals made with the gradient */
+  int64_t fallback;     /* proposals from states without a gradient (Kelemen) */
+  int64_t lookups;      /* stage-2 cache lookups */
+  int64_t lookup_hits;  /* ... that found neighbours within the radius */
+  int64_t recorded;     /* stage-1 states stored */
+  int64_t record_full;  /* stage-1 states not stored: the cache was full */
+} lmc_mala_stats;
+
+typedef struct lmc_mala {
+  lmc_kernel_params p;
+  int dim;
+  int stage2;            /* CACHE: lookups in `cache` instead of online Adam */
+  const gcache *cache;   /* borrowed (stage 2) */
+  gcache *record;        /* borrowed (stage 1; NULL: nothing recorded) */
+  adam_stats adam;
+  double *M_chain;       /* ADAM, DIMINISH, CACHE stage 1: the chain's current M */
+  double *g, *M;         /* scratch */
+  double *m1, *m2;       /* scratch for recording */
+  /* Stage 2: the last two lookups (state, key, M), reused when the chain
+   * proposes from or returns to the same state (a pure function of it). */
+  double *memo_u[2], *memo_M[2];
+  int memo_key[2];
+  int memo_next;
+  int own_step;          /* the step in progress was proposed here */
+  int own_key;           /* its state's key (0: fallback) */
+  int64_t own_steps;
+  lmc_mala_stats st;
+} lmc_mala;
+
+lmc_status lmc_mala_init(lmc_mala *k, int dim, const lmc_kernel_params *p, lmc_error *err);
+/* Frees the buffers (k may be zeroed). */
+void lmc_mala_free(lmc_mala *k);
+/* The mc_kernel (kind FULL, needs_grad) over k; k must outlive the chain. */
+mc_kernel lmc_mala_kernel(lmc_mala *k);
+/* CACHE stage 1: where states are recorded (NULL: nowhere). */
+void lmc_mala_set_record(lmc_mala *k, gcache *record);
+/* CACHE: switch to stage 2 with a frozen cache. */
+void lmc_mala_begin_stage2(lmc_mala *k, const gcache *cache);
+
+/* The cache key k(x) of a state (0 without a gradient). */
+int lmc_state_key(const mc_state *x);
+
+/* The cache's independence proposal (gcache_indep_*) as a kernel. Without
+ * a cache (or anchors) it makes Kelemen's small step (s1, s2) instead, so
+ * its slot in a chain's mixture is a valid kernel in every stage. */
+typedef struct lmc_indep {
+  const gcache *cache; /* borrowed, frozen, with anchors (NULL: Kelemen) */
+  double sigma;
+  double s1, s2;
+} lmc_indep;
+mc_kernel lmc_indep_kernel(lmc_indep *k);
+
+#endif

@@ -1,0 +1,92 @@
+/*
+ * mala.h: the Metropolis-adjusted Langevin proposal on the unit torus, and
+ * Kelemen's isotropic small step with its exact density, as pure functions
+ * over vectors.
+ *
+ * MALA (Roberts and Tweedie 1996; for rendering: Luan, Zhao, Bala and
+ * Gkioulekas 2020, "Langevin Monte Carlo Rendering with Gradient-based
+ * Adaptation"). At a state x in [0,1)^n with g = grad log pi(x) (its norm
+ * truncated to a bound, as the paper's implementation does, so that a huge
+ * gradient near a singularity cannot throw the chain away) and a diagonal
+ * preconditioner M, the proposal is
+ *
+ *     y ~ N(x + (s/2) M g, s M),   then every coordinate wrapped into [0,1).
+ *
+ * The Metropolis-Hastings ratio needs the density of y on the torus, not on
+ * the real line: a coordinate y_i has the wrapped normal density
+ *
+ *     q_i(y_i | x) = sum over integers k of N(y_i + k; mu_i, sigma_i^2),
+ *     mu_i = x_i + (s/2) M_i g_i,   sigma_i^2 = s M_i,
+ *
+ * and q(y | x) is the product over i (M is diagonal). mala_log_wrapped_normal
+ * evaluates it to double precision: for sigma <= 1 it sums images around the
+ * nearest one until a pair adds less than 1e-18 of the sum (terms shrink
+ * like exp(-k^2 / (2 sigma^2)), so the tail is below rounding); for
+ * sigma > 1 the Fourier form of the same function (Jacobi theta),
+ * 1 + 2 sum_n exp(-2 pi^2 n^2 sigma^2) cos(2 pi n d), converges in a few
+ * terms. Logs are computed relative to the nearest image, so a far y gives
+ * a large negative log density, never log(0) from underflow.
+ *
+ * Kelemen's small step (Kelemen, Szirmay-Kalos, Antal and Csonka 2002): each
+ * coordinate moves by +-r, r = s2 exp(-log(s2 / s1) xi) with xi uniform, so
+ * |offset| is log-uniform on (s1, s2] and the offset density is
+ * 1 / (2 |d| log(s2 / s1)) there, zero elsewhere. With s2 < 1/2 only one
+ * image of y can lie within s2 of x, so that is also the torus density.
+ * The step is symmetric; the density matters only where it is mixed with
+ * MALA in one state-dependent kernel (the fallback where a state has no
+ * gradient: the forward density is Kelemen's, the reverse may be MALA's).
+ *
+ * Conventions: n coordinates, double vectors, M == NULL means M = I. The
+ * sampling routines take their random numbers from an rng; they do not
+ * allocate. OUT_ arrays may not alias inputs.
+ */
+#ifndef LMC_MCMC_MALA_H
+#define LMC_MCMC_MALA_H
+
+#include <math.h>
+
+#include "render/rng.h"
+
+/* Euclidean norm of g. */
+double mala_norm(int n, const double *g);
+
+/* Scales g in place to norm `bound` when its norm exceeds it (bound <= 0 or
+ * infinite: no truncation). Non-finite entries are set to 0 first. Returns
+ * the norm before truncation. */
+double mala_truncate(int n, double *g, double bound);
+
+/* A standard normal deviate (Box-Muller, one of the pair; two uniforms). */
+double mala_std_normal(rng *r);
+
+/* Wraps a real number into [0, 1). */
+static inline double mala_wrap(double y) {
+  double w = y - floor(y);
+  return w < 1.0 ? w : 0.0;
+}
+
+/* log of the wrapped normal density on [0,1) at y for mean mu (any real)
+ * and standard deviation sigma > 0. */
+double mala_log_wrapped_normal(double y, double mu, double sigma);
+
+/* Draws y ~ N(x + (s/2) M g, s M) wrapped into [0,1)^n. g: the (truncated)
+ * gradient of log pi at x; M: diagonal (NULL: identity); s > 0. */
+void mala_sample(int n, const double *x, const double *g, const double *M, double s, rng *r,
+                 double *OUT_y);
+
+/* log q(y | x) of mala_sample with the same g, M and s (exact on the torus). */
+double mala_log_density(int n, const double *x, const double *g, const double *M, double s,
+                        const double *y);
+
+/* Kelemen's small step with offsets log-uniform in (s1, s2], 0 < s1 < s2 < 1/2. */
+void mala_kelemen_sample(int n, const double *x, double s1, double s2, rng *r, double *OUT_y);
+
+/* log density of mala_kelemen_sample at y given x (-INFINITY where zero). */
+double mala_kelemen_log_density(int n, const double *x, double s1, double s2, const double *y);
+
+/* Signed torus difference y - x, in [-1/2, 1/2). */
+static inline double mala_torus_diff(double y, double x) {
+  double d = y - x;
+  return d - floor(d + 0.5);
+}
+
+#endif

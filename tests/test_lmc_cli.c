@@ -1,0 +1,106 @@
+/*
+ * test_lmc_cli.c: `lmc render --integrator lmc --adapt MODE` as a user runs
+ * it: each valid mode (both `--adapt MODE` and `--adapt=MODE`) selects
+ * that mode, visible in the statistics the render prints; no --adapt means
+ * cache; cache prints its stage-1 and cache lines; an invalid mode exits
+ * with status 2 and a message that lists the valid ones.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include "test_util.h"
+
+#define SCENE "data/analytic/diffuse_sphere.xml"
+#define TMP "/tmp/lmc_test_lmc_cli"
+#define COMMON "render " SCENE " -o " TMP "/img --resolution 16x12 --spp 8 --threads 1 --integrator lmc"
+
+static char err_text[65536];
+
+static int run_lmc(const char *args) {
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
+  int rc = system(cmd);
+  err_text[0] = '\0';
+  FILE *f = fopen(TMP "/err.txt", "rb");
+  if (f) {
+    size_t n = fread(err_text, 1, sizeof err_text - 1, f);
+    err_text[n] = '\0';
+    fclose(f);
+  }
+  if (rc == -1 || !WIFEXITED(rc)) return -1;
+  return WEXITSTATUS(rc);
+}
+
+static int setup(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  return 0;
+}
+
+/* Every valid mode, in both spellings, shows up in the statistics. */
+static void test_each_mode_selected(void **state) {
+  (void)state;
+  static const char *modes[] = {"none", "adam", "diminish", "cache"};
+  static const char *shown[] = {"lmc: adapt none,", "lmc: adapt adam (biased),",
+                                "lmc: adapt diminish,", "lmc: adapt cache,"};
+  int checked = 0;
+  for (int m = 0; m < 4; m++)
+    for (int form = 0; form < 2; form++) {
+      char args[1024];
+      snprintf(args, sizeof args, form ? "%s --adapt=%s" : "%s --adapt %s", COMMON, modes[m]);
+      int rc = run_lmc(args);
+      if (rc != 0) print_error("%s\n%s", args, err_text);
+      assert_int_equal(rc, 0);
+      if (!strstr(err_text, shown[m])) fail_msg("'%s' does not print '%s':\n%s", args, shown[m], err_text);
+      /* Only the chosen mode is named. */
+      for (int o = 0; o < 4; o++)
+        if (o != m) assert_null(strstr(err_text, shown[o]));
+      checked++;
+    }
+  assert_int_equal(checked, 8);
+}
+
+/* Without --adapt, lmc uses the cache; the cache lines are printed. */
+static void test_default_is_cache(void **state) {
+  (void)state;
+  assert_int_equal(run_lmc(COMMON), 0);
+  assert_non_null(strstr(err_text, "lmc: adapt cache,"));
+  assert_non_null(strstr(err_text, "lmc: cache: stage 1"));
+  assert_non_null(strstr(err_text, "image discarded"));
+  assert_non_null(strstr(err_text, "gradient evaluations/s"));
+  assert_non_null(strstr(err_text, "chains stalled"));
+}
+
+/* An invalid mode: exit status 2, the message names it and the valid ones. */
+static void test_invalid_mode(void **state) {
+  (void)state;
+  static const char *bad[] = {"fast", "Cache"};
+  for (int i = 0; i < 2; i++) {
+    char args[1024];
+    snprintf(args, sizeof args, "%s --adapt=%s", COMMON, bad[i]);
+    assert_int_equal(run_lmc(args), 2);
+    assert_non_null(strstr(err_text, "--adapt"));
+    static const char *valid[] = {"none", "adam", "diminish", "cache"};
+    for (int v = 0; v < 4; v++)
+      if (!strstr(err_text, valid[v])) fail_msg("message lacks '%s':\n%s", valid[v], err_text);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_each_mode_selected),
+      cmocka_unit_test(test_default_is_cache),
+      cmocka_unit_test(test_invalid_mode),
+  };
+  return cmocka_run_group_tests(tests, setup, NULL);
+}

@@ -1,0 +1,146 @@
+/*
+ * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc) with
+ * --adapt diminish and --adapt cache agrees with bdpt on the ring-caustics
+ * scenes (scenes/ring-caustics, scenes/ring-caustics-glass) at 24x18: in
+ * the image mean and in the means of a 4 x 4 grid of regions. These are
+ * the unbiased modes; a bias from the adaptation, the cache's stage
+ * switch, the restart of the chains or the normalisation would show here.
+ *
+ * Variance: each integrator renders R = 6 independent seeds (lmc: each
+ * with its own bootstrap, stage 1 and chains). Per statistic the runs give
+ * a mean and a standard error SE = sd / sqrt(R); lmc's mean must lie within
+ * 6 sqrt(SE_lmc^2 + SE_bdpt^2) of bdpt's. The difference over its
+ * estimated standard error is roughly Student t with about 10 degrees of
+ * freedom (Welch), P(|t| > 6) ~ 1.3e-4 per check; over 2 scenes x 2 modes
+ * x 17 statistics = 68 checks a false alarm has a chance of about 1%.
+ * Equal effort: --spp 128 for each (lmc: mutations per pixel, stage 1 of
+ * cache included); lmc's bootstrap is fixed at 131072 paths (it would
+ * otherwise dominate the time at this resolution).
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "lmc/mcmc.h"
+#include "render/io/io.h"
+#include "test_util.h"
+
+#define RUNS 6
+#define GRID 4
+#define N_STATS (GRID * GRID + 1)
+
+static int g_checks;
+
+/* Mean and SE over RUNS of the region means (index GRID*GRID: the image). */
+static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt,
+                      double mean[N_STATS], double se[N_STATS]) {
+  double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
+  for (int r = 0; r < RUNS; r++) {
+    render_settings rs = s->settings;
+    snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
+    rs.adapt = adapt;
+    rs.spp = 128;
+    rs.set |= SET_SPP;
+    rs.bootstrap = 131072; /* b to a few percent: its error is part of each run's, so of the SE */
+    rs.time_limit = 0.0;
+    rs.threads = 2;
+    rs.seed = 500 + (uint64_t)r;
+    rs.quiet = 1;
+    film f;
+    render_stats st;
+    lmc_error err;
+    lmc_error_clear(&err);
+    lmc_status status = mcmc_is_integrator(integrator) ? mcmc_render_run(s, &rs, &f, &st, &err)
+                                                       : render_run(s, &rs, &f, &st, &err);
+    if (status) fprintf(stderr, "%s\n", err.msg);
+    assert_int_equal(status, LMC_OK);
+    lmc_image img;
+    assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
+    double reg[N_STATS] = {0};
+    int cnt[N_STATS] = {0};
+    for (int y = 0; y < img.height; y++)
+      for (int x = 0; x < img.width; x++) {
+        const float *p = img.data + 3 * ((size_t)y * img.width + x);
+        double l = rgb_luminance(rgb_make(p[0], p[1], p[2]));
+        int g = (y * GRID / img.height) * GRID + x * GRID / img.width;
+        reg[g] += l, cnt[g]++;
+        reg[GRID * GRID] += l, cnt[GRID * GRID]++;
+      }
+    for (int k = 0; k < N_STATS; k++) {
+      double m = reg[k] / cnt[k];
+      sum[k] += m;
+      sum2[k] += m * m;
+    }
+    image_free(&img);
+    film_free(&f);
+  }
+  for (int k = 0; k < N_STATS; k++) {
+    mean[k] = sum[k] / RUNS;
+    se[k] = sqrt(fmax(0.0, (sum2[k] - RUNS * mean[k] * mean[k]) / (RUNS - 1)) / RUNS);
+  }
+}
+
+static void check_scene(const char *folder) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", LMC_SOURCE_DIR, folder);
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
+  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  camera_set_resolution(&s->cam, 24, 18);
+
+  double ref[N_STATS], ref_se[N_STATS];
+  run_stats(s, "bdpt", LMC_ADAPT_NONE, ref, ref_se);
+  const lmc_adapt modes[2] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE};
+  const char *names[2] = {"diminish", "cache"};
+  for (int i = 0; i < 2; i++) {
+    double m[N_STATS], se[N_STATS];
+    run_stats(s, "lmc", modes[i], m, se);
+    double worst = 0.0;
+    for (int k = 0; k < N_STATS; k++) {
+      double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
+      double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
+      if (z > worst) worst = z;
+      if (k == GRID * GRID)
+        fprintf(stderr, "  %s lmc %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder,
+                names[i], m[k], se[k], ref[k], ref_se[k]);
+      assert_true(se[k] > 0.0 || m[k] == ref[k]); /* independent runs differ */
+      assert_near(m[k], ref[k], 6.0 * sd);
+      g_checks++;
+    }
+    fprintf(stderr, "  %s lmc %s: largest |difference| / SE over the regions %.2f\n", folder,
+            names[i], worst);
+  }
+  scene_destroy(s);
+}
+
+static void test_ring_caustics(void **state) {
+  (void)state;
+  check_scene("ring-caustics");
+}
+
+static void test_ring_caustics_glass(void **state) {
+  (void)state;
+  check_scene("ring-caustics-glass");
+}
+
+static void test_count(void **state) {
+  (void)state;
+  assert_int_equal(g_checks, 2 * 2 * N_STATS);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_ring_caustics),
+      cmocka_unit_test(test_ring_caustics_glass),
+      cmocka_unit_test(test_count),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
