@@ -5,18 +5,23 @@
 #                                scenes/ring-caustics and print where the images are
 #   bash scripts/setup.sh test   install what is missing, build, run the whole test
 #                                suite (ctest), then the unit tests again under
-#                                AddressSanitizer + UndefinedBehaviorSanitizer
+#                                AddressSanitizer + UndefinedBehaviorSanitizer,
+#                                then every libFuzzer target of tests/fuzz briefly
+#                                on its corpus (clang build in build-fuzz/)
 #
 # Works on a fresh Debian 12 machine as root (or with sudo). Environment:
 #   LMC_JOBS      parallel build jobs (default: the number of cores)
 #   LMC_DEMO_SPP  samples per pixel of the demo render (default 256)
+#   LMC_FUZZ_SECONDS  seconds per fuzz target in `test` (default 15; 0 skips fuzzing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 mode=${1:-demo}
 jobs=${LMC_JOBS:-$(nproc)}
 packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-dev
-          libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev)
+          libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev
+          clang libclang-rt-dev libomp-dev   # libFuzzer (-fsanitize=fuzzer) and OpenMP for clang
+          gnuplot-nox)                       # plots of bench/equal_time.sh
 
 # Install the Debian packages that are missing.
 missing=()
@@ -52,6 +57,14 @@ case "$mode" in
     build build-sanitize -DLMC_SANITIZE=ON
     ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -L fast
+    if [ "${LMC_FUZZ_SECONDS:-15}" -gt 0 ]; then
+      # Only the fuzz targets: clang's warnings elsewhere are gcc's business.
+      cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DLMC_WERROR=ON \
+        -DCMAKE_C_COMPILER=clang -DLMC_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+      cmake --build build-fuzz -j "$jobs" --target fuzz_xml fuzz_obj fuzz_ply fuzz_serialized \
+        fuzz_png fuzz_jpeg fuzz_exr
+      bash scripts/fuzz.sh build-fuzz "${LMC_FUZZ_SECONDS:-15}"
+    fi
     ;;
   *)
     echo "usage: bash scripts/setup.sh demo|test" >&2

@@ -35,6 +35,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 lmc_status image_init(lmc_image *img, int width, int height, int channels, lmc_error *err) {
@@ -170,6 +171,13 @@ lmc_status image_read_png(const char *path, int srgb_to_linear_flag, lmc_image *
   if (w <= 0 || h <= 0 || (ch != 1 && ch != 3 && ch != 4) || (depth != 8 && depth != 16) ||
       rowbytes != (size_t)w * (size_t)ch * (size_t)(depth / 8))
     png_error(png, "unsupported PNG layout");
+  /* The header can claim any size; the file's size bounds what it holds.
+   * Deflate packs at most about 1032:1, so more than 1100 decoded bytes per
+   * file byte (beyond 64 MiB) is a lie that would only exhaust memory. */
+  struct stat sb;
+  if (fstat(fileno(f), &sb) == 0 && (double)rowbytes * h > 64.0 * 1024 * 1024 &&
+      (double)rowbytes * h > 1100.0 * (double)sb.st_size)
+    png_error(png, "the header claims more pixels than the file can hold");
   pixels = malloc(rowbytes * (size_t)h);
   rows = malloc(sizeof(png_bytep) * (size_t)h);
   if (!pixels || !rows) png_error(png, "out of memory");

@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "render/image.h"
@@ -71,11 +72,14 @@ static int exr__choose(const exr_attr_chlist_t *ch, exr__layout *lay) {
 }
 
 /* Decodes one chunk into the image; (ox, oy) is the chunk's first pixel
- * relative to the data window. Channels are decoded into separate planes
- * of a scratch buffer and then interleaved: with interleaved destination
- * pointers OpenEXRCore 3.1 picks specialised half-to-float unpackers that
- * assume a channel order (we saw RGBA come back as ABGR), while the
- * planar case goes through its generic, order-agnostic unpacker. */
+ * relative to the data window. Every channel of the chunk is decoded, each
+ * into its own plane of a scratch buffer, and the wanted ones are then
+ * interleaved into the image. Two OpenEXRCore 3.1 behaviours force this:
+ * with interleaved destination pointers it picks specialised half-to-float
+ * unpackers that assume a channel order (we saw RGBA come back as ABGR),
+ * and its specialised planar unpackers write every channel even when a
+ * channel's decode_to_ptr is NULL (fuzzing found the NULL write with a file
+ * of channels B, G, R and one more, as in an RGB + Z render). */
 static exr_result_t exr__decode_chunk(exr_context_t ctxt, const exr_chunk_info_t *cinfo,
                                       const exr__layout *lay, lmc_image *img, int64_t ox,
                                       int64_t oy) {
@@ -83,38 +87,42 @@ static exr_result_t exr__decode_chunk(exr_context_t ctxt, const exr_chunk_info_t
   if (ox < 0 || oy < 0 || cw <= 0 || chh <= 0 || ox + cw > img->width || oy + chh > img->height)
     return EXR_ERR_CORRUPT_CHUNK;
   size_t plane = (size_t)cw * (size_t)chh;
-  float *scratch = calloc(plane * (size_t)lay->count, sizeof(float));
-  if (!scratch) return EXR_ERR_OUT_OF_MEMORY;
   exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
   exr_result_t rv = exr_decoding_initialize(ctxt, 0, cinfo, &dec);
-  if (rv != EXR_ERR_SUCCESS) {
-    free(scratch);
-    return rv;
+  if (rv != EXR_ERR_SUCCESS) return rv;
+  float *scratch = dec.channel_count > 0 ? calloc(plane * (size_t)dec.channel_count, sizeof(float))
+                                         : NULL;
+  if (!scratch) {
+    exr_decoding_destroy(ctxt, &dec);
+    return dec.channel_count > 0 ? EXR_ERR_OUT_OF_MEMORY : EXR_ERR_CORRUPT_CHUNK;
   }
-  /* Point each wanted channel at its plane; the others are skipped. */
+
+  /* Every channel gets its plane; find where each wanted channel went. */
+  int src[4] = {-1, -1, -1, -1};
   for (int c = 0; c < dec.channel_count; c++) {
     exr_coding_channel_info_t *ci = &dec.channels[c];
-    ci->decode_to_ptr = NULL;
-    for (int k = 0; k < lay->count; k++) {
-      if (strcmp(ci->channel_name, lay->names[k]) != 0) continue;
-      ci->decode_to_ptr = (uint8_t *)(scratch + plane * (size_t)k);
-      ci->user_pixel_stride = (int32_t)sizeof(float);
-      ci->user_line_stride = (int32_t)(sizeof(float) * (size_t)cw);
-      ci->user_bytes_per_element = 4;
-      ci->user_data_type = EXR_PIXEL_FLOAT;
-    }
+    ci->decode_to_ptr = (uint8_t *)(scratch + plane * (size_t)c);
+    ci->user_pixel_stride = (int32_t)sizeof(float);
+    ci->user_line_stride = (int32_t)(sizeof(float) * (size_t)cw);
+    ci->user_bytes_per_element = 4;
+    ci->user_data_type = EXR_PIXEL_FLOAT;
+    for (int k = 0; k < lay->count; k++)
+      if (src[k] < 0 && strcmp(ci->channel_name, lay->names[k]) == 0) src[k] = c;
   }
-  rv = exr_decoding_choose_default_routines(ctxt, 0, &dec);
+  for (int k = 0; k < lay->count; k++)
+    if (src[k] < 0) rv = EXR_ERR_CORRUPT_CHUNK;
+  if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_choose_default_routines(ctxt, 0, &dec);
   if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(ctxt, 0, &dec);
   exr_decoding_destroy(ctxt, &dec);
 
-  /* Interleave the planes into the image. */
+  /* Interleave the wanted planes into the image. */
   if (rv == EXR_ERR_SUCCESS) {
     for (int64_t y = 0; y < chh; y++)
       for (int64_t x = 0; x < cw; x++) {
         float *dst = img->data + ((size_t)(oy + y) * (size_t)img->width + (size_t)(ox + x)) *
                                      (size_t)img->channels;
-        for (int k = 0; k < lay->count; k++) dst[k] = scratch[plane * (size_t)k + (size_t)(y * cw + x)];
+        for (int k = 0; k < lay->count; k++)
+          dst[k] = scratch[plane * (size_t)src[k] + (size_t)(y * cw + x)];
       }
   }
   free(scratch);
@@ -160,6 +168,19 @@ lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
   if (st == LMC_OK && (w <= 0 || h <= 0 || w > (1 << 20) || h > (1 << 20) || w * h > (1ll << 31)))
     st = lmc_error_set(err, LMC_EPARSE, path, 0, "unreasonable EXR size %lld x %lld", (long long)w,
                        (long long)h);
+  /* A header can claim any size; the file's own size bounds what it can
+   * really hold. No EXR compression packs more than about 1000:1 (ZIP, as
+   * deflate), times 2 for half data decoded to float: beyond 4096 image
+   * bytes per file byte (and 64 MiB) the header is lying, and the
+   * allocation would only serve to run out of memory (found by fuzzing). */
+  struct stat sb;
+  if (st == LMC_OK && stat(path, &sb) == 0) {
+    double bytes = (double)w * (double)h * lay.count * sizeof(float);
+    if (bytes > 64.0 * 1024 * 1024 && bytes > 4096.0 * (double)sb.st_size)
+      st = lmc_error_set(err, LMC_EPARSE, path, 0,
+                         "EXR claims %lld x %lld pixels, more than its %lld bytes can hold",
+                         (long long)w, (long long)h, (long long)sb.st_size);
+  }
   if (st == LMC_OK) st = image_init(out, (int)w, (int)h, lay.count, err);
 
   /* Decode every chunk of level 0. */

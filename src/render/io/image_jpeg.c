@@ -10,11 +10,13 @@
  * pads the image with grey); we treat that warning as an error, so a
  * truncated JPEG is reported instead of silently read.
  */
+#define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <setjmp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <jpeglib.h>
 #include <jerror.h>
@@ -64,6 +66,20 @@ lmc_status image_read_jpeg(const char *path, int srgb_to_linear_flag, lmc_image 
   jpeg_create_decompress(&cinfo);
   jpeg_stdio_src(&cinfo, f);
   jpeg_read_header(&cinfo, TRUE);
+
+  /* The header can claim any size; the file's size bounds what it holds.
+   * Every 8x8 block of every component costs at least one bit (its DC
+   * code), so a true JPEG decodes to at most 64 * 8 * 4 float bytes per
+   * file byte and component: beyond that (and 64 MiB) the header lies,
+   * and libjpeg's own buffers would exhaust memory before any error. */
+  struct stat sb;
+  double claimed = (double)cinfo.image_width * cinfo.image_height * cinfo.num_components * 4.0;
+  if (fstat(fileno(f), &sb) == 0 && claimed > 64.0 * 1024 * 1024 &&
+      claimed > 2048.0 * cinfo.num_components * (double)sb.st_size) {
+    snprintf(je.msg, sizeof je.msg, "the header claims %ux%u pixels, more than the file can hold",
+             (unsigned)cinfo.image_width, (unsigned)cinfo.image_height);
+    longjmp(je.jump, 1);
+  }
 
   /* Grey stays grey; YCbCr/RGB become RGB; CMYK is not supported. */
   if (cinfo.jpeg_color_space == JCS_GRAYSCALE) {

@@ -189,7 +189,7 @@ static int obj__numbers(const char *s, double *x, int max) {
  * elements; returns the 0-based index or -1 when invalid. */
 static int64_t obj__resolve(long long i, int64_t count) {
   if (i > 0 && i <= count) return i - 1;
-  if (i < 0 && -i <= count) return count + i;
+  if (i < 0 && i >= -count) return count + i; /* never negates i: -LLONG_MIN overflows */
   return -1;
 }
 

@@ -18,6 +18,7 @@
  * file, and for the header and ascii bodies the line.
  */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -377,7 +378,10 @@ lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
         }
         /* A list: its count, then the items. */
         double cnt;
-        if (!ply__read(&in, pr->count_type, &cnt) || cnt < 0 || cnt != (double)(int64_t)cnt) {
+        /* Range before the cast: converting a double beyond int64 (or NaN,
+         * which ASCII files may spell) is undefined behaviour. */
+        if (!ply__read(&in, pr->count_type, &cnt) || !(cnt >= 0.0 && cnt <= 1e15) ||
+            cnt != floor(cnt)) {
           st = ply__eof(&in, el->name, err);
           break;
         }
@@ -405,7 +409,7 @@ lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
             break;
           }
           if (!is_face) continue;
-          if (x < 0 || x >= (double)n_verts || x != (double)(int64_t)x) {
+          if (!(x >= 0.0 && x < (double)n_verts) || x != floor(x)) {
             st = lmc_error_set(err, LMC_EPARSE, path, format == PLY_ASCII ? in.line : 0,
                                "face %lld: vertex index %g out of range (%lld vertices)",
                                (long long)r, x, (long long)n_verts);

@@ -26,6 +26,12 @@
  *   - Fatal errors (wrong property type, missing required property,
  *     dangling ref, missing mesh or image file, ...) return LMC_EPARSE or
  *     LMC_EIO with the XML file and line of the offending element.
+ *   - Degenerate input never loads silently: mesh_validate drops zero-area
+ *     triangles (warning) and rejects NaN/Inf values and bad indices; a
+ *     mesh left empty is skipped with its area emitter (warning); eta = 1
+ *     warns; bitmap textures with NaN/Inf texels warn (the render drops
+ *     the samples that meet them); envmap texels that are NaN, Inf or
+ *     negative are set to 0 with a warning.
  *   - Conductors: cond_eta = eta / extEta and cond_k = k / extEta, where
  *     extEta defaults to 1 (Mitsuba's "air", 1.000277, differs by 0.03%).
  *     Dielectrics and plastic: eta = intIOR / extIOR.
@@ -33,6 +39,7 @@
  *     grows, so BSDF textures keep an image index while loading and get
  *     their pointers after the last image was added (fix-up list).
  */
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -324,6 +331,20 @@ static lmc_status xml__relabel(builder *B, lmc_status st, const prop *p, const c
 
 /* ---- Textures. ---------------------------------------------------------- */
 
+/* Counts the texels of img that are NaN or infinite; with `repair`, also
+ * those that are negative, and sets all of them to 0. */
+static int64_t xml__bad_texels(lmc_image *img, int repair) {
+  int64_t n = (int64_t)img->width * img->height * img->channels, bad = 0;
+  for (int64_t i = 0; i < n; i++) {
+    float v = img->data[i];
+    if (!isfinite(v) || (repair && v < 0.0f)) {
+      bad++;
+      if (repair) img->data[i] = 0.0f;
+    }
+  }
+  return bad;
+}
+
 /* Loads (once per texture object) the image of a bitmap texture. */
 static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
   if (o->index >= 0) {
@@ -348,6 +369,14 @@ static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
     image_free(&img);
     return xml__relabel(B, st, fp, "texture image");
   }
+  /* NaN or Inf texels are kept (the image is the user's), but said: the
+   * render drops and counts every sample that meets one. */
+  int64_t bad = xml__bad_texels(&img, 0);
+  if (bad > 0)
+    lmc_warn(fp->file, fp->line,
+             "texture image '%s' has %lld NaN or infinite values: samples that meet them will be "
+             "dropped",
+             fp->s, (long long)bad);
   int idx = scene_add_image(B->s, &img, B->err);
   if (idx < 0) {
     image_free(&img);
@@ -592,6 +621,9 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if ((st = xml__ior(B, o, "intIOR", bk7, &int_ior)) != LMC_OK) return st;
     if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
     b->eta = int_ior / ext_ior;
+    if (b->eta == 1.0)
+      lmc_warn(o->file, o->line,
+               "%s with intIOR = extIOR (eta = 1): an index-matched interface, invisible", t);
     if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
                            &img[1])) != LMC_OK)
       return st;
@@ -612,6 +644,9 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if ((st = xml__ior(B, o, "intIOR", pp, &int_ior)) != LMC_OK) return st;
     if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
     b->eta = int_ior / ext_ior;
+    if (b->eta == 1.0)
+      lmc_warn(o->file, o->line,
+               "%s with intIOR = extIOR (eta = 1): no specular coating, only the diffuse base", t);
     if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
                            &img[0])) != LMC_OK)
       return st;
@@ -808,6 +843,15 @@ static lmc_status xml__shape(builder *B, pset *o) {
   }
   xml__warn_unused(o);
 
+  /* An empty mesh (mesh_validate has warned) is left out, with its emitter:
+   * a light of zero area could only produce 0/0 when sampled. */
+  if (m.n_triangles == 0) {
+    if (emitter)
+      lmc_warn(emitter->file, emitter->line, "area emitter on an empty mesh: ignored");
+    mesh_free(&m);
+    return LMC_OK;
+  }
+
   int mi = scene_add_mesh(B->s, &m, B->err);
   if (mi < 0) {
     mesh_free(&m);
@@ -904,6 +948,12 @@ static lmc_status xml__emitter(builder *B, pset *o) {
       image_free(&l.image);
       return xml__relabel(B, st, fp, "environment map");
     }
+    /* The light's sampling distribution needs finite, non-negative values. */
+    int64_t bad = xml__bad_texels(&l.image, 1);
+    if (bad > 0)
+      lmc_warn(fp->file, fp->line,
+               "environment map '%s' has %lld NaN, infinite or negative values: set to 0", fp->s,
+               (long long)bad);
   } else if (strcmp(t, "area") == 0) {
     lmc_warn(o->file, o->line, "an area emitter must be nested in a shape: ignored");
     for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
