@@ -45,6 +45,7 @@ struct mc_pss {
   int64_t iter, last_large;
   int large;        /* the proposal being evaluated is a large step */
   double s1, s2;    /* the chain's small step (owed steps are replayed with it) */
+  const double *scale; /* per-coordinate factor on s1, s2 (target.h; NULL: 1) */
   rng *r;
   int64_t *overflow;
 };
@@ -81,10 +82,12 @@ static double pss__get(mc_pss *p, int i) {
         from = p->last_large;
       }
       int64_t n = p->iter - from;
+      double sc = p->scale ? p->scale[i] : 1.0;
       if (n > PSS_MAX_REPLAY) {
         p->val[i] = rng_uniform(p->r);
-      } else {
-        for (int64_t k = 0; k < n; k++) p->val[i] = chain__kelemen(p->val[i], p->s1, p->s2, p->r);
+      } else if (sc > 0.0) {
+        for (int64_t k = 0; k < n; k++)
+          p->val[i] = chain__kelemen(p->val[i], sc * p->s1, sc * p->s2, p->r);
       }
     }
     p->mod[i] = p->iter;
@@ -236,6 +239,7 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   p->r = &c->r;
   p->s1 = s1;
   p->s2 = s2;
+  p->scale = target->step_scale;
   p->overflow = &c->overflow;
   c->target = target;
   c->n_kernels = n;
@@ -278,17 +282,37 @@ void mc_chain_destroy(mc_chain *c) {
   free(c);
 }
 
-/* Evaluates the state the lazy vector holds into st (f = 0 on failure). */
-static void chain__eval(mc_chain *c, mc_state *st) {
+/* Evaluates the state the lazy vector holds into st (f = 0 on failure),
+ * with its gradient when want_grad. */
+static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
   pss__rewind(c->pss);
   st->grad_ok = 0;
+  st->grad_eval = want_grad != 0;
   int rc = c->target->eval(c->target, c->scratch, &c->pss->base, &st->v,
-                           c->with_grad ? st->grad : NULL, &st->grad_ok);
+                           want_grad ? st->grad : NULL, &st->grad_ok);
   if (rc != 0 || !(st->v.f >= 0.0) || !isfinite(st->v.f)) {
     if (rc != 0) c->eval_failures++;
     st->v.f = 0.0;
     st->grad_ok = 0;
   }
+}
+
+/* The gradient of the current state, evaluated lazily: after
+ * pss__materialise every coordinate is up to date, so the evaluation
+ * replays x exactly (f is a function of u). The stored f is kept: when a
+ * coordinate past a stream's block made the new f differ (pseudo-marginal,
+ * chain.h), x gets no gradient. */
+static void chain__regrad(mc_chain *c) {
+  mc_value v = c->x.v;
+  c->regrad++;
+  if (!(v.f > 0.0)) {
+    c->x.grad_ok = 0;
+    c->x.grad_eval = 1;
+    return;
+  }
+  chain__eval(c, &c->x, 1);
+  if (c->x.v.f != v.f) c->x.grad_ok = 0;
+  c->x.v = v;
 }
 
 double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_seq) {
@@ -298,7 +322,7 @@ double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_s
   p->last_large = 0;
   rng_seed(&c->r, seed, seq);
   pss__begin(p, 1);
-  chain__eval(c, &c->x);
+  chain__eval(c, &c->x, 0);
   pss__accept(p);
   rng_seed(&c->r, seed, chain_seq);
   c->steps = 0;
@@ -344,10 +368,11 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   int full = k->kind == MC_KERNEL_FULL;
   if (full) {
     pss__materialise(p, c->x.u);
+    if (k->needs_grad && !c->x.grad_eval) chain__regrad(c);
     pss__begin(p, 0);
     double log_fwd = k->propose(k->self, &c->r, &c->x, c->y.u);
     for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
-    chain__eval(c, &c->y);
+    chain__eval(c, &c->y, k->needs_grad);
     if (c->y.v.f > 0.0) log_ratio = k->log_density(k->self, &c->y, c->x.u) - log_fwd;
   } else if (k->kind == MC_KERNEL_TECHNIQUE) {
     /* A small step of every other coordinate (the lazy vector owes every
@@ -355,10 +380,10 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
      * coordinate redrawn: a product of symmetric proposals. */
     pss__begin(p, 0);
     pss__set(p, k->coord, rng_uniform(&c->r));
-    chain__eval(c, &c->y);
+    chain__eval(c, &c->y, k->needs_grad);
   } else {
     pss__begin(p, k->kind == MC_KERNEL_LARGE);
-    chain__eval(c, &c->y);
+    chain__eval(c, &c->y, k->needs_grad);
   }
 
   /* Metropolis-Hastings: a = min(1, f(y) q(x|y) / (f(x) q(y|x))). */

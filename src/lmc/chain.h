@@ -14,7 +14,7 @@
  *
  * The step (full Metropolis-Hastings). With probability p_k the chain picks
  * kernel k, draws a proposal y ~ q_k(. | x), evaluates f(y) (with its
- * gradient when some kernel of the chain needs gradients), and accepts with
+ * gradient only when kernel k needs gradients), and accepts with
  *
  *     a = min(1, f(y) q_k(x | y) / (f(x) q_k(y | x))).
  *
@@ -28,7 +28,8 @@
  * (every coordinate a fresh uniform; an independence proposal whose
  * density is 1, so the ratio is f(y) / f(x)) and Kelemen's small step
  * (each coordinate moves by +-r, r = s2 exp(-log(s2/s1) xi), wrapped into
- * [0,1); symmetric). Any other kernel is "full": it sees the whole
+ * [0,1); symmetric; a target may scale s1, s2 per coordinate by a constant
+ * factor, mc_target.step_scale, which keeps it symmetric). Any other kernel is "full": it sees the whole
  * coordinate vector of x (materialised from the lazy vector), writes all
  * coordinates of y, and gives the two log densities; see mc_kernel.
  * The MMLT technique mutation is a third built-in lazy kind: one given
@@ -62,6 +63,7 @@ typedef struct mc_state {
   mc_value v;   /* f, value, raster position */
   double *grad; /* df/du (owned by the chain; valid when grad_ok) */
   int grad_ok;  /* 1 when grad holds the gradient of f at u */
+  int grad_eval; /* 1 when the state was evaluated with its gradient (grad_ok meaningful) */
 } mc_state;
 
 typedef enum mc_kernel_kind {
@@ -75,7 +77,11 @@ typedef enum mc_kernel_kind {
  *  propose(self, r, x, OUT_y): draws y ~ q(. | x) with the chain's rng r,
  *    writes all x->dim coordinates (each in [0,1)) to OUT_y and returns
  *    log q(y | x). x->grad is valid when x->grad_ok (needs_grad kernels
- *    get states evaluated with their gradient).
+ *    get states evaluated with their gradient: the proposal y of such a
+ *    kernel is evaluated with it, and a current state reached by another
+ *    kernel, evaluated with f alone, is re-evaluated with its gradient
+ *    before such a kernel proposes from it; other kernels' proposals are
+ *    evaluated without, which is the cheaper pass 1 of path.h).
  *  log_density(self, from, to_u): log q(to_u | from), from a state whose
  *    gradient is available as above; the chain calls it with from = y and
  *    to_u = x's coordinates for the reverse density. Return -INFINITY
@@ -124,7 +130,8 @@ typedef struct mc_chain {
   mc_kernel kernels[MC_MAX_KERNELS];
   double cdf[MC_MAX_KERNELS]; /* cumulative kernel probabilities */
   mc_kernel_stats stats[MC_MAX_KERNELS];
-  int with_grad;              /* evaluate every state with its gradient */
+  int with_grad;              /* some kernel needs gradients */
+  int64_t regrad;             /* current states re-evaluated for their gradient */
   rng r;                      /* the chain's own random stream */
   mc_pss *pss;                /* the lazy vector of the current state */
   mc_state x, y;              /* current and proposed (x.u valid after a full step) */

@@ -207,8 +207,11 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       }
     if (st->max_streak >= LMC_STALL_STEPS) stalled++;
   }
-  (void)chains, (void)n;
-  for (int i = 0; i < run->n; i++) grad_evals += run->mala[i].st.steps;
+  int64_t regrad = 0;
+  for (int i = 0; i < n; i++) {
+    grad_evals += lmc_target_scratch_grad_evals(chains[i]->scratch);
+    regrad += chains[i]->regrad;
+  }
   for (int len = 0; len < MAXL; len++)
     if (pr[0][len])
       fprintf(stderr, "lmc: mala       length %-3d%s proposed %lld, accepted %lld (%.1f%%)\n", len,
@@ -217,6 +220,6 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   if (pr[1][0])
     fprintf(stderr, "lmc: mala fallback (no gradient, Kelemen step) proposed %lld, accepted %lld (%.1f%%)\n",
             (long long)pr[1][0], (long long)ac[1][0], 100.0 * (double)ac[1][0] / (double)pr[1][0]);
-  fprintf(stderr, "lmc: %.4g gradient evaluations/s; %lld of %d chains stalled (%d+ steps without an accepted move)\n",
-          (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)stalled, run->n, LMC_STALL_STEPS);
+  fprintf(stderr, "lmc: %.4g gradient evaluations/s (%lld states re-evaluated for their gradient); %lld of %d chains stalled (%d+ steps without an accepted move)\n",
+          (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)regrad, (long long)stalled, run->n, LMC_STALL_STEPS);
 }

@@ -26,6 +26,7 @@ lmc_kernel_params lmc_kernel_params_default(void) {
   p.cache.radius = 0.1;
   p.cache.eps = p.eps, p.cache.lo = p.lo, p.cache.hi = p.hi;
   p.record_stride = 4;
+  p.norm = LMC_NORM_OFF; /* measured: no normalisation helped on ring-caustics (README) */
   return p;
 }
 
@@ -107,18 +108,43 @@ static int lmc__gradient(lmc_mala *k, const mc_state *x) {
   return key;
 }
 
+/* Normalises M over its first n coordinates (see lmc_kernel.h) in place. */
+static void lmc__normalise(int norm, double *M, int n) {
+  if (norm == LMC_NORM_OFF || n < 1) return;
+  double c = 0.0;
+  if (norm == LMC_NORM_MEAN) {
+    for (int i = 0; i < n; i++) c += M[i];
+    c /= (double)n;
+  } else if (norm == LMC_NORM_GEOMEAN) {
+    for (int i = 0; i < n; i++) c += log(M[i]);
+    c = exp(c / (double)n);
+  } else {
+    for (int i = 0; i < n; i++) c = M[i] > c ? M[i] : c;
+  }
+  if (!(c > 0.0) || !isfinite(c)) return;
+  double inv = 1.0 / c;
+  for (int i = 0; i < n; i++) M[i] *= inv;
+}
+
+/* The chain's Adam M (ADAM, DIMINISH, CACHE stage 1) at a state of key
+ * `key`: normalised over the key coordinates, and for DIMINISH mixed with
+ * I after normalising. */
+static const double *lmc__precond_chain(lmc_mala *k, const mc_state *x, int key) {
+  if (k->p.norm == LMC_NORM_OFF && k->p.adapt != LMC_ADAPT_DIMINISH) return k->M_chain;
+  memcpy(k->M, k->M_chain, (size_t)x->dim * sizeof(double));
+  lmc__normalise(k->p.norm, k->M, key);
+  if (k->p.adapt == LMC_ADAPT_DIMINISH) {
+    double w = k->adam.t > 0 ? k->p.diminish_t0 / (double)k->adam.t : 1.0;
+    if (w > 1.0) w = 1.0;
+    for (int i = 0; i < x->dim; i++) k->M[i] = (1.0 - w) + w * k->M[i];
+  }
+  return k->M;
+}
+
 /* The preconditioner at state x with key `key` (> 0); NULL means I. */
 static const double *lmc__precond(lmc_mala *k, const mc_state *x, int key) {
-  switch (k->p.adapt) {
-    case LMC_ADAPT_NONE:
-      return NULL;
-    case LMC_ADAPT_ADAM:
-    case LMC_ADAPT_DIMINISH:
-      return k->M_chain;
-    case LMC_ADAPT_CACHE:
-      break;
-  }
-  if (!k->stage2) return k->M_chain;
+  if (k->p.adapt == LMC_ADAPT_NONE) return NULL;
+  if (k->p.adapt != LMC_ADAPT_CACHE || !k->stage2) return lmc__precond_chain(k, x, key);
   /* Stage 2: a pure function of x (its first `key` coordinates); the same
    * state as one of the last two lookups gives the same M. */
   size_t bytes = (size_t)x->dim * sizeof(double);
@@ -133,6 +159,7 @@ static const double *lmc__precond(lmc_mala *k, const mc_state *x, int key) {
   if (found) k->st.lookup_hits++;
   double one = 1.0 < k->p.lo ? k->p.lo : (1.0 > k->p.hi ? k->p.hi : 1.0);
   for (int i = kk; i < x->dim; i++) M[i] = one;
+  lmc__normalise(k->p.norm, M, key);
   memcpy(k->memo_u[slot], x->u, bytes);
   k->memo_key[slot] = key;
   return M;
@@ -183,11 +210,7 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   int key = lmc__gradient(k, x);
   if (key == 0) return;
   adam_update(&k->adam, x->dim, k->g);
-  if (k->p.adapt == LMC_ADAPT_DIMINISH)
-    adam_precond_diminish(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->p.diminish_t0,
-                          k->M_chain);
-  else
-    adam_precond(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
+  adam_precond(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
   /* Stage 1 of CACHE: record every record_stride-th state of our own steps
    * (x->u is valid only after a full kernel's step). */
   if (!own || !k->record || k->p.record_stride <= 0) return;

@@ -30,7 +30,18 @@
  *              a pure function of x, evaluated at x for the forward and at
  *              y for the reverse density.
  * For ADAM and DIMINISH the M of one step is the same in both directions
- * (it changes only between steps).
+ * (it changes only between steps) up to the normalisation below.
+ *
+ * Normalisation (lmc_kernel_params.norm, default off): an adapted M may be
+ * divided by its mean, geometric mean or maximum over the state's key
+ * coordinates (a function of the state, so both directions of a step stay
+ * exact), so that s means for M what it means for I. On ring-caustics none
+ * of the three made adaptation beat M = I (see the README), hence off.
+ *
+ * Gradients are evaluated lazily by the chain (chain.h): a state reached
+ * by a large or Kelemen step is evaluated without its gradient, and
+ * re-evaluated with it only when this kernel proposes from it. Adam's
+ * statistics (on_step) are updated at states whose gradient is known.
  *
  * Cache key. Paths of different lengths use different numbers of
  * coordinates; the cache keys a state by k(x) = 1 + the index of the last
@@ -51,6 +62,11 @@
 #include "lmc/gcache.h"
 #include "render/settings.h"
 
+/* Normalisation of an adapted M over the state's key coordinates (the
+ * first k(x)): M / c with c their mean, geometric mean or maximum, so the
+ * step s keeps the meaning it has for M = I. */
+typedef enum lmc_norm { LMC_NORM_OFF = 0, LMC_NORM_MEAN, LMC_NORM_GEOMEAN, LMC_NORM_MAX } lmc_norm;
+
 typedef struct lmc_kernel_params {
   lmc_adapt adapt;
   double step;          /* s */
@@ -60,6 +76,7 @@ typedef struct lmc_kernel_params {
   double diminish_t0;   /* DIMINISH: w_t = min(1, t0 / t) */
   gcache_params cache;  /* CACHE stage 2 lookup */
   int record_stride;    /* CACHE stage 1: record every n-th own state (0: none) */
+  int norm;             /* lmc_norm: how M is normalised over the key coordinates */
 } lmc_kernel_params;
 
 /* The parameters of render settings (rs->lmc_step, adam_eps, precond_lo/hi,
@@ -76,7 +93,7 @@ typedef struct lmc_mala_stats {
    * path lengths), [0]: MALA proposals, [1]: Kelemen fallbacks. */
   int64_t key_proposed[2][LMC_STAT_KEYS];
   int64_t key_accepted[2][LMC_STAT_KEYS];
-  int64_t steps;        /* steps of the chain (every one evaluates a proposal with its gradient) */
+  int64_t steps;        /* steps of the chain */
   int64_t streak;       /* steps of the chain since its last accepted one */
   int64_t max_streak;   /* the longest such run (stalls) */
   int64_t mala;         /* proposals made with the gradient */

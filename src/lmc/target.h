@@ -56,6 +56,13 @@ struct mc_target {
   void (*scratch_destroy)(void *scratch);
   /* Optional counter of rays traced in `scratch` since it was created (NULL: none). */
   int64_t (*scratch_rays)(const void *scratch);
+  /* Optional (NULL: all 1), borrowed: per-coordinate factor on the offsets of
+   * Kelemen's small step, in [0, 1]. A target sets it below 1 for a
+   * coordinate whose mapping has a huge derivative (e.g. the triangle
+   * choice of a finely tessellated area light, which a step of 1/1024
+   * throws to the far side of the light); 0 leaves the coordinate to large
+   * steps. Each factor is a constant, so the step stays symmetric. */
+  const double *step_scale;
 };
 
 /* First coordinate of stream k. */
