@@ -69,7 +69,7 @@ static const char *lmc_render_usage =
     "\n"
     "MCMC (pssmlt, mmlt, lmc; --spp counts mutations per pixel):\n"
     "  --largestep P            large-step probability (default 0.3)\n"
-    "  --sigma S                Kelemen small-step scale (default 1/64; mmlt 0.2)\n"
+    "  --sigma S                Kelemen small-step scale (default 1/64; mmlt 0.05)\n"
     "  --bootstrap N            independent paths used to estimate b (default: enough for 1%)\n"
     "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
     "\n"
