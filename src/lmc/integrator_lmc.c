@@ -18,6 +18,7 @@
 
 #include "lmc/gcache.h"
 #include "lmc/lmc_kernel.h"
+#include "lmc/mcmc.h"
 
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */
@@ -30,6 +31,7 @@ struct lmc_run {
   mc_target target;
   render_settings rs;
   lmc_kernel_params kp;
+  double *step_scale;    /* the target's and the kernels' step scale (owned; mcmc_pt_step_scale) */
   int n;                 /* chains */
   lmc_mala *mala;        /* per chain */
   gcache **rec;          /* per chain, stage 1 */
@@ -49,6 +51,17 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
   run->rs = *rs;
   lmc_target_init(&run->target, &run->tctx, s, rs, unbounded);
   run->kp = lmc_kernel_params_from_settings(rs);
+  /* The light-position numbers of next-event estimation, as pssmlt: a
+   * smaller step for the chain's Kelemen step and a factor c^2 on MALA's
+   * preconditioner (lmc_kernel.h). */
+  run->step_scale = malloc((size_t)run->target.dim * sizeof(double));
+  if (!run->step_scale) {
+    free(run);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+  }
+  mcmc_pt_step_scale(s, run->target.dim, run->step_scale);
+  run->target.step_scale = run->step_scale;
+  run->kp.scale = run->step_scale;
   run->indep = (lmc_indep){NULL, LMC_INDEP_SIGMA, run->kp.s1, run->kp.s2};
   run->stage1 = rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
   *OUT_run = run;
@@ -64,6 +77,7 @@ void lmc_run_destroy(lmc_run *run) {
   free(run->mala);
   free(run->rec);
   gcache_destroy(run->cache);
+  free(run->step_scale);
   free(run);
 }
 
@@ -175,9 +189,11 @@ int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elaps
 void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
-  fprintf(stderr, "lmc: adapt %s, step %g, precond clamp [%g, %g], grad bound %g, iso %g\n",
+  fprintf(stderr,
+          "lmc: adapt %s, step %g, precond clamp [%g, %g], grad bound %g, iso %g, light-position "
+          "step scale %g\n",
           mode[adapt], run->kp.step, run->kp.lo, run->kp.hi, run->kp.grad_bound,
-          run->rs.iso_prob);
+          run->rs.iso_prob, run->target.dim > PT_DIMS_CAMERA + 1 ? run->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
   /* The cache. */
   if (run->rs.adapt == LMC_ADAPT_CACHE && run->cache) {
     int trees = 0;

@@ -10,7 +10,11 @@
  *
  * Each chain mixes the large step (--largestep), Kelemen's isotropic
  * small step (--iso-prob) and LMC's preconditioned MALA step (lmc_kernel.h;
- * the rest). With --adapt cache and LMC_INDEP_PROB > 0 the cache's
+ * the rest). Both small steps are scaled by 1 / (the area lights' largest
+ * triangle count) on next-event estimation's light-position number, which
+ * picks the triangle (mcmc_pt_step_scale, as pssmlt and mmlt); for MALA
+ * that is a constant factor c^2 of the preconditioner, with the gradient,
+ * its truncation and Adam taken in the rescaled coordinates. With --adapt cache and LMC_INDEP_PROB > 0 the cache's
  * independence proposal joins them (in stage 1, where there is no cache
  * yet, its slot makes a Kelemen step). It is off: on ring-caustics it
  * accepted 0 of 51291 proposals in a 60 s render (a Gaussian of 0.01

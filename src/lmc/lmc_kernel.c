@@ -97,13 +97,15 @@ int lmc_state_key(const mc_state *x) {
   return 0;
 }
 
-/* g = grad f / f truncated into k->g; returns the cache key k(x) (0: the
- * state has no usable gradient and takes the Kelemen fallback). */
+/* g = c grad f / f (the gradient in the rescaled coordinates, lmc_kernel.h)
+ * truncated into k->g; returns the cache key k(x) (0: the state has no
+ * usable gradient and takes the Kelemen fallback). */
 static int lmc__gradient(lmc_mala *k, const mc_state *x) {
   int key = lmc_state_key(x);
   if (key == 0) return 0;
   double inv = 1.0 / x->v.f;
-  for (int i = 0; i < x->dim; i++) k->g[i] = x->grad[i] * inv;
+  const double *c = k->p.scale;
+  for (int i = 0; i < x->dim; i++) k->g[i] = x->grad[i] * inv * (c ? c[i] : 1.0);
   mala_truncate(x->dim, k->g, k->p.grad_bound);
   return key;
 }
@@ -173,21 +175,22 @@ static double lmc__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
   if (key == 0) {
     /* Fallback: Kelemen's small step, with its exact density. */
     k->st.fallback++;
-    mala_kelemen_sample(x->dim, x->u, k->p.s1, k->p.s2, r, OUT_y);
-    return mala_kelemen_log_density(x->dim, x->u, k->p.s1, k->p.s2, OUT_y);
+    mala_kelemen_sample_c(x->dim, x->u, k->p.s1, k->p.s2, k->p.scale, r, OUT_y);
+    return mala_kelemen_log_density_c(x->dim, x->u, k->p.s1, k->p.s2, k->p.scale, OUT_y);
   }
   k->st.mala++;
   const double *M = lmc__precond(k, x, key);
-  mala_sample(x->dim, x->u, k->g, M, k->p.step, r, OUT_y);
-  return mala_log_density(x->dim, x->u, k->g, M, k->p.step, OUT_y);
+  mala_sample_c(x->dim, x->u, k->g, M, k->p.scale, k->p.step, r, OUT_y);
+  return mala_log_density_c(x->dim, x->u, k->g, M, k->p.scale, k->p.step, OUT_y);
 }
 
 static double lmc__log_density(void *self, const mc_state *from, const double *to_u) {
   lmc_mala *k = self;
   int key = lmc__gradient(k, from);
-  if (key == 0) return mala_kelemen_log_density(from->dim, from->u, k->p.s1, k->p.s2, to_u);
+  if (key == 0)
+    return mala_kelemen_log_density_c(from->dim, from->u, k->p.s1, k->p.s2, k->p.scale, to_u);
   const double *M = lmc__precond(k, from, key);
-  return mala_log_density(from->dim, from->u, k->g, M, k->p.step, to_u);
+  return mala_log_density_c(from->dim, from->u, k->g, M, k->p.scale, k->p.step, to_u);
 }
 
 static void lmc__on_step(void *self, const mc_state *x, int accepted) {

@@ -38,6 +38,17 @@
  * exact), so that s means for M what it means for I. On ring-caustics none
  * of the three made adaptation beat M = I (see the README), hence off.
  *
+ * Step scale (lmc_kernel_params.scale: the target's step_scale, target.h).
+ * A coordinate with a huge derivative (the triangle choice of a tessellated
+ * area light) gets a constant factor c_i: the kernel runs MALA in the
+ * rescaled coordinates z = u / c (mala.h), i.e. with preconditioner c^2 M
+ * in u, and its Kelemen fallback scales the offsets by c_i, as the chain's
+ * own small step does. g above is then c grad log f, the gradient in z:
+ * the truncation to grad_bound and Adam's moments (hence M and the cache's
+ * records) are taken of it, so one coordinate whose raw gradient is ~1/c_i
+ * times the others neither shrinks the rest of g under the bound nor
+ * drives M to its clamp. c is constant, so both directions stay exact.
+ *
  * Gradients are evaluated lazily by the chain (chain.h): a state reached
  * by a large or Kelemen step is evaluated without its gradient, and
  * re-evaluated with it only when this kernel proposes from it. Adam's
@@ -77,6 +88,7 @@ typedef struct lmc_kernel_params {
   gcache_params cache;  /* CACHE stage 2 lookup */
   int record_stride;    /* CACHE stage 1: record every n-th own state (0: none) */
   int norm;             /* lmc_norm: how M is normalised over the key coordinates */
+  const double *scale;  /* borrowed, dim entries (NULL: all 1): the step scale c (below) */
 } lmc_kernel_params;
 
 /* The parameters of render settings (rs->lmc_step, adam_eps, precond_lo/hi,

@@ -5,6 +5,7 @@
 #include "lmc/mala.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #define MALA_TWO_PI 6.28318530717958647692
 #define MALA_LOG_SQRT_TWO_PI 0.91893853320467274178
@@ -68,52 +69,80 @@ double mala_log_wrapped_normal(double y, double mu, double sigma) {
   return -d0 * d0 * inv + log(sum) - log(sigma) - MALA_LOG_SQRT_TWO_PI;
 }
 
-void mala_sample(int n, const double *x, const double *g, const double *M, double s, rng *r,
-                 double *OUT_y) {
+void mala_sample_c(int n, const double *x, const double *g, const double *M, const double *c,
+                   double s, rng *r, double *OUT_y) {
   /* Box-Muller gives two independent normals per pair of uniforms. */
   for (int i = 0; i < n; i += 2) {
     double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
     double rad = sqrt(-2.0 * log(u1)), z[2] = {rad * cos(MALA_TWO_PI * u2), rad * sin(MALA_TWO_PI * u2)};
     for (int j = 0; j < 2 && i + j < n; j++) {
-      double m = M ? M[i + j] : 1.0;
-      double mu = x[i + j] + 0.5 * s * m * g[i + j];
-      OUT_y[i + j] = mala_wrap(mu + sqrt(s * m) * z[j]);
+      double m = M ? M[i + j] : 1.0, ci = c ? c[i + j] : 1.0;
+      double mu = x[i + j] + 0.5 * s * ci * m * g[i + j];
+      OUT_y[i + j] = ci > 0.0 ? mala_wrap(mu + ci * sqrt(s * m) * z[j]) : x[i + j];
     }
   }
 }
 
-double mala_log_density(int n, const double *x, const double *g, const double *M, double s,
-                        const double *y) {
+void mala_sample(int n, const double *x, const double *g, const double *M, double s, rng *r,
+                 double *OUT_y) {
+  mala_sample_c(n, x, g, M, NULL, s, r, OUT_y);
+}
+
+double mala_log_density_c(int n, const double *x, const double *g, const double *M,
+                          const double *c, double s, const double *y) {
   double lq = 0.0;
   for (int i = 0; i < n; i++) {
-    double m = M ? M[i] : 1.0;
-    lq += mala_log_wrapped_normal(y[i], x[i] + 0.5 * s * m * g[i], sqrt(s * m));
+    double m = M ? M[i] : 1.0, ci = c ? c[i] : 1.0;
+    if (!(ci > 0.0)) {
+      if (y[i] != x[i]) return -INFINITY;
+      continue;
+    }
+    lq += mala_log_wrapped_normal(y[i], x[i] + 0.5 * s * ci * m * g[i], ci * sqrt(s * m));
   }
   return lq;
 }
 
-void mala_kelemen_sample(int n, const double *x, double s1, double s2, rng *r, double *OUT_y) {
+double mala_log_density(int n, const double *x, const double *g, const double *M, double s,
+                        const double *y) {
+  return mala_log_density_c(n, x, g, M, NULL, s, y);
+}
+
+void mala_kelemen_sample_c(int n, const double *x, double s1, double s2, const double *c, rng *r,
+                           double *OUT_y) {
   double logr = log(s2 / s1);
   for (int i = 0; i < n; i++) {
     /* One uniform gives the sign (its first half) and the magnitude. */
-    double xi = rng_uniform(r);
+    double xi = rng_uniform(r), ci = c ? c[i] : 1.0;
     int neg = xi < 0.5;
     xi = neg ? 2.0 * xi : 2.0 * xi - 1.0;
-    double d = s2 * exp(-logr * xi);
-    OUT_y[i] = mala_wrap(neg ? x[i] - d : x[i] + d);
+    double d = ci * s2 * exp(-logr * xi);
+    OUT_y[i] = ci > 0.0 ? mala_wrap(neg ? x[i] - d : x[i] + d) : x[i];
   }
 }
 
-double mala_kelemen_log_density(int n, const double *x, double s1, double s2, const double *y) {
+void mala_kelemen_sample(int n, const double *x, double s1, double s2, rng *r, double *OUT_y) {
+  mala_kelemen_sample_c(n, x, s1, s2, NULL, r, OUT_y);
+}
+
+double mala_kelemen_log_density_c(int n, const double *x, double s1, double s2, const double *c,
+                                  const double *y) {
   /* The offset recomputed from the wrapped coordinates can differ from the
    * drawn one by rounding; a relative slack of 1e-9 at the edges of the
    * support keeps such proposals from getting density zero (a set of
    * measure ~1e-9 of the step, the same for both directions). */
   double logr = log(s2 / s1), lq = 0.0;
   for (int i = 0; i < n; i++) {
-    double d = fabs(mala_torus_diff(y[i], x[i]));
-    if (d < s1 * (1.0 - 1e-9) || d > s2 * (1.0 + 1e-9)) return -INFINITY;
+    double ci = c ? c[i] : 1.0, d = fabs(mala_torus_diff(y[i], x[i]));
+    if (!(ci > 0.0)) {
+      if (y[i] != x[i]) return -INFINITY;
+      continue;
+    }
+    if (d < ci * s1 * (1.0 - 1e-9) || d > ci * s2 * (1.0 + 1e-9)) return -INFINITY;
     lq -= log(2.0 * d * logr);
   }
   return lq;
+}
+
+double mala_kelemen_log_density(int n, const double *x, double s1, double s2, const double *y) {
+  return mala_kelemen_log_density_c(n, x, s1, s2, NULL, y);
 }

@@ -36,6 +36,22 @@
  * MALA in one state-dependent kernel (the fallback where a state has no
  * gradient: the forward density is Kelemen's, the reverse may be MALA's).
  *
+ * Per-coordinate step scale c (the _c variants; mc_target.step_scale): a
+ * constant diagonal change of variables z_i = u_i / c_i, for a coordinate
+ * whose mapping has a huge derivative (the triangle choice of a finely
+ * tessellated area light). MALA in z with gradient g_z = c g_u (the caller
+ * passes g_z, so that truncation and Adam's statistics see the gradient
+ * in the rescaled coordinates) is, in u,
+ *
+ *     y ~ N(x + (s/2) c^2 M g_u, s c^2 M) = N(x + (s/2) c M g_z, s c^2 M),
+ *
+ * a constant diagonal factor c^2 of the preconditioner: the densities are
+ * the wrapped normals above with mu_i = x_i + (s/2) c_i M_i g_z,i and
+ * sigma_i = c_i sqrt(s M_i), exact on the torus. Kelemen's step scales its
+ * offsets to (c_i s1, c_i s2]. c_i = 0 keeps coordinate i fixed (its
+ * density factor is a point mass: 0 in log where y_i = x_i, else -inf).
+ * c == NULL means c = 1.
+ *
  * Conventions: n coordinates, double vectors, M == NULL means M = I. The
  * sampling routines take their random numbers from an rng; they do not
  * allocate. OUT_ arrays may not alias inputs.
@@ -77,11 +93,25 @@ void mala_sample(int n, const double *x, const double *g, const double *M, doubl
 double mala_log_density(int n, const double *x, const double *g, const double *M, double s,
                         const double *y);
 
+/* mala_sample and mala_log_density with the step scale c (see above; g is
+ * the gradient in the rescaled coordinates, c g_u). */
+void mala_sample_c(int n, const double *x, const double *g, const double *M, const double *c,
+                   double s, rng *r, double *OUT_y);
+double mala_log_density_c(int n, const double *x, const double *g, const double *M,
+                          const double *c, double s, const double *y);
+
 /* Kelemen's small step with offsets log-uniform in (s1, s2], 0 < s1 < s2 < 1/2. */
 void mala_kelemen_sample(int n, const double *x, double s1, double s2, rng *r, double *OUT_y);
 
 /* log density of mala_kelemen_sample at y given x (-INFINITY where zero). */
 double mala_kelemen_log_density(int n, const double *x, double s1, double s2, const double *y);
+
+/* Kelemen's step with coordinate i's offsets in (c_i s1, c_i s2], and its
+ * log density (c_i in [0, 1]; NULL: 1). */
+void mala_kelemen_sample_c(int n, const double *x, double s1, double s2, const double *c, rng *r,
+                           double *OUT_y);
+double mala_kelemen_log_density_c(int n, const double *x, double s1, double s2, const double *c,
+                                  const double *y);
 
 /* Signed torus difference y - x, in [-1/2, 1/2). */
 static inline double mala_torus_diff(double y, double x) {
