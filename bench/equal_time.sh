@@ -19,8 +19,12 @@
 # integrators pt bdpt pssmlt mmlt, plus "lmc:none lmc:diminish lmc:cache"
 # when the build accepts --integrator lmc. An entry NAME:ADAPT means
 # --integrator NAME --adapt ADAPT.
+# Extra render flags for every render (references included) come from the
+# environment: LMC_BENCH_FLAGS="--resolution 256x192" renders the torus at
+# the LMC paper's benchmark size.
 # Needs BUILD_DIR/lmc (default build/) and gnuplot (gnuplot-nox).
 set -euo pipefail
+read -r -a extra <<<"${LMC_BENCH_FLAGS:-}"
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
@@ -70,7 +74,7 @@ for sdir in $scenes; do
       mkdir -p "$out/torus-ref"
       for seed in 1 2; do
         "$lmc" render "$sdir/scene.xml" --integrator bdpt --time $((TORUS_REF_MINUTES * 60)) \
-          --seed $seed -q -o "$out/torus-ref/half$seed.exr" >/dev/null
+          --seed $seed "${extra[@]}" -q -o "$out/torus-ref/half$seed.exr" >/dev/null
       done
       "$lmc" merge "$out/torus-ref/half1.exr" "$out/torus-ref/half2.exr" -o "$out/torus-ref/reference.exr"
       ref="$out/torus-ref/reference.exr"
@@ -89,7 +93,7 @@ for sdir in $scenes; do
     stem="$out/$sname/$label"
     rm -f "$stem"-*s.exr
     echo "  $sname / $label ..." >&2
-    "$lmc" render "$sdir/scene.xml" "${flags[@]}" --time "$secs" --threads "$threads" \
+    "$lmc" render "$sdir/scene.xml" "${flags[@]}" "${extra[@]}" --time "$secs" --threads "$threads" \
       --snapshot "$snap" -o "$stem.exr" >"$stem.log" 2>&1 || {
       echo "equal_time: $label failed on $sname (see $stem.log)" >&2
       continue
