@@ -20,6 +20,15 @@
  *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
  * give a bit-identical film under --spp.
+ *
+ * b refined with the large steps (mcmc.c): on the furnace every pixel's
+ * radiance is exactly 1 (grey), so pssmlt's b = E[luminance(A L)] = A, the
+ * film area grown by the filter radius. For each of RUNS seeds the refined
+ * b the render reports must lie within 4 of its own stated standard errors
+ * of A (two-sided normal, 6e-5 per check), and that standard error must be
+ * at most 0.8 times the bootstrap-only one (at 64 mutations per pixel the
+ * large steps add 0.3 * 64 W H, about 30000, samples to the bootstrap's
+ * 16384: sqrt(16384 / 46000) = 0.6 expected).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -150,6 +159,31 @@ static void test_diffuse_sphere(void **state) {
   check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
 }
 
+/* --- b refined with the large steps ------------------------------------------- */
+
+static void test_refined_b(void **state) {
+  (void)state;
+  scene *s = load("furnace.xml");
+  double r = s->filter.radius;
+  double area = (s->cam.width + 2.0 * r) * (s->cam.height + 2.0 * r);
+  for (int i = 0; i < RUNS; i++) {
+    render_settings rs = settings(s, "pssmlt", 64, 200 + (uint64_t)i, 2);
+    film f;
+    render_stats st;
+    lmc_error err;
+    lmc_error_clear(&err);
+    assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
+    fprintf(stderr, "  furnace pssmlt seed %d: b %.6g +- %.3g (bootstrap %.6g +- %.3g), exact %.6g\n",
+            200 + i, st.mcmc_b, st.mcmc_b_se, st.mcmc_b_boot, st.mcmc_b_boot_se, area);
+    assert_near(st.mcmc_b, area, 4.0 * st.mcmc_b_se + 1e-9 * area);
+    assert_le(st.mcmc_b_se, 0.8 * st.mcmc_b_boot_se);
+    assert_true(st.mcmc_b_se > 0.0);
+    g_checks++;
+    film_free(&f);
+  }
+  scene_destroy(s);
+}
+
 /* --- determinism ------------------------------------------------------- */
 
 static void render_film(const scene *s, const char *integrator, uint64_t seed, int threads,
@@ -190,7 +224,7 @@ static void test_determinism(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 3 + 3 + 2 * 2 * 3);
+  assert_int_equal(g_checks, 3 + 3 + 2 * 2 * 3 + RUNS);
 }
 
 int main(void) {
@@ -198,6 +232,7 @@ int main(void) {
       cmocka_unit_test(test_furnace_pssmlt),
       cmocka_unit_test(test_furnace_mmlt),
       cmocka_unit_test(test_diffuse_sphere),
+      cmocka_unit_test(test_refined_b),
       cmocka_unit_test(test_determinism),
       cmocka_unit_test(test_count),
   };

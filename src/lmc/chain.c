@@ -407,6 +407,8 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   mc_kernel_stats *ks = &c->stats[ki];
   ks->proposed++;
   ks->accept_sum += a;
+  ks->f_sum += c->y.v.f;
+  ks->f_sum2 += c->y.v.f * c->y.v.f;
   if (accepted) {
     ks->accepted++;
     pss__accept(p);

@@ -116,6 +116,8 @@ mc_kernel mc_kernel_technique(int coord);
 typedef struct mc_kernel_stats {
   int64_t proposed, accepted;
   double accept_sum; /* sum of acceptance probabilities */
+  double f_sum, f_sum2; /* sum of f(y) and f(y)^2 over the proposals y (for the large
+                           step: independent uniform samples of b = E[f], mcmc.c) */
 } mc_kernel_stats;
 
 /* Where a chain's splats go: w * value / f at (rx, ry); for toy targets the

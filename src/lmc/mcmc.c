@@ -21,14 +21,36 @@
  * is the BDPT estimate of length k. Kernels: large step, Kelemen's small
  * step and the technique mutation (chain.h). The small step of the two
  * light-position coordinates (emission and the s = 1 light sample) is
- * scaled down by the area lights' triangle count (mcmc__light_u1_scale):
+ * scaled down by the area lights' triangle count (mcmc_light_u1_scale):
  * without it, light-tracing states on a tessellated light almost never
- * accepted a small step.
+ * accepted a small step. pssmlt (and lmc, integrator_lmc.h) scale the
+ * same way the light-position number of next-event estimation at every
+ * bounce (mcmc_pt_step_scale).
  *
  * Normalisation. For a family g with target f_g, b_g = E[f_g(u)] over
  * uniform u is estimated by the bootstrap; the family's n_g chains each make
  * m mutations, and its image is b_g / (n_g m) times the sum of its splats
  * value / f (expected-value splatting, chain.c). Families add.
+ *
+ * Refining b with the large steps (Kelemen et al. 2002 do the same). A
+ * large step proposes a fresh uniform state y, so f_g(y) is one more
+ * independent sample of exactly what the bootstrap averages (for mmlt, the
+ * large step of a length-k chain samples b_k). The chains tally sum f(y),
+ * sum f(y)^2 and the count of their large-step proposals (chain.h,
+ * mc_kernel_stats), and the image uses b_g = (bootstrap sum + large-step
+ * sum) / (bootstrap count + large-step count), reduced in chain order so
+ * that under --spp the image stays bit-identical for any --threads. The
+ * splats are therefore kept apart from b: pssmlt and lmc multiply the film
+ * by b at the end (film.splat_scale); mmlt keeps one splat buffer per
+ * length and sums b_k times it into the film at every snapshot and at the
+ * end (when those buffers would exceed MCMC_FAMILY_FILM_BYTES, it falls
+ * back to the bootstrap's b_k, baked into the splats as they are made).
+ * Bias: b_g is an unbiased estimate of b_g, but the image is b_g times the
+ * normalised splat histogram, and the large-step proposals that refine b_g
+ * also drive the chains, so the two factors are (weakly) correlated: like
+ * every ratio estimator the product has an O(1/N) bias, N the number of
+ * samples of b_g, far below its O(1/sqrt N) noise (and the bootstrap-only
+ * b has the same caveat through the starting states).
  *
  * Bootstrap. Sample j of family g is the large step drawn from the stream
  * (seed, hash(g, j)); batches of MCMC_BOOT_BATCH per family are drawn until
@@ -73,6 +95,7 @@
 #define MCMC_BOOT_BATCH 8192
 #define MCMC_BOOT_CAP (1 << 20)
 #define MCMC_MAX_FAMILIES 64
+#define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* mmlt's per-length splat buffers, at most */
 #define MCMC_UNBOUNDED_PT 128  /* pt bounces kept in the state when maxdepth is -1 */
 #define MCMC_UNBOUNDED_MMLT 24 /* mmlt's longest path when maxdepth is -1 */
 #define MCMC_UNBOUNDED_LMC 16  /* lmc's bounces kept in the state when maxdepth is -1 */
@@ -214,9 +237,10 @@ static void mcmc__record(void *ctx, const mc_value *v, double weight) {
   r->v = rgb_scale(v->value, weight * sl->scale);
 }
 
-/* Adds record r to rows [y_lo, y_hi) of the film (film_splat's rule). */
-static void mcmc__splat_rows(film *f, const film_filter *filter, const mcmc_splat *r, int y_lo,
-                             int y_hi) {
+/* Adds record r to rows [y_lo, y_hi) of splat, a film's splat array or a
+ * buffer of its size (film_splat's rule). */
+static void mcmc__splat_rows(const film *f, double *splat, const film_filter *filter,
+                             const mcmc_splat *r, int y_lo, int y_hi) {
   if (!rgb_isfinite(r->v)) return;
   int x0 = (int)floor(r->rx - 0.5 - filter->radius), x1 = (int)ceil(r->rx - 0.5 + filter->radius);
   int y0 = (int)floor(r->ry - 0.5 - filter->radius), y1 = (int)ceil(r->ry - 0.5 + filter->radius);
@@ -228,7 +252,7 @@ static void mcmc__splat_rows(film *f, const film_filter *filter, const mcmc_spla
     for (int x = x0; x <= x1; x++) {
       double w = filter_eval(filter, (x + 0.5) - r->rx, (y + 0.5) - r->ry);
       if (w == 0.0) continue;
-      double *s = f->splat + 3 * ((int64_t)y * f->width + x);
+      double *s = splat + 3 * ((int64_t)y * f->width + x);
       s[0] += w * r->v.r;
       s[1] += w * r->v.g;
       s[2] += w * r->v.b;
@@ -243,13 +267,17 @@ typedef struct mcmc_family {
   mcmc_scene_target st;
   double *f;          /* bootstrap values */
   int64_t n_boot;
-  double b, b_var;    /* estimate of b and the variance of that estimate */
+  double b, b_var;    /* estimate of b and the variance of that estimate (bootstrap) */
+  double boot_s, boot_s2; /* sum of f and f^2 over the bootstrap */
+  double b_ref, b_ref_var; /* b refined with the chains' large steps, and its variance */
+  int64_t n_large;    /* large-step proposals counted in b_ref */
+  double *splat;      /* mmlt: this length's splats, not yet times b (owned; 3 per pixel) */
   int n_chains, first_chain;
-  double *step_scale; /* mmlt: the target's per-coordinate small-step factors (owned) */
+  double *step_scale; /* mmlt, pssmlt: the target's per-coordinate small-step factors (owned) */
 } mcmc_family;
 
 /* The small-step factor for the coordinate that picks an area light's
- * triangle (mmlt). light_sample_le and light_sample_li choose the triangle
+ * triangle (mmlt, pssmlt and lmc). light_sample_le and light_sample_li choose the triangle
  * with their first position number u1 and reuse u1 inside its cell, so
  * d(point)/d(u1) grows with the triangle count: on the 16384-triangle
  * sphere light of ring-caustics a step of 1/1024 moves the point about 60
@@ -259,7 +287,7 @@ typedef struct mcmc_family {
  * coordinate's steps by 1 / (largest triangle count of an area light)
  * keeps them within about a cell; larger moves of the point are left to
  * large steps. 1 when no area light has more than one triangle. */
-static double mcmc__light_u1_scale(const scene *s) {
+double mcmc_light_u1_scale(const scene *s) {
   int64_t n_max = 1;
   for (int i = 0; i < s->n_lights; i++) {
     const light *l = &s->lights[i];
@@ -268,6 +296,12 @@ static double mcmc__light_u1_scale(const scene *s) {
     if (n > n_max) n_max = n;
   }
   return 1.0 / (double)n_max;
+}
+
+void mcmc_pt_step_scale(const scene *s, int dim, double *OUT_scale) {
+  double u1_scale = mcmc_light_u1_scale(s);
+  for (int i = 0; i < dim; i++) OUT_scale[i] = 1.0;
+  for (int i = PT_DIMS_CAMERA + 1; i < dim; i += PT_DIMS_PER_BOUNCE) OUT_scale[i] = u1_scale;
 }
 
 static uint64_t mcmc__boot_seq(int g, int64_t j) {
@@ -309,6 +343,69 @@ static void mcmc__family_b(mcmc_family *F, int64_t n) {
   F->b = mean;
   F->b_var = n > 0 ? var / n : 0.0;
   F->n_boot = n;
+  F->boot_s = s;
+  F->boot_s2 = s2;
+  F->b_ref = F->b;
+  F->b_ref_var = F->b_var;
+  F->n_large = 0;
+}
+
+/* b_ref of every family with chains: the bootstrap's sums plus its chains'
+ * large-step tallies, added in chain order (deterministic). Returns the sum
+ * of b_ref over the families and its variance in OUT_var. */
+static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot *slots,
+                             double *OUT_var) {
+  double b = 0.0, v = 0.0;
+  for (int g = 0; g < n_fam; g++) {
+    mcmc_family *F = &fam[g];
+    double s = F->boot_s, s2 = F->boot_s2;
+    int64_t nl = 0;
+    for (int i = 0; i < F->n_chains; i++) {
+      const mc_chain *c = slots[F->first_chain + i].chain;
+      for (int q = 0; q < c->n_kernels; q++) {
+        if (c->kernels[q].kind != MC_KERNEL_LARGE) continue;
+        s += c->stats[q].f_sum;
+        s2 += c->stats[q].f_sum2;
+        nl += c->stats[q].proposed;
+      }
+    }
+    double n = (double)(F->n_boot + nl);
+    double mean = n > 0.0 ? s / n : 0.0;
+    double var = n > 1.0 ? fmax(0.0, (s2 - n * mean * mean) / (n - 1.0)) : 0.0;
+    F->b_ref = mean;
+    F->b_ref_var = n > 0.0 ? var / n : 0.0;
+    F->n_large = nl;
+    b += F->b_ref;
+    v += F->b_ref_var;
+  }
+  *OUT_var = v;
+  return b;
+}
+
+/* How the splats meet b (see Normalisation above). */
+typedef enum mcmc_norm {
+  MCMC_NORM_BOOT = 0, /* bootstrap b baked into each splat (mmlt without buffer memory) */
+  MCMC_NORM_SCALE,    /* one family: refined b in film.splat_scale */
+  MCMC_NORM_BUFFERS   /* mmlt: per-length buffers, summed times refined b_k */
+} mcmc_norm;
+
+/* Puts the chains' image (done mutations per chain) into the film with the
+ * refined b: one family through splat_scale; per-length buffers, when
+ * compose is set, by summing b_k times each buffer into the film's splats. */
+static void mcmc__publish(film *out, mcmc_family *fam, int n_fam, const mcmc_chain_slot *slots,
+                          mcmc_norm norm, int64_t done, int compose) {
+  if (done <= 0) return;
+  double v;
+  if (norm != MCMC_NORM_BOOT) mcmc__refine_b(fam, n_fam, slots, &v);
+  out->splat_scale = (norm == MCMC_NORM_SCALE ? fam[0].b_ref : 1.0) / (double)done;
+  if (norm != MCMC_NORM_BUFFERS || !compose) return;
+  int64_t n = 3 * (int64_t)out->width * out->height;
+  memset(out->splat, 0, (size_t)n * sizeof(double));
+  for (int g = 0; g < n_fam; g++) {
+    if (!fam[g].splat) continue;
+    double b = fam[g].b_ref;
+    for (int64_t i = 0; i < n; i++) out->splat[i] += b * fam[g].splat[i];
+  }
 }
 
 static void mcmc__free_slots(mcmc_chain_slot *slots, int n) {
@@ -338,7 +435,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
 
   /* Kelemen's s2: --sigma, else 1/64 (pssmlt, lmc) or MCMC_MMLT_SIGMA (mmlt:
    * on ring-caustics at 20 s, once the light-position steps were scaled
-   * (mcmc__light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
+   * (mcmc_light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
    * for 1/64, 0.03, 0.1 and 0.2, one run each). */
   const double sigma = (rs->set & SET_SIGMA) || !is_mmlt ? rs->sigma : MCMC_MMLT_SIGMA;
 
@@ -425,11 +522,23 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     fam[g].f = malloc((size_t)cap * sizeof(double));
     if (!fam[g].f) cap = 0;
   }
+  if (!is_mmlt && !is_lmc) {
+    /* pssmlt: next-event estimation's light-position number u1 of every
+     * bounce (lmc's run sets the same on its own target). */
+    mc_target *T = &fam[0].target;
+    fam[0].step_scale = malloc((size_t)T->dim * sizeof(double));
+    if (fam[0].step_scale) {
+      mcmc_pt_step_scale(s, T->dim, fam[0].step_scale);
+      T->step_scale = fam[0].step_scale;
+    } else {
+      cap = 0;
+    }
+  }
   if (is_mmlt) {
     /* The light-position coordinates u1 of the light stream (emission) and
      * of the connect stream (the light sample of s = 1): see
-     * mcmc__light_u1_scale. */
-    double u1_scale = mcmc__light_u1_scale(s);
+     * mcmc_light_u1_scale. */
+    double u1_scale = mcmc_light_u1_scale(s);
     for (int g = 0; g < n_fam; g++) {
       mc_target *T = &fam[g].target;
       fam[g].step_scale = malloc((size_t)T->dim * sizeof(double));
@@ -468,6 +577,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   }
   double b_total = 0.0, b_var = 0.0;
   for (int g = 0; g < n_fam; g++) b_total += fam[g].b, b_var += fam[g].b_var;
+  st->mcmc_b_boot = st->mcmc_b = b_total;
+  st->mcmc_b_boot_se = st->mcmc_b_se = sqrt(b_var);
 
   /* Chains: MCMC_CHAINS shared in proportion to b_g (at least MCMC_MIN_CHAINS per
    * family that has any contribution). */
@@ -479,6 +590,25 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     n_slots += fam[g].n_chains;
   }
   if (n_slots == 0) goto finish; /* a black image */
+
+  /* Where the splats go (see Normalisation above). */
+  mcmc_norm norm = n_fam == 1 ? MCMC_NORM_SCALE : MCMC_NORM_BUFFERS;
+  if (norm == MCMC_NORM_BUFFERS) {
+    int n_active = 0;
+    for (int g = 0; g < n_fam; g++) n_active += fam[g].n_chains > 0;
+    if ((int64_t)n_active * 3 * W * H * (int64_t)sizeof(double) > MCMC_FAMILY_FILM_BYTES)
+      norm = MCMC_NORM_BOOT;
+    for (int g = 0; g < n_fam && norm == MCMC_NORM_BUFFERS; g++) {
+      if (fam[g].n_chains == 0) continue;
+      fam[g].splat = calloc(3 * (size_t)W * (size_t)H, sizeof(double));
+      if (!fam[g].splat) norm = MCMC_NORM_BOOT;
+    }
+    if (norm == MCMC_NORM_BOOT) {
+      for (int g = 0; g < n_fam; g++) free(fam[g].splat), fam[g].splat = NULL;
+      if (!rs->quiet)
+        fprintf(stderr, "lmc: no memory for per-length splat buffers; b from the bootstrap only\n");
+    }
+  }
   slots = calloc((size_t)n_slots, sizeof *slots);
   if (!slots) {
     status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the chains");
@@ -517,7 +647,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     for (int i = 0; i < F->n_chains; i++) {
       mcmc_chain_slot *sl = &slots[F->first_chain + i];
       sl->family = g;
-      sl->scale = F->b / F->n_chains;
+      sl->scale = (norm == MCMC_NORM_BOOT ? F->b : 1.0) / F->n_chains;
       if (lrun) nk = lmc_run_chain_kernels(lrun, F->first_chain + i, k, p);
       status = mc_chain_create(&sl->chain, &F->target, k, p, nk, err);
       if (status) goto done;
@@ -576,9 +706,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         /* Add the records in chain order, each thread to its band of rows. */
         if (!abandon) {
           int y_lo = (int)((int64_t)H * tid / nthreads), y_hi = (int)((int64_t)H * (tid + 1) / nthreads);
-          for (int i = 0; i < n_slots; i++)
+          for (int i = 0; i < n_slots; i++) {
+            double *dst = fam[slots[i].family].splat ? fam[slots[i].family].splat : out->splat;
             for (int q = 0; q < slots[i].n_rec; q++)
-              mcmc__splat_rows(out, &s->filter, &slots[i].rec[q], y_lo, y_hi);
+              mcmc__splat_rows(out, dst, &s->filter, &slots[i].rec[q], y_lo, y_hi);
+          }
         }
       }
       if (abandon) {
@@ -588,12 +720,14 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         break;
       }
       done_per_chain += m;
-      out->splat_scale = 1.0 / (double)done_per_chain;
+      mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 0);
       if (lrun && lmc_run_after_round(lrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
         /* Stage 1 of lmc --adapt cache ended: its (biased) image is
          * dropped and the chains restart from their bootstrap states with
          * the frozen cache; under --spp, stage 1 counts against the budget. */
         memset(out->splat, 0, 3 * sizeof(double) * (size_t)W * (size_t)H);
+        for (int g = 0; g < n_fam; g++)
+          if (fam[g].splat) memset(fam[g].splat, 0, 3 * sizeof(double) * (size_t)W * (size_t)H);
         for (int i = 0; i < n_slots; i++) {
           mc_chain *c = slots[i].chain;
           memset(c->stats, 0, sizeof c->stats);
@@ -608,6 +742,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       if (render_stop_signal()) stop = 1;
       if (timed && now - t0 >= rs->time_limit) stop = 2;
       if (rs->snapshot > 0.0 && rs->snapshot_fn && now - t0 >= next_snapshot) {
+        mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 1);
         rs->snapshot_fn(rs->snapshot_ctx, out, now - t0);
         while (next_snapshot <= now - t0) next_snapshot += rs->snapshot;
       }
@@ -616,6 +751,15 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       progress_update(&bar, frac);
     }
     progress_finish(&bar);
+    /* The final image with the refined b (also after an interruption: the
+     * film holds whole rounds, and the tallies of the abandoned round are
+     * still independent samples of b). */
+    mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 1);
+    if (norm != MCMC_NORM_BOOT) {
+      double v = 0.0;
+      st->mcmc_b = mcmc__refine_b(fam, n_fam, slots, &v);
+      st->mcmc_b_se = sqrt(v);
+    }
     if (render_stop_signal()) st->interrupted = 1;
     else if (timed && done_per_chain < per_chain) st->timed_out = 1;
     st->samples = done_per_chain * n_slots;
@@ -650,15 +794,27 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
               pr += slots[fam[g].first_chain + i].chain->stats[q].proposed;
               ac += slots[fam[g].first_chain + i].chain->stats[q].accepted;
             }
-          fprintf(stderr, "lmc: length %-3d b %.5g, %d chains, proposed %lld, accepted %.1f%%\n",
-                  fam[g].st.length, fam[g].b, fam[g].n_chains, (long long)pr,
-                  100.0 * (double)ac / fmax(1.0, (double)pr));
+          fprintf(stderr,
+                  "lmc: length %-3d b %.5g (%.1f%%), with large steps %.5g (%.1f%%), %d chains, "
+                  "proposed %lld, accepted %.1f%%\n",
+                  fam[g].st.length, fam[g].b, 100.0 * sqrt(fam[g].b_var) / fmax(fam[g].b, 1e-300),
+                  fam[g].b_ref, 100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
+                  fam[g].n_chains, (long long)pr, 100.0 * (double)ac / fmax(1.0, (double)pr));
         }
       fprintf(stderr,
               "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s)\n",
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
               100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)fam[0].n_boot,
               n_fam > 1 ? " per length" : "");
+      if (norm != MCMC_NORM_BOOT) {
+        double b_ref = 0.0, b_ref_var = 0.0;
+        int64_t n_large = 0;
+        for (int g = 0; g < n_fam; g++)
+          b_ref += fam[g].b_ref, b_ref_var += fam[g].b_ref_var, n_large += fam[g].n_large;
+        fprintf(stderr, "lmc: b with large steps = %.6g +- %.2g (%.2f%%, %lld large steps more)\n",
+                b_ref, sqrt(b_ref_var), 100.0 * sqrt(b_ref_var) / fmax(b_ref, 1e-300),
+                (long long)n_large);
+      }
       if (overflow > 0)
         fprintf(stderr, "lmc: %lld coordinates drawn past the state's blocks\n", (long long)overflow);
       if (lrun) {
@@ -683,7 +839,7 @@ finish:
 done:
   mcmc__free_slots(slots, n_slots);
   lmc_run_destroy(lrun);
-  for (int g = 0; g < n_fam; g++) free(fam[g].f), free(fam[g].step_scale);
+  for (int g = 0; g < n_fam; g++) free(fam[g].f), free(fam[g].step_scale), free(fam[g].splat);
   free(cnt);
   st->seconds = omp_get_wtime() - t0;
   if (status) film_free(out);

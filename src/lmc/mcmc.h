@@ -20,6 +20,18 @@ int mcmc_is_integrator(const char *name);
  * is called; the film then holds a correctly normalised image of all
  * mutations so far. Prints one statistics line per proposal type unless
  * rs->quiet. */
+/* The small-step factor for a coordinate that picks an area light's
+ * triangle: 1 / (largest triangle count of an area light of s), 1 when no
+ * area light has more than one triangle (see mcmc.c). */
+double mcmc_light_u1_scale(const scene *s);
+
+/* Fills OUT_scale[0 .. dim-1] for a camera stream in pt_li's layout
+ * (integrator.h; pssmlt and lmc): 1, except mcmc_light_u1_scale(s) on the
+ * first light-position number of every bounce, PT_DIMS_CAMERA +
+ * PT_DIMS_PER_BOUNCE b + 1, which picks the triangle of next-event
+ * estimation's light sample. */
+void mcmc_pt_step_scale(const scene *s, int dim, double *OUT_scale);
+
 lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                            render_stats *st, lmc_error *err);
 

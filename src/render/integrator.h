@@ -75,6 +75,8 @@ typedef struct render_stats {
   int64_t nan_samples;
   int interrupted;     /* stopped by a signal */
   int timed_out;       /* stopped by the time limit */
+  double mcmc_b_boot, mcmc_b_boot_se; /* MCMC: b (sum over families) from the bootstrap alone, its SE */
+  double mcmc_b, mcmc_b_se;           /* MCMC: b the image uses (refined with large steps), its SE */
 } render_stats;
 
 /* Renders with pt or bdpt according to rs->integrator into `out` (created
