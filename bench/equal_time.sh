@@ -73,7 +73,7 @@ for sdir in $scenes; do
     if [ "$sname" = torus ] && [ -n "${TORUS_REF_MINUTES:-}" ]; then
       mkdir -p "$out/torus-ref"
       for seed in 1 2; do
-        "$lmc" render "$sdir/scene.xml" --integrator bdpt --time $((TORUS_REF_MINUTES * 60)) \
+        "$lmc" render "$sdir/lmc.xml" --integrator bdpt --time $((TORUS_REF_MINUTES * 60)) \
           --seed $seed "${extra[@]}" -q -o "$out/torus-ref/half$seed.exr" >/dev/null
       done
       "$lmc" merge "$out/torus-ref/half1.exr" "$out/torus-ref/half2.exr" -o "$out/torus-ref/reference.exr"
@@ -83,6 +83,10 @@ for sdir in $scenes; do
       continue
     fi
   fi
+  # A scene folder holds scene.xml; the torus of the LMC reference
+  # implementation holds lmc.xml instead.
+  sfile="$sdir/scene.xml"
+  [ -f "$sfile" ] || sfile="$sdir/lmc.xml"
   mkdir -p "$out/$sname"
   plot_lines=()
   for entry in $integrators; do
@@ -93,7 +97,7 @@ for sdir in $scenes; do
     stem="$out/$sname/$label"
     rm -f "$stem"-*s.exr
     echo "  $sname / $label ..." >&2
-    "$lmc" render "$sdir/scene.xml" "${flags[@]}" "${extra[@]}" --time "$secs" --threads "$threads" \
+    "$lmc" render "$sfile" "${flags[@]}" "${extra[@]}" --time "$secs" --threads "$threads" \
       --snapshot "$snap" -o "$stem.exr" >"$stem.log" 2>&1 || {
       echo "equal_time: $label failed on $sname (see $stem.log)" >&2
       continue
