@@ -28,6 +28,7 @@
 
 #include "lmc/mcmc.h"
 #include "render/io/io.h"
+#include "region_stats.h"
 #include "test_util.h"
 
 #define RUNS 6
@@ -61,28 +62,17 @@ static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt,
     assert_int_equal(status, LMC_OK);
     lmc_image img;
     assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
-    double reg[N_STATS] = {0};
-    int cnt[N_STATS] = {0};
-    for (int y = 0; y < img.height; y++)
-      for (int x = 0; x < img.width; x++) {
-        const float *p = img.data + 3 * ((size_t)y * img.width + x);
-        double l = rgb_luminance(rgb_make(p[0], p[1], p[2]));
-        int g = (y * GRID / img.height) * GRID + x * GRID / img.width;
-        reg[g] += l, cnt[g]++;
-        reg[GRID * GRID] += l, cnt[GRID * GRID]++;
-      }
+    double reg[N_STATS];
+    region_means(&img, GRID, reg);
     for (int k = 0; k < N_STATS; k++) {
-      double m = reg[k] / cnt[k];
+      double m = reg[k];
       sum[k] += m;
       sum2[k] += m * m;
     }
     image_free(&img);
     film_free(&f);
   }
-  for (int k = 0; k < N_STATS; k++) {
-    mean[k] = sum[k] / RUNS;
-    se[k] = sqrt(fmax(0.0, (sum2[k] - RUNS * mean[k] * mean[k]) / (RUNS - 1)) / RUNS);
-  }
+  region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
 }
 
 static void check_scene(const char *folder) {
