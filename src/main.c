@@ -76,11 +76,13 @@ static const char *lmc_render_usage =
     "LMC (--integrator lmc):\n"
     "  --adapt MODE             none | adam | diminish | cache (default cache; adam is biased)\n"
     "  --step S                 Langevin step s: y ~ N(x + s/2 M g, s M) (default 1e-5)\n"
+    "  --step-range R           each Langevin step draws s log-uniformly from [S/R, S R] (default 1)\n"
     "  --adam-eps E             M = clamp(1 / (E + sqrt(v)), LO, HI) (default 1e-8)\n"
     "  --precond-clamp LO,HI    the clamp of M (default 1e-3,1e3)\n"
     "  --grad-bound B           truncate |grad log f| to B (default 1e3)\n"
     "  --cache-fraction F       --adapt cache: share of the budget for stage 1 (default 0.1)\n"
-    "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.1)\n"
+    "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.4)\n"
+    "  --lmc-states KIND        lmc's chains: mmlt (multiplexed bidirectional, default) | pt\n"
     "  -q, --quiet              no progress bar\n"
     "  -h, --help               this text\n";
 
@@ -391,6 +393,10 @@ static int lmc_cmd_render(int argc, char **argv) {
     } else if (lmc_flag_is(&a, "--step")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--step", v, 1e-12, 1, &cli.lmc_step))
         goto bad;
+    } else if (lmc_flag_is(&a, "--step-range")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--step-range", v, 1, 1e6, &cli.step_range))
+        goto bad;
     } else if (lmc_flag_is(&a, "--adam-eps")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--adam-eps", v, 0, 1e6, &cli.adam_eps))
         goto bad;
@@ -414,6 +420,13 @@ static int lmc_cmd_render(int argc, char **argv) {
     } else if (lmc_flag_is(&a, "--iso-prob")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
         goto bad;
+    } else if (lmc_flag_is(&a, "--lmc-states")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "mmlt") && strcmp(v, "pt")) {
+        fprintf(stderr, "lmc: flag --lmc-states: '%s' is not one of mmlt, pt\n", v);
+        goto bad;
+      }
+      cli.lmc_states = strcmp(v, "pt") == 0 ? LMC_STATES_PT : LMC_STATES_MMLT;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
     } else if (arg[0] == '-') {
@@ -465,12 +478,14 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
   rs.snapshot = cli.snapshot;
   rs.lmc_step = cli.lmc_step;
+  rs.step_range = cli.step_range;
   rs.adam_eps = cli.adam_eps;
   rs.precond_lo = cli.precond_lo;
   rs.precond_hi = cli.precond_hi;
   rs.grad_bound = cli.grad_bound;
   rs.cache_fraction = cli.cache_fraction;
   rs.iso_prob = cli.iso_prob;
+  rs.lmc_states = cli.lmc_states;
   rs.set |= cli.set;
   rs.threads = cli.threads;
   rs.seed = cli.seed;

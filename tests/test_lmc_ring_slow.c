@@ -1,6 +1,7 @@
 /*
  * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc) with
- * --adapt diminish and --adapt cache agrees with bdpt on the ring-caustics
+ * --adapt diminish and --adapt cache (on its default multiplexed states,
+ * and cache on --lmc-states pt) agrees with bdpt on the ring-caustics
  * scenes (scenes/ring-caustics, scenes/ring-caustics-glass) at 24x18: in
  * the image mean and in the means of a 4 x 4 grid of regions. These are
  * the unbiased modes; a bias from the adaptation, the cache's stage
@@ -12,7 +13,8 @@
  * 6 sqrt(SE_lmc^2 + SE_bdpt^2) of bdpt's. The difference over its
  * estimated standard error is roughly Student t with about 10 degrees of
  * freedom (Welch), P(|t| > 6) ~ 1.3e-4 per check; over 2 scenes x 2 modes
- * x 17 statistics = 68 checks a false alarm has a chance of about 1%.
+ * x 17 statistics = 68 checks a false alarm has a chance of about 1%
+ * (1.3% with the third mode's 34 more).
  * Equal effort: --spp 128 for each (lmc: mutations per pixel, stage 1 of
  * cache included); lmc's bootstrap is fixed at 131072 paths (it would
  * otherwise dominate the time at this resolution).
@@ -32,19 +34,21 @@
 #include "test_util.h"
 
 #define RUNS 6
+#define MODES 3 /* diminish and cache on mmlt states (the default), cache on pt states */
 #define GRID 4
 #define N_STATS (GRID * GRID + 1)
 
 static int g_checks;
 
 /* Mean and SE over RUNS of the region means (index GRID*GRID: the image). */
-static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt,
+static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt, lmc_states states,
                       double mean[N_STATS], double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
     rs.adapt = adapt;
+    rs.lmc_states = states;
     rs.spp = 128;
     rs.set |= SET_SPP;
     rs.bootstrap = 131072; /* b to a few percent: its error is part of each run's, so of the SE */
@@ -87,12 +91,13 @@ static void check_scene(const char *folder) {
   camera_set_resolution(&s->cam, 24, 18);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", LMC_ADAPT_NONE, ref, ref_se);
-  const lmc_adapt modes[2] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE};
-  const char *names[2] = {"diminish", "cache"};
-  for (int i = 0; i < 2; i++) {
+  run_stats(s, "bdpt", LMC_ADAPT_NONE, LMC_STATES_MMLT, ref, ref_se);
+  const lmc_adapt modes[MODES] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE};
+  const lmc_states states[MODES] = {LMC_STATES_MMLT, LMC_STATES_MMLT, LMC_STATES_PT};
+  const char *names[MODES] = {"diminish", "cache", "cache, pt states"};
+  for (int i = 0; i < MODES; i++) {
     double m[N_STATS], se[N_STATS];
-    run_stats(s, "lmc", modes[i], m, se);
+    run_stats(s, "lmc", modes[i], states[i], m, se);
     double worst = 0.0;
     for (int k = 0; k < N_STATS; k++) {
       double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
@@ -123,7 +128,7 @@ static void test_ring_caustics_glass(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 2 * 2 * N_STATS);
+  assert_int_equal(g_checks, 2 * MODES * N_STATS);
 }
 
 int main(void) {

@@ -22,21 +22,30 @@
 
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */
-#define LMC_CACHE_PER_DIM 2048               /* entries kept per tree (lookup cost) */
+#define LMC_CACHE_PER_DIM 256                /* entries kept per tree (lookup cost: brute force in high dimensions) */
 #define LMC_INDEP_SIGMA 0.01                 /* its Gaussian width per coordinate */
 #define LMC_STALL_STEPS 10000                /* a chain this long without acceptance is stalled */
 
-struct lmc_run {
-  lmc_scene_target tctx;
+/* One family of chains: a target and what adapts to it. */
+typedef struct lmc__family {
   mc_target target;
-  render_settings rs;
+  lmc_bdpt_target bctx;  /* mmlt states: the target's context */
+  int length;            /* mmlt states: k; pt states: 0 */
+  double *step_scale;    /* the target's and the kernels' step scale (owned) */
   lmc_kernel_params kp;
-  double *step_scale;    /* the target's and the kernels' step scale (owned; mcmc_pt_step_scale) */
+  gcache *cache;         /* merged and frozen (cache mode, stage 2) */
+  lmc_indep indep;       /* read-only in stage 2 */
+} lmc__family;
+
+struct lmc_run {
+  lmc_scene_target tctx; /* pt states: the target's context */
+  render_settings rs;
+  int n_fam;
+  lmc__family *fam;
   int n;                 /* chains */
+  int *chain_fam;        /* per chain: its family */
   lmc_mala *mala;        /* per chain */
   gcache **rec;          /* per chain, stage 1 */
-  gcache *cache;         /* merged and frozen */
-  lmc_indep indep;       /* shared, read-only in stage 2 */
   int stage1;            /* cache mode, stage 1 running */
   int64_t stage1_mutations;
   double stage1_seconds, build_seconds;
@@ -44,26 +53,49 @@ struct lmc_run {
 };
 
 lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
-                          int unbounded, lmc_error *err) {
+                          int unbounded, int kmin, int kmax, lmc_error *err) {
   *OUT_run = NULL;
   lmc_run *run = calloc(1, sizeof *run);
-  if (!run) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
-  run->rs = *rs;
-  lmc_target_init(&run->target, &run->tctx, s, rs, unbounded);
-  run->kp = lmc_kernel_params_from_settings(rs);
-  /* The light-position numbers of next-event estimation, as pssmlt: a
-   * smaller step for the chain's Kelemen step and a factor c^2 on MALA's
-   * preconditioner (lmc_kernel.h). */
-  run->step_scale = malloc((size_t)run->target.dim * sizeof(double));
-  if (!run->step_scale) {
+  int multiplexed = rs->lmc_states == LMC_STATES_MMLT;
+  int n_fam = multiplexed ? (kmax >= kmin ? kmax - kmin + 1 : 0) : 1;
+  if (run) run->fam = calloc((size_t)(n_fam > 0 ? n_fam : 1), sizeof *run->fam);
+  if (!run || !run->fam) {
     free(run);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
-  mcmc_pt_step_scale(s, run->target.dim, run->step_scale);
-  run->target.step_scale = run->step_scale;
-  run->kp.scale = run->step_scale;
-  run->indep = (lmc_indep){NULL, LMC_INDEP_SIGMA, run->kp.s1, run->kp.s2};
+  run->rs = *rs;
+  run->n_fam = n_fam;
   run->stage1 = rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
+  double u1_scale = mcmc_light_u1_scale(s);
+  for (int g = 0; g < n_fam; g++) {
+    lmc__family *F = &run->fam[g];
+    mc_target *T = &F->target;
+    if (multiplexed) {
+      F->length = kmin + g;
+      lmc_bdpt_target_init(T, &F->bctx, s, rs, F->length);
+    } else {
+      lmc_target_init(T, &run->tctx, s, rs, unbounded);
+    }
+    F->kp = lmc_kernel_params_from_settings(rs);
+    F->step_scale = malloc((size_t)T->dim * sizeof(double));
+    if (!F->step_scale) {
+      lmc_run_destroy(run);
+      return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+    }
+    /* The coordinates that pick a light triangle, as mmlt and pssmlt: a
+     * smaller step for the chain's Kelemen step and a factor c^2 on MALA's
+     * preconditioner (lmc_kernel.h). */
+    if (multiplexed) {
+      for (int i = 0; i < T->dim; i++) F->step_scale[i] = 1.0;
+      F->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
+      F->step_scale[mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 2] = u1_scale;
+    } else {
+      mcmc_pt_step_scale(s, T->dim, F->step_scale);
+    }
+    T->step_scale = F->step_scale;
+    F->kp.scale = F->step_scale;
+    F->indep = (lmc_indep){NULL, LMC_INDEP_SIGMA, F->kp.s1, F->kp.s2};
+  }
   *OUT_run = run;
   return LMC_OK;
 }
@@ -76,86 +108,131 @@ void lmc_run_destroy(lmc_run *run) {
   }
   free(run->mala);
   free(run->rec);
-  gcache_destroy(run->cache);
-  free(run->step_scale);
+  free(run->chain_fam);
+  for (int g = 0; g < run->n_fam; g++) {
+    gcache_destroy(run->fam[g].cache);
+    free(run->fam[g].step_scale);
+  }
+  free(run->fam);
   free(run);
 }
 
-const mc_target *lmc_run_target(const lmc_run *run) { return &run->target; }
+int lmc_run_n_families(const lmc_run *run) { return run->n_fam; }
+const mc_target *lmc_run_family_target(const lmc_run *run, int g) { return &run->fam[g].target; }
+int lmc_run_family_length(const lmc_run *run, int g) { return run->fam[g].length; }
 int lmc_run_in_stage1(const lmc_run *run) { return run->stage1; }
 int64_t lmc_run_stage1_mutations(const lmc_run *run) { return run->stage1_mutations; }
 
-lmc_status lmc_run_set_chains(lmc_run *run, int n, lmc_error *err) {
+int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch) {
+  return run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_nan_samples(scratch) : 0;
+}
+
+static int64_t lmc__grad_evals(const lmc_run *run, const void *scratch) {
+  return run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_grad_evals(scratch)
+                                               : lmc_target_scratch_grad_evals(scratch);
+}
+
+/* An empty frozen cache: M = I everywhere (a valid stage-2 kernel). */
+static gcache *lmc__empty_cache(int dim) {
+  gcache *c = NULL;
+  lmc_error err;
+  if (gcache_create(&c, dim, 0, &err) != LMC_OK) return NULL;
+  if (gcache_freeze(c, 0, 0, &err) != LMC_OK) {
+    gcache_destroy(c);
+    return NULL;
+  }
+  return c;
+}
+
+lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err) {
   run->mala = calloc((size_t)n, sizeof *run->mala);
   run->rec = calloc((size_t)n, sizeof *run->rec);
-  if (!run->mala || !run->rec) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+  run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
+  if (!run->mala || !run->rec || !run->chain_fam)
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
   run->chains_start = omp_get_wtime();
+  if (!run->stage1 && run->rs.adapt == LMC_ADAPT_CACHE) {
+    /* --cache-fraction 0: stage 2 with empty caches. */
+    for (int g = 0; g < run->n_fam; g++)
+      if (!(run->fam[g].cache = lmc__empty_cache(run->fam[g].target.dim)))
+        return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+  }
   for (int i = 0; i < n; i++) {
-    lmc_status st = lmc_mala_init(&run->mala[i], run->target.dim, &run->kp, err);
+    int g = family[i] >= 0 && family[i] < run->n_fam ? family[i] : 0;
+    lmc__family *F = &run->fam[g];
+    run->chain_fam[i] = g;
+    lmc_status st = lmc_mala_init(&run->mala[i], F->target.dim, &F->kp, err);
     if (st) return st;
     if (run->stage1) {
-      st = gcache_create(&run->rec[i], run->target.dim, LMC_CACHE_DOUBLES / n, err);
+      st = gcache_create(&run->rec[i], F->target.dim, LMC_CACHE_DOUBLES / n, err);
       if (st) return st;
       lmc_mala_set_record(&run->mala[i], run->rec[i]);
+    } else if (run->rs.adapt == LMC_ADAPT_CACHE) {
+      lmc_mala_begin_stage2(&run->mala[i], F->cache);
     }
-  }
-  if (!run->stage1 && run->rs.adapt == LMC_ADAPT_CACHE) {
-    /* --cache-fraction 0: stage 2 with an empty cache (M = I everywhere). */
-    lmc_status st = gcache_create(&run->cache, run->target.dim, 0, err);
-    if (!st) st = gcache_freeze(run->cache, 0, 0, err);
-    if (st) return st;
-    for (int i = 0; i < n; i++) lmc_mala_begin_stage2(&run->mala[i], run->cache);
   }
   return LMC_OK;
 }
 
 int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
+  lmc__family *F = &run->fam[run->chain_fam[i]];
   double large = run->rs.largestep, iso = run->rs.iso_prob;
   double indep = run->rs.adapt == LMC_ADAPT_CACHE ? LMC_INDEP_PROB : 0.0;
-  OUT_k[0] = mc_kernel_large();
-  OUT_k[1] = mc_kernel_small(run->kp.s1, run->kp.s2);
-  OUT_k[2] = lmc_mala_kernel(&run->mala[i]);
-  OUT_p[0] = large;
-  OUT_p[1] = iso;
-  OUT_p[2] = fmax(0.0, 1.0 - large - iso - indep);
-  if (indep == 0.0) return 3;
-  OUT_k[3] = lmc_indep_kernel(&run->indep);
-  OUT_p[3] = indep;
-  return 4;
+  double tech = F->length >= 2 ? LMC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
+  int n = 0;
+  OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
+  OUT_k[n] = mc_kernel_small(F->kp.s1, F->kp.s2), OUT_p[n++] = iso;
+  /* Paths of one or two segments (emitters seen directly, direct light on
+   * a surface) get Kelemen's step instead of MALA: f is smooth there, and a
+   * gradient costs more than the few more mutations it saves. */
+  if (F->length >= 1 && F->length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
+  OUT_k[n] = lmc_mala_kernel(&run->mala[i]), OUT_p[n++] = fmax(0.0, 1.0 - large - iso - indep - tech);
+  if (tech > 0.0) {
+    /* The technique coordinate is the first of the connect stream. */
+    OUT_k[n] = mc_kernel_technique(mc_target_stream_offset(&F->target, LMC_STREAM_CONNECT));
+    OUT_k[n].s1 = F->kp.s1, OUT_k[n].s2 = F->kp.s2;
+    OUT_p[n++] = tech;
+  }
+  if (indep > 0.0) OUT_k[n] = lmc_indep_kernel(&F->indep), OUT_p[n++] = indep;
+  return n;
 }
 
-/* Ends stage 1: merge, freeze, switch every chain's kernel to the cache. */
+/* Ends stage 1: merge per family, freeze, switch every chain's kernel to
+ * its family's cache. */
 static void lmc__end_stage1(lmc_run *run, int64_t done) {
   double t0 = omp_get_wtime();
-  int64_t total = 0;
-  for (int i = 0; i < run->n; i++) total += gcache_size(run->rec[i]) * (3 * run->target.dim + 2);
   lmc_error err;
   run->stage1 = 0;
   run->stage1_mutations = done;
   run->stage1_seconds = omp_get_wtime() - run->chains_start;
-  if (gcache_create(&run->cache, run->target.dim, total, &err) == LMC_OK) {
-    for (int i = 0; i < run->n; i++) gcache_merge(run->cache, run->rec[i]);
-    if (gcache_freeze(run->cache, LMC_ANCHORS, LMC_CACHE_PER_DIM, &err) != LMC_OK) {
-      gcache_destroy(run->cache);
-      run->cache = NULL;
+  for (int g = 0; g < run->n_fam; g++) {
+    lmc__family *F = &run->fam[g];
+    int dim = F->target.dim;
+    int64_t total = 0;
+    for (int i = 0; i < run->n; i++)
+      if (run->chain_fam[i] == g) total += gcache_size(run->rec[i]) * (3 * dim + 2);
+    if (gcache_create(&F->cache, dim, total, &err) == LMC_OK) {
+      for (int i = 0; i < run->n; i++)
+        if (run->chain_fam[i] == g) gcache_merge(F->cache, run->rec[i]);
+      if (gcache_freeze(F->cache, LMC_ANCHORS, LMC_CACHE_PER_DIM, &err) != LMC_OK) {
+        gcache_destroy(F->cache);
+        F->cache = NULL;
+      }
     }
-  }
-  if (!run->cache) {
     /* Out of memory: an empty frozen cache still gives a valid (isotropic) kernel. */
-    if (gcache_create(&run->cache, run->target.dim, 0, &err) == LMC_OK)
-      gcache_freeze(run->cache, 0, 0, &err);
+    if (!F->cache) F->cache = lmc__empty_cache(dim);
+    F->indep.cache = F->cache;
   }
   for (int i = 0; i < run->n; i++) {
     gcache_destroy(run->rec[i]);
     run->rec[i] = NULL;
-    lmc_mala_begin_stage2(&run->mala[i], run->cache);
+    lmc_mala_begin_stage2(&run->mala[i], run->fam[run->chain_fam[i]].cache);
     /* Statistics count stage 2 only (the recorded count stays). */
     int64_t recorded = run->mala[i].st.recorded, full = run->mala[i].st.record_full;
     memset(&run->mala[i].st, 0, sizeof run->mala[i].st);
     run->mala[i].st.recorded = recorded, run->mala[i].st.record_full = full;
   }
-  run->indep.cache = run->cache;
   run->build_seconds = omp_get_wtime() - t0;
 }
 
@@ -189,23 +266,34 @@ int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elaps
 void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
+  int multiplexed = run->rs.lmc_states == LMC_STATES_MMLT;
+  const lmc__family *F0 = &run->fam[0];
   fprintf(stderr,
-          "lmc: adapt %s, step %g, precond clamp [%g, %g], grad bound %g, iso %g, light-position "
-          "step scale %g\n",
-          mode[adapt], run->kp.step, run->kp.lo, run->kp.hi, run->kp.grad_bound,
-          run->rs.iso_prob, run->target.dim > PT_DIMS_CAMERA + 1 ? run->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
-  /* The cache. */
-  if (run->rs.adapt == LMC_ADAPT_CACHE && run->cache) {
+          "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
+          "iso %g, light-triangle step scale %g\n",
+          mode[adapt], multiplexed ? "multiplexed bidirectional (mmlt)" : "unidirectional (pt)",
+          F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi, F0->kp.grad_bound, run->rs.iso_prob,
+          multiplexed ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
+          : F0->target.dim > PT_DIMS_CAMERA + 1 ? F0->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
+  /* The caches. */
+  if (run->rs.adapt == LMC_ADAPT_CACHE) {
     int trees = 0;
-    for (int d = 1; d <= gcache_max_dim(run->cache); d++) trees += gcache_size_dim(run->cache, d) > 0;
-    int64_t lookups = 0, hits = 0;
+    int64_t entries = 0, lookups = 0, hits = 0;
+    double bytes = 0.0;
+    for (int g = 0; g < run->n_fam; g++) {
+      const gcache *c = run->fam[g].cache;
+      if (!c) continue;
+      for (int d = 1; d <= gcache_max_dim(c); d++) trees += gcache_size_dim(c, d) > 0;
+      entries += gcache_size(c);
+      bytes += (double)gcache_bytes(c);
+    }
     for (int i = 0; i < run->n; i++) lookups += run->mala[i].st.lookups, hits += run->mala[i].st.lookup_hits;
     fprintf(stderr,
             "lmc: cache: stage 1 %.2f s, %lld mutations per chain (image discarded); %lld entries "
-            "in %d trees, %.1f MB, built in %.3f s, %d anchors; lookups %lld, %.1f%% with neighbours\n",
-            run->stage1_seconds, (long long)run->stage1_mutations,
-            (long long)gcache_size(run->cache), trees, gcache_bytes(run->cache) / 1048576.0,
-            run->build_seconds, gcache_anchor_count(run->cache), (long long)lookups,
+            "in %d trees over %d families, %.1f MB, built in %.3f s; lookups %lld, %.1f%% with "
+            "neighbours\n",
+            run->stage1_seconds, (long long)run->stage1_mutations, (long long)entries, trees,
+            run->n_fam, bytes / 1048576.0, run->build_seconds, (long long)lookups,
             100.0 * (double)hits / fmax(1.0, (double)lookups));
   }
   /* Per proposal type and path length (of the state proposed from). */
@@ -214,9 +302,10 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   int64_t stalled = 0, grad_evals = 0;
   for (int i = 0; i < run->n; i++) {
     const lmc_mala_stats *st = &run->mala[i].st;
+    int flen = run->fam[run->chain_fam[i]].length;
     for (int t = 0; t < 2; t++)
       for (int k = 0; k < LMC_STAT_KEYS; k++) {
-        int len = t == 0 ? lmc_target_length_of_key(k) : 0;
+        int len = flen > 0 ? flen : t == 0 ? lmc_target_length_of_key(k) : 0;
         if (len >= MAXL) len = MAXL - 1;
         pr[t][len] += st->key_proposed[t][k];
         ac[t][len] += st->key_accepted[t][k];
@@ -225,7 +314,7 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   }
   int64_t regrad = 0;
   for (int i = 0; i < n; i++) {
-    grad_evals += lmc_target_scratch_grad_evals(chains[i]->scratch);
+    grad_evals += lmc__grad_evals(run, chains[i]->scratch);
     regrad += chains[i]->regrad;
   }
   for (int len = 0; len < MAXL; len++)
@@ -233,9 +322,11 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       fprintf(stderr, "lmc: mala       length %-3d%s proposed %lld, accepted %lld (%.1f%%)\n", len,
               len == MAXL - 1 ? "+" : " ", (long long)pr[0][len], (long long)ac[0][len],
               100.0 * (double)ac[0][len] / (double)pr[0][len]);
-  if (pr[1][0])
+  int64_t fpr = 0, fac = 0;
+  for (int len = 0; len < MAXL; len++) fpr += pr[1][len], fac += ac[1][len];
+  if (fpr)
     fprintf(stderr, "lmc: mala fallback (no gradient, Kelemen step) proposed %lld, accepted %lld (%.1f%%)\n",
-            (long long)pr[1][0], (long long)ac[1][0], 100.0 * (double)ac[1][0] / (double)pr[1][0]);
+            (long long)fpr, (long long)fac, 100.0 * (double)fac / (double)fpr);
   fprintf(stderr, "lmc: %.4g gradient evaluations/s (%lld states re-evaluated for their gradient); %lld of %d chains stalled (%d+ steps without an accepted move)\n",
           (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)regrad, (long long)stalled, run->n, LMC_STALL_STEPS);
 }

@@ -3,34 +3,42 @@
  * (Luan, Zhao, Bala and Gkioulekas 2020), as a client of the MCMC driver
  * (mcmc.c) and the chain framework (chain.h).
  *
- * The target (lmc_target.c) is the unidirectional path of path_eval_pt
- * (render/path.h; pt_li's estimator with next-event estimation) over the
- * camera stream, with the gradient of its luminance per coordinate. Its
- * film position is uniform over [0, W) x [0, H), so f = W H lum(L).
+ * The states (--lmc-states). `mmlt` (the default): the chains live in the
+ * multiplexed bidirectional states of mmlt (mcmc.c), one family of chains
+ * per path length k, a state being the strategy (s, t) and its camera,
+ * light and connect streams; the target (lmc_bdpt_target.c) is
+ * path_eval_bdpt with the gradient of its MIS-weighted contribution. This
+ * is the state space of the LMC paper's own implementation. `pt`: the
+ * unidirectional path of path_eval_pt (pt_li's estimator with next-event
+ * estimation) over the camera stream (lmc_target.c), pssmlt's states, with
+ * f = W H lum(L).
  *
  * Each chain mixes the large step (--largestep), Kelemen's isotropic
- * small step (--iso-prob) and LMC's preconditioned MALA step (lmc_kernel.h;
- * the rest). Both small steps are scaled by 1 / (the area lights' largest
- * triangle count) on next-event estimation's light-position number, which
- * picks the triangle (mcmc_pt_step_scale, as pssmlt and mmlt); for MALA
- * that is a constant factor c^2 of the preconditioner, with the gradient,
- * its truncation and Adam taken in the rescaled coordinates. With --adapt cache and LMC_INDEP_PROB > 0 the cache's
- * independence proposal joins them (in stage 1, where there is no cache
- * yet, its slot makes a Kelemen step). It is off: on ring-caustics it
- * accepted 0 of 51291 proposals in a 60 s render (a Gaussian of 0.01
- * around a cached state in 20 to 65 coordinates, the rest uniform, almost
- * never lands on a path of similar contribution) and cost 7% of the time.
+ * small step (--iso-prob), for mmlt states the technique mutation
+ * (LMC_TECHNIQUE_PROB, as mmlt), and LMC's preconditioned MALA step
+ * (lmc_kernel.h; the rest). Both small steps are scaled down on the
+ * coordinates that pick a light triangle (mcmc_light_u1_scale and
+ * mcmc_pt_step_scale, as mmlt and pssmlt); for MALA that is a constant
+ * factor c^2 of the preconditioner, with the gradient, its truncation and
+ * Adam taken in the rescaled coordinates. With --adapt cache and
+ * LMC_INDEP_PROB > 0 the cache's independence proposal joins them (in
+ * stage 1, where there is no cache yet, its slot makes a Kelemen step). It
+ * is off: on ring-caustics (pt states) it accepted 0 of 51291 proposals in
+ * a 60 s render (a Gaussian of 0.01 around a cached state in 20 to 65
+ * coordinates, the rest uniform, almost never lands on a path of similar
+ * contribution) and cost 7% of the time.
  *
  * --adapt cache runs in two stages. Stage 1 takes --cache-fraction of the
  * budget (of the time under --time, of the mutations under --spp): the
  * chains adapt with online Adam and record states; its image is
  * DISCARDED, since the adapting kernel is biased. Then the per-chain
- * records are merged and frozen into the k-d trees, the chains restart
+ * records are merged per family (path length) and frozen into k-d trees, the chains restart
  * from the bootstrap's starting states (the driver's job: stage 1's end
  * states carry Adam's bias) and stage 2 renders with the frozen,
  * state-dependent preconditioner. Stage 2 alone makes the image.
  *
- * The driver calls, in order: lmc_run_create (the target), lmc_run_set_chains,
+ * The driver calls, in order: lmc_run_create (the targets: one, or one per
+ * length for mmlt states; lmc_run_n_families, lmc_run_family_target), lmc_run_set_chains,
  * lmc_run_chain_kernels per chain, lmc_run_round_limit before and
  * lmc_run_after_round after every round
  * (a return of 1 means stage 1 just ended: drop the splats so far, restart
@@ -46,7 +54,9 @@
 #include "render/scene.h"
 #include "render/settings.h"
 
-#define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see below) */
+#define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see above) */
+#define LMC_TECHNIQUE_PROB 0.1 /* mmlt states: share of the technique mutation */
+#define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
 
 /* ---- The scene target (lmc_target.c) ------------------------------------- */
 
@@ -67,17 +77,44 @@ int64_t lmc_target_scratch_grad_evals(const void *scratch);
  * the deepest differentiated coordinate's bounce + 2, or 1 for the film. */
 int lmc_target_length_of_key(int key);
 
+/* ---- The multiplexed bidirectional target (lmc_bdpt_target.c) ---------- */
+
+typedef struct lmc_bdpt_target {
+  const scene *s;     /* borrowed */
+  render_settings rs; /* mindepth -1: the family's length is what counts */
+  int length;         /* k, segments */
+  int n_strategies;   /* n_k: 1 for k = 1, else k + 1 */
+  double margin;      /* filter radius r */
+  double area;        /* (W + 2r)(H + 2r) */
+} lmc_bdpt_target;
+
+/* Sets up *OUT_target for paths of `length` segments over ctx (both owned
+ * by the caller; ctx must outlive the target), with mmlt's layout. */
+void lmc_bdpt_target_init(mc_target *OUT_target, lmc_bdpt_target *ctx, const scene *s,
+                          const render_settings *rs, int length);
+/* Gradient evaluations and non-finite contributions in a scratch of it. */
+int64_t lmc_bdpt_scratch_grad_evals(const void *scratch);
+int64_t lmc_bdpt_scratch_nan_samples(const void *scratch);
+
 /* ---- The run ------------------------------------------------------------- */
 
 typedef struct lmc_run lmc_run;
 
+/* pt states (rs->lmc_states): one family, `unbounded` bounces kept in the
+ * state when maxdepth is -1. mmlt states: one family per length
+ * kmin .. kmax. */
 lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
-                          int unbounded, lmc_error *err);
+                          int unbounded, int kmin, int kmax, lmc_error *err);
 void lmc_run_destroy(lmc_run *run);
-/* The target the chains sample (owned by run). */
-const mc_target *lmc_run_target(const lmc_run *run);
-/* Allocates per-chain state for n chains. */
-lmc_status lmc_run_set_chains(lmc_run *run, int n, lmc_error *err);
+/* The families' targets (owned by run). */
+int lmc_run_n_families(const lmc_run *run);
+const mc_target *lmc_run_family_target(const lmc_run *run, int g);
+/* Path length of family g (0 for pt states: all lengths). */
+int lmc_run_family_length(const lmc_run *run, int g);
+/* Allocates per-chain state for n chains; chain i belongs to family[i]. */
+lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err);
+/* Non-finite contributions dropped in a chain's scratch. */
+int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch);
 /* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
 int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p);
 /* After a round: done / budget mutations per chain (budget INT64_MAX under

@@ -15,6 +15,7 @@ lmc_kernel_params lmc_kernel_params_default(void) {
   memset(&p, 0, sizeof p);
   p.adapt = LMC_ADAPT_CACHE;
   p.step = 1e-5;
+  p.step_range = 1.0;
   p.eps = 1e-8;
   p.lo = 1e-3;
   p.hi = 1e3;
@@ -34,6 +35,7 @@ lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs) {
   lmc_kernel_params p = lmc_kernel_params_default();
   p.adapt = rs->adapt;
   p.step = rs->lmc_step;
+  p.step_range = rs->step_range;
   p.eps = rs->adam_eps;
   p.lo = rs->precond_lo;
   p.hi = rs->precond_hi;
@@ -51,6 +53,7 @@ lmc_status lmc_mala_init(lmc_mala *k, int dim, const lmc_kernel_params *p, lmc_e
   if (dim < 1) return lmc_error_set(err, LMC_EINVAL, NULL, 0, "lmc: %d coordinates", dim);
   k->p = *p;
   k->dim = dim;
+  k->cur_step = p->step;
   lmc_status st = adam_init(&k->adam, dim, err);
   if (st != LMC_OK) return st;
   size_t n = (size_t)dim;
@@ -180,8 +183,12 @@ static double lmc__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
   }
   k->st.mala++;
   const double *M = lmc__precond(k, x, key);
-  mala_sample_c(x->dim, x->u, k->g, M, k->p.scale, k->p.step, r, OUT_y);
-  return mala_log_density_c(x->dim, x->u, k->g, M, k->p.scale, k->p.step, OUT_y);
+  /* This step's s: log-uniform over [s / R, s R], drawn independently of
+   * the state (lmc_kernel.h). */
+  k->cur_step = k->p.step;
+  if (k->p.step_range > 1.0) k->cur_step *= exp(log(k->p.step_range) * (2.0 * rng_uniform(r) - 1.0));
+  mala_sample_c(x->dim, x->u, k->g, M, k->p.scale, k->cur_step, r, OUT_y);
+  return mala_log_density_c(x->dim, x->u, k->g, M, k->p.scale, k->cur_step, OUT_y);
 }
 
 static double lmc__log_density(void *self, const mc_state *from, const double *to_u) {
@@ -190,7 +197,7 @@ static double lmc__log_density(void *self, const mc_state *from, const double *t
   if (key == 0)
     return mala_kelemen_log_density_c(from->dim, from->u, k->p.s1, k->p.s2, k->p.scale, to_u);
   const double *M = lmc__precond(k, from, key);
-  return mala_log_density_c(from->dim, from->u, k->g, M, k->p.scale, k->p.step, to_u);
+  return mala_log_density_c(from->dim, from->u, k->g, M, k->p.scale, k->cur_step, to_u);
 }
 
 static void lmc__on_step(void *self, const mc_state *x, int accepted) {

@@ -32,6 +32,14 @@
  * For ADAM and DIMINISH the M of one step is the same in both directions
  * (it changes only between steps) up to the normalisation below.
  *
+ * Step size. Each MALA step draws its own s, log-uniformly over
+ * [s / R, s R] (R = step_range, 1: always s), before it looks at the
+ * state, and uses it in both directions: the kernel is a mixture over s
+ * of MALA kernels that each satisfy detailed balance, so the mixture does
+ * too, without its (intractable) mixture density. As with Kelemen's
+ * mutation, the occasional long step explores while the short ones keep
+ * the acceptance up where f is sharp.
+ *
  * Normalisation (lmc_kernel_params.norm, default off): an adapted M may be
  * divided by its mean, geometric mean or maximum over the state's key
  * coordinates (a function of the state, so both directions of a step stay
@@ -80,7 +88,8 @@ typedef enum lmc_norm { LMC_NORM_OFF = 0, LMC_NORM_MEAN, LMC_NORM_GEOMEAN, LMC_N
 
 typedef struct lmc_kernel_params {
   lmc_adapt adapt;
-  double step;          /* s */
+  double step;          /* s (the centre of its range) */
+  double step_range;    /* R >= 1: each MALA step draws its s log-uniformly from [s / R, s R] */
   double eps, lo, hi;   /* preconditioner: clamp(1 / (eps + sqrt(v)), lo, hi) */
   double grad_bound;    /* |g| truncated to this norm */
   double s1, s2;        /* Kelemen fallback offsets */
@@ -131,6 +140,7 @@ typedef struct lmc_mala {
   double *memo_u[2], *memo_M[2];
   int memo_key[2];
   int memo_next;
+  double cur_step;       /* s of the step in progress */
   int own_step;          /* the step in progress was proposed here */
   int own_key;           /* its state's key (0: fallback) */
   int64_t own_steps;

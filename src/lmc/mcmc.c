@@ -27,8 +27,15 @@
  * same way the light-position number of next-event estimation at every
  * bounce (mcmc_pt_step_scale).
  *
+ * lmc (integrator_lmc.h) runs on either layout: by default on mmlt's
+ * families with its own gradient-capable targets (lmc_bdpt_target.c),
+ * with --lmc-states pt on pssmlt's.
+ *
  * Normalisation. For a family g with target f_g, b_g = E[f_g(u)] over
- * uniform u is estimated by the bootstrap; the family's n_g chains each make
+ * uniform u is estimated by the bootstrap (for mmlt's families from
+ * eval_expect, the expectation over the technique coordinate, on samples
+ * independent of those that pick the starting states: same mean, far less
+ * variance); the family's n_g chains each make
  * m mutations, and its image is b_g / (n_g m) times the sum of its splats
  * value / f (expected-value splatting, chain.c). Families add.
  *
@@ -94,6 +101,7 @@
 #define MCMC_ROUND 64
 #define MCMC_BOOT_BATCH 8192
 #define MCMC_BOOT_CAP (1 << 20)
+#define MCMC_EXPECT_SEQ 0x5eed0fb0075a3e11ull /* eval_expect's bootstrap streams: (seed, seq ^ this) */
 #define MCMC_MAX_FAMILIES 64
 #define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* mmlt's per-length splat buffers, at most */
 #define MCMC_UNBOUNDED_PT 128  /* pt bounces kept in the state when maxdepth is -1 */
@@ -169,14 +177,9 @@ static int mcmc__pssmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp
   return 0;
 }
 
-static int mcmc__mmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp,
-                           mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
-  const mcmc_scene_target *st = t->ctx;
-  mcmc_scratch *sc = scratch;
-  (void)OUT_grad;
-  if (OUT_grad_ok) *OUT_grad_ok = 0;
-  int k = st->length, n = st->n_strategies;
-
+rgb mcmc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n, double margin,
+                           double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
+                           render_counters *cnt, double *OUT_rx, double *OUT_ry) {
   /* The strategy (s, t) from the technique coordinate, and the light sample
    * of s = 1. */
   sampler_use_stream(smp, LMC_STREAM_CONNECT);
@@ -188,28 +191,76 @@ static int mcmc__mmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp,
 
   /* The two subpaths, just long enough for (s, t). */
   sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  double rx, ry;
-  mcmc__raster(st, smp, &rx, &ry);
-  memset(OUT_value, 0, sizeof *OUT_value);
-  int nc = bdpt_camera_subpath(st->s, &st->rs, smp, rx, ry, tt, sc->cam, &sc->cnt);
-  if (nc < tt) return 0;
-  int nl = 0;
+  double u0 = sampler_next(smp), u1 = sampler_next(smp);
+  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
+  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
+  *OUT_rx = rx, *OUT_ry = ry;
+  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, tt, cam, cnt);
+  if (nc < tt) return rgb_zero();
   if (ss > 0) {
     sampler_use_stream(smp, LMC_STREAM_LIGHT);
-    nl = bdpt_light_subpath(st->s, &st->rs, smp, ss, sc->lp, &sc->cnt);
-    if (nl < ss) return 0;
+    int nl = bdpt_light_subpath(s, rs, smp, ss, lp, cnt);
+    if (nl < ss) return rgb_zero();
   }
 
   /* The strategy's MIS-weighted contribution, times n_k. */
   double prx = rx, pry = ry;
-  rgb c = bdpt_connect(st->s, sc->cam, tt, sc->lp, ss, uc, &prx, &pry, NULL, &sc->cnt);
-  if (tt == 1) {
-    c = rgb_scale(c, (double)n);
-  } else {
-    c = rgb_scale(c, st->area * n);
-    prx = rx, pry = ry;
+  rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
+  if (tt != 1) return rgb_scale(c, area * n);
+  *OUT_rx = prx, *OUT_ry = pry;
+  return rgb_scale(c, (double)n);
+}
+
+double mcmc_mmlt_expected(const scene *s, const render_settings *rs, int k, double margin,
+                          double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
+                          render_counters *cnt) {
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+  (void)sampler_next(smp); /* the technique */
+  double uc[BDPT_DIMS_CONNECT];
+  for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
+  /* Subpaths long enough for every strategy (their prefixes are those of
+   * the shorter ones: the streams' layout is per vertex). */
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  double u0 = sampler_next(smp), u1 = sampler_next(smp);
+  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
+  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
+  int t_max = k + 1, s_max = k == 1 ? 0 : k;
+  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, t_max, cam, cnt);
+  int nl = 0;
+  if (s_max > 0) {
+    sampler_use_stream(smp, LMC_STREAM_LIGHT);
+    nl = bdpt_light_subpath(s, rs, smp, s_max, lp, cnt);
   }
-  mcmc__value(OUT_value, c, prx, pry, &sc->cnt);
+  double sum = 0.0;
+  for (int tt = k == 1 ? 2 : 1; tt <= t_max; tt++) {
+    int ss = k + 1 - tt;
+    if (nc < tt || nl < ss) continue;
+    double prx = rx, pry = ry;
+    rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
+    if (tt != 1) c = rgb_scale(c, area);
+    double f = rgb_luminance(c);
+    if (rgb_isfinite(c) && f > 0.0 && isfinite(f)) sum += f;
+  }
+  return sum;
+}
+
+static double mcmc__mmlt_expect(const mc_target *t, void *scratch, lmc_sampler *smp) {
+  const mcmc_scene_target *st = t->ctx;
+  mcmc_scratch *sc = scratch;
+  return mcmc_mmlt_expected(st->s, &st->rs, st->length, st->margin, st->area, smp, sc->cam, sc->lp,
+                            &sc->cnt);
+}
+
+static int mcmc__mmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp,
+                           mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
+  const mcmc_scene_target *st = t->ctx;
+  mcmc_scratch *sc = scratch;
+  (void)OUT_grad;
+  if (OUT_grad_ok) *OUT_grad_ok = 0;
+  double rx, ry;
+  rgb c = mcmc_mmlt_contribution(st->s, &st->rs, st->length, st->n_strategies, st->margin,
+                                 st->area, smp, sc->cam, sc->lp, &sc->cnt, &rx, &ry);
+  mcmc__value(OUT_value, c, rx, ry, &sc->cnt);
   return 0;
 }
 
@@ -266,6 +317,7 @@ typedef struct mcmc_family {
   mc_target target;
   mcmc_scene_target st;
   double *f;          /* bootstrap values */
+  double *fe;         /* target.eval_expect: its bootstrap values (NULL: b from f) */
   int64_t n_boot;
   double b, b_var;    /* estimate of b and the variance of that estimate (bootstrap) */
   double boot_s, boot_s2; /* sum of f and f^2 over the bootstrap */
@@ -323,8 +375,16 @@ static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, int64_t from, int
       void *sc = F->target.scratch_create(&F->target);
       int tid = omp_get_thread_num();
 #pragma omp for schedule(dynamic, 256)
-      for (int64_t j = from; j < to; j++)
+      for (int64_t j = from; j < to; j++) {
         F->f[j] = sc ? mc_eval_independent(&F->target, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
+        if (F->fe) {
+          /* An independent sample for b (the one above picks starting states). */
+          lmc_indep_sampler smp;
+          indep_sampler_init(&smp, seed, mcmc__boot_seq(g, j) ^ MCMC_EXPECT_SEQ);
+          double v = sc ? F->target.eval_expect(&F->target, sc, &smp.base) : 0.0;
+          F->fe[j] = v >= 0.0 && isfinite(v) ? v : 0.0;
+        }
+      }
       if (sc) {
 #pragma omp atomic
         cnt[tid].rays += F->target.scratch_rays(sc);
@@ -334,10 +394,12 @@ static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, int64_t from, int
   }
 }
 
-/* b and the variance of its estimate from samples [0, n). */
+/* b and the variance of its estimate from samples [0, n) (of fe when the
+ * target has eval_expect, else of f). */
 static void mcmc__family_b(mcmc_family *F, int64_t n) {
   double s = 0.0, s2 = 0.0;
-  for (int64_t j = 0; j < n; j++) s += F->f[j], s2 += F->f[j] * F->f[j];
+  const double *f = F->fe ? F->fe : F->f;
+  for (int64_t j = 0; j < n; j++) s += f[j], s2 += f[j] * f[j];
   double mean = n > 0 ? s / n : 0.0;
   double var = n > 1 ? fmax(0.0, (s2 - n * mean * mean) / (double)(n - 1)) : 0.0;
   F->b = mean;
@@ -350,15 +412,28 @@ static void mcmc__family_b(mcmc_family *F, int64_t n) {
   F->n_large = 0;
 }
 
-/* b_ref of every family with chains: the bootstrap's sums plus its chains'
- * large-step tallies, added in chain order (deterministic). Returns the sum
- * of b_ref over the families and its variance in OUT_var. */
+/* Mean and variance of the mean of n samples with sums s, s2. */
+static void mcmc__mean_var(double s, double s2, double n, double *OUT_mean, double *OUT_var) {
+  double mean = n > 0.0 ? s / n : 0.0;
+  double var = n > 1.0 ? fmax(0.0, (s2 - n * mean * mean) / (n - 1.0)) : 0.0;
+  *OUT_mean = mean;
+  *OUT_var = n > 0.0 ? var / n : 0.0;
+}
+
+/* b_ref of every family with chains: the bootstrap's samples pooled with
+ * its chains' large-step tallies, added in chain order (deterministic).
+ * Both are unbiased samples of b_g (the bootstrap's of eval_expect when the
+ * target has it, with less variance), so the pooled mean is unbiased. (An
+ * inverse-variance weighting of the two means was tried and dropped: with
+ * heavy tails a low estimate comes with a low estimated variance, and on
+ * ring-caustics it pulled the long lengths' b far down.) Returns the sum of
+ * b_ref over the families and its variance in OUT_var. */
 static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot *slots,
                              double *OUT_var) {
   double b = 0.0, v = 0.0;
   for (int g = 0; g < n_fam; g++) {
     mcmc_family *F = &fam[g];
-    double s = F->boot_s, s2 = F->boot_s2;
+    double s = 0.0, s2 = 0.0;
     int64_t nl = 0;
     for (int i = 0; i < F->n_chains; i++) {
       const mc_chain *c = slots[F->first_chain + i].chain;
@@ -369,11 +444,8 @@ static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot 
         nl += c->stats[q].proposed;
       }
     }
-    double n = (double)(F->n_boot + nl);
-    double mean = n > 0.0 ? s / n : 0.0;
-    double var = n > 1.0 ? fmax(0.0, (s2 - n * mean * mean) / (n - 1.0)) : 0.0;
-    F->b_ref = mean;
-    F->b_ref_var = n > 0.0 ? var / n : 0.0;
+    mcmc__mean_var(F->boot_s + s, F->boot_s2 + s2, (double)(F->n_boot + nl), &F->b_ref,
+                   &F->b_ref_var);
     F->n_large = nl;
     b += F->b_ref;
     v += F->b_ref_var;
@@ -421,7 +493,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                            render_stats *st, lmc_error *err) {
   memset(st, 0, sizeof *st);
   int is_mmlt = !strcmp(rs->integrator, "mmlt");
-  int is_lmc = !strcmp(rs->integrator, "lmc"); /* integrator_lmc.h: pssmlt's layout, LMC kernels */
+  int is_lmc = !strcmp(rs->integrator, "lmc"); /* integrator_lmc.h */
+  /* Families per path length: mmlt, and lmc on mmlt's states. */
+  int multiplexed = is_mmlt || (is_lmc && rs->lmc_states == LMC_STATES_MMLT);
   lmc_run *lrun = NULL;
   if (!is_mmlt && !is_lmc && strcmp(rs->integrator, "pssmlt"))
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
@@ -437,7 +511,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
    * on ring-caustics at 20 s, once the light-position steps were scaled
    * (mcmc_light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
    * for 1/64, 0.03, 0.1 and 0.2, one run each). */
-  const double sigma = (rs->set & SET_SIGMA) || !is_mmlt ? rs->sigma : MCMC_MMLT_SIGMA;
+  const double sigma = (rs->set & SET_SIGMA) || !multiplexed ? rs->sigma : MCMC_MMLT_SIGMA;
 
   /* Direct lighting by pt first, when asked (--direct separate). */
   render_settings mrs = *rs;
@@ -477,18 +551,23 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   memset(fam, 0, sizeof fam);
   int n_fam = 0;
   double margin = s->filter.radius, area = (W + 2.0 * margin) * (H + 2.0 * margin);
-  if (!is_mmlt) {
+  int kmin = 1, kmax = 0;
+  if (multiplexed) {
+    kmax = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_MMLT;
+    if (kmax > MCMC_MAX_FAMILIES) kmax = MCMC_MAX_FAMILIES;
+    if (kmax > BDPT_MAX_VERTICES - 2) kmax = BDPT_MAX_VERTICES - 2;
+    kmin = mrs.mindepth > 1 ? mrs.mindepth : 1;
+    if (kmax - kmin + 1 > MCMC_MAX_FAMILIES) kmax = kmin + MCMC_MAX_FAMILIES - 1;
+    if (rs->maxdepth < 0 && !rs->quiet)
+      fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
+              rs->integrator, kmax);
+  }
+  if (!multiplexed) {
     int bounces = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_PT;
     mcmc_family *F = &fam[n_fam++];
     F->st = (mcmc_scene_target){s, mrs, 0, 1, margin, area};
     F->target.stream_dim[LMC_STREAM_CAMERA] = PT_DIMS_CAMERA + PT_DIMS_PER_BOUNCE * (bounces + 1);
   } else {
-    int kmax = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_MMLT;
-    if (kmax > MCMC_MAX_FAMILIES) kmax = MCMC_MAX_FAMILIES;
-    if (kmax > BDPT_MAX_VERTICES - 2) kmax = BDPT_MAX_VERTICES - 2;
-    int kmin = mrs.mindepth > 1 ? mrs.mindepth : 1;
-    if (rs->maxdepth < 0 && !rs->quiet)
-      fprintf(stderr, "lmc: mmlt renders paths of at most %d segments (set --maxdepth)\n", kmax);
     for (int k = kmin; k <= kmax && n_fam < MCMC_MAX_FAMILIES; k++) {
       mcmc_family *F = &fam[n_fam++];
       F->st = (mcmc_scene_target){s, mrs, k, k == 1 ? 1 : k + 1, margin, area};
@@ -502,7 +581,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     mc_target *T = &fam[g].target;
     T->ctx = &fam[g].st;
     T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
-    T->eval = is_mmlt ? mcmc__mmlt_eval : mcmc__pssmlt_eval;
+    T->eval = multiplexed ? mcmc__mmlt_eval : mcmc__pssmlt_eval;
+    T->eval_expect = multiplexed ? mcmc__mmlt_expect : NULL;
     T->scratch_create = mcmc__scratch_create;
     T->scratch_destroy = mcmc__scratch_destroy;
     T->scratch_rays = mcmc__scratch_rays;
@@ -512,15 +592,27 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   mcmc_chain_slot *slots = NULL;
   int n_slots = 0;
   if (is_lmc) {
-    /* The LMC target (path_eval_pt with gradients) replaces pssmlt's. */
-    status = lmc_run_create(&lrun, s, &mrs, MCMC_UNBOUNDED_LMC, err);
+    /* The LMC targets (path_eval_pt or path_eval_bdpt, with gradients)
+     * replace pssmlt's or mmlt's, family for family. */
+    render_settings lrs = mrs;
+    lrs.sigma = sigma;
+    status = lmc_run_create(&lrun, s, &lrs, MCMC_UNBOUNDED_LMC, kmin, kmax, err);
     if (status) goto done;
-    fam[0].target = *lmc_run_target(lrun);
+    if (lmc_run_n_families(lrun) != n_fam) {
+      status = lmc_error_set(err, LMC_EINVAL, NULL, 0, "lmc: %d families, expected %d",
+                             lmc_run_n_families(lrun), n_fam);
+      goto done;
+    }
+    for (int g = 0; g < n_fam; g++) fam[g].target = *lmc_run_family_target(lrun, g);
   }
   int64_t cap = rs->bootstrap > 0 ? rs->bootstrap : MCMC_BOOT_CAP / (n_fam > 4 ? 4 : n_fam);
   for (int g = 0; g < n_fam; g++) {
     fam[g].f = malloc((size_t)cap * sizeof(double));
     if (!fam[g].f) cap = 0;
+    if (fam[g].target.eval_expect) {
+      fam[g].fe = malloc((size_t)cap * sizeof(double));
+      if (!fam[g].fe) cap = 0;
+    }
   }
   if (!is_mmlt && !is_lmc) {
     /* pssmlt: next-event estimation's light-position number u1 of every
@@ -615,7 +707,15 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     goto done;
   }
   if (lrun) {
-    status = lmc_run_set_chains(lrun, n_slots, err);
+    int *family = malloc((size_t)n_slots * sizeof *family);
+    if (!family) {
+      status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the chains");
+      goto done;
+    }
+    for (int g = 0; g < n_fam; g++)
+      for (int i = 0; i < fam[g].n_chains; i++) family[fam[g].first_chain + i] = g;
+    status = lmc_run_set_chains(lrun, n_slots, family, err);
+    free(family);
     if (status) goto done;
   }
   for (int g = 0; g < n_fam; g++) {
@@ -665,8 +765,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
   }
   for (int g = 0; g < n_fam; g++) {
-    free(fam[g].f);
-    fam[g].f = NULL;
+    free(fam[g].f), free(fam[g].fe);
+    fam[g].f = fam[g].fe = NULL;
   }
 
   /* Chains in rounds. Every chain makes MCMC_ROUND mutations per round. */
@@ -786,7 +886,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         fprintf(stderr, "lmc: %-10s proposed %lld, accepted %lld (%.1f%%)\n", names[q],
                 (long long)tot[q].proposed, (long long)tot[q].accepted,
                 100.0 * (double)tot[q].accepted / fmax(1.0, (double)tot[q].proposed));
-      if (is_mmlt)
+      if (multiplexed)
         for (int g = 0; g < n_fam; g++) {
           int64_t pr = 0, ac = 0;
           for (int i = 0; i < fam[g].n_chains; i++)
@@ -835,11 +935,13 @@ finish:
   }
   for (int i = 0; i < n_slots; i++)
     if (slots && slots[i].chain && slots[i].chain->scratch)
-      if (!is_lmc) st->nan_samples += ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
+      st->nan_samples += is_lmc ? lmc_run_scratch_nan_samples(lrun, slots[i].chain->scratch)
+                                : ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
 done:
   mcmc__free_slots(slots, n_slots);
   lmc_run_destroy(lrun);
-  for (int g = 0; g < n_fam; g++) free(fam[g].f), free(fam[g].step_scale), free(fam[g].splat);
+  for (int g = 0; g < n_fam; g++)
+    free(fam[g].f), free(fam[g].fe), free(fam[g].step_scale), free(fam[g].splat);
   free(cnt);
   st->seconds = omp_get_wtime() - t0;
   if (status) film_free(out);

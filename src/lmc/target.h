@@ -63,6 +63,12 @@ struct mc_target {
    * throws to the far side of the light); 0 leaves the coordinate to large
    * steps. Each factor is a constant, so the step stays symmetric. */
   const double *step_scale;
+  /* Optional (NULL: none): an unbiased estimate of b = E[f] with less
+   * variance than f itself, from the numbers of smp: E[f | every coordinate
+   * but the target's own discrete choice] (mmlt: the sum over the length's
+   * strategies of their MIS-weighted contributions, i.e. the expectation
+   * over the technique coordinate). Used for the normalisation only. */
+  double (*eval_expect)(const mc_target *t, void *scratch, lmc_sampler *smp);
 };
 
 /* First coordinate of stream k. */

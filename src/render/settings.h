@@ -32,6 +32,12 @@ typedef enum lmc_adapt {
   LMC_ADAPT_CACHE     /* Adam in stage 1, frozen k-d tree cache in stage 2 (default) */
 } lmc_adapt;
 
+/* The states LMC's chains live in (--lmc-states). */
+typedef enum lmc_states {
+  LMC_STATES_MMLT = 0, /* multiplexed bidirectional: length, strategy (s, t), primary samples */
+  LMC_STATES_PT        /* pssmlt's: the unidirectional path tracer's primary samples */
+} lmc_states;
+
 typedef struct render_settings {
   unsigned set;          /* SET_* bits of the fields chosen explicitly */
   char integrator[32];   /* pt, bdpt, pssmlt, mmlt, lmc */
@@ -56,11 +62,13 @@ typedef struct render_settings {
   /* LMC (src/lmc/mala.c, adam.c, gcache.c) */
   lmc_adapt adapt;       /* preconditioner adaptation */
   double lmc_step;       /* s: proposal N(x + s/2 M g, s M) */
+  double step_range;     /* R: each LMC step draws s log-uniformly from [s / R, s R] */
   double adam_eps;       /* M = clamp(1 / (eps + sqrt(v)), lo, hi) */
   double precond_lo, precond_hi;
   double grad_bound;     /* |g| is truncated to this norm */
   double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
   double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
+  int lmc_states;        /* lmc's state space: LMC_STATES_MMLT (default) or _PT */
   int mala;              /* the <dpt> block asked for MALA */
   int h2mc;              /* the <dpt> block asked for H2MC */
   int quiet;             /* no progress bar */
@@ -80,12 +88,13 @@ static inline render_settings render_settings_default(void) {
   s.bootstrap = 0;
   s.adapt = LMC_ADAPT_CACHE;
   s.lmc_step = 1e-5;
+  s.step_range = 1.0;
   s.adam_eps = 1e-8;
   s.precond_lo = 1e-3;
   s.precond_hi = 1e3;
   s.grad_bound = 1e3;
   s.cache_fraction = 0.1;
-  s.iso_prob = 0.1;
+  s.iso_prob = 0.4;
   return s;
 }
 
