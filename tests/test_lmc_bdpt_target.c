@@ -96,13 +96,12 @@ static int teardown(void **state) {
 
 /* A state as a vector sampler over the target's layout (every stream filled
  * to its block size). */
-static void fill_state(path_vec_sampler *vs, const mc_target *T, rng *r) {
+static void fill_state(path_vec_sampler *vs, const mc_target *T) {
   path_vec_sampler_clear(vs);
   for (int k = 0; k < LMC_STREAM_COUNT; k++) {
     vs->base.use_stream(&vs->base, k);
     for (int j = 0; j < T->stream_dim[k]; j++) sampler_next(&vs->base);
   }
-  (void)r;
   path_vec_sampler_rewind(vs);
 }
 
@@ -128,8 +127,6 @@ static void test_values_and_gradients(void **state) {
   fixture *fx = *state;
   render_settings rs = fx->sc->settings;
   rs.maxdepth = KMAX;
-  rng r;
-  rng_seed(&r, 11, 0);
   path_vec_sampler vs;
   path_vec_sampler_init(&vs, 5, NULL);
   int total_nonzero = 0;
@@ -142,7 +139,7 @@ static void test_values_and_gradients(void **state) {
     double *grad = malloc((size_t)T.dim * sizeof(double));
     int nonzero = 0, mismatched = 0, compared = 0, passed = 0, with_grad = 0;
     for (int n = 0; n < 20000 && nonzero < 150; n++) {
-      fill_state(&vs, &T, &r);
+      fill_state(&vs, &T);
       mc_value a, b;
       T.eval(&T, scratch, &vs.base, &a, NULL, NULL);
       path_vec_sampler_rewind(&vs);

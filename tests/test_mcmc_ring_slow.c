@@ -47,24 +47,7 @@ static void run_stats(const scene *s, const char *integrator, double mean[N_STAT
     rs.threads = 2;
     rs.seed = 1000 + (uint64_t)r;
     rs.quiet = 1;
-    film f;
-    render_stats st;
-    lmc_error err;
-    lmc_error_clear(&err);
-    lmc_status status = mcmc_is_integrator(integrator) ? mcmc_render_run(s, &rs, &f, &st, &err)
-                                                       : render_run(s, &rs, &f, &st, &err);
-    assert_int_equal(status, LMC_OK);
-    lmc_image img;
-    assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
-    double reg[N_STATS];
-    region_means(&img, GRID, reg);
-    for (int k = 0; k < N_STATS; k++) {
-      double m = reg[k];
-      sum[k] += m;
-      sum2[k] += m * m;
-    }
-    image_free(&img);
-    film_free(&f);
+    region_stats_render(s, &rs, GRID, sum, sum2);
   }
   region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
 }
