@@ -1,7 +1,8 @@
 /*
  * test_image_io.c: image readers and writers (PNG, JPEG, OpenEXR), format
- * dispatch by magic bytes, the sRGB curve, and the writers' promise never
- * to leave a partial file behind.
+ * dispatch by magic bytes, the sRGB curve, the size limits every reader
+ * checks in the header, and the writers' promise never to leave a partial
+ * file behind.
  *
  * Test images are generated into /tmp: PNGs of every colour type and depth
  * with libpng directly, two small JPEGs embedded below (made with libjpeg
@@ -500,7 +501,107 @@ static void test_jpeg(void **state) {
     else image_free(&img);
   }
   assert_int_equal(n_err, n_cut);
+  /* Scan data cut short but closed by EOI: libjpeg only warns ("premature
+   * end of data segment") and pads with grey; for us an error. */
+  size_t sos = 0;
+  while (!(rgb_jpg[sos] == 0xFF && rgb_jpg[sos + 1] == 0xDA)) sos++;
+  size_t data = sos + 2 + ((size_t)rgb_jpg[sos + 2] << 8 | rgb_jpg[sos + 3]);
+  n_err = n_cut = 0;
+  for (size_t cut = data; cut < sizeof rgb_jpg - 2; cut++) {
+    unsigned char bytes[sizeof rgb_jpg];
+    memcpy(bytes, rgb_jpg, cut);
+    bytes[cut] = 0xFF;
+    bytes[cut + 1] = 0xD9;
+    assert_true(write_file(path, bytes, cut + 2));
+    n_cut++;
+    if (image_read(path, 0, &img, &err) != LMC_OK) n_err++;
+    else image_free(&img);
+  }
+  assert_int_equal(n_cut, 10);
+  assert_int_equal(n_err, n_cut);
   remove(path);
+}
+
+/* ---- size limits ----------------------------------------------------------- */
+
+/* Writes a PNG header claiming w x h 8-bit grey pixels and an empty IDAT:
+ * enough for a reader to learn the size, no pixels to decode. */
+static void write_png_header(const char *path, png_uint_32 w, png_uint_32 h) {
+  FILE *f = fopen(path, "wb");
+  assert_non_null(f);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) fail_msg("libpng failed writing a test header");
+  png_set_user_limits(png, 0x7fffffff, 0x7fffffff);
+  png_init_io(png, f);
+  png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  png_write_chunk(png, (png_const_bytep) "IDAT", NULL, 0);
+  png_destroy_write_struct(&png, &info);
+  fclose(f);
+}
+
+/* Reading path fails with LMC_EUNSUPPORTED and a message naming w x h. */
+static void check_too_large(const char *path, long long w, long long h) {
+  lmc_image img;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status st = image_read(path, 1, &img, &err);
+  if (st == LMC_OK) image_free(&img);
+  if (st != LMC_EUNSUPPORTED)
+    fail_msg("%s (%lld x %lld): status %d, want %d; message '%s'", path, w, h, (int)st,
+             (int)LMC_EUNSUPPORTED, err.msg);
+  char want[64];
+  snprintf(want, sizeof want, "%lld x %lld pixels", w, h);
+  if (!strstr(err.msg, want)) fail_msg("message '%s' does not name '%s'", err.msg, want);
+  assert_string_equal(err.file, path);
+  assert_null(img.data);
+}
+
+static void test_size_limits(void **state) {
+  (void)state;
+  const long long side = IMAGE_MAX_SIDE, rows = IMAGE_MAX_PIXELS / IMAGE_MAX_SIDE;
+  lmc_image img;
+  lmc_error err;
+
+  /* PNG: a side too long, too many pixels, and beyond libpng's own 10^6. */
+  const char *path = "/tmp/lmc_test_imageio_huge.png";
+  write_png_header(path, (png_uint_32)side + 1, 1);
+  check_too_large(path, side + 1, 1);
+  write_png_header(path, (png_uint_32)side, (png_uint_32)rows + 1);
+  check_too_large(path, side, rows + 1);
+  write_png_header(path, 1, 2000000);
+  check_too_large(path, 1, 2000000);
+  /* At the limits the size passes; the header-only file is then malformed. */
+  write_png_header(path, (png_uint_32)side, (png_uint_32)rows);
+  assert_int_equal(image_read(path, 1, &img, &err), LMC_EPARSE);
+  remove(path);
+#ifndef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+  /* A 16K x 8K environment map is within the limits. */
+  check_ok(image_check_size("env.exr", "EXR", 16384, 8192, &err), &err);
+#endif
+
+  /* JPEG: the 16 x 8 test image with its SOF0 claiming side + 1 columns. */
+  unsigned char jpg[sizeof rgb_jpg];
+  memcpy(jpg, rgb_jpg, sizeof jpg);
+  size_t sof = 0;
+  while (!(jpg[sof] == 0xFF && jpg[sof + 1] == 0xC0)) sof++;
+  /* FF C0, length (2 bytes), precision (1), height (2), width (2). */
+  jpg[sof + 7] = (unsigned char)((side + 1) >> 8);
+  jpg[sof + 8] = (unsigned char)((side + 1) & 255);
+  const char *jpath = "/tmp/lmc_test_imageio_huge.jpg";
+  assert_true(write_file(jpath, jpg, sizeof jpg));
+  check_too_large(jpath, side + 1, 8);
+  remove(jpath);
+
+  /* EXR: one row a pixel too wide, written by our writer (200 KB). */
+  const char *epath = "/tmp/lmc_test_imageio_huge.exr";
+  check_ok(image_init(&img, (int)side + 1, 1, 3, &err), &err);
+  check_ok(image_write_exr(epath, &img, &err), &err);
+  image_free(&img);
+  check_too_large(epath, side + 1, 1);
+  remove(epath);
 }
 
 /* ---- dispatch and failure paths ------------------------------------------ */
@@ -558,7 +659,8 @@ int main(void) {
       cmocka_unit_test(test_exr_sunsky),
       cmocka_unit_test(test_exr_tiled_half_rgba),    cmocka_unit_test(test_png_roundtrip),
       cmocka_unit_test(test_png_types),     cmocka_unit_test(test_png_checker),
-      cmocka_unit_test(test_jpeg),          cmocka_unit_test(test_errors),
+      cmocka_unit_test(test_jpeg),          cmocka_unit_test(test_size_limits),
+      cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

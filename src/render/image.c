@@ -15,6 +15,7 @@
  * image.h only knows 1, 3 and 4 channels. Colour samples are divided by
  * their maximum (255 or 65535) and, when asked, decoded with the sRGB curve
  * (16-bit files too: PNG samples are sRGB-encoded); alpha stays linear.
+ * The size in the header is checked against image.h's limits first.
  *
  * PNG writing: 8-bit RGB, v -> round(255 * clamp(srgb(scale * v), 0, 1)),
  * NaN -> 0. Like every writer it writes a temporary file beside the target
@@ -80,6 +81,16 @@ lmc_status image_to_rgb(lmc_image *img, lmc_error *err) {
   img->data = d;
   img->channels = 3;
   return LMC_OK;
+}
+
+lmc_status image_check_size(const char *path, const char *format, long long width,
+                            long long height, lmc_error *err) {
+  if (width <= IMAGE_MAX_SIDE && height <= IMAGE_MAX_SIDE && width * height <= IMAGE_MAX_PIXELS)
+    return LMC_OK;
+  return lmc_error_set(err, LMC_EUNSUPPORTED, path, 0,
+                       "%s image of %lld x %lld pixels is too large "
+                       "(at most %d a side and %ld in all)",
+                       format, width, height, IMAGE_MAX_SIDE, IMAGE_MAX_PIXELS);
 }
 
 double srgb_to_linear(double v) {
@@ -150,7 +161,16 @@ lmc_status image_read_png(const char *path, int srgb_to_linear_flag, lmc_image *
     return lmc_error_set(err, LMC_EPARSE, path, 0, "bad PNG: %s", ctx.msg[0] ? ctx.msg : "error");
   }
   png_init_io(png, f);
+  /* Sizes beyond libpng's own limit (10^6) then get our message too. */
+  png_set_user_limits(png, 0x7fffffff, 0x7fffffff);
   png_read_info(png, info);
+  lmc_status st = image_check_size(path, "PNG", png_get_image_width(png, info),
+                                   png_get_image_height(png, info), err);
+  if (st != LMC_OK) {
+    png_destroy_read_struct(&png, &info, NULL);
+    fclose(f);
+    return st;
+  }
 
   /* Expand palettes, grey < 8 bits and tRNS; 16-bit samples in host order. */
   png_set_expand(png);
@@ -186,7 +206,7 @@ lmc_status image_read_png(const char *path, int srgb_to_linear_flag, lmc_image *
   png_read_end(png, NULL);
 
   /* Convert to float: colour through the sRGB curve when asked, alpha linear. */
-  lmc_status st = image_init(out, w, h, ch, err);
+  st = image_init(out, w, h, ch, err);
   if (st == LMC_OK) {
     float lut[256];
     for (int i = 0; i < 256; i++)

@@ -28,6 +28,27 @@ void image_free(lmc_image *img);
 /* Converts in place to 3 channels (grey is replicated, alpha dropped). */
 lmc_status image_to_rgb(lmc_image *img, lmc_error *err);
 
+/* The largest image the readers accept: IMAGE_MAX_SIDE pixels a side (16K,
+ * the texture limit of current GPUs) and IMAGE_MAX_PIXELS in all (2^27: a
+ * 16K x 8K environment map loads, 2 GiB as float RGBA; 16K x 16K does
+ * not). Each reader checks the size its header claims before it allocates
+ * or decodes any pixel, so a hostile header cannot exhaust memory or time.
+ * Fuzz builds (LMC_FUZZ) stop at 2^20 pixels, as libjpeg-turbo's own fuzz
+ * targets do: under ASan a valid 2 KB PNG of 4096 x 4096 pixels takes
+ * 3 s and 600 MB, which libFuzzer's limits count against the fuzzer. */
+#define IMAGE_MAX_SIDE 16384
+#ifndef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+#define IMAGE_MAX_PIXELS (1L << 27)
+#else
+#define IMAGE_MAX_PIXELS (1L << 20)
+#endif
+
+/* Checks a header's claimed size against the limits above: LMC_OK, or
+ * LMC_EUNSUPPORTED with an error that names the file, the format ("PNG")
+ * and the size. Non-positive sizes are the reader's to reject. */
+lmc_status image_check_size(const char *path, const char *format, long long width,
+                            long long height, lmc_error *err);
+
 /* Reads PNG, JPEG or EXR, chosen by the file's magic bytes (not its name).
  * `srgb_to_linear`: for 8-bit formats, decode sRGB (1) or take values as
  * linear (0). Errors name the file. */

@@ -7,7 +7,9 @@
  * the library converts to float while unpacking. Channels R, G, B (and A if
  * present) give a 3- or 4-channel image; otherwise a Y channel gives a
  * 1-channel image. Subsampled channels (luminance/chroma files) are not
- * supported. The image covers the data window. EXR values are linear.
+ * supported. The image covers the data window, whose size is checked
+ * against image.h's limits before any pixel is allocated. EXR values are
+ * linear.
  *
  * Writing produces a single-part scanline file with FP32 R, G, B channels
  * and ZIP compression (16 lines per chunk). As every writer in lmc, it
@@ -165,9 +167,10 @@ lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
                            ch->entries[i].name.str);
   }
   int64_t w = (int64_t)dw.max.x - dw.min.x + 1, h = (int64_t)dw.max.y - dw.min.y + 1;
-  if (st == LMC_OK && (w <= 0 || h <= 0 || w > (1 << 20) || h > (1 << 20) || w * h > (1ll << 31)))
-    st = lmc_error_set(err, LMC_EPARSE, path, 0, "unreasonable EXR size %lld x %lld", (long long)w,
+  if (st == LMC_OK && (w <= 0 || h <= 0))
+    st = lmc_error_set(err, LMC_EPARSE, path, 0, "empty EXR data window %lld x %lld", (long long)w,
                        (long long)h);
+  if (st == LMC_OK) st = image_check_size(path, "EXR", w, h, err);
   /* A header can claim any size; the file's own size bounds what it can
    * really hold. No EXR compression packs more than about 1000:1 (ZIP, as
    * deflate), times 2 for half data decoded to float: beyond 4096 image

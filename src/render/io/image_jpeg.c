@@ -6,9 +6,11 @@
  * 8-bit and sRGB-encoded: value / 255, then the sRGB curve when asked.
  *
  * libjpeg's default error handler calls exit(); ours records the message
- * and longjmps back. A file that ends early only makes libjpeg warn (it
- * pads the image with grey); we treat that warning as an error, so a
- * truncated JPEG is reported instead of silently read.
+ * and longjmps back. A file that ends early, or whose scan data stops at a
+ * marker before the image is complete, only makes libjpeg warn (it pads
+ * the image with grey); we treat both warnings as errors, so a truncated
+ * JPEG is reported instead of silently read. The size in the header is
+ * checked against image.h's limits before anything is decoded.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -35,10 +37,11 @@ static void jpeg__error_exit(j_common_ptr cinfo) {
   longjmp(e->jump, 1);
 }
 
-/* Warnings: silent, except premature end of data, which is fatal here. */
+/* Warnings: silent, except premature end of the file or of the scan data
+ * (libjpeg would invent the missing pixels), which are fatal here. */
 static void jpeg__emit_message(j_common_ptr cinfo, int level) {
   jpeg__err *e = (jpeg__err *)cinfo->err;
-  if (level < 0 && e->mgr.msg_code == JWRN_JPEG_EOF) {
+  if (level < 0 && (e->mgr.msg_code == JWRN_JPEG_EOF || e->mgr.msg_code == JWRN_HIT_MARKER)) {
     e->mgr.format_message(cinfo, e->msg);
     longjmp(e->jump, 1);
   }
@@ -66,6 +69,12 @@ lmc_status image_read_jpeg(const char *path, int srgb_to_linear_flag, lmc_image 
   jpeg_create_decompress(&cinfo);
   jpeg_stdio_src(&cinfo, f);
   jpeg_read_header(&cinfo, TRUE);
+  lmc_status st = image_check_size(path, "JPEG", cinfo.image_width, cinfo.image_height, err);
+  if (st != LMC_OK) {
+    jpeg_destroy_decompress(&cinfo);
+    fclose(f);
+    return st;
+  }
 
   /* The header can claim any size; the file's size bounds what it holds.
    * Every 8x8 block of every component costs at least one bit (its DC
@@ -92,7 +101,7 @@ lmc_status image_read_jpeg(const char *path, int srgb_to_linear_flag, lmc_image 
   }
   jpeg_start_decompress(&cinfo);
   int w = (int)cinfo.output_width, h = (int)cinfo.output_height, ch = cinfo.output_components;
-  lmc_status st = image_init(out, w, h, ch, err);
+  st = image_init(out, w, h, ch, err);
   if (st != LMC_OK) {
     snprintf(je.msg, sizeof je.msg, "%.150s", err ? err->msg : "cannot allocate the image");
     longjmp(je.jump, 1);
