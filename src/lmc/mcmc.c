@@ -649,9 +649,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     goto done;
   }
 
-  /* Bootstrap: estimate b (to 1% unless --bootstrap says how many). */
+  /* Bootstrap: estimate b (to 1% unless --bootstrap says how many), in at
+   * most a tenth of the time left (after --direct separate's pt pass). */
   {
     int64_t n = 0;
+    const double t_boot = omp_get_wtime(), boot_time = 0.1 * (rs->time_limit - (t_boot - t0));
     for (;;) {
       int64_t to = rs->bootstrap > 0 ? cap : (n + MCMC_BOOT_BATCH < cap ? n + MCMC_BOOT_BATCH : cap);
       mcmc__bootstrap_batch(fam, n_fam, n, to, rs->seed, nthreads, cnt);
@@ -663,7 +665,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         v += fam[g].b_var;
       }
       if (n >= cap || (b > 0.0 && sqrt(v) < 0.01 * b)) break;
-      if (timed && omp_get_wtime() - t0 > 0.1 * rs->time_limit) break;
+      if (timed && omp_get_wtime() - t_boot > boot_time) break;
       if (render_stop_signal()) break; /* Ctrl-C: the chains below stop at once */
     }
   }
