@@ -24,7 +24,7 @@
 #include "ad/dual_math.h"
 
 /* ---- The formula, generic over the arithmetic. ---------------------------- */
-#define GGX_BODY(T, X, MUL, ADD, SUB, DIV, SQRT, SIN, COS, MULS, ADDS, SSUB)                   \
+#define GGX_BODY(T, X, MUL, ADD, DIV, SQRT, SIN, COS, MULS, ADDS, SSUB)                        \
   T phi = MULS(X[0], 2.0 * AD_PI);                                                             \
   T st = SQRT(X[1]), ct = SQRT(SSUB(1.0, X[1]));                                               \
   T wix = MUL(st, COS(phi)), wiy = MUL(st, SIN(phi)), wiz = ct;                                \
@@ -55,22 +55,19 @@
 /* ---- Plain doubles. -------------------------------------------------------- */
 #define P_MUL(a, b) ((a) * (b))
 #define P_ADD(a, b) ((a) + (b))
-#define P_SUB(a, b) ((a) - (b))
 #define P_DIV(a, b) ((a) / (b))
 #define P_MULS(a, s) ((a) * (s))
 #define P_ADDS(a, s) ((a) + (s))
 #define P_SSUB(s, a) ((s) - (a))
 
 static double ggx_plain(const double *u) {
-  GGX_BODY(double, u, P_MUL, P_ADD, P_SUB, P_DIV, sqrt, sin, cos, P_MULS, P_ADDS, P_SSUB)
-  (void)P_SUB(0.0, 0.0);
+  GGX_BODY(double, u, P_MUL, P_ADD, P_DIV, sqrt, sin, cos, P_MULS, P_ADDS, P_SSUB)
   return f;
 }
 
 /* ---- The arena design (src/ad). ------------------------------------------- */
 #define A_MUL(a, b) ad_mul(A, a, b)
 #define A_ADD(a, b) ad_add(A, a, b)
-#define A_SUB(a, b) ad_sub(A, a, b)
 #define A_DIV(a, b) ad_div(A, a, b)
 #define A_SQRT(a) ad_sqrt(A, a)
 #define A_SIN(a) ad_sin(A, a)
@@ -83,7 +80,7 @@ static double ggx_arena(ad_arena *A, const double *u) {
   ad_arena_reset(A);
   ad x[5];
   for (int i = 0; i < 5; i++) x[i] = ad_var(A, u[i], i);
-  GGX_BODY(ad, x, A_MUL, A_ADD, A_SUB, A_DIV, A_SQRT, A_SIN, A_COS, A_MULS, A_ADDS, A_SSUB)
+  GGX_BODY(ad, x, A_MUL, A_ADD, A_DIV, A_SQRT, A_SIN, A_COS, A_MULS, A_ADDS, A_SSUB)
   double s = f.v;
   for (int k = 0; k < ad_arena_n(A); k++) s += f.d[k];
   return s;
@@ -124,7 +121,6 @@ static inline fx fx_var(double v, int i, int n) {
 }
 static inline fx fx_mul(fx a, fx b) { return fx_lin2(a.v * b.v, b.v, &a, a.v, &b); }
 static inline fx fx_add(fx a, fx b) { return fx_lin2(a.v + b.v, 1.0, &a, 1.0, &b); }
-static inline fx fx_sub(fx a, fx b) { return fx_lin2(a.v - b.v, 1.0, &a, -1.0, &b); }
 static inline fx fx_div(fx a, fx b) {
   double q = a.v / b.v;
   return fx_lin2(q, 1.0 / b.v, &a, -q / b.v, &b);
@@ -145,7 +141,7 @@ static inline fx fx_ssub(double s, fx a) { return fx_lin1(s - a.v, -1.0, &a); }
 static double ggx_fixed(const double *u, int n) {
   fx x[5];
   for (int i = 0; i < 5; i++) x[i] = fx_var(u[i], i, n);
-  GGX_BODY(fx, x, fx_mul, fx_add, fx_sub, fx_div, fx_sqrt, fx_sin, fx_cos, fx_muls, fx_adds,
+  GGX_BODY(fx, x, fx_mul, fx_add, fx_div, fx_sqrt, fx_sin, fx_cos, fx_muls, fx_adds,
            fx_ssub)
   double s = f.v;
   for (int k = 0; k < n; k++) s += f.d[k];

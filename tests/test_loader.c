@@ -407,7 +407,7 @@ static void test_happy(void **state) {
 /* -D overrides a <default>. */
 static void test_define_override(void **state) {
   (void)state;
-  const char *defs[] = {"fov=30", "width=80", "texfile=" TEXFILE};
+  const char *defs[] = {"fov=30", "width=80", ("texfile=" TEXFILE)};
   scene *s = NULL;
   lmc_error err;
   lmc_error_clear(&err);
