@@ -83,6 +83,8 @@ static const char *lmc_render_usage =
     "  --cache-fraction F       --adapt cache: share of the budget for stage 1 (default 0.1)\n"
     "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.4)\n"
     "  --lmc-states KIND        lmc's chains: mmlt (multiplexed bidirectional, default) | pt\n"
+    "  --delayed on|off         Langevin proposals first tested without their gradient\n"
+    "                           (delayed acceptance, exact; default off)\n"
     "  -q, --quiet              no progress bar\n"
     "  -h, --help               this text\n";
 
@@ -420,6 +422,13 @@ static int lmc_cmd_render(int argc, char **argv) {
     } else if (lmc_flag_is(&a, "--iso-prob")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
         goto bad;
+    } else if (lmc_flag_is(&a, "--delayed")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "on") && strcmp(v, "off")) {
+        fprintf(stderr, "lmc: flag --delayed: '%s' is not one of on, off\n", v);
+        goto bad;
+      }
+      cli.delayed = strcmp(v, "on") == 0;
     } else if (lmc_flag_is(&a, "--lmc-states")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       if (strcmp(v, "mmlt") && strcmp(v, "pt")) {
@@ -486,6 +495,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   rs.cache_fraction = cli.cache_fraction;
   rs.iso_prob = cli.iso_prob;
   rs.lmc_states = cli.lmc_states;
+  rs.delayed = cli.delayed;
   rs.set |= cli.set;
   rs.threads = cli.threads;
   rs.seed = cli.seed;

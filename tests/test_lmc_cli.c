@@ -3,7 +3,9 @@
  * it: each valid mode (both `--adapt MODE` and `--adapt=MODE`) selects
  * that mode, visible in the statistics the render prints; no --adapt means
  * cache; cache prints its stage-1 and cache lines; an invalid mode exits
- * with status 2 and a message that lists the valid ones.
+ * with status 2 and a message that lists the valid ones. --delayed on turns
+ * on delayed acceptance (its line in the statistics), off (the default)
+ * leaves it out, anything else exits 2 naming the flag.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
@@ -96,11 +98,39 @@ static void test_invalid_mode(void **state) {
   }
 }
 
+/* --delayed on|off, on ring-caustics (paths long enough for Langevin steps). */
+static void test_delayed_flag(void **state) {
+  (void)state;
+  static const char *base =
+      "render ../scenes/ring-caustics/scene.xml -o " TMP "/img --resolution 16x12 --spp 8 "
+      "--threads 1 --integrator lmc --adapt none --bootstrap 2048";
+  static const char *flag[] = {"", " --delayed off", " --delayed on", " --delayed=on"};
+  int checked = 0;
+  for (int i = 0; i < 4; i++) {
+    char args[1024];
+    snprintf(args, sizeof args, "%s%s", base, flag[i]);
+    int rc = run_lmc(args);
+    if (rc != 0) print_error("%s\n%s", args, err_text);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(err_text, "lmc: mala       length 3"));
+    int shown = strstr(err_text, "lmc: delayed acceptance:") != NULL;
+    assert_int_equal(shown, i >= 2);
+    checked++;
+  }
+  char args[1024];
+  snprintf(args, sizeof args, "%s --delayed yes", base);
+  assert_int_equal(run_lmc(args), 2);
+  assert_non_null(strstr(err_text, "--delayed"));
+  assert_non_null(strstr(err_text, "on, off"));
+  assert_int_equal(checked, 4);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_each_mode_selected),
       cmocka_unit_test(test_default_is_cache),
       cmocka_unit_test(test_invalid_mode),
+      cmocka_unit_test(test_delayed_flag),
   };
   return cmocka_run_group_tests(tests, setup, NULL);
 }

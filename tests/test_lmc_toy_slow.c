@@ -9,7 +9,8 @@
  *            [0.3, 0.6] with Gaussian shoulders: the Kelemen fallback;
  *   ripple   2-D, for the bias of adam (below).
  *
- * For adapt = none, diminish and cache, the histogram of the (u0, u1)
+ * For adapt = none, diminish, cache, and cache with delayed acceptance
+ * (lmc_kernel.h's first-order screen), the histogram of the (u0, u1)
  * marginal (expected-value splats of every step of R independent chains)
  * passes a chi-square test against the normalised density. The chains are
  * correlated, so counts are scaled to the effective sample size:
@@ -57,7 +58,7 @@
 #define MAXD 6
 #define NB 16        /* histogram bins per axis */
 #define R_CHAINS 32  /* independent chains per run */
-#define CHI2_TESTS 9 /* 3 targets x 3 unbiased modes */
+#define CHI2_TESTS 12 /* 3 targets x 4 unbiased runs */
 #define Z999 3.2905  /* two-sided 99.9% normal quantile */
 #define BIAS_STEP 1e-2 /* the bias test's Langevin step */
 #define BIAS_L 50000   /* and its steps per chain */
@@ -232,7 +233,7 @@ typedef struct run_result {
   double p[NB * NB];   /* mean frequency per cell */
   double var[NB * NB]; /* between-chain variance of a chain's frequency */
   double quad, quad_se;
-  int64_t fallback, mala, hits, lookups;
+  int64_t fallback, mala, hits, lookups, screened;
 } run_result;
 
 /* Kernel mixture: large step, Kelemen small step, LMC (and, for cache
@@ -253,8 +254,9 @@ static void make_chain(mc_chain **OUT_c, const mc_target *tg, lmc_mala *k, lmc_i
 
 /* R chains of `burn` + L steps each with mode `adapt`; for CACHE, stage 1
  * runs the same chains for `stage1` steps first (their splats discarded). */
-static void run_mode(const toy *t, lmc_adapt adapt, double step, double p_large, double p_small,
-                     int64_t burn, int64_t L, int64_t stage1, uint64_t seed, run_result *OUT) {
+static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, double p_large,
+                     double p_small, int64_t burn, int64_t L, int64_t stage1, uint64_t seed,
+                     run_result *OUT) {
   mc_target tg;
   memset(&tg, 0, sizeof tg);
   tg.dim = t->dim;
@@ -265,6 +267,7 @@ static void run_mode(const toy *t, lmc_adapt adapt, double step, double p_large,
   p.adapt = adapt;
   p.step = step;
   p.record_stride = 4;
+  p.delayed = delayed;
   lmc_error err;
   static lmc_mala km[R_CHAINS];
   static mc_chain *ch[R_CHAINS];
@@ -315,6 +318,7 @@ static void run_mode(const toy *t, lmc_adapt adapt, double step, double p_large,
   for (int r = 0; r < R_CHAINS; r++) {
     double f = hs[r].quad / (double)L;
     qs += f, qs2 += f * f;
+    OUT->screened += ch[r]->screened;
     OUT->fallback += km[r].st.fallback;
     OUT->mala += km[r].st.mala;
     OUT->hits += km[r].st.lookup_hits;
@@ -355,18 +359,22 @@ static int check_target(toy_kind kind, int dim, double step, int64_t L, uint64_t
   static double pe[NB * NB];
   toy_expected(&t, pe);
   double alpha = chi2_sidak(1e-3, CHI2_TESTS);
-  const lmc_adapt modes[3] = {LMC_ADAPT_NONE, LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE};
+  /* none, diminish, cache, and cache with delayed acceptance (whose screen
+   * ignores that M differs between x and y: the second test corrects it). */
+  const lmc_adapt modes[4] = {LMC_ADAPT_NONE, LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE};
   int checked = 0;
-  for (int m = 0; m < 3; m++) {
+  for (int m = 0; m < 4; m++) {
     static run_result rr;
-    run_mode(&t, modes[m], step, 0.02, 0.1, 2000, L, L / 2, seed, &rr);
+    int delayed = m == 3;
+    run_mode(&t, modes[m], delayed, step, 0.02, 0.1, 2000, L, L / 2, seed, &rr);
     double tau, pv = chi2_ess(&rr, pe, L, &tau);
-    printf("  target %d (%d-D) %-8s: p = %.3g, tau = %.1f, mala %lld, fallback %lld, lookups %lld (hits %lld)\n",
-           (int)kind, dim, mode_name[modes[m]], pv, tau, (long long)rr.mala, (long long)rr.fallback,
-           (long long)rr.lookups, (long long)rr.hits);
+    printf("  target %d (%d-D) %-8s%s: p = %.3g, tau = %.1f, mala %lld, fallback %lld, lookups %lld (hits %lld), first tests %lld\n",
+           (int)kind, dim, mode_name[modes[m]], delayed ? " delayed" : "", pv, tau, (long long)rr.mala,
+           (long long)rr.fallback, (long long)rr.lookups, (long long)rr.hits, (long long)rr.screened);
     if (pv < alpha) print_error("%s: p = %g below %g\n", mode_name[modes[m]], pv, alpha);
     assert_true(pv >= alpha);
     assert_true(rr.mala > 0);
+    assert_true(delayed ? rr.screened > 0 : rr.screened == 0);
     if (kind == TOY_PLATEAU) assert_true(rr.fallback > 0);
     if (modes[m] == LMC_ADAPT_CACHE) assert_true(rr.hits > 0);
     checked++;
@@ -376,17 +384,17 @@ static int check_target(toy_kind kind, int dim, double step, int64_t L, uint64_t
 
 static void test_ridge(void **state) {
   (void)state;
-  assert_int_equal(check_target(TOY_RIDGE, 2, 1e-4, 20000, 21), 3);
+  assert_int_equal(check_target(TOY_RIDGE, 2, 1e-4, 20000, 21), 4);
 }
 
 static void test_scales(void **state) {
   (void)state;
-  assert_int_equal(check_target(TOY_SCALES, 4, 1e-4, 20000, 22), 3);
+  assert_int_equal(check_target(TOY_SCALES, 4, 1e-4, 20000, 22), 4);
 }
 
 static void test_plateau(void **state) {
   (void)state;
-  assert_int_equal(check_target(TOY_PLATEAU, 6, 1e-4, 20000, 23), 3);
+  assert_int_equal(check_target(TOY_PLATEAU, 6, 1e-4, 20000, 23), 4);
 }
 
 /* Adam's bias against the unbiased modes on `ripple`. */
@@ -402,7 +410,7 @@ static void test_adam_bias(void **state) {
   double bias[4], se[4];
   for (int m = 0; m < 4; m++) {
     static run_result rr;
-    run_mode(&t, modes[m], BIAS_STEP, 0.0, 0.0, 2000, BIAS_L, BIAS_L / 2, 31, &rr);
+    run_mode(&t, modes[m], 0, BIAS_STEP, 0.0, 0.0, 2000, BIAS_L, BIAS_L / 2, 31, &rr);
     bias[m] = rr.quad - q;
     se[m] = rr.quad_se;
     printf("  mass of u0 < 1/2 %-8s: %.4f (exact %.4f), bias %+.4f +- %.4f\n", mode_name[modes[m]],

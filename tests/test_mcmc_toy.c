@@ -9,7 +9,9 @@
  * density (1 + 4 u1) / 3; this exercises the lazy replay and the restore on
  * rejection), and a 1-D density sampled with a full (non-lazy) kernel whose
  * independence proposal q(y) = 2y is not symmetric, so a wrong
- * Metropolis-Hastings ratio would show.
+ * Metropolis-Hastings ratio would show. Delayed acceptance (chain.h) runs
+ * on the bimodal density with a drifted (asymmetric) wrapped walk whose
+ * screen is deliberately not the full ratio.
  *
  * Chain histograms: N independent chains, each started from an exact
  * draw of the target (rejection sampling of uniform large-step states) and
@@ -21,7 +23,8 @@
  * for an overall false-alarm rate of 1e-3.
  *
  * Expected-value splatting: 32 independent groups of chains splat (weight a
- * at the proposal, 1 - a at the current state) into a histogram; each bin's
+ * at the proposal, 1 - a at the current state; under delayed acceptance the
+ * second test's a2 after a passed first test) into a histogram; each bin's
  * mean over groups must lie within 5 standard errors (estimated from the
  * 32 groups) of the exact bin probability. With ~60 bins checked, a false
  * alarm has probability below 1e-3 even with Student-t tails (31 dof).
@@ -40,7 +43,7 @@
 #include "lmc/chain.h"
 #include "test_util.h"
 
-#define N_CHI2_TESTS 9
+#define N_CHI2_TESTS 11
 static int g_chi2_tests;
 
 /* --- toy targets -------------------------------------------------------- */
@@ -132,6 +135,57 @@ static double lin_propose(void *self, rng *r, const mc_state *x, double *OUT_y) 
 static double lin_log_density(void *self, const mc_state *from, const double *to_u) {
   (void)self, (void)from;
   return to_u[0] > 0.0 ? log(2.0 * to_u[0]) : -INFINITY;
+}
+
+/* --- a full kernel with delayed acceptance: a drifted wrapped walk ------- */
+
+/* y = x + MU + SIGMA N(0, 1), wrapped: not symmetric (it drifts right), so
+ * a wrong ratio would show. Its screen is deliberately not the full ratio:
+ * it ignores q and adds a term that depends on the state proposed from, as
+ * the gradient term of lmc's screen does. */
+#define DRIFT_MU 0.05
+#define DRIFT_SIGMA 0.08
+
+static double drift_log_q(double from, double to) {
+  double d = to - from - DRIFT_MU;
+  d -= floor(d + 0.5);
+  double s = 0.0;
+  for (int k = -3; k <= 3; k++) {
+    double e = (d + k) / DRIFT_SIGMA;
+    s += exp(-0.5 * e * e);
+  }
+  return log(s / (DRIFT_SIGMA * sqrt(2.0 * M_PI)));
+}
+
+static double drift_propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  (void)self;
+  /* Box-Muller. */
+  double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
+  double y = x->u[0] + DRIFT_MU + DRIFT_SIGMA * sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
+  y -= floor(y);
+  if (y >= 1.0) y = 0.0;
+  OUT_y[0] = y;
+  return drift_log_q(x->u[0], y);
+}
+
+static double drift_log_density(void *self, const mc_state *from, const double *to_u) {
+  (void)self;
+  return drift_log_q(from->u[0], to_u[0]);
+}
+
+static double drift_log_screen(void *self, const mc_state *from, const double *to_u, double f_to) {
+  (void)self, (void)to_u;
+  return log(f_to) - log(from->v.f) + 0.5 * sin(2.0 * M_PI * from->u[0]);
+}
+
+static mc_kernel drift_kernel(void) {
+  mc_kernel k = {0};
+  k.name = "drift";
+  k.kind = MC_KERNEL_FULL;
+  k.propose = drift_propose;
+  k.log_density = drift_log_density;
+  k.log_screen = drift_log_screen;
+  return k;
 }
 
 /* --- chain histograms --------------------------------------------------- */
@@ -271,6 +325,36 @@ static void test_full_kernel_asymmetric(void **state) {
   check_chi2("full asymmetric", hist, prob, NB, N);
 }
 
+/* Delayed acceptance (chain.h) with the drifted walk, alone and mixed with
+ * large steps; both tests of the two-stage acceptance must be exercised. */
+static void test_delayed_acceptance(void **state) {
+  (void)state;
+  toy_ctx c = {toy_bimodal, 0};
+  mc_target t = toy_target(&c, 1);
+  mc_kernel k[2] = {drift_kernel(), mc_kernel_large()};
+  double p[2] = {0.8, 0.2};
+  enum { NB = 20, N = 20000 };
+  double prob[NB], hist[NB];
+  exact_bins(toy_bimodal, 1, NB, prob);
+  chain_histogram(&t, k, p, 1, 1.1, N, 100, NB, 1, hist);
+  check_chi2("delayed acceptance", hist, prob, NB, N);
+  chain_histogram(&t, k, p, 2, 1.1, N, 100, NB, 1, hist);
+  check_chi2("delayed acceptance + large", hist, prob, NB, N);
+
+  /* Both outcomes of the first test occur. */
+  lmc_error err;
+  mc_chain *ch = NULL;
+  assert_int_equal(mc_chain_create(&ch, &t, k, p, 1, &err), LMC_OK);
+  mc_chain_start(ch, 3, 1, 2);
+  for (int i = 0; i < 10000; i++) mc_chain_step(ch, NULL, NULL);
+  printf("  delayed acceptance: %lld first tests, %lld passed, %lld accepted\n",
+         (long long)ch->screened, (long long)ch->screen_passed, (long long)ch->stats[0].accepted);
+  assert_true(ch->screened > 9000);
+  assert_true(ch->screen_passed > 1000 && ch->screen_passed < ch->screened - 1000);
+  assert_true(ch->stats[0].accepted > 500 && ch->stats[0].accepted < ch->screen_passed);
+  mc_chain_destroy(ch);
+}
+
 /* --- expected-value splatting -------------------------------------------- */
 
 typedef struct splat_hist {
@@ -295,15 +379,21 @@ static void test_expected_value_splatting(void **state) {
   enum { NB = 20, G = 32, CH = 16, STEPS = 4000 };
   double prob[NB];
   exact_bins(toy_bimodal, 1, NB, prob);
+  /* A 4th set: delayed acceptance, whose splat weight is an estimate of a. */
+  mc_kernel kd[2] = {drift_kernel(), mc_kernel_large()};
+  double pd[2] = {0.8, 0.2};
   int checked = 0;
-  for (int s = 0; s < 3; s++) {
+  for (int s = 0; s < 4; s++) {
+    const mc_kernel *ks = s < 3 ? k[s] : kd;
+    const double *ps = s < 3 ? p[s] : pd;
+    int nks = s < 3 ? nk[s] : 2;
     double sum[NB] = {0}, sum2[NB] = {0};
     for (int g = 0; g < G; g++) {
       splat_hist hist;
       memset(&hist, 0, sizeof hist);
       lmc_error err;
       mc_chain *ch = NULL;
-      assert_int_equal(mc_chain_create(&ch, &t, k[s], p[s], nk[s], &err), LMC_OK);
+      assert_int_equal(mc_chain_create(&ch, &t, ks, ps, nks, &err), LMC_OK);
       for (int i = 0; i < CH; i++) {
         /* Start from the stationary law (rejection sampling of uniform
          * starts), so no burn-in is needed. */
@@ -331,7 +421,7 @@ static void test_expected_value_splatting(void **state) {
       checked++;
     }
   }
-  assert_int_equal(checked, 3 * NB);
+  assert_int_equal(checked, 4 * NB);
 }
 
 static void test_count(void **state) {
@@ -345,6 +435,7 @@ int main(void) {
       cmocka_unit_test(test_ring_2d),
       cmocka_unit_test(test_lazy_coordinates),
       cmocka_unit_test(test_full_kernel_asymmetric),
+      cmocka_unit_test(test_delayed_acceptance),
       cmocka_unit_test(test_expected_value_splatting),
       cmocka_unit_test(test_count),
   };

@@ -304,17 +304,21 @@ static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
  * chain.h), x gets no gradient. A difference of rounding (a target whose
  * evaluation with the gradient is other code, lmc_bdpt_target.c, agreeing
  * to 1e-9) is not one. */
-static void chain__regrad(mc_chain *c) {
-  mc_value v = c->x.v;
-  c->regrad++;
+static void chain__regrad_state(mc_chain *c, mc_state *st) {
+  mc_value v = st->v;
   if (!(v.f > 0.0)) {
-    c->x.grad_ok = 0;
-    c->x.grad_eval = 1;
+    st->grad_ok = 0;
+    st->grad_eval = 1;
     return;
   }
-  chain__eval(c, &c->x, 1);
-  if (!(fabs(c->x.v.f - v.f) <= 1e-9 * v.f)) c->x.grad_ok = 0;
-  c->x.v = v;
+  chain__eval(c, st, 1);
+  if (!(fabs(st->v.f - v.f) <= 1e-9 * v.f)) st->grad_ok = 0;
+  st->v = v;
+}
+
+static void chain__regrad(mc_chain *c) {
+  c->regrad++;
+  chain__regrad_state(c, &c->x);
 }
 
 double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_seq) {
@@ -365,8 +369,10 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   while (ki < c->n_kernels - 1 && uk >= c->cdf[ki]) ki++;
   mc_kernel *k = &c->kernels[ki];
 
-  /* Propose y and evaluate it; log_ratio = log q(x|y) - log q(y|x). */
-  double log_ratio = 0.0;
+  /* Propose y and evaluate it; log_ratio = log q(x|y) - log q(y|x). With
+   * delayed acceptance, screen = the log of a1(y, x) / a1(x, y) (chain.h),
+   * or -INFINITY when the first test rejected y. */
+  double log_ratio = 0.0, screen = 0.0;
   int full = k->kind == MC_KERNEL_FULL;
   if (full) {
     pss__materialise(p, c->x.u);
@@ -374,8 +380,23 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     pss__begin(p, 0);
     double log_fwd = k->propose(k->self, &c->r, &c->x, c->y.u);
     for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
-    chain__eval(c, &c->y, k->needs_grad);
-    if (c->y.v.f > 0.0) log_ratio = k->log_density(k->self, &c->y, c->x.u) - log_fwd;
+    int delayed = k->log_screen && c->x.v.f > 0.0;
+    chain__eval(c, &c->y, k->needs_grad && !delayed);
+    if (delayed && c->y.v.f > 0.0) {
+      c->screened++;
+      double s1 = k->log_screen(k->self, &c->x, c->y.u, c->y.v.f);
+      double la1 = s1 < 0.0 ? s1 : 0.0;
+      if (!(rng_uniform(&c->r) < exp(la1))) {
+        screen = -INFINITY;
+      } else {
+        c->screen_passed++;
+        if (k->needs_grad) chain__regrad_state(c, &c->y);
+        double s2 = k->log_screen(k->self, &c->y, c->x.u, c->x.v.f);
+        screen = (s2 < 0.0 ? s2 : 0.0) - la1;
+      }
+    }
+    if (c->y.v.f > 0.0 && screen > -INFINITY)
+      log_ratio = k->log_density(k->self, &c->y, c->x.u) - log_fwd;
   } else if (k->kind == MC_KERNEL_TECHNIQUE) {
     /* A small step of every other coordinate (the lazy vector owes every
      * accepted non-large iteration a small step) with the technique
@@ -388,12 +409,14 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     chain__eval(c, &c->y, k->needs_grad);
   }
 
-  /* Metropolis-Hastings: a = min(1, f(y) q(x|y) / (f(x) q(y|x))). */
+  /* Metropolis-Hastings: a = min(1, f(y) q(x|y) / (f(x) q(y|x))); with
+   * delayed acceptance, the second test's a2 (0 after a failed first test,
+   * an unbiased estimate of the acceptance probability for the splats). */
   double a;
-  if (!(c->y.v.f > 0.0)) a = 0.0;
+  if (!(c->y.v.f > 0.0) || screen == -INFINITY) a = 0.0;
   else if (!(c->x.v.f > 0.0)) a = 1.0;
   else {
-    double lr = log(c->y.v.f) - log(c->x.v.f) + log_ratio;
+    double lr = log(c->y.v.f) - log(c->x.v.f) + log_ratio + screen;
     a = lr >= 0.0 ? 1.0 : exp(lr);
     if (!(a >= 0.0)) a = 0.0;
   }

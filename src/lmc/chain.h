@@ -86,6 +86,19 @@ typedef enum mc_kernel_kind {
  *    gradient is available as above; the chain calls it with from = y and
  *    to_u = x's coordinates for the reverse density. Return -INFINITY
  *    where the density is zero (the proposal is then rejected).
+ *  log_screen(self, from, to_u, f_to) (may be NULL): delayed acceptance
+ *    (Christen and Fox 2005). When set, the chain evaluates y first with f
+ *    alone and makes a first test, accepting with a1(x, y) = min(1,
+ *    exp(log_screen(x, y, f(y)))); only a proposal that passes is evaluated
+ *    with its gradient (needs_grad), and a second test accepts it with
+ *    a2 = min(1, [f(y) q(x|y) / (f(x) q(y|x))] a1(y, x) / a1(x, y)), where
+ *    a1(y, x) = min(1, exp(log_screen(y, x, f(x)))) is the first test of
+ *    the reverse move, from y with its gradient. The two tests together
+ *    satisfy detailed balance for any screen that is a function of the
+ *    two states (and of from's gradient) alone, so the screen need only be
+ *    cheap and close to the full ratio: a proposal it rejects costs no
+ *    gradient. The splats weigh y by 1{first test passed} a2, whose
+ *    expectation is the acceptance probability a1 a2 (chain.c).
  *  on_step(self, current, accepted) (may be NULL): called after every step
  *    of the chain, whatever kernel made it, with the state now current
  *    (coordinates materialised only when the kernel was full; current->u
@@ -102,6 +115,7 @@ typedef struct mc_kernel {
   void *self;
   double (*propose)(void *self, rng *r, const mc_state *x, double *OUT_y);
   double (*log_density)(void *self, const mc_state *from, const double *to_u);
+  double (*log_screen)(void *self, const mc_state *from, const double *to_u, double f_to);
   void (*on_step)(void *self, const mc_state *current, int accepted);
 } mc_kernel;
 
@@ -134,6 +148,8 @@ typedef struct mc_chain {
   mc_kernel_stats stats[MC_MAX_KERNELS];
   int with_grad;              /* some kernel needs gradients */
   int64_t regrad;             /* current states re-evaluated for their gradient */
+  int64_t screened;           /* proposals of delayed-acceptance kernels: first tests made */
+  int64_t screen_passed;      /* ... passed (the proposal then got its gradient) */
   rng r;                      /* the chain's own random stream */
   mc_pss *pss;                /* the lazy vector of the current state */
   mc_state x, y;              /* current and proposed (x.u valid after a full step) */

@@ -312,11 +312,16 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       }
     if (st->max_streak >= LMC_STALL_STEPS) stalled++;
   }
-  int64_t regrad = 0;
+  int64_t regrad = 0, screened = 0, passed = 0;
   for (int i = 0; i < n; i++) {
     grad_evals += lmc__grad_evals(run, chains[i]->scratch);
     regrad += chains[i]->regrad;
+    screened += chains[i]->screened;
+    passed += chains[i]->screen_passed;
   }
+  if (screened)
+    fprintf(stderr, "lmc: delayed acceptance: %lld first tests, %.1f%% passed (evaluated with the gradient)\n",
+            (long long)screened, 100.0 * (double)passed / (double)screened);
   for (int len = 0; len < MAXL; len++)
     if (pr[0][len])
       fprintf(stderr, "lmc: mala       length %-3d%s proposed %lld, accepted %lld (%.1f%%)\n", len,

@@ -40,11 +40,10 @@ lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs) {
   p.lo = rs->precond_lo;
   p.hi = rs->precond_hi;
   p.grad_bound = rs->grad_bound;
-  if (rs->sigma > 0.0 && rs->sigma < 0.5) {
-    p.s2 = rs->sigma;
-    p.s1 = rs->sigma / 16.0;
-  }
+  /* Kelemen's offsets as mmlt and pssmlt draw them: in (1/1024, sigma]. */
+  if (rs->sigma > p.s1 && rs->sigma < 0.5) p.s2 = rs->sigma;
   p.cache.eps = p.eps, p.cache.lo = p.lo, p.cache.hi = p.hi;
+  p.delayed = rs->delayed;
   return p;
 }
 
@@ -200,6 +199,17 @@ static double lmc__log_density(void *self, const mc_state *from, const double *t
   return mala_log_density_c(from->dim, from->u, k->g, M, k->p.scale, k->cur_step, to_u);
 }
 
+/* Delayed acceptance's screen from `from` to to_u (lmc_kernel.h). */
+static double lmc__log_screen(void *self, const mc_state *from, const double *to_u, double f_to) {
+  lmc_mala *k = self;
+  double s = log(f_to) - log(from->v.f);
+  if (lmc__gradient(k, from) == 0) return s;
+  const double *c = k->p.scale;
+  for (int i = 0; i < from->dim; i++)
+    if (k->g[i] != 0.0) s += mala_torus_diff(from->u[i], to_u[i]) / (c ? c[i] : 1.0) * k->g[i];
+  return s;
+}
+
 static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   lmc_mala *k = self;
   int own = k->own_step;
@@ -242,6 +252,7 @@ mc_kernel lmc_mala_kernel(lmc_mala *k) {
   kn.self = k;
   kn.propose = lmc__propose;
   kn.log_density = lmc__log_density;
+  if (k->p.delayed) kn.log_screen = lmc__log_screen;
   kn.on_step = lmc__on_step;
   return kn;
 }

@@ -57,6 +57,17 @@
  * times the others neither shrinks the rest of g under the bound nor
  * drives M to its clamp. c is constant, so both directions stay exact.
  *
+ * Delayed acceptance (lmc_kernel_params.delayed, chain.h). The screen
+ * from x to y is log f(y) - log f(x) + (x - y) . g(x), with x - y the
+ * shortest difference on the torus, in the rescaled coordinates z: the
+ * full log ratio of the step with g(y) and M(y) replaced by g(x) and M(x)
+ * (for a Gaussian proposal whose mean moves by (s/2) M g, the two
+ * densities then differ by exactly (x - y) . g). From a state without a
+ * gradient (the Kelemen fallback, symmetric) it is log f(y) - log f(x).
+ * Where f is smooth over a step the screen is close to the full ratio, so
+ * the second test passes nearly always, and a proposal the screen rejects
+ * costs a plain evaluation of f instead of one with its gradient.
+ *
  * Gradients are evaluated lazily by the chain (chain.h): a state reached
  * by a large or Kelemen step is evaluated without its gradient, and
  * re-evaluated with it only when this kernel proposes from it. Adam's
@@ -98,10 +109,11 @@ typedef struct lmc_kernel_params {
   int record_stride;    /* CACHE stage 1: record every n-th own state (0: none) */
   int norm;             /* lmc_norm: how M is normalised over the key coordinates */
   const double *scale;  /* borrowed, dim entries (NULL: all 1): the step scale c (below) */
+  int delayed;          /* delayed acceptance with the first-order screen (below) */
 } lmc_kernel_params;
 
 /* The parameters of render settings (rs->lmc_step, adam_eps, precond_lo/hi,
- * grad_bound, adapt), with s1 = sigma / 16, s2 = sigma and the defaults
+ * grad_bound, adapt), with s1 = 1/1024, s2 = sigma (mmlt's and pssmlt's) and the defaults
  * below for the rest. */
 lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs);
 lmc_kernel_params lmc_kernel_params_default(void);

@@ -69,6 +69,7 @@ typedef struct render_settings {
   double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
   double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
   int lmc_states;        /* lmc's state space: LMC_STATES_MMLT (default) or _PT */
+  int delayed;           /* --delayed on: Langevin proposals get a gradient-free first test (off) */
   int mala;              /* the <dpt> block asked for MALA */
   int h2mc;              /* the <dpt> block asked for H2MC */
   int quiet;             /* no progress bar */
