@@ -2,16 +2,23 @@
 # bench/equal_time.sh: the equal-time benchmark (issue 4).
 #
 # usage: bench/equal_time.sh [-s "SCENE_DIR ..."] [-i "INTEGRATOR ..."] [-t SECONDS]
-#                            [-j THREADS] [-b BUILD_DIR] [-o OUT_DIR]
+#                            [-n RUNS] [-j THREADS] [-b BUILD_DIR] [-o OUT_DIR]
 #
-# Renders every scene with every integrator for SECONDS (default 60) with
-# the same thread count (default: all cores), writing a snapshot every
-# SECONDS/6 (--snapshot), compares each snapshot and the final image with
-# the scene's reference.exr (lmc compare), and writes
-#   OUT_DIR/table.md                 scene x integrator: relmse, mean ratio,
-#                                    samples or mutations per second, acceptance
-#   OUT_DIR/<scene>-convergence.png  log-log relmse against time (gnuplot)
-#   OUT_DIR/<scene>/<integrator>.*   the renders, their logs and curves
+# Renders every scene with every integrator RUNS times (seeds 1 .. RUNS,
+# default 1) for SECONDS (default 60) each with the same thread count
+# (default: all cores), writing a snapshot every SECONDS/6 (--snapshot),
+# compares each snapshot and the final image with the scene's
+# reference.exr (lmc compare), and writes
+#   OUT_DIR/table.md                 scene x integrator: relmse (mean over
+#                                    the runs, with its standard error when
+#                                    RUNS > 1, and each run's), relmse
+#                                    without the worst 0.1% of pixels (mean),
+#                                    mean ratio, samples or mutations per
+#                                    second, acceptance (of the first run)
+#   OUT_DIR/<scene>-convergence.png  log-log mean relmse against time (gnuplot)
+#   OUT_DIR/<scene>/<integrator>-sN.* the renders, their logs and curves
+# A short render's relmse is heavy-tailed (one firefly can outweigh the rest
+# of the image), so compare integrators over several runs.
 # Defaults: scenes/ring-caustics, scenes/ring-caustics-glass and, when
 # ../shared/scenes/torus exists, the torus (it has no reference there: one
 # is made with scripts/make_reference.sh's recipe into OUT_DIR/torus-ref
@@ -28,16 +35,17 @@ read -r -a extra <<<"${LMC_BENCH_FLAGS:-}"
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
-scenes="" integrators="" secs=60 threads="" build=build out=bench-out
-while getopts "s:i:t:j:b:o:h" opt; do
+scenes="" integrators="" secs=60 runs=1 threads="" build=build out=bench-out
+while getopts "s:i:t:n:j:b:o:h" opt; do
   case $opt in
     s) scenes=$OPTARG ;;
     i) integrators=$OPTARG ;;
     t) secs=$OPTARG ;;
+    n) runs=$OPTARG ;;
     j) threads=$OPTARG ;;
     b) build=$OPTARG ;;
     o) out=$OPTARG ;;
-    *) sed -n '2,22p' "$0"; exit 2 ;;
+    *) sed -n '2,31p' "$0"; exit 2 ;;
   esac
 done
 lmc=$build/lmc
@@ -59,11 +67,11 @@ if [ -z "$integrators" ]; then
 fi
 snap=$(awk -v t="$secs" 'BEGIN { s = t / 6; if (s < 1) s = 1; print s }')
 
-echo "equal_time: T=${secs}s, threads=$threads, snapshots every ${snap}s; load: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "equal_time: T=${secs}s, $runs run(s) each, threads=$threads, snapshots every ${snap}s; load: $(cut -d' ' -f1-3 /proc/loadavg)"
 table="$out/table.md"
 {
-  echo "| scene | integrator | relmse | mean ratio | samples or mutations / s | acceptance |"
-  echo "| --- | --- | --- | --- | --- | --- |"
+  echo "| scene | integrator | relmse (runs) | relmse without worst 0.1% | mean ratio | samples or mutations / s | acceptance |"
+  echo "| --- | --- | --- | --- | --- | --- | --- |"
 } >"$table"
 
 for sdir in $scenes; do
@@ -94,37 +102,57 @@ for sdir in $scenes; do
     label=${entry/:/-}
     flags=(--integrator "$name")
     [ "$entry" != "$name" ] && flags+=(--adapt "${entry#*:}")
-    stem="$out/$sname/$label"
-    rm -f "$stem"-*s.exr
-    echo "  $sname / $label ..." >&2
-    "$lmc" render "$sfile" "${flags[@]}" "${extra[@]}" --time "$secs" --threads "$threads" \
-      --snapshot "$snap" -o "$stem.exr" >"$stem.log" 2>&1 || {
-      echo "equal_time: $label failed on $sname (see $stem.log)" >&2
-      continue
-    }
-    # The convergence curve: seconds, relmse (snapshots, then the final image).
-    : >"$stem.dat"
-    for f in "$stem"-*s.exr; do
-      [ -f "$f" ] || continue
-      t=${f##*-}
-      t=${t%s.exr}
-      echo "$t $("$lmc" compare "$f" "$ref" | sed -n 's/^relmse: //p')" >>"$stem.dat"
+    rels=() trims=() ratios=() dats=() rate="" acc=""
+    for seed in $(seq 1 "$runs"); do
+      stem="$out/$sname/$label-s$seed"
+      rm -f "$stem"-*s.exr
+      echo "  $sname / $label / seed $seed ..." >&2
+      "$lmc" render "$sfile" "${flags[@]}" "${extra[@]}" --time "$secs" --threads "$threads" \
+        --seed "$seed" --snapshot "$snap" -o "$stem.exr" >"$stem.log" 2>&1 || {
+        echo "equal_time: $label failed on $sname (see $stem.log)" >&2
+        continue
+      }
+      # The convergence curve: seconds, relmse (snapshots, then the final image).
+      : >"$stem.dat"
+      for f in "$stem"-*s.exr; do
+        [ -f "$f" ] || continue
+        t=${f##*-}
+        t=${t%s.exr}
+        echo "$t $("$lmc" compare "$f" "$ref" | sed -n 's/^relmse: //p')" >>"$stem.dat"
+      done
+      cmp=$("$lmc" compare "$stem.exr" "$ref")
+      rels+=("$(sed -n 's/^relmse: //p' <<<"$cmp")")
+      trims+=("$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")")
+      ratios+=("$(sed -n 's/^mean_ratio: //p' <<<"$cmp")")
+      secs_used=$(sed -n 's/.* in \([0-9.]*\) s (load.*/\1/p' "$stem.log" | tail -1)
+      echo "$secs_used ${rels[-1]}" >>"$stem.dat"
+      sort -g -o "$stem.dat" "$stem.dat"
+      dats+=("$stem.dat")
+      [ -n "$rate" ] && continue
+      # Throughput: mutations per second (MCMC) or camera samples per second.
+      rate=$(sed -n 's/.* \([0-9.e+]*\) mutations\/s.*/\1 mutations/p' "$stem.log" | tail -1)
+      if [ -z "$rate" ]; then
+        rate=$(sed -n 's/.*spp (\([0-9]*\) samples) in \([0-9.]*\) s.*/\1 \2/p' "$stem.log" |
+          awk '{ printf "%.3g samples", $1 / $2 }')
+      fi
+      acc=$(sed -n 's/^lmc: \([a-z-]*\) *proposed [0-9]*, accepted [0-9]* (\([0-9.]*%\)).*/\1 \2/p' \
+        "$stem.log" | paste -sd, - | sed 's/,/, /g')
     done
-    cmp=$("$lmc" compare "$stem.exr" "$ref")
-    rel=$(sed -n 's/^relmse: //p' <<<"$cmp")
-    ratio=$(sed -n 's/^mean_ratio: //p' <<<"$cmp")
-    secs_used=$(sed -n 's/.* in \([0-9.]*\) s (load.*/\1/p' "$stem.log" | tail -1)
-    echo "$secs_used $rel" >>"$stem.dat"
-    sort -g -o "$stem.dat" "$stem.dat"
-    # Throughput: mutations per second (MCMC) or camera samples per second.
-    rate=$(sed -n 's/.* \([0-9.e+]*\) mutations\/s.*/\1 mutations/p' "$stem.log" | tail -1)
-    if [ -z "$rate" ]; then
-      rate=$(sed -n 's/.*spp (\([0-9]*\) samples) in \([0-9.]*\) s.*/\1 \2/p' "$stem.log" |
-        awk '{ printf "%.3g samples", $1 / $2 }')
-    fi
-    acc=$(sed -n 's/^lmc: \([a-z-]*\) *proposed [0-9]*, accepted [0-9]* (\([0-9.]*%\)).*/\1 \2/p' \
-      "$stem.log" | paste -sd, - | sed 's/,/, /g')
-    echo "| $sname | $label | $rel | $ratio | $rate | ${acc:--} |" >>"$table"
+    [ ${#rels[@]} -gt 0 ] || continue
+    # Means over the runs (the relmse with its standard error and each run's).
+    rel=$(printf '%s\n' "${rels[@]}" | awk '{ s += $1; s2 += $1 * $1; v[NR] = $1 }
+      END { m = s / NR; line = sprintf("%.4g", m)
+            if (NR > 1) { se = sqrt((s2 - NR * m * m) / (NR - 1) / NR); line = line sprintf(" +- %.2g (", se)
+                          for (i = 1; i <= NR; i++) line = line sprintf(i > 1 ? ", %.3g" : "%.3g", v[i]); line = line ")" }
+            print line }')
+    trim=$(printf '%s\n' "${trims[@]}" | awk '{ s += $1 } END { printf "%.4g", s / NR }')
+    ratio=$(printf '%s\n' "${ratios[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')
+    echo "| $sname | $label | $rel | $trim | $ratio | $rate | ${acc:--} |" >>"$table"
+    # The mean curve over the runs (the snapshots fall at the same seconds;
+    # the final image's time differs by run, its mean is used).
+    paste -d' ' "${dats[@]}" | awk '{ t = 0; r = 0; n = NF / 2
+      for (i = 1; i <= NF; i += 2) { t += $i; r += $(i + 1) } print t / n, r / n }' >"$out/$sname/$label.dat"
+    stem="$out/$sname/$label"
     plot_lines+=("'$stem.dat' using 1:2 with linespoints title '$label'")
   done
   if command -v gnuplot >/dev/null && [ ${#plot_lines[@]} -gt 0 ]; then

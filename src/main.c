@@ -568,6 +568,12 @@ static rgb lmc_heat_color(double t) {
                   stops[i][2] + f * (stops[i + 1][2] - stops[i][2]));
 }
 
+/* Ascending order of doubles, for qsort. */
+static int lmc_cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
 static int lmc_cmd_compare(int argc, char **argv) {
   const char *paths[2] = {NULL, NULL}, *heatmap = NULL;
   int n_paths = 0;
@@ -577,8 +583,10 @@ static int lmc_cmd_compare(int argc, char **argv) {
       if (!(heatmap = lmc_flag_value(&a))) return EXIT_BADINPUT;
     } else if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
       printf("usage: lmc compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
-             "prints mse, relmse (mean of (I-R)^2 / (R^2 + 0.01)) and mean_ratio\n"
-             "(mean luminance of IMAGE over REFERENCE); exit 2 if the sizes differ\n");
+             "prints mse, relmse (mean of (I-R)^2 / (R^2 + 0.01)), relmse_trimmed\n"
+             "(the same without the 0.1%% of pixels with the largest error) and\n"
+             "mean_ratio (mean luminance of IMAGE over REFERENCE); exit 2 if the\n"
+             "sizes differ\n");
       return EXIT_OK;
     } else if (argv[a.i][0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (see lmc compare --help)\n", argv[a.i]);
@@ -615,22 +623,41 @@ static int lmc_cmd_compare(int argc, char **argv) {
     return EXIT_BADINPUT;
   }
 
-  /* The metrics, over pixels and channels. */
+  /* The metrics, over pixels and channels; rel[] keeps each pixel's
+   * relative squared error for the trimmed mean. */
   size_t n = (size_t)img[0].width * (size_t)img[0].height;
   double mse = 0.0, relmse = 0.0, lum_i = 0.0, lum_r = 0.0;
+  double *rel = malloc(n * sizeof *rel);
+  if (!rel) {
+    fprintf(stderr, "lmc: out of memory\n");
+    image_free(&img[0]);
+    image_free(&img[1]);
+    return EXIT_FAIL;
+  }
   for (size_t p = 0; p < n; p++) {
     const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
+    rel[p] = 0.0;
     for (int c = 0; c < 3; c++) {
       double d = (double)I[c] - (double)R[c];
       mse += d * d;
-      relmse += d * d / ((double)R[c] * R[c] + 0.01);
+      rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
     }
+    relmse += rel[p];
     lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));
     lum_r += rgb_luminance(rgb_make(R[0], R[1], R[2]));
   }
   mse /= 3.0 * (double)n;
-  relmse /= 3.0 * (double)n;
-  printf("mse: %.9g\nrelmse: %.9g\nmean_ratio: %.9g\n", mse, relmse,
+  relmse /= (double)n;
+  /* The trimmed relative MSE: the mean over the pixels left when the
+   * largest 0.1% of the per-pixel errors are dropped (one firefly of a
+   * short render can outweigh the rest of the image). */
+  size_t drop = n / 1000;
+  qsort(rel, n, sizeof *rel, lmc_cmp_double);
+  double trimmed = 0.0;
+  for (size_t p = 0; p + drop < n; p++) trimmed += rel[p];
+  trimmed /= (double)(n - drop);
+  free(rel);
+  printf("mse: %.9g\nrelmse: %.9g\nrelmse_trimmed: %.9g\nmean_ratio: %.9g\n", mse, relmse, trimmed,
          lum_r != 0.0 ? lum_i / lum_r : (lum_i == 0.0 ? 1.0 : INFINITY));
 
   /* The heatmap: per-pixel relative error, log scale from 1e-4 to 1. */

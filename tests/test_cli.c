@@ -202,6 +202,7 @@ static void test_compare_metrics(void **state) {
   assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/R.exr --heatmap=" TMP "/h.png"), 0);
   assert_near(metric("mse"), mse, 1e-7 * mse);
   assert_near(metric("relmse"), rel, 1e-7 * rel);
+  assert_near(metric("relmse_trimmed"), rel, 1e-7 * rel); /* 2 pixels: none dropped */
   assert_near(metric("mean_ratio"), li / lr, 1e-7);
   lmc_image h = {0};
   assert_int_equal(image_read(TMP "/h.png", 0, &h, &err), LMC_OK);
@@ -211,6 +212,34 @@ static void test_compare_metrics(void **state) {
   assert_int_equal(run_lmc("compare " TMP "/R.exr " TMP "/R.exr"), 0);
   assert_near(metric("mse"), 0.0, 0.0);
   assert_near(metric("mean_ratio"), 1.0, 1e-12);
+  /* The trimmed relative MSE drops the largest 0.1% of pixel errors: on
+   * 2000 pixels, the 2 outliers. */
+  {
+    lmc_image A, B;
+    assert_int_equal(image_init(&A, 2000, 1, 3, &err), LMC_OK);
+    assert_int_equal(image_init(&B, 2000, 1, 3, &err), LMC_OK);
+    double full = 0.0, kept = 0.0;
+    for (int p = 0; p < 2000; p++) {
+      double r = 0.5 + 0.25 * (p % 7), v = p == 17 || p == 1500 ? 100.0 : r * (1.0 + 0.01 * (p % 5));
+      double e = 0.0;
+      for (int c = 0; c < 3; c++) {
+        B.data[3 * p + c] = (float)r;
+        A.data[3 * p + c] = (float)v;
+        double d = (double)(float)v - (double)(float)r;
+        e += d * d / ((double)(float)r * (float)r + 0.01) / 3.0;
+      }
+      full += e / 2000.0;
+      if (p != 17 && p != 1500) kept += e / 1998.0;
+    }
+    assert_int_equal(image_write_exr(TMP "/A.exr", &A, &err), LMC_OK);
+    assert_int_equal(image_write_exr(TMP "/B.exr", &B, &err), LMC_OK);
+    assert_int_equal(run_lmc("compare " TMP "/A.exr " TMP "/B.exr"), 0);
+    assert_near(metric("relmse"), full, 1e-6 * full);
+    assert_near(metric("relmse_trimmed"), kept, 1e-6 * kept);
+    assert_true(kept < 1e-3 * full);
+    image_free(&A);
+    image_free(&B);
+  }
   /* Different sizes: exit 2. */
   assert_int_equal(run_lmc("compare " TMP "/I.exr " TMP "/S.exr"), 2);
   assert_non_null(strstr(err_text, "3x1"));
