@@ -71,6 +71,7 @@ static const char *lmc_render_usage =
     "  --largestep P            large-step probability (default 0.3)\n"
     "  --sigma S                Kelemen small-step scale (default 1/64; mmlt 0.05)\n"
     "  --bootstrap N            independent paths used to estimate b (default: enough for 1%)\n"
+    "  --bootstrap-error E      without --bootstrap: b's target relative standard error (0.01)\n"
     "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
     "\n"
     "LMC (--integrator lmc):\n"
@@ -372,6 +373,10 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--sigma", v, 1e-9, 1, &cli.sigma))
         goto bad;
       cli.set |= SET_SIGMA;
+    } else if (lmc_flag_is(&a, "--bootstrap-error")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--bootstrap-error", v, 1e-4, 1, &cli.bootstrap_error))
+        goto bad;
     } else if (lmc_flag_is(&a, "--bootstrap")) {
       if (!(v = lmc_flag_value(&a)) ||
           !lmc_parse_int64("--bootstrap", v, 1, INT64_MAX / 2, &cli.bootstrap))
@@ -483,6 +488,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_LARGESTEP) rs.largestep = cli.largestep;
   if (cli.set & SET_SIGMA) rs.sigma = cli.sigma;
   if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
+  rs.bootstrap_error = cli.bootstrap_error;
   if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
   if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
   rs.snapshot = cli.snapshot;

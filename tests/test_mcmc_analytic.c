@@ -19,7 +19,8 @@
  * that are not exact.
  *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
- * give a bit-identical film under --spp.
+ * give a bit-identical film under --spp, also with mmlt's default, adaptive
+ * bootstrap (its batches are shared out by rays counted, not by time).
  *
  * b refined with the large steps (mcmc.c): on the furnace every pixel's
  * radiance is exactly 1 (grey), so pssmlt's b = E[luminance(A L)] = A, the
@@ -186,13 +187,21 @@ static void test_refined_b(void **state) {
 
 /* --- determinism ------------------------------------------------------- */
 
-static void render_film(const scene *s, const char *integrator, uint64_t seed, int threads,
-                        film *OUT_f) {
+/* adaptive: the default bootstrap (batches until b's standard error is
+ * below --bootstrap-error, Neyman-allocated over mmlt's lengths) instead of
+ * a fixed count; returns the bootstrap's size. */
+static int64_t render_film(const scene *s, const char *integrator, uint64_t seed, int threads,
+                           int adaptive, film *OUT_f) {
   render_settings rs = settings(s, integrator, 4, seed, threads);
+  if (adaptive) {
+    rs.bootstrap = 0;
+    rs.bootstrap_error = 0.003;
+  }
   render_stats st;
   lmc_error err;
   assert_int_equal(mcmc_render_run(s, &rs, OUT_f, &st, &err), LMC_OK);
   assert_true(st.samples >= 4 * (int64_t)s->cam.width * s->cam.height);
+  return st.mcmc_boot_paths;
 }
 
 static int films_equal(const film *a, const film *b) {
@@ -203,14 +212,19 @@ static int films_equal(const film *a, const film *b) {
 
 static void test_determinism(void **state) {
   (void)state;
-  scene *s = load("furnace.xml");
-  const char *names[2] = {"pssmlt", "mmlt"};
-  for (int i = 0; i < 2; i++) {
+  scene *s = load("furnace.xml"), *sphere = load("diffuse_sphere.xml");
+  const char *names[3] = {"pssmlt", "mmlt", "mmlt"};
+  for (int i = 0; i < 3; i++) {
+    /* The third: mmlt's adaptive bootstrap, several batches shared out by
+     * the lengths' costs and variances. */
+    const scene *sc = i == 2 ? sphere : s;
+    int adaptive = i == 2;
     film a, b, c, d;
-    render_film(s, names[i], 3, 2, &a);
-    render_film(s, names[i], 3, 2, &b);
-    render_film(s, names[i], 3, 1, &c);
-    render_film(s, names[i], 4, 2, &d);
+    int64_t n = render_film(sc, names[i], 3, 2, adaptive, &a);
+    render_film(sc, names[i], 3, 2, adaptive, &b);
+    render_film(sc, names[i], 3, 1, adaptive, &c);
+    render_film(sc, names[i], 4, 2, adaptive, &d);
+    if (adaptive) assert_true(n > 4 * 8192); /* more than the first batch */
     assert_true(films_equal(&a, &b)); /* same seed, same threads */
     assert_true(films_equal(&a, &c)); /* 1 vs 2 threads */
     assert_false(films_equal(&a, &d)); /* another seed differs */
@@ -220,6 +234,7 @@ static void test_determinism(void **state) {
     film_free(&d);
   }
   scene_destroy(s);
+  scene_destroy(sphere);
 }
 
 static void test_count(void **state) {

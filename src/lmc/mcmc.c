@@ -60,10 +60,24 @@
  * b has the same caveat through the starting states).
  *
  * Bootstrap. Sample j of family g is the large step drawn from the stream
- * (seed, hash(g, j)); batches of MCMC_BOOT_BATCH per family are drawn until
- * the standard error of sum_g b_g is below 1% of it, MCMC_BOOT_CAP samples
- * per family are drawn, or (under --time) a tenth of the budget is spent;
- * --bootstrap N draws exactly N per family. Starting states are chosen by
+ * (seed, hash(g, j)). A first batch of MCMC_BOOT_BATCH per family, then
+ * batches of MCMC_BOOT_BATCH times the number of families shared out by
+ * Neyman allocation: family g gets a share proportional to sigma_g /
+ * sqrt(c_g), its per-sample standard deviation so far over the square root
+ * of its rays per sample (deterministic, unlike a time), at least an
+ * eighth of an even share. That minimises the standard error of sum_g b_g
+ * for the rays spent; on ring-caustics, where the longer lengths' samples
+ * are both costlier and (relative to their b) noisier, it reaches 1% with
+ * about half the samples an even split needs (1.33% at 2^18 paths per
+ * length evenly, 1.01% with the same 2^21 in all allocated). Batches are
+ * drawn until that standard error is below 1% of the sum
+ * (--bootstrap-error), MCMC_BOOT_CAP
+ * samples are drawn in all, or (under --time) a tenth of the time left is
+ * spent; --bootstrap
+ * N draws exactly N per family. (A sample size that depends on earlier
+ * samples makes each b_g's mean biased by O(1/N), as any stopping rule
+ * does: far below its noise, and diluted further by the large steps that
+ * refine b during the render.) Starting states are chosen by
  * systematic resampling in proportion to f, so chains start in the
  * stationary distribution (no burn-in, no start-up bias, up to the
  * bootstrap's finite size).
@@ -100,7 +114,7 @@
 #define MCMC_MMLT_SIGMA 0.05 /* mmlt's default small-step scale (see mcmc_render_run) */
 #define MCMC_ROUND 64
 #define MCMC_BOOT_BATCH 8192
-#define MCMC_BOOT_CAP (1 << 20)
+#define MCMC_BOOT_CAP (1 << 22) /* bootstrap samples in all, over the families */
 #define MCMC_EXPECT_SEQ 0x5eed0fb0075a3e11ull /* eval_expect's bootstrap streams: (seed, seq ^ this) */
 #define MCMC_MAX_FAMILIES 64
 #define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* mmlt's per-length splat buffers, at most */
@@ -319,6 +333,8 @@ typedef struct mcmc_family {
   double *f;          /* bootstrap values */
   double *fe;         /* target.eval_expect: its bootstrap values (NULL: b from f) */
   int64_t n_boot;
+  int64_t boot_cap;   /* room in f (and fe) */
+  int64_t boot_rays;  /* rays the bootstrap spent on this family (its cost per sample) */
   double b, b_var;    /* estimate of b and the variance of that estimate (bootstrap) */
   double boot_s, boot_s2; /* sum of f and f^2 over the bootstrap */
   double b_ref, b_ref_var; /* b refined with the chains' large steps, and its variance */
@@ -363,19 +379,22 @@ static uint64_t mcmc__chain_seq(int g, int i) {
   return rng_hash64(((uint64_t)(g + 1) << 44) ^ (1ull << 43) ^ (uint64_t)i);
 }
 
-/* Draws bootstrap samples [from, to) of every family in parallel (each
- * sample from its own stream, so the values do not depend on threads). */
-static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, int64_t from, int64_t to,
-                                  uint64_t seed, int nthreads, render_counters *cnt) {
+/* Draws bootstrap samples [n_boot, to[g]) of every family g in parallel
+ * (each sample from its own stream, so the values do not depend on
+ * threads), then updates the family's b (mcmc__family_b). */
+static void mcmc__family_b(mcmc_family *F, int64_t n);
+static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, const int64_t *to, uint64_t seed,
+                                  int nthreads, render_counters *cnt) {
   for (int g = 0; g < n_fam; g++) {
     mcmc_family *F = &fam[g];
+    int64_t from = F->n_boot;
 #pragma omp parallel num_threads(nthreads)
     {
       /* The target's own scratch (lmc's target has another kind). */
       void *sc = F->target.scratch_create(&F->target);
       int tid = omp_get_thread_num();
 #pragma omp for schedule(dynamic, 256)
-      for (int64_t j = from; j < to; j++) {
+      for (int64_t j = from; j < to[g]; j++) {
         F->f[j] = sc ? mc_eval_independent(&F->target, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
         if (F->fe) {
           /* An independent sample for b (the one above picks starting states). */
@@ -386,11 +405,59 @@ static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, int64_t from, int
         }
       }
       if (sc) {
+        int64_t rays = F->target.scratch_rays(sc);
 #pragma omp atomic
-        cnt[tid].rays += F->target.scratch_rays(sc);
+        cnt[tid].rays += rays;
+#pragma omp atomic
+        F->boot_rays += rays;
       }
       F->target.scratch_destroy(sc);
     }
+    mcmc__family_b(F, to[g] > from ? to[g] : from);
+  }
+}
+
+/* Room for n bootstrap samples in F's arrays (grown by doubling); 0 when
+ * out of memory. */
+static int mcmc__reserve(mcmc_family *F, int64_t n) {
+  if (n <= F->boot_cap) return 1;
+  int64_t c = F->boot_cap > 0 ? F->boot_cap : n;
+  while (c < n) c *= 2;
+  double *f = realloc(F->f, (size_t)c * sizeof(double));
+  if (!f) return 0;
+  F->f = f;
+  if (F->target.eval_expect) {
+    double *fe = realloc(F->fe, (size_t)c * sizeof(double));
+    if (!fe) return 0;
+    F->fe = fe;
+  }
+  F->boot_cap = c;
+  return 1;
+}
+
+/* The next batch's size per family (Neyman allocation, see Bootstrap
+ * above) into to[], within `left` more samples in all; a family whose
+ * arrays cannot grow gets none. */
+static void mcmc__bootstrap_allocate(mcmc_family *fam, int n_fam, int64_t left, int64_t *to) {
+  double w[MCMC_MAX_FAMILIES], wsum = 0.0;
+  for (int g = 0; g < n_fam; g++) {
+    const mcmc_family *F = &fam[g];
+    double n = (double)F->n_boot;
+    double sd = n > 0.0 ? sqrt(F->b_var * n) : 0.0;
+    double cost = n > 0.0 ? fmax(1.0, (double)F->boot_rays / n) : 1.0;
+    w[g] = isfinite(sd) ? sd / sqrt(cost) : 0.0;
+    wsum += w[g];
+  }
+  double total = (double)MCMC_BOOT_BATCH * n_fam;
+  if (total > (double)left) total = (double)left;
+  for (int g = 0; g < n_fam; g++) {
+    double share = wsum > 0.0 ? w[g] / wsum : 1.0 / n_fam;
+    int64_t add = (int64_t)(total * share);
+    if (add < MCMC_BOOT_BATCH / 8) add = MCMC_BOOT_BATCH / 8;
+    if (add > left) add = left;
+    left -= add;
+    to[g] = fam[g].n_boot + add;
+    if (!mcmc__reserve(&fam[g], to[g])) to[g] = fam[g].n_boot;
   }
 }
 
@@ -605,15 +672,13 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
     for (int g = 0; g < n_fam; g++) fam[g].target = *lmc_run_family_target(lrun, g);
   }
-  int64_t cap = rs->bootstrap > 0 ? rs->bootstrap : MCMC_BOOT_CAP / (n_fam > 4 ? 4 : n_fam);
-  for (int g = 0; g < n_fam; g++) {
-    fam[g].f = malloc((size_t)cap * sizeof(double));
-    if (!fam[g].f) cap = 0;
-    if (fam[g].target.eval_expect) {
-      fam[g].fe = malloc((size_t)cap * sizeof(double));
-      if (!fam[g].fe) cap = 0;
-    }
-  }
+  /* The bootstrap's sample arrays: --bootstrap N per family, else a first
+   * batch, grown as the allocation asks (mcmc__reserve); in all at most
+   * MCMC_BOOT_CAP samples. */
+  int64_t cap = rs->bootstrap > 0 ? rs->bootstrap : MCMC_BOOT_BATCH;
+  const int64_t cap_total = rs->bootstrap > 0 ? rs->bootstrap * n_fam : MCMC_BOOT_CAP;
+  for (int g = 0; g < n_fam; g++)
+    if (!mcmc__reserve(&fam[g], cap)) cap = 0;
   if (!is_mmlt && !is_lmc) {
     /* pssmlt: next-event estimation's light-position number u1 of every
      * bounce (lmc's run sets the same on its own target). */
@@ -652,19 +717,20 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   /* Bootstrap: estimate b (to 1% unless --bootstrap says how many), in at
    * most a tenth of the time left (after --direct separate's pt pass). */
   {
-    int64_t n = 0;
     const double t_boot = omp_get_wtime(), boot_time = 0.1 * (rs->time_limit - (t_boot - t0));
-    for (;;) {
-      int64_t to = rs->bootstrap > 0 ? cap : (n + MCMC_BOOT_BATCH < cap ? n + MCMC_BOOT_BATCH : cap);
-      mcmc__bootstrap_batch(fam, n_fam, n, to, rs->seed, nthreads, cnt);
-      n = to;
+    int64_t to[MCMC_MAX_FAMILIES], drawn = 0;
+    for (int batch = 0;; batch++) {
+      if (batch == 0)
+        for (int g = 0; g < n_fam; g++) to[g] = cap;
+      else
+        mcmc__bootstrap_allocate(fam, n_fam, cap_total - drawn, to);
+      int64_t before = drawn;
+      for (int g = 0; g < n_fam; g++) drawn += to[g] - fam[g].n_boot;
+      mcmc__bootstrap_batch(fam, n_fam, to, rs->seed, nthreads, cnt);
       double b = 0.0, v = 0.0;
-      for (int g = 0; g < n_fam; g++) {
-        mcmc__family_b(&fam[g], n);
-        b += fam[g].b;
-        v += fam[g].b_var;
-      }
-      if (n >= cap || (b > 0.0 && sqrt(v) < 0.01 * b)) break;
+      for (int g = 0; g < n_fam; g++) b += fam[g].b, v += fam[g].b_var;
+      if (rs->bootstrap > 0 || drawn >= cap_total || drawn == before) break;
+      if (b > 0.0 && sqrt(v) < rs->bootstrap_error * b) break;
       if (timed && omp_get_wtime() - t_boot > boot_time) break;
       if (render_stop_signal()) break; /* Ctrl-C: the chains below stop at once */
     }
@@ -672,6 +738,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   double b_total = 0.0, b_var = 0.0;
   for (int g = 0; g < n_fam; g++) b_total += fam[g].b, b_var += fam[g].b_var;
   st->mcmc_b_boot = st->mcmc_b = b_total;
+  st->mcmc_boot_paths = 0;
+  for (int g = 0; g < n_fam; g++) st->mcmc_boot_paths += fam[g].n_boot;
   st->mcmc_b_boot_se = st->mcmc_b_se = sqrt(b_var);
 
   /* Chains: MCMC_CHAINS shared in proportion to b_g (at least MCMC_MIN_CHAINS per
@@ -744,7 +812,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
      * proportion to f. */
     rng pick;
     rng_seed(&pick, rs->seed, mcmc__chain_seq(g, -1));
-    double u0 = rng_uniform(&pick), acc = 0.0, total = F->b * (double)F->n_boot;
+    double u0 = rng_uniform(&pick), acc = 0.0, total = 0.0;
+    for (int64_t q = 0; q < F->n_boot; q++) total += F->f[q]; /* (b may come from fe) */
     int64_t j = 0;
     for (int i = 0; i < F->n_chains; i++) {
       mcmc_chain_slot *sl = &slots[F->first_chain + i];
@@ -897,17 +966,20 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
               ac += slots[fam[g].first_chain + i].chain->stats[q].accepted;
             }
           fprintf(stderr,
-                  "lmc: length %-3d b %.5g (%.1f%%), with large steps %.5g (%.1f%%), %d chains, "
-                  "proposed %lld, accepted %.1f%%\n",
+                  "lmc: length %-3d b %.5g (%.1f%%, %lld paths), with large steps %.5g (%.1f%%), "
+                  "%d chains, proposed %lld, accepted %.1f%%\n",
                   fam[g].st.length, fam[g].b, 100.0 * sqrt(fam[g].b_var) / fmax(fam[g].b, 1e-300),
+                  (long long)fam[g].n_boot,
                   fam[g].b_ref, 100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
                   fam[g].n_chains, (long long)pr, 100.0 * (double)ac / fmax(1.0, (double)pr));
         }
+      int64_t n_boot = 0;
+      for (int g = 0; g < n_fam; g++) n_boot += fam[g].n_boot;
       fprintf(stderr,
               "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s)\n",
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
-              100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)fam[0].n_boot,
-              n_fam > 1 ? " per length" : "");
+              100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)n_boot,
+              n_fam > 1 ? " over the lengths" : "");
       if (norm != MCMC_NORM_BOOT) {
         double b_ref = 0.0, b_ref_var = 0.0;
         int64_t n_large = 0;

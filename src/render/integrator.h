@@ -76,6 +76,7 @@ typedef struct render_stats {
   int interrupted;     /* stopped by a signal */
   int timed_out;       /* stopped by the time limit */
   double mcmc_b_boot, mcmc_b_boot_se; /* MCMC: b (sum over families) from the bootstrap alone, its SE */
+  int64_t mcmc_boot_paths;            /* MCMC: bootstrap paths drawn (over all families) */
   double mcmc_b, mcmc_b_se;           /* MCMC: b the image uses (refined with large steps), its SE */
 } render_stats;
 

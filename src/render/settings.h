@@ -52,6 +52,7 @@ typedef struct render_settings {
   double largestep;      /* large-step probability */
   double sigma;          /* Kelemen small-step scale */
   int64_t bootstrap;     /* bootstrap paths */
+  double bootstrap_error; /* without --bootstrap: draw until b's relative standard error is below this */
   int direct_separate;   /* --direct separate: pt renders direct light, MCMC the rest */
   double snapshot;       /* seconds between intermediate images (0: none) */
   /* Called by the render drivers every `snapshot` seconds with the film
@@ -87,6 +88,7 @@ static inline render_settings render_settings_default(void) {
   s.largestep = 0.3;
   s.sigma = 1.0 / 64.0;
   s.bootstrap = 0;
+  s.bootstrap_error = 0.01;
   s.adapt = LMC_ADAPT_CACHE;
   s.lmc_step = 1e-5;
   s.step_range = 1.0;
