@@ -1,8 +1,8 @@
 /*
  * test_image_io.c: image readers and writers (PNG, JPEG, OpenEXR), format
  * dispatch by magic bytes, the sRGB curve, the size limits every reader
- * checks in the header, and the writers' promise never to leave a partial
- * file behind.
+ * checks in the header, PNG chunks that claim more memory than the file
+ * holds, and the writers' promise never to leave a partial file behind.
  *
  * Test images are generated into /tmp: PNGs of every colour type and depth
  * with libpng directly, two small JPEGs embedded below (made with libjpeg
@@ -21,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <cmocka.h>
@@ -604,6 +605,138 @@ static void test_size_limits(void **state) {
   remove(epath);
 }
 
+/* ---- ancillary chunks ------------------------------------------------------ */
+
+/* The process's peak resident memory so far, in KiB (Linux units). */
+static long peak_rss_kib(void) {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_maxrss;
+}
+
+static void put_u32(unsigned char *p, uint32_t v) {
+  p[0] = (unsigned char)(v >> 24);
+  p[1] = (unsigned char)(v >> 16);
+  p[2] = (unsigned char)(v >> 8);
+  p[3] = (unsigned char)v;
+}
+
+/* Text chunks far beyond libpng's 8 MB chunk limit, plain and compressed,
+ * before and after the image data: a valid file, read with the pixels
+ * intact and the text skipped. */
+static void test_png_text_chunks(void **state) {
+  (void)state;
+  const size_t big = 16u << 20;
+  char *text = malloc(big + 1);
+  assert_non_null(text);
+  memset(text, 'a', big);
+  text[big] = '\0';
+  const char *path = "/tmp/lmc_test_imageio_text.png";
+  FILE *f = fopen(path, "wb");
+  assert_non_null(f);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) fail_msg("libpng failed writing a test image");
+  png_init_io(png, f);
+  png_set_IHDR(png, info, 4, 3, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  /* Before IDAT: 9 MiB of tEXt and a zTXt that inflates to 16 MiB. */
+  png_text before[2];
+  memset(before, 0, sizeof before);
+  before[0].compression = PNG_TEXT_COMPRESSION_NONE;
+  before[0].key = "Comment";
+  before[0].text = text + big - (9u << 20);
+  before[1].compression = PNG_TEXT_COMPRESSION_zTXt;
+  before[1].key = "Bomb";
+  before[1].text = text;
+  png_set_text(png, info, before, 2);
+  png_write_info(png, info);
+  for (int y = 0; y < 3; y++) {
+    png_byte row[12];
+    for (int i = 0; i < 12; i++) row[i] = (png_byte)(20 * y + i);
+    png_write_row(png, row);
+  }
+  /* After IDAT (png_write_end writes the text not yet written): an iTXt
+   * that inflates to 16 MiB. */
+  png_text after;
+  memset(&after, 0, sizeof after);
+  after.compression = PNG_ITXT_COMPRESSION_zTXt;
+  after.key = "Bomb2";
+  after.text = text;
+  png_set_text(png, info, &after, 1);
+  png_write_end(png, info);
+  png_destroy_write_struct(&png, &info);
+  fclose(f);
+  free(text);
+
+  lmc_image img;
+  lmc_error err;
+  long rss0 = peak_rss_kib();
+  check_ok(image_read_png(path, 0, &img, &err), &err);
+  long grown = peak_rss_kib() - rss0;
+  assert_int_equal(img.width, 4);
+  assert_int_equal(img.height, 3);
+  assert_int_equal(img.channels, 3);
+  for (int y = 0; y < 3; y++)
+    for (int i = 0; i < 12; i++) assert_near(img.data[12 * y + i], (20 * y + i) / 255.0, 1e-6);
+  image_free(&img);
+  if (grown > 32 << 10) fail_msg("reading %s raised the peak RSS by %ld KiB", path, grown);
+  remove(path);
+}
+
+/* Ancillary chunks whose header claims 256 MiB in a file that then ends:
+ * each read fails at the end of the file, naming it, without allocating
+ * what the chunk claims. libpng 1.6.39 only warns about a chunk beyond its
+ * malloc limit, then allocates and zeroes the claimed length for tEXt,
+ * zTXt, iTXt, sPLT, pCAL and sCAL (before IDAT): 256 MiB of peak RSS. */
+static void test_png_chunk_claims(void **state) {
+  (void)state;
+  const char *path = "/tmp/lmc_test_imageio_claims.png";
+  write_test_png(path, PNG_COLOR_TYPE_RGB, 8);
+  size_t n = 0;
+  unsigned char *good = read_all(path, &n);
+  assert_non_null(good);
+  assert_true(n > 33 + 12);
+  static const char *const types[] = {"tEXt", "zTXt", "iTXt", "sPLT", "pCAL",
+                                      "sCAL", "iCCP", "eXIf", "prVt"};
+  const uint32_t claim = 256u << 20;
+  long rss0 = peak_rss_kib();
+  int n_failed = 0, n_read = 0;
+  for (size_t t = 0; t < sizeof types / sizeof types[0]; t++)
+    for (int after_idat = 0; after_idat < 2; after_idat++) {
+      /* Signature and IHDR (33 bytes), or all but IEND (12 bytes), then the
+       * chunk's length, type and 64 bytes of its data. */
+      size_t head = after_idat ? n - 12 : 33;
+      unsigned char bytes[4096];
+      assert_true(head + 8 + 64 <= sizeof bytes);
+      memcpy(bytes, good, head);
+      put_u32(bytes + head, claim);
+      memcpy(bytes + head + 4, types[t], 4);
+      for (int i = 0; i < 64; i++) bytes[head + 8 + i] = (unsigned char)('a' + i % 26);
+      assert_true(write_file(path, bytes, head + 8 + 64));
+      lmc_image img;
+      lmc_error err;
+      lmc_error_clear(&err);
+      lmc_status st = image_read(path, 1, &img, &err);
+      n_read++;
+      if (st == LMC_OK) {
+        image_free(&img);
+        continue;
+      }
+      n_failed++;
+      if (st != LMC_EPARSE || strcmp(err.file, path) != 0 || !strstr(err.msg, "bad PNG"))
+        fail_msg("%s chunk (after IDAT: %d): status %d, want %d; file '%s'; message '%s'",
+                 types[t], after_idat, (int)st, (int)LMC_EPARSE, err.file, err.msg);
+    }
+  assert_int_equal(n_failed, n_read);
+  long grown = peak_rss_kib() - rss0;
+  if (grown > 32 << 10)
+    fail_msg("%d reads raised the peak RSS by %ld KiB (a chunk claims %u KiB)", n_read, grown,
+             (unsigned)(claim >> 10));
+  free(good);
+  remove(path);
+}
+
 /* ---- dispatch and failure paths ------------------------------------------ */
 
 static void test_errors(void **state) {
@@ -660,6 +793,7 @@ int main(void) {
       cmocka_unit_test(test_exr_tiled_half_rgba),    cmocka_unit_test(test_png_roundtrip),
       cmocka_unit_test(test_png_types),     cmocka_unit_test(test_png_checker),
       cmocka_unit_test(test_jpeg),          cmocka_unit_test(test_size_limits),
+      cmocka_unit_test(test_png_text_chunks), cmocka_unit_test(test_png_chunk_claims),
       cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -16,6 +16,12 @@
  * their maximum (255 or 65535) and, when asked, decoded with the sRGB curve
  * (16-bit files too: PNG samples are sRGB-encoded); alpha stays linear.
  * The size in the header is checked against image.h's limits first.
+ * Ancillary chunks (text, gAMA, iCCP, sPLT, ...) are skipped unread: the
+ * reader needs only IHDR, PLTE, tRNS and IDAT, and libpng 1.6.39 allocates
+ * (and zeroes) a text, sPLT, pCAL or sCAL chunk's claimed length, up to
+ * 2 GiB, before it finds that the file is 400 bytes long. Skipped chunks are
+ * read through a small fixed buffer, so the reader's memory is bounded by
+ * the pixel limit whatever the file claims.
  *
  * PNG writing: 8-bit RGB, v -> round(255 * clamp(srgb(scale * v), 0, 1)),
  * NaN -> 0. Like every writer it writes a temporary file beside the target
@@ -163,6 +169,15 @@ lmc_status image_read_png(const char *path, int srgb_to_linear_flag, lmc_image *
   png_init_io(png, f);
   /* Sizes beyond libpng's own limit (10^6) then get our message too. */
   png_set_user_limits(png, 0x7fffffff, 0x7fffffff);
+  /* Skip every chunk but IHDR, PLTE, tRNS, IDAT and IEND without storing
+   * it (num_chunks -1 selects libpng's list of all ancillary chunks it
+   * knows; unknown ones are skipped by default). A chunk longer than the
+   * malloc limit below only draws a warning in libpng 1.6.39 (a benign
+   * error) and is then read into a buffer of its claimed size, so the limit
+   * alone does not bound memory; it still caps what libpng would inflate
+   * from a compressed chunk (iCCP, zTXt, iTXt) if one were ever kept. */
+  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, NULL, -1);
+  png_set_chunk_malloc_max(png, (png_alloc_size_t)1 << 20);
   png_read_info(png, info);
   lmc_status st = image_check_size(path, "PNG", png_get_image_width(png, info),
                                    png_get_image_height(png, info), err);
