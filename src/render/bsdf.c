@@ -60,7 +60,7 @@ static double bsdf__fresnel_conductor1(double c, double eta, double k) {
   double c2 = c * c, s2 = 1.0 - c2;
   double t = eta * eta - k * k - s2;
   double a2pb2 = sqrt(t * t + 4.0 * eta * eta * k * k);
-  double a = sqrt(fmax(0.0, 0.5 * (a2pb2 + t)));
+  double a = sqrt(lmc_fmax(0.0, 0.5 * (a2pb2 + t)));
   double t1 = a2pb2 + c2, t2 = 2.0 * a * c;
   if (!(t1 + t2 > 0.0)) return 1.0;
   double rs = (t1 - t2) / (t1 + t2);
@@ -70,7 +70,7 @@ static double bsdf__fresnel_conductor1(double c, double eta, double k) {
 }
 
 rgb fresnel_conductor(double cos_i, rgb eta, rgb k) {
-  double c = fmin(1.0, fabs(cos_i));
+  double c = lmc_fmin(1.0, fabs(cos_i));
   return rgb_make(bsdf__fresnel_conductor1(c, eta.r, k.r), bsdf__fresnel_conductor1(c, eta.g, k.g),
                   bsdf__fresnel_conductor1(c, eta.b, k.b));
 }
@@ -337,6 +337,43 @@ double bsdf_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
     break;
   }
   return 0.0;
+}
+
+rgb bsdf_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode,
+                  double *OUT_pdf) {
+  if (bsdf__flip(b, wo)) {
+    wo.z = -wo.z;
+    wi.z = -wi.z;
+  }
+  switch (b->type) {
+  case BSDF_PHONG:
+    return bsdf__phong_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
+  case BSDF_ROUGHCONDUCTOR:
+    return bsdf__roughconductor_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
+  case BSDF_ROUGHDIELECTRIC:
+    return bsdf__roughdielectric_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
+  default:
+    /* Nothing to share: the two calls (the flip is already applied). */
+    break;
+  }
+  *OUT_pdf = 0.0;
+  switch (b->type) {
+  case BSDF_DIFFUSE:
+    *OUT_pdf = bsdf__diffuse_pdf(b, tu, tv, wo, wi);
+    return bsdf__diffuse_eval(b, tu, tv, wo, wi, mode);
+  case BSDF_CONDUCTOR:
+    *OUT_pdf = bsdf__conductor_pdf(b, tu, tv, wo, wi);
+    return bsdf__conductor_eval(b, tu, tv, wo, wi, mode);
+  case BSDF_DIELECTRIC:
+    *OUT_pdf = bsdf__dielectric_pdf(b, tu, tv, wo, wi);
+    return bsdf__dielectric_eval(b, tu, tv, wo, wi, mode);
+  case BSDF_PLASTIC:
+    *OUT_pdf = bsdf__plastic_pdf(b, tu, tv, wo, wi);
+    return bsdf__plastic_eval(b, tu, tv, wo, wi, mode);
+  default:
+    break;
+  }
+  return rgb_zero();
 }
 
 int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,

@@ -89,6 +89,11 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type);
 rgb bsdf_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
 /* Solid-angle density of bsdf_sample producing wi (delta lobes excluded). */
 double bsdf_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
+/* bsdf_eval and bsdf_pdf of the same pair in one call (next-event
+ * estimation needs both): the same two values, bit for bit, with the work
+ * they share done once. *OUT_pdf gets the pdf. */
+rgb bsdf_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode,
+                  double *OUT_pdf);
 /* Samples wi; returns 1 on success, 0 when the sample is absorbed or invalid. */
 int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1,
                   double u2, transport_mode mode, bsdf_sample *out);

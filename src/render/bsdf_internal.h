@@ -25,7 +25,8 @@ double bsdf__fresnel_diffuse_reflectance(double eta);
 /* Mitsuba's specular sampling weight: lum(mean spec) / (lum(mean spec) + lum(mean diff)). */
 double bsdf__specular_weight(const texture *spec, const texture *diff);
 
-/* The models: eval, pdf and sample with the signatures of bsdf.h. */
+/* The models: eval, pdf and sample with the signatures of bsdf.h; the
+ * models whose eval and pdf share work also have eval_pdf (bsdf_eval_pdf). */
 rgb bsdf__diffuse_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
 double bsdf__diffuse_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
 int bsdf__diffuse_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
@@ -33,6 +34,8 @@ int bsdf__diffuse_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_
 
 rgb bsdf__phong_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
 double bsdf__phong_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
+rgb bsdf__phong_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                         transport_mode mode, double *OUT_pdf);
 int bsdf__phong_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
                      transport_mode mode, bsdf_sample *out);
 
@@ -43,6 +46,8 @@ int bsdf__conductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double 
 
 rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
 double bsdf__roughconductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
+rgb bsdf__roughconductor_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                         transport_mode mode, double *OUT_pdf);
 int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
                      transport_mode mode, bsdf_sample *out);
 
@@ -53,6 +58,8 @@ int bsdf__dielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double
 
 rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
 double bsdf__roughdielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
+rgb bsdf__roughdielectric_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                         transport_mode mode, double *OUT_pdf);
 int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
                      transport_mode mode, bsdf_sample *out);
 

@@ -31,8 +31,9 @@
  * distribution, alpha (1.2 - 0.2 sqrt(|cos_o|)) (Walter et al.'s trick to
  * lower the weights at grazing angles); the pdf uses the same alpha.
  *
- * Sample weights are computed as f |cos_i| / pdf from the same eval and pdf
- * functions, so the three can never disagree.
+ * Sample weights are computed as f |cos_i| / pdf from the one function
+ * that evaluates both (bsdf__rc_eval_pdf, bsdf__rd_eval_pdf), which eval
+ * and pdf call too, so the three can never disagree.
  */
 #include <math.h>
 #include <stddef.h>
@@ -42,41 +43,68 @@
 
 /* ---- roughconductor ------------------------------------------------------ */
 
-rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
-                              transport_mode mode) {
-  (void)mode;
+/* f and pdf of one (wo, wi) pair in one pass: eval, pdf, sample and
+ * next-event estimation all come here, so the three can never disagree, and
+ * a caller that needs both shares the half vector, D and G1(wo) (the
+ * visible-normal pdf uses the same G1). want_f = 0 skips f (Fresnel and
+ * texture); OUT_pdf = NULL skips the pdf. Each value is computed with the
+ * same operations, in the same order, whatever the caller asks for. */
+static rgb bsdf__rc_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
+                             double *OUT_pdf) {
+  if (OUT_pdf) *OUT_pdf = 0.0;
   if (wo.z <= 0.0 || wi.z <= 0.0) return rgb_zero();
   vec3 h = v3_normalize(v3_add(wo, wi));
   double d = mf_D(b->dist, b->alpha, h);
-  if (d == 0.0) return rgb_zero();
-  double g = mf_G(b->dist, b->alpha, wi, wo, h);
+  int need_f = want_f && d != 0.0;
+  /* G1(wo, h): shared by G and the visible-normal density. */
+  double g1o = 0.0;
+  if (need_f || (OUT_pdf && b->sample_visible)) g1o = mf_G1(b->dist, b->alpha, wo, h);
+
+  /* pdf = p_m(h) / (4 wi.h). */
+  if (OUT_pdf) {
+    double wih = v3_dot(wi, h);
+    if (wih > 0.0) *OUT_pdf = mf_pdf_known(d, g1o, wo, h, b->sample_visible) / (4.0 * wih);
+  }
+
+  /* f = F D G / (4 cos_o cos_i) ks, G = G1(wi, h) G1(wo, h). */
+  if (!need_f) return rgb_zero();
+  double g = mf_G1(b->dist, b->alpha, wi, h) * g1o;
   if (g == 0.0) return rgb_zero();
   rgb fr = fresnel_conductor(v3_dot(wo, h), b->cond_eta, b->cond_k);
   rgb ks = tex_eval(&b->specular, tu, tv);
   return rgb_scale(rgb_mul(fr, ks), d * g / (4.0 * wo.z * wi.z));
 }
 
+rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                              transport_mode mode) {
+  (void)mode;
+  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, NULL);
+}
+
 double bsdf__roughconductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
-  (void)tu, (void)tv;
-  if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
-  vec3 h = v3_normalize(v3_add(wo, wi));
-  double wih = v3_dot(wi, h);
-  if (wih <= 0.0) return 0.0;
-  return mf_pdf(b->dist, b->alpha, wo, h, b->sample_visible) / (4.0 * wih);
+  double pdf;
+  bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 0, &pdf);
+  return pdf;
+}
+
+rgb bsdf__roughconductor_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                                  transport_mode mode, double *OUT_pdf) {
+  (void)mode;
+  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, OUT_pdf);
 }
 
 int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
                                 double u1, double u2, transport_mode mode, bsdf_sample *out) {
-  (void)u_lobe;
+  (void)u_lobe, (void)mode;
   if (wo.z <= 0.0) return 0;
   vec3 m = mf_sample(b->dist, b->alpha, wo, b->sample_visible, u1, u2);
   double wom = v3_dot(wo, m);
   if (wom <= 0.0) return 0;
   vec3 wi = v3_normalize(v3_reflect(wo, m));
   if (wi.z <= 0.0) return 0;
-  return bsdf__finish(out, wi, bsdf__roughconductor_eval(b, tu, tv, wo, wi, mode),
-                      bsdf__roughconductor_pdf(b, tu, tv, wo, wi), 1.0,
-                      BSDF_REFLECTION | BSDF_GLOSSY);
+  double pdf;
+  rgb f = bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, &pdf);
+  return bsdf__finish(out, wi, f, pdf, 1.0, BSDF_REFLECTION | BSDF_GLOSSY);
 }
 
 /* ---- roughdielectric ----------------------------------------------------- */
@@ -102,19 +130,48 @@ static int bsdf__rd_half(const bsdf *b, vec3 wo, vec3 wi, vec3 *h, double *e, in
   return 1;
 }
 
-rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
-                               transport_mode mode) {
+/* f and pdf of one (wo, wi) pair in one pass, as bsdf__rc_eval_pdf: the
+ * half vector, wo.h, wi.h and F are shared, and with visible-normal
+ * sampling (same roughness for sampling and evaluation) D(h) and G1(wo, h)
+ * too: G1(v, h) with v = +-wo is G1(wo, h) exactly, as G1 only sees the
+ * product (v.h) v.z and v.z^2. */
+static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
+                             transport_mode mode, double *OUT_pdf) {
+  if (OUT_pdf) *OUT_pdf = 0.0;
   if (wo.z == 0.0 || wi.z == 0.0) return rgb_zero();
   vec3 h;
   double e;
   int reflect;
   if (!bsdf__rd_half(b, wo, wi, &h, &e, &reflect)) return rgb_zero();
-  double d = mf_D(b->dist, b->alpha, h);
-  if (d == 0.0) return rgb_zero();
-  double g = mf_G(b->dist, b->alpha, wi, wo, h);
-  if (g == 0.0) return rgb_zero();
   double woh = v3_dot(wo, h), wih = v3_dot(wi, h);
   double fr = fresnel_dielectric(woh, b->eta, NULL);
+  double d = 0.0;
+  if (want_f || (OUT_pdf && b->sample_visible)) d = mf_D(b->dist, b->alpha, h);
+  int need_f = want_f && d != 0.0;
+  double g1o = 0.0;
+  if (need_f || (OUT_pdf && b->sample_visible)) g1o = mf_G1(b->dist, b->alpha, wo, h);
+
+  /* The density. A valid configuration has wo and wi on the sides of h
+   * their z says; the normal was drawn from the side of wo. */
+  if (OUT_pdf && !(woh * wo.z <= 0.0 || wih * wi.z <= 0.0)) {
+    vec3 v = wo.z > 0.0 ? wo : v3_neg(wo);
+    double pm = b->sample_visible
+                    ? mf_pdf_known(d, g1o, v, h, 1)
+                    : mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wo.z), v, h, 0);
+    if (pm != 0.0) {
+      if (reflect) {
+        *OUT_pdf = fr * pm / (4.0 * fabs(wih));
+      } else {
+        double den = woh + e * wih;
+        if (den != 0.0) *OUT_pdf = (1.0 - fr) * pm * e * e * fabs(wih) / (den * den);
+      }
+    }
+  }
+
+  /* The value. */
+  if (!need_f) return rgb_zero();
+  double g = mf_G1(b->dist, b->alpha, wi, h) * g1o;
+  if (g == 0.0) return rgb_zero();
   if (reflect) {
     rgb ks = tex_eval(&b->specular, tu, tv);
     return rgb_scale(ks, fr * d * g / (4.0 * fabs(wo.z) * fabs(wi.z)));
@@ -127,24 +184,20 @@ rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec
   return rgb_scale(tex_eval(&b->transmittance, tu, tv), v);
 }
 
+rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                               transport_mode mode) {
+  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, NULL);
+}
+
 double bsdf__roughdielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
-  (void)tu, (void)tv;
-  if (wo.z == 0.0 || wi.z == 0.0) return 0.0;
-  vec3 h;
-  double e;
-  int reflect;
-  if (!bsdf__rd_half(b, wo, wi, &h, &e, &reflect)) return 0.0;
-  double woh = v3_dot(wo, h), wih = v3_dot(wi, h);
-  /* A valid configuration has wo and wi on the sides of h their z says. */
-  if (woh * wo.z <= 0.0 || wih * wi.z <= 0.0) return 0.0;
-  vec3 v = wo.z > 0.0 ? wo : v3_neg(wo);
-  double pm = mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wo.z), v, h, b->sample_visible);
-  if (pm == 0.0) return 0.0;
-  double fr = fresnel_dielectric(woh, b->eta, NULL);
-  if (reflect) return fr * pm / (4.0 * fabs(wih));
-  double den = woh + e * wih;
-  if (den == 0.0) return 0.0;
-  return (1.0 - fr) * pm * e * e * fabs(wih) / (den * den);
+  double pdf;
+  bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 0, TRANSPORT_RADIANCE, &pdf);
+  return pdf;
+}
+
+rgb bsdf__roughdielectric_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                                   transport_mode mode, double *OUT_pdf) {
+  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, OUT_pdf);
 }
 
 int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
@@ -175,6 +228,7 @@ int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, d
     flags = BSDF_TRANSMISSION | BSDF_GLOSSY;
     eta_out = cos_t < 0.0 ? b->eta : 1.0 / b->eta;
   }
-  return bsdf__finish(out, wi, bsdf__roughdielectric_eval(b, tu, tv, wo, wi, mode),
-                      bsdf__roughdielectric_pdf(b, tu, tv, wo, wi), eta_out, flags);
+  double pdf;
+  rgb f = bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, &pdf);
+  return bsdf__finish(out, wi, f, pdf, eta_out, flags);
 }

@@ -71,31 +71,49 @@ int bsdf__diffuse_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_
 
 /* ---- phong ----------------------------------------------------------------- */
 
-rgb bsdf__phong_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode) {
-  (void)mode;
+/* f and pdf of one (wo, wi) pair in one pass (eval, pdf and sample all
+ * come here), sharing cos^n(a), the costly pow. want_f = 0 skips f;
+ * OUT_pdf = NULL skips the pdf. */
+static rgb bsdf__ph_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
+                             double *OUT_pdf) {
+  if (OUT_pdf) *OUT_pdf = 0.0;
   if (wo.z <= 0.0 || wi.z <= 0.0) return rgb_zero();
-  rgb f = rgb_scale(tex_eval(&b->diffuse, tu, tv), 1.0 / M_PI);
   /* cos(a) = wi . r with r the mirror of wo about the normal. */
   double ca = -wi.x * wo.x - wi.y * wo.y + wi.z * wo.z;
-  if (ca > 0.0) {
-    double n = b->exponent;
-    f = rgb_add(f, rgb_scale(tex_eval(&b->specular, tu, tv), (n + 2.0) / (2.0 * M_PI) * pow(ca, n)));
+  double n = b->exponent;
+  double can = ca > 0.0 ? pow(ca, n) : 0.0;
+  if (OUT_pdf) {
+    double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+    double spec = ca > 0.0 ? (n + 1.0) / (2.0 * M_PI) * can : 0.0;
+    *OUT_pdf = w * spec + (1.0 - w) * wi.z / M_PI;
   }
+  if (!want_f) return rgb_zero();
+  rgb f = rgb_scale(tex_eval(&b->diffuse, tu, tv), 1.0 / M_PI);
+  if (ca > 0.0)
+    f = rgb_add(f, rgb_scale(tex_eval(&b->specular, tu, tv), (n + 2.0) / (2.0 * M_PI) * can));
   return f;
 }
 
+rgb bsdf__phong_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode) {
+  (void)mode;
+  return bsdf__ph_eval_pdf(b, tu, tv, wo, wi, 1, NULL);
+}
+
 double bsdf__phong_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
-  (void)tu, (void)tv;
-  if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
-  double w = bsdf__specular_weight(&b->specular, &b->diffuse);
-  double ca = -wi.x * wo.x - wi.y * wo.y + wi.z * wo.z;
-  double n = b->exponent;
-  double spec = ca > 0.0 ? (n + 1.0) / (2.0 * M_PI) * pow(ca, n) : 0.0;
-  return w * spec + (1.0 - w) * wi.z / M_PI;
+  double pdf;
+  bsdf__ph_eval_pdf(b, tu, tv, wo, wi, 0, &pdf);
+  return pdf;
+}
+
+rgb bsdf__phong_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                         transport_mode mode, double *OUT_pdf) {
+  (void)mode;
+  return bsdf__ph_eval_pdf(b, tu, tv, wo, wi, 1, OUT_pdf);
 }
 
 int bsdf__phong_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1,
                        double u2, transport_mode mode, bsdf_sample *out) {
+  (void)mode;
   if (wo.z <= 0.0) return 0;
   double w = bsdf__specular_weight(&b->specular, &b->diffuse);
   vec3 wi;
@@ -104,7 +122,7 @@ int bsdf__phong_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lo
     /* Specular lobe: cos(a) = u2^(1/(n+1)) around the mirror direction. */
     double n = b->exponent;
     double ca = pow(u2, 1.0 / (n + 1.0));
-    double sa = sqrt(fmax(0.0, 1.0 - ca * ca));
+    double sa = sqrt(lmc_fmax(0.0, 1.0 - ca * ca));
     double phi = 2.0 * M_PI * u1;
     frame fr = frame_from_z(v3(-wo.x, -wo.y, wo.z));
     wi = v3_normalize(frame_to_world(&fr, v3(sa * cos(phi), sa * sin(phi), ca)));
@@ -114,8 +132,9 @@ int bsdf__phong_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lo
     flags = BSDF_REFLECTION | BSDF_DIFFUSE_LOBE;
   }
   if (wi.z <= 0.0) return 0;
-  return bsdf__finish(out, wi, bsdf__phong_eval(b, tu, tv, wo, wi, mode),
-                      bsdf__phong_pdf(b, tu, tv, wo, wi), 1.0, flags);
+  double pdf;
+  rgb f = bsdf__ph_eval_pdf(b, tu, tv, wo, wi, 1, &pdf);
+  return bsdf__finish(out, wi, f, pdf, 1.0, flags);
 }
 
 /* ---- conductor (smooth) ------------------------------------------------- */

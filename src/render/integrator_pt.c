@@ -17,8 +17,15 @@ static int pt__counts(const render_settings *rs, int length) {
   return rs->mindepth <= 0 || length >= rs->mindepth;
 }
 
+/* The next number of smp, r = sampler_indep_rng(smp): drawn inline for the
+ * independent sampler (the same number, without the indirect call). */
+static inline double pt__next(lmc_sampler *smp, rng *r) {
+  return r ? rng_uniform(r) : sampler_next(smp);
+}
+
 rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
           render_counters *cnt) {
+  rng *r = sampler_indep_rng(smp);
   rgb L = rgb_zero(), beta = rgb_gray(1.0);
   int prev_delta = 1;      /* the previous vertex was the camera or a delta lobe */
   double prev_pdf = 0.0;   /* solid-angle density of the previous BSDF sample */
@@ -36,11 +43,12 @@ rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org,
       for (int k = 0; k < s->n_infinite; k++) {
         int li = s->infinite_lights[k];
         const light *l = &s->lights[li];
-        rgb le = light_le_infinite(l, dir);
+        double pdf_li; /* light_pdf_li of dir, for the MIS weight */
+        rgb le = light_le_pdf_infinite(l, s, dir, &pdf_li);
         if (rgb_is_black(le)) continue;
         double w = 1.0;
         if (!prev_delta) {
-          double pdf_l = scene_light_pmf(s, li) * light_pdf_li(l, s, prev_p, dir, prev_p, prev_p);
+          double pdf_l = scene_light_pmf(s, li) * pdf_li;
           w = mis_power(prev_pdf, pdf_l);
         }
         L = rgb_fma(L, beta, rgb_scale(le, w));
@@ -64,9 +72,9 @@ rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org,
     }
 
     /* Take this bounce's numbers (fixed layout), then stop if too long. */
-    double u_light = sampler_next(smp), ul1 = sampler_next(smp), ul2 = sampler_next(smp);
-    double u_lobe = sampler_next(smp), ub1 = sampler_next(smp), ub2 = sampler_next(smp);
-    double u_rr = sampler_next(smp);
+    double u_light = pt__next(smp, r), ul1 = pt__next(smp, r), ul2 = pt__next(smp, r);
+    double u_lobe = pt__next(smp, r), ub1 = pt__next(smp, r), ub2 = pt__next(smp, r);
+    double u_rr = pt__next(smp, r);
     if (rs->maxdepth >= 0 && depth >= rs->maxdepth) break;
 
     const bsdf *b = h.bsdf;
@@ -82,7 +90,8 @@ rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org,
           ls.pdf > 0.0 && !rgb_is_black(ls.li)) {
         vec3 wi_l = frame_to_local(&h.sh, ls.wi);
         if (v3_dot(ls.wi, h.ng) * wi_l.z > 0.0) {
-          rgb f = bsdf_eval(b, h.tu, h.tv, wo_l, wi_l, TRANSPORT_RADIANCE);
+          double pdf_b; /* the BSDF's density of wi, for the MIS weight */
+          rgb f = bsdf_eval_pdf(b, h.tu, h.tv, wo_l, wi_l, TRANSPORT_RADIANCE, &pdf_b);
           if (!rgb_is_black(f)) {
             cnt->rays++;
             if (cnt->log) {
@@ -94,7 +103,7 @@ rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org,
                                          : scene_occluded_segment(s, h.p, ls.p);
             if (!blocked) {
               double pdf_l = pmf * ls.pdf;
-              double w = ls.delta ? 1.0 : mis_power(pdf_l, bsdf_pdf(b, h.tu, h.tv, wo_l, wi_l));
+              double w = ls.delta ? 1.0 : mis_power(pdf_l, pdf_b);
               rgb c = rgb_scale(rgb_mul(f, ls.li), fabs(wi_l.z) * w / pdf_l);
               L = rgb_fma(L, beta, c);
             }

@@ -92,14 +92,14 @@ static void light__triangle(const mesh *m, int64_t tri, vec3 *a, vec3 *b, vec3 *
 static void light__sample_area_point(const light *l, const struct scene *s, double u1, double u2,
                                      vec3 *p, vec3 *n) {
   const mesh *m = &s->meshes[l->mesh];
-  double pmf, u1r;
-  int tri = distrib1d_sample_discrete(&l->tri_dist, u1, &pmf, &u1r);
+  double u1r;
+  int tri = distrib1d_sample_discrete(&l->tri_dist, u1, NULL, &u1r); /* pmf unused: one load less */
   double b1, b2;
   warp_square_to_triangle(u1r, u2, &b1, &b2);
   vec3 a, b, c;
   light__triangle(m, tri, &a, &b, &c);
   *p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
-  *n = mesh_face_normal(m, tri);
+  *n = mesh_corners_normal(m, a, b, c);
 }
 
 /* Mitsuba's spot falloff as a function of the cosine to the axis. */
@@ -123,7 +123,10 @@ static rgb light__env_pixel(const lmc_image *img, int x, int y) {
 /* Pixel containing (u, v) in [0,1]^2 (u wraps, v clamps). */
 static void light__env_cell(const lmc_image *img, double u, double v, int *x, int *y) {
   double fx = floor(u * img->width), fy = floor(v * img->height);
-  int ix = isfinite(fx) ? (int)fmod(fx, (double)img->width) : 0;
+  /* fmod only when u is outside [0, 1) (it is a slow call, and the
+   * identity inside). */
+  int ix = fx >= 0.0 && fx < img->width ? (int)fx
+                                         : (isfinite(fx) ? (int)fmod(fx, (double)img->width) : 0);
   if (ix < 0) ix += img->width;
   int iy = fy < 0.0 || !isfinite(fy) ? 0 : (fy > img->height - 1 ? img->height - 1 : (int)fy);
   *x = ix;
@@ -138,10 +141,10 @@ static int light__env_dir_to_uv(const light *l, vec3 dir, double *u, double *v, 
   double uu = atan2(d.x, -d.z) * (0.5 / M_PI);
   if (uu < 0.0) uu += 1.0;
   if (uu >= 1.0) uu = 0.0;
-  double y = fmin(1.0, fmax(-1.0, d.y));
+  double y = lmc_fmin(1.0, lmc_fmax(-1.0, d.y));
   *u = uu;
   *v = acos(y) / M_PI;
-  *sin_theta = sqrt(fmax(0.0, 1.0 - y * y));
+  *sin_theta = sqrt(lmc_fmax(0.0, 1.0 - y * y));
   return 1;
 }
 
@@ -441,6 +444,19 @@ rgb light_le_infinite(const light *l, vec3 dir) {
   if (l->type != LIGHT_ENVMAP) return rgb_zero();
   double u, v, sin_theta;
   if (!light__env_dir_to_uv(l, dir, &u, &v, &sin_theta)) return rgb_zero();
+  return light__env_eval_uv(l, u, v);
+}
+
+rgb light_le_pdf_infinite(const light *l, const struct scene *s, vec3 dir, double *OUT_pdf) {
+  *OUT_pdf = 0.0;
+  if (l->type == LIGHT_CONSTANT) {
+    *OUT_pdf = light_pdf_li(l, s, dir, dir, dir, dir);
+    return l->value;
+  }
+  if (l->type != LIGHT_ENVMAP) return rgb_zero();
+  double u, v, sin_theta;
+  if (!light__env_dir_to_uv(l, dir, &u, &v, &sin_theta)) return rgb_zero();
+  *OUT_pdf = light__env_pdf_uv(l, u, v, sin_theta);
   return light__env_eval_uv(l, u, v);
 }
 

@@ -99,6 +99,11 @@ rgb light_le_area(const light *l, vec3 n, vec3 w);
 /* Radiance arriving from infinite light along direction `dir` (pointing
  * away from the receiver). */
 rgb light_le_infinite(const light *l, vec3 dir);
+/* light_le_infinite(l, dir) and, in *OUT_pdf, light_pdf_li of the same
+ * direction (what path tracing needs when a ray escapes), in one call: the
+ * environment map's direction-to-pixel mapping is done once. Infinite
+ * lights only (others: black, density 0). */
+rgb light_le_pdf_infinite(const light *l, const struct scene *s, vec3 dir, double *OUT_pdf);
 
 /* Samples an emitted ray (BDPT light subpaths) from four numbers. */
 int light_sample_le(const light *l, const struct scene *s, double u1, double u2, double u3,

@@ -103,8 +103,9 @@ static vec3 mesh__cross(const mesh *m, int64_t f) {
 }
 
 vec3 mesh_face_normal(const mesh *m, int64_t tri) {
-  vec3 n = v3_normalize(mesh__cross(m, tri));
-  return m->flip_normals ? v3_neg(n) : n;
+  const uint32_t *idx = m->idx + 3 * tri;
+  return mesh_corners_normal(m, mesh_position(m, idx[0]), mesh_position(m, idx[1]),
+                             mesh_position(m, idx[2]));
 }
 
 double mesh_triangle_area(const mesh *m, int64_t tri) { return 0.5 * v3_len(mesh__cross(m, tri)); }
@@ -112,18 +113,8 @@ double mesh_triangle_area(const mesh *m, int64_t tri) { return 0.5 * v3_len(mesh
 int mesh_intersect_triangle(const mesh *m, int64_t tri, vec3 org, vec3 dir, double *OUT_t,
                             double *OUT_b1, double *OUT_b2) {
   const uint32_t *idx = m->idx + 3 * tri;
-  vec3 p0 = mesh_position(m, idx[0]), p1 = mesh_position(m, idx[1]), p2 = mesh_position(m, idx[2]);
-  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
-  vec3 pv = v3_cross(dir, e2);
-  double det = v3_dot(e1, pv);
-  if (!(det != 0.0) || !isfinite(det)) return 0;
-  double inv = 1.0 / det;
-  vec3 tv = v3_sub(org, p0);
-  vec3 qv = v3_cross(tv, e1);
-  *OUT_b1 = v3_dot(tv, pv) * inv;
-  *OUT_b2 = v3_dot(dir, qv) * inv;
-  *OUT_t = v3_dot(e2, qv) * inv;
-  return 1;
+  return mesh_intersect_corners(mesh_position(m, idx[0]), mesh_position(m, idx[1]),
+                                mesh_position(m, idx[2]), org, dir, OUT_t, OUT_b1, OUT_b2);
 }
 
 /* Recomputes every vertex normal whose length is zero from the area-weighted

@@ -50,6 +50,12 @@ static inline vec3 mesh_position(const mesh *m, uint32_t i) {
 }
 /* Unit geometric normal of triangle `tri` (with flip_normals applied). */
 vec3 mesh_face_normal(const mesh *m, int64_t tri);
+/* The same normal from the triangle's corners p0, p1, p2 (mesh_position of
+ * its three indices), for callers that have loaded them already. */
+static inline vec3 mesh_corners_normal(const mesh *m, vec3 p0, vec3 p1, vec3 p2) {
+  vec3 n = v3_normalize(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+  return m->flip_normals ? v3_neg(n) : n;
+}
 double mesh_triangle_area(const mesh *m, int64_t tri);
 /* Ray-triangle intersection in double (Moller and Trumbore 1997) with
  * triangle `tri`, no bounds on t or the barycentrics: the hit Embree found
@@ -61,5 +67,20 @@ double mesh_triangle_area(const mesh *m, int64_t tri);
  * ray is parallel to the triangle (det = 0). */
 int mesh_intersect_triangle(const mesh *m, int64_t tri, vec3 org, vec3 dir, double *OUT_t,
                             double *OUT_b1, double *OUT_b2);
+/* mesh_intersect_triangle on the triangle's corners p0, p1, p2. */
+static inline int mesh_intersect_corners(vec3 p0, vec3 p1, vec3 p2, vec3 org, vec3 dir,
+                                         double *OUT_t, double *OUT_b1, double *OUT_b2) {
+  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+  vec3 pv = v3_cross(dir, e2);
+  double det = v3_dot(e1, pv);
+  if (!(det != 0.0) || !isfinite(det)) return 0;
+  double inv = 1.0 / det;
+  vec3 tv = v3_sub(org, p0);
+  vec3 qv = v3_cross(tv, e1);
+  *OUT_b1 = v3_dot(tv, pv) * inv;
+  *OUT_b2 = v3_dot(dir, qv) * inv;
+  *OUT_t = v3_dot(e2, qv) * inv;
+  return 1;
+}
 
 #endif

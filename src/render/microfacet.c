@@ -22,7 +22,7 @@
 /* tan^2(theta) of a direction (|v.z| used); +inf at grazing. */
 static double mf__tan2(vec3 v) {
   double c2 = v.z * v.z;
-  double s2 = fmax(0.0, 1.0 - c2);
+  double s2 = lmc_fmax(0.0, 1.0 - c2);
   return c2 > 0.0 ? s2 / c2 : INFINITY;
 }
 
@@ -126,7 +126,7 @@ vec3 mf_sample(mf_dist dist, double alpha, vec3 v, int visible, double u1, doubl
      * Beckmann: 1 - exp(-tan^2 / alpha^2); GGX: tan^2 / (alpha^2 + tan^2). */
     double t2 = dist == MF_BECKMANN ? -alpha * alpha * log1p(-u1) : alpha * alpha * u1 / (1.0 - u1);
     double cos_m = 1.0 / sqrt(1.0 + t2);
-    double sin_m = sqrt(fmax(0.0, 1.0 - cos_m * cos_m));
+    double sin_m = sqrt(lmc_fmax(0.0, 1.0 - cos_m * cos_m));
     double phi = 2.0 * M_PI * u2;
     return v3(sin_m * cos(phi), sin_m * sin(phi), cos_m);
   }
@@ -142,14 +142,14 @@ vec3 mf_sample(mf_dist dist, double alpha, vec3 v, int visible, double u1, doubl
     double r = sqrt(u1), phi = 2.0 * M_PI * u2;
     double p1 = r * cos(phi), p2 = r * sin(phi);
     double s = 0.5 * (1.0 + vh.z);
-    p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
+    p2 = (1.0 - s) * sqrt(lmc_fmax(0.0, 1.0 - p1 * p1)) + s * p2;
     vec3 nh = v3_add(v3_add(v3_scale(t1, p1), v3_scale(t2, p2)),
-                     v3_scale(vh, sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2))));
-    return v3_normalize(v3(alpha * nh.x, alpha * nh.y, fmax(1e-12, nh.z)));
+                     v3_scale(vh, sqrt(lmc_fmax(0.0, 1.0 - p1 * p1 - p2 * p2))));
+    return v3_normalize(v3(alpha * nh.x, alpha * nh.y, lmc_fmax(1e-12, nh.z)));
   }
   /* Beckmann (Heitz and d'Eon 2014): slopes in the standard configuration,
    * rotated to the azimuth of vh, scaled by alpha. */
-  double cos_t = vh.z, sin_t = sqrt(fmax(0.0, 1.0 - cos_t * cos_t));
+  double cos_t = vh.z, sin_t = sqrt(lmc_fmax(0.0, 1.0 - cos_t * cos_t));
   double sx, sy;
   mf__beckmann_visible_slopes(cos_t, sin_t, u1, u2, &sx, &sy);
   double cos_p = 1.0, sin_p = 0.0;
@@ -166,11 +166,17 @@ vec3 mf_sample(mf_dist dist, double alpha, vec3 v, int visible, double u1, doubl
   return v3_normalize(v3(-rx, -ry, 1.0));
 }
 
-double mf_pdf(mf_dist dist, double alpha, vec3 v, vec3 m, int visible) {
-  if (!visible) return mf_D(dist, alpha, m) * fmax(0.0, m.z);
+double mf_pdf_known(double d, double g1, vec3 v, vec3 m, int visible) {
+  if (!visible) return d * lmc_fmax(0.0, m.z);
   if (v.z <= 0.0) return 0.0;
   /* D_v(m) = G1(v, m) max(0, v.m) D(m) / v.z */
   double vm = v3_dot(v, m);
   if (vm <= 0.0) return 0.0;
-  return mf_G1(dist, alpha, v, m) * vm * mf_D(dist, alpha, m) / v.z;
+  return g1 * vm * d / v.z;
+}
+
+double mf_pdf(mf_dist dist, double alpha, vec3 v, vec3 m, int visible) {
+  if (!visible) return mf_pdf_known(mf_D(dist, alpha, m), 0.0, v, m, 0);
+  if (v.z <= 0.0 || v3_dot(v, m) <= 0.0) return 0.0;
+  return mf_pdf_known(mf_D(dist, alpha, m), mf_G1(dist, alpha, v, m), v, m, 1);
 }

@@ -38,6 +38,9 @@ double mf_G(mf_dist dist, double alpha, vec3 wi, vec3 wo, vec3 m);
 vec3 mf_sample(mf_dist dist, double alpha, vec3 v, int visible, double u1, double u2);
 /* Density of mf_sample producing m (per unit solid angle of m). */
 double mf_pdf(mf_dist dist, double alpha, vec3 v, vec3 m, int visible);
+/* mf_pdf from d = D(m) and, when visible, g1 = G1(v, m) that the caller
+ * already has (the same value, bit for bit). */
+double mf_pdf_known(double d, double g1, vec3 v, vec3 m, int visible);
 
 /* Inverse error function on (-1, 1) (erfinv(+-1) = +-inf). */
 double mf_erfinv(double x);

@@ -3,7 +3,9 @@
  * and the progress bar.
  *
  * The image is rendered in passes of one sample per pixel; OpenMP threads
- * take rows round-robin (static schedule). Every pixel sample draws from
+ * take the next row whenever they finish one (dynamic schedule: rows differ
+ * in cost, and a thread that the system preempts does not hold the others
+ * at the end of the pass). Every pixel sample draws from
  * its own random stream, seeded by (seed, pixel, pass), and adds to its own
  * pixel only, in pass order: the camera-ray estimates do not depend on the
  * schedule. Splats (bdpt's light tracing) land anywhere on the film, so
@@ -89,16 +91,23 @@ void progress_finish(progress *p) {
   fprintf(stderr, "\n");
 }
 
+/* A thread's counters, alone on their cache line: the integrators bump
+ * cnt->rays at every ray, and the counters of two threads on one line would
+ * make that line bounce between their cores (false sharing). */
+typedef struct render__counters_slot {
+  _Alignas(64) render_counters c;
+} render__counters_slot;
+
 /* Hands rs->snapshot_fn the image so far: the camera estimates plus the
  * splats (already replayed into `out`), normalised as at the end. */
 static void render__snapshot(const render_settings *rs, const film *out, int has_splats,
-                             int nthreads, const render_counters *counters, double seconds) {
+                             int nthreads, const render__counters_slot *counters, double seconds) {
   film tmp;
   lmc_error err;
   if (film_init(&tmp, out->width, out->height, &err)) return;
   film_merge(&tmp, out);
   int64_t samples = 0;
-  for (int t = 0; t < nthreads; t++) samples += counters[t].samples;
+  for (int t = 0; t < nthreads; t++) samples += counters[t].c.samples;
   if (has_splats) tmp.splat_scale = samples > 0 ? 1.0 / (double)samples : 0.0;
   rs->snapshot_fn(rs->snapshot_ctx, &tmp, seconds);
   film_free(&tmp);
@@ -122,7 +131,8 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
    * whole pass as one block. */
   const int block = use_bdpt ? RENDER_SPLAT_ROWS : H;
   film_splat_log *logs = use_bdpt ? calloc((size_t)block, sizeof *logs) : NULL;
-  render_counters *counters = calloc((size_t)nthreads, sizeof(render_counters));
+  render__counters_slot *counters = aligned_alloc(64, (size_t)nthreads * sizeof *counters);
+  if (counters) memset(counters, 0, (size_t)nthreads * sizeof *counters);
   if (!counters || (use_bdpt && !logs)) {
     free(logs);
     free(counters);
@@ -152,8 +162,8 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
 #pragma omp parallel num_threads(nthreads)
       {
         int tid = omp_get_thread_num();
-        render_counters *cnt = &counters[tid];
-#pragma omp for schedule(static, 1)
+        render_counters *cnt = &counters[tid].c;
+#pragma omp for schedule(dynamic, 1)
         for (int y = yb; y < ye; y++) {
           if (stop) continue;
           if (render__stop) {
@@ -218,9 +228,9 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
    * each light subpath (with the per-pixel importance of camera.h) is an
    * estimate of every pixel, so splats are divided by their total number. */
   for (int t = 0; t < nthreads; t++) {
-    st->rays += counters[t].rays;
-    st->samples += counters[t].samples;
-    st->nan_samples += counters[t].nan_samples;
+    st->rays += counters[t].c.rays;
+    st->samples += counters[t].c.samples;
+    st->nan_samples += counters[t].c.nan_samples;
   }
   st->passes = (st->samples == (int64_t)W * H * pass) ? pass : st->samples / ((int64_t)W * H);
   if (use_bdpt) {

@@ -44,5 +44,9 @@ typedef struct lmc_indep_sampler {
 } lmc_indep_sampler;
 
 void indep_sampler_init(lmc_indep_sampler *s, uint64_t seed, uint64_t seq);
+/* The stream of s when s is an independent sampler, else NULL. A hot loop
+ * may then draw rng_uniform from it directly: the same numbers as
+ * sampler_next, without the indirect call. */
+rng *sampler_indep_rng(lmc_sampler *s);
 
 #endif

@@ -142,7 +142,7 @@ lmc_status scene_finalize(scene *s, lmc_error *err) {
 
 double scene_ray_eps(const scene *s, vec3 p) {
   (void)s;
-  double m = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+  double m = lmc_fmax(fabs(p.x), lmc_fmax(fabs(p.y), fabs(p.z)));
   return 2e-5 * (1.0 + m);
 }
 
@@ -151,10 +151,14 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   accel_hit ah;
   if (!accel_intersect(s->accel, org, dir, tmin, tmax, &ah)) return 0;
   const mesh *m = &s->meshes[ah.mesh];
+  /* The triangle's corners, loaded once for the refinement, the hit point
+   * and the geometric normal. */
+  const uint32_t *tri = m->idx + 3 * ah.prim;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
   /* Refine Embree's float hit to double on the same triangle (the formula
    * the differentiable path sampler re-evaluates, see path.h). */
   double rt, rb1, rb2;
-  if (mesh_intersect_triangle(m, ah.prim, org, dir, &rt, &rb1, &rb2) && isfinite(rb1) &&
+  if (mesh_intersect_corners(p0, p1, p2, org, dir, &rt, &rb1, &rb2) && isfinite(rb1) &&
       isfinite(rb2) && isfinite(rt)) {
     ah.t = rt;
     ah.b1 = rb1;
@@ -167,11 +171,9 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   h->b1 = ah.b1;
   h->b2 = ah.b2;
   /* Re-evaluate the hit point on the triangle from its barycentrics. */
-  const uint32_t *tri = m->idx + 3 * ah.prim;
   double b0 = 1.0 - ah.b1 - ah.b2;
-  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
   h->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, ah.b1)), v3_scale(p2, ah.b2));
-  h->ng = mesh_face_normal(m, ah.prim);
+  h->ng = mesh_corners_normal(m, p0, p1, p2);
   /* Shading normal: interpolated, turned to the geometric side. */
   vec3 ns = h->ng;
   if (m->n && !m->face_normals) {

@@ -36,6 +36,7 @@
 
 /* Non-negative remainder of a modulo b (b > 0). */
 static int tex__mod(int a, int b) {
+  if (a >= 0 && a < b) return a; /* the usual case, without a division */
   int r = a % b;
   return r < 0 ? r + b : r;
 }

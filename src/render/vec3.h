@@ -15,6 +15,13 @@ typedef struct vec3 {
   double x, y, z;
 } vec3;
 
+/* fmax and fmin, inline: at -O2 on x86-64 GCC calls libm for them (to
+ * honour NaN). Same results as glibc's (maxsd/minsd): the larger (smaller)
+ * value, the argument that is not NaN, and b when a and b compare equal
+ * (signed zeros included). */
+static inline double lmc_fmax(double a, double b) { return a > b || isnan(b) ? a : b; }
+static inline double lmc_fmin(double a, double b) { return a < b || isnan(b) ? a : b; }
+
 static inline vec3 v3(double x, double y, double z) { return (vec3){x, y, z}; }
 static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }

@@ -72,7 +72,7 @@ void warp_disk_concentric_to_square(double x, double y, double *u1, double *u2) 
 vec3 warp_square_to_cosine_hemisphere(double u1, double u2) {
   double x, y;
   warp_square_to_disk_concentric(u1, u2, &x, &y);
-  double z = sqrt(fmax(0.0, 1.0 - x * x - y * y));
+  double z = sqrt(lmc_fmax(0.0, 1.0 - x * x - y * y));
   return v3(x, y, z);
 }
 
@@ -85,7 +85,7 @@ void warp_cosine_hemisphere_to_square(vec3 w, double *u1, double *u2) {
 /* z = 1 - 2 u1, phi = 2 pi u2. */
 vec3 warp_square_to_uniform_sphere(double u1, double u2) {
   double z = 1.0 - 2.0 * u1;
-  double r = sqrt(fmax(0.0, 1.0 - z * z));
+  double r = sqrt(lmc_fmax(0.0, 1.0 - z * z));
   double phi = 2.0 * M_PI * u2;
   return v3(r * cos(phi), r * sin(phi), z);
 }
