@@ -22,7 +22,8 @@
 # Defaults: scenes/ring-caustics, scenes/ring-caustics-glass and, when
 # ../shared/scenes/torus exists, the torus (it has no reference there: one
 # is made with scripts/make_reference.sh's recipe into OUT_DIR/torus-ref
-# when TORUS_REF_MINUTES is set, else the torus is skipped with a message);
+# when TORUS_REF_MINUTES is set and reused by later runs into the same
+# OUT_DIR, else the torus is skipped with a message);
 # integrators pt bdpt pssmlt mmlt, plus "lmc:none lmc:diminish lmc:cache"
 # when the build accepts --integrator lmc. An entry NAME:ADAPT means
 # --integrator NAME --adapt ADAPT.
@@ -78,7 +79,9 @@ for sdir in $scenes; do
   sname=$(basename "$sdir")
   ref="$sdir/reference.exr"
   if [ ! -f "$ref" ]; then
-    if [ "$sname" = torus ] && [ -n "${TORUS_REF_MINUTES:-}" ]; then
+    if [ "$sname" = torus ] && [ -f "$out/torus-ref/reference.exr" ]; then
+      ref="$out/torus-ref/reference.exr" # made by an earlier run into this OUT_DIR
+    elif [ "$sname" = torus ] && [ -n "${TORUS_REF_MINUTES:-}" ]; then
       mkdir -p "$out/torus-ref"
       for seed in 1 2; do
         "$lmc" render "$sdir/lmc.xml" --integrator bdpt --time $((TORUS_REF_MINUTES * 60)) \
