@@ -269,6 +269,18 @@ static void test_ply_errors(void **state) {
   assert_int_equal(err.line, 4);
   assert_true(write_file(path, "hello\n", 6));
   assert_int_not_equal(mesh_read_ply(path, &m, &err), LMC_OK);
+  /* A header that claims far more vertices than the body can hold (ASCII
+   * and binary) is refused before anything is allocated for them. */
+  const char *huge[2] = {
+      "ply\nformat ascii 1.0\nelement vertex 77777777\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n",
+      "ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n0123456789abcdef0123456789abcdef"};
+  for (int i = 0; i < 2; i++) {
+    assert_true(write_file(path, huge[i], strlen(huge[i])));
+    assert_int_equal(mesh_read_ply(path, &m, &err), LMC_EPARSE);
+    assert_non_null(strstr(err.msg, "exceeds the file's data"));
+  }
   remove(path);
 }
 

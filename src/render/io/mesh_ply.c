@@ -351,8 +351,18 @@ lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
   ply__in in = {path, buf + body, buf + len, format, line};
   if (st == LMC_OK) {
     n_verts = elems[iv].count;
-    if (n_verts > (int64_t)UINT32_MAX ||
-        (format != PLY_ASCII && n_verts > (int64_t)(len - body))) /* >= 1 byte per vertex */
+    /* Each vertex row takes at least this many bytes of the body: the sizes
+     * of its scalars and list counts, or in ASCII one character and one
+     * separator per property. Bounding the count by the data keeps the
+     * allocation proportional to the file, whatever the header claims. */
+    int64_t row_min = 0;
+    for (int k = 0; k < elems[iv].n_props; k++) {
+      const ply__prop *pr = &elems[iv].props[k];
+      row_min += format == PLY_ASCII ? 2
+                 : ply__type_size(pr->count_type != PLY_NONE ? pr->count_type : pr->type);
+    }
+    if (row_min < 1) row_min = 1;
+    if (n_verts > (int64_t)UINT32_MAX || n_verts > ((int64_t)(len - body) + 1) / row_min)
       st = lmc_error_set(err, LMC_EPARSE, path, 0, "vertex count %lld exceeds the file's data",
                          (long long)n_verts);
     else if (!(vdata = calloc((size_t)n_verts * 8 + 1, sizeof(double))))
