@@ -276,6 +276,17 @@ static void test_ply_errors(void **state) {
       "property float z\nend_header\n0 0 0\n",
       "ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\n"
       "property float y\nproperty float z\nend_header\n0123456789abcdef0123456789abcdef"};
+  /* An element without properties holds no data whatever its count (a
+   * count of 2^62 was once walked row by row). */
+  const char *empty_elem =
+      "ply\nformat ascii 1.0\nelement junk 4611686018427387904\nelement vertex 3\n"
+      "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  assert_true(write_file(path, empty_elem, strlen(empty_elem)));
+  assert_int_equal(mesh_read_ply(path, &m, &err), LMC_OK);
+  assert_int_equal(m.n_vertices, 3);
+  assert_int_equal(m.n_triangles, 1);
+  mesh_free(&m);
   for (int i = 0; i < 2; i++) {
     assert_true(write_file(path, huge[i], strlen(huge[i])));
     assert_int_equal(mesh_read_ply(path, &m, &err), LMC_EPARSE);

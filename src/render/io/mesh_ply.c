@@ -370,6 +370,9 @@ lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
   }
   for (int e = 0; st == LMC_OK && e < n_elems; e++) {
     const ply__elem *el = &elems[e];
+    /* An element without properties has no data: its rows take no bytes, so
+     * its count (up to 2^63 in a header) bounds nothing and is not walked. */
+    if (el->n_props == 0) continue;
     for (int64_t r = 0; st == LMC_OK && r < el->count; r++) {
       if (in.p >= in.end) {
         st = ply__eof(&in, el->name, err);
