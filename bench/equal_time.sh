@@ -4,8 +4,8 @@
 # usage: bench/equal_time.sh [-s "SCENE_DIR ..."] [-i "INTEGRATOR ..."] [-t SECONDS]
 #                            [-n RUNS] [-j THREADS] [-b BUILD_DIR] [-o OUT_DIR]
 #
-# Renders every scene with every integrator RUNS times (seeds 1 .. RUNS,
-# default 1) for SECONDS (default 60) each with the same thread count
+# Renders every scene with every integrator RUNS times (seeds 101 ..
+# 100 + RUNS, default 1 run) for SECONDS (default 60) each with the same thread count
 # (default: all cores), writing a snapshot every SECONDS/6 (--snapshot),
 # compares each snapshot and the final image with the scene's
 # reference.exr (lmc compare), and writes
@@ -15,8 +15,16 @@
 #                                    without the worst 0.1% of pixels (mean),
 #                                    mean ratio, samples or mutations per
 #                                    second, acceptance (of the first run)
+#                                    and, under it, each reference's own
+#                                    estimated relmse (a floor under every
+#                                    figure: relmse(I, R) ~ relmse(I) +
+#                                    relmse(R) for independent I and R)
 #   OUT_DIR/<scene>-convergence.png  log-log mean relmse against time (gnuplot)
 #   OUT_DIR/<scene>/<integrator>-sN.* the renders, their logs and curves
+# References are bdpt renders with seeds 1 and 2; the runs start at seed
+# 101 so that no bdpt run replays the first samples of its own reference
+# (with seed 1, a 60 s bdpt run is a prefix of the reference's first half
+# and looks far better than it is).
 # A short render's relmse is heavy-tailed (one firefly can outweigh the rest
 # of the image), so compare integrators over several runs.
 # Defaults: scenes/ring-caustics, scenes/ring-caustics-glass and, when
@@ -75,6 +83,7 @@ table="$out/table.md"
   echo "| --- | --- | --- | --- | --- | --- | --- |"
 } >"$table"
 
+notes=()
 for sdir in $scenes; do
   sname=$(basename "$sdir")
   ref="$sdir/reference.exr"
@@ -94,6 +103,17 @@ for sdir in $scenes; do
       continue
     fi
   fi
+  # The reference's own error: from its two halves when they are at hand
+  # (relmse(half1, half2) / 4), else as its scene README records it.
+  rdir=$(dirname "$ref")
+  if [ -f "$rdir/half1.exr" ] && [ -f "$rdir/half2.exr" ]; then
+    floor=$("$lmc" compare "$rdir/half1.exr" "$rdir/half2.exr" | sed -n 's/^relmse: //p' |
+      awk '{ printf "%.3g", $1 / 4 }')
+  else
+    floor=$(sed -n 's/^| estimated relmse of the reference[^|]*| *\([0-9.e+-]*\) *|.*/\1/p' \
+      "$sdir/README.md" 2>/dev/null | head -1)
+  fi
+  notes+=("$sname: the reference's own relmse is about ${floor:-unknown} (every relmse above includes it)")
   # A scene folder holds scene.xml; the torus of the LMC reference
   # implementation holds lmc.xml instead.
   sfile="$sdir/scene.xml"
@@ -106,7 +126,7 @@ for sdir in $scenes; do
     flags=(--integrator "$name")
     [ "$entry" != "$name" ] && flags+=(--adapt "${entry#*:}")
     rels=() trims=() ratios=() dats=() rate="" acc=""
-    for seed in $(seq 1 "$runs"); do
+    for seed in $(seq 101 $((100 + runs))); do
       stem="$out/$sname/$label-s$seed"
       rm -f "$stem"-*s.exr
       echo "  $sname / $label / seed $seed ..." >&2
@@ -175,4 +195,8 @@ EOF
     echo "equal_time: gnuplot not found; no plot (apt-get install gnuplot-nox)" >&2
   fi
 done
+if [ ${#notes[@]} -gt 0 ]; then
+  echo >>"$table"
+  printf -- '- %s\n' "${notes[@]}" >>"$table"
+fi
 cat "$table"
