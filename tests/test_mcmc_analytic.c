@@ -20,7 +20,9 @@
  *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
  * give a bit-identical film under --spp, also with mmlt's default, adaptive
- * bootstrap (its batches are shared out by rays counted, not by time).
+ * bootstrap (its batches are shared out by rays counted, not by time), and
+ * for lmc with --adapt none, diminish and cache (Adam's statistics, the
+ * stage-1 records and the frozen cache are made in chain order).
  *
  * b refined with the large steps (mcmc.c): on the furnace every pixel's
  * radiance is exactly 1 (grey), so pssmlt's b = E[luminance(A L)] = A, the
@@ -190,9 +192,10 @@ static void test_refined_b(void **state) {
 /* adaptive: the default bootstrap (batches until b's standard error is
  * below --bootstrap-error, Neyman-allocated over mmlt's lengths) instead of
  * a fixed count; returns the bootstrap's size. */
-static int64_t render_film(const scene *s, const char *integrator, uint64_t seed, int threads,
-                           int adaptive, film *OUT_f) {
+static int64_t render_film(const scene *s, const char *integrator, lmc_adapt adapt, uint64_t seed,
+                           int threads, int adaptive, film *OUT_f) {
   render_settings rs = settings(s, integrator, 4, seed, threads);
+  rs.adapt = adapt;
   if (adaptive) {
     rs.bootstrap = 0;
     rs.bootstrap_error = 0.003;
@@ -200,7 +203,13 @@ static int64_t render_film(const scene *s, const char *integrator, uint64_t seed
   render_stats st;
   lmc_error err;
   assert_int_equal(mcmc_render_run(s, &rs, OUT_f, &st, &err), LMC_OK);
-  assert_true(st.samples >= 4 * (int64_t)s->cam.width * s->cam.height);
+  /* lmc's cache mode counts only stage 2's mutations: stage 1 (a
+   * cache_fraction of the budget, rounded per chain) builds the cache and
+   * is discarded. */
+  int64_t want = 4 * (int64_t)s->cam.width * s->cam.height;
+  if (!strcmp(integrator, "lmc") && adapt == LMC_ADAPT_CACHE)
+    want = (int64_t)(0.99 * (1.0 - rs.cache_fraction) * (double)want);
+  assert_true(st.samples >= want);
   return st.mcmc_boot_paths;
 }
 
@@ -213,26 +222,33 @@ static int films_equal(const film *a, const film *b) {
 static void test_determinism(void **state) {
   (void)state;
   scene *s = load("furnace.xml"), *sphere = load("diffuse_sphere.xml");
-  const char *names[3] = {"pssmlt", "mmlt", "mmlt"};
-  for (int i = 0; i < 3; i++) {
+  /* lmc with each unbiased adaptation: its Adam statistics, stage-1 records
+   * and frozen cache must be as deterministic as the chains. */
+  const char *names[6] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc"};
+  const lmc_adapt adapts[6] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,
+                               LMC_ADAPT_NONE,  LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE};
+  int checked = 0;
+  for (int i = 0; i < 6; i++) {
     /* The third: mmlt's adaptive bootstrap, several batches shared out by
      * the lengths' costs and variances. */
     const scene *sc = i == 2 ? sphere : s;
     int adaptive = i == 2;
     film a, b, c, d;
-    int64_t n = render_film(sc, names[i], 3, 2, adaptive, &a);
-    render_film(sc, names[i], 3, 2, adaptive, &b);
-    render_film(sc, names[i], 3, 1, adaptive, &c);
-    render_film(sc, names[i], 4, 2, adaptive, &d);
+    int64_t n = render_film(sc, names[i], adapts[i], 3, 2, adaptive, &a);
+    render_film(sc, names[i], adapts[i], 3, 2, adaptive, &b);
+    render_film(sc, names[i], adapts[i], 3, 1, adaptive, &c);
+    render_film(sc, names[i], adapts[i], 4, 2, adaptive, &d);
     if (adaptive) assert_true(n > 4 * 8192); /* more than the first batch */
     assert_true(films_equal(&a, &b)); /* same seed, same threads */
     assert_true(films_equal(&a, &c)); /* 1 vs 2 threads */
     assert_false(films_equal(&a, &d)); /* another seed differs */
+    checked++;
     film_free(&a);
     film_free(&b);
     film_free(&c);
     film_free(&d);
   }
+  assert_int_equal(checked, 6);
   scene_destroy(s);
   scene_destroy(sphere);
 }
