@@ -341,39 +341,24 @@ double bsdf_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
 
 rgb bsdf_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode,
                   double *OUT_pdf) {
+  vec3 fo = wo, fi = wi;
   if (bsdf__flip(b, wo)) {
-    wo.z = -wo.z;
-    wi.z = -wi.z;
+    fo.z = -fo.z;
+    fi.z = -fi.z;
   }
   switch (b->type) {
   case BSDF_PHONG:
-    return bsdf__phong_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
+    return bsdf__phong_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
   case BSDF_ROUGHCONDUCTOR:
-    return bsdf__roughconductor_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
+    return bsdf__roughconductor_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
   case BSDF_ROUGHDIELECTRIC:
-    return bsdf__roughdielectric_eval_pdf(b, tu, tv, wo, wi, mode, OUT_pdf);
-  default:
-    /* Nothing to share: the two calls (the flip is already applied). */
-    break;
-  }
-  *OUT_pdf = 0.0;
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-    *OUT_pdf = bsdf__diffuse_pdf(b, tu, tv, wo, wi);
-    return bsdf__diffuse_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_CONDUCTOR:
-    *OUT_pdf = bsdf__conductor_pdf(b, tu, tv, wo, wi);
-    return bsdf__conductor_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_DIELECTRIC:
-    *OUT_pdf = bsdf__dielectric_pdf(b, tu, tv, wo, wi);
-    return bsdf__dielectric_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_PLASTIC:
-    *OUT_pdf = bsdf__plastic_pdf(b, tu, tv, wo, wi);
-    return bsdf__plastic_eval(b, tu, tv, wo, wi, mode);
+    return bsdf__roughdielectric_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
   default:
     break;
   }
-  return rgb_zero();
+  /* Nothing to share: the two dispatchers (each applies the flip itself). */
+  *OUT_pdf = bsdf_pdf(b, tu, tv, wo, wi);
+  return bsdf_eval(b, tu, tv, wo, wi, mode);
 }
 
 int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
