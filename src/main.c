@@ -73,6 +73,8 @@ static const char *lmc_render_usage =
     "  --bootstrap N            independent paths used to estimate b (default: enough for 1%)\n"
     "  --bootstrap-error E      without --bootstrap: b's target relative standard error (0.01)\n"
     "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
+    "  --allocate b|even        mmlt, lmc: mutations per path length in proportion to its b\n"
+    "                           (default), or the same for every chain\n"
     "\n"
     "LMC (--integrator lmc):\n"
     "  --adapt MODE             none | adam | diminish | cache (default cache; adam is biased)\n"
@@ -390,6 +392,13 @@ static int lmc_cmd_render(int argc, char **argv) {
       }
       cli.direct_separate = strcmp(v, "separate") == 0;
       cli.set |= SET_DIRECT;
+    } else if (lmc_flag_is(&a, "--allocate")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "b") && strcmp(v, "even")) {
+        fprintf(stderr, "lmc: flag --allocate: '%s' is not one of b, even\n", v);
+        goto bad;
+      }
+      cli.mcmc_even = strcmp(v, "even") == 0;
     } else if (lmc_flag_is(&a, "--adapt")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       if (!lmc_parse_adapt(v, &cli.adapt)) {
@@ -490,6 +499,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
   rs.bootstrap_error = cli.bootstrap_error;
   if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
+  rs.mcmc_even = cli.mcmc_even;
   if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
   rs.snapshot = cli.snapshot;
   rs.lmc_step = cli.lmc_step;

@@ -14,9 +14,12 @@
  * R runs give their mean and its standard error SE = sd / sqrt(R). The
  * mean must lie within 8 SE of the exact value (plus 0.3% for mmlt on the
  * furnace, whose state stops at 24 segments when maxdepth is unbounded and
- * so loses the longer paths). With R = 6 the t statistic has 5 degrees of
- * freedom, P(|t_5| > 8) = 5e-4 per check, about 0.7% over the 15 checks
- * that are not exact.
+ * so loses the longer paths). mmlt runs the furnace twice: with its default
+ * allocation (mutations per length in proportion to b_k) and with
+ * --allocate even. With R = 6 the t statistic has 5 degrees of
+ * freedom, P(|t_5| > 8) = 5e-4 per check, about 0.9% over the 18 checks
+ * that are not exact. Every render must also make spp mutations per pixel
+ * (up to less than 10% of whole rounds).
  *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
  * give a bit-identical film under --spp, also with mmlt's default, adaptive
@@ -48,6 +51,7 @@
 
 #define RUNS 6
 static int g_checks;
+static int g_even; /* --allocate even for the renders of check_scene */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -72,6 +76,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   rs.seed = seed;
   rs.bootstrap = 16384;
   rs.quiet = 1;
+  rs.mcmc_even = g_even;
   return rs;
 }
 
@@ -104,6 +109,10 @@ static void check_scene(const char *file, const char *integrator, int64_t spp, c
     lmc_error err;
     lmc_error_clear(&err);
     assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
+    /* Whatever the allocation among mmlt's lengths, the budget is spp
+     * mutations per pixel, up to whole rounds of every chain. */
+    int64_t want = spp * (int64_t)s->cam.width * s->cam.height;
+    assert_true(st.samples >= want && st.samples < want + want / 10);
     lmc_image img;
     assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
     double gs[2][3] = {{0}};
@@ -153,6 +162,11 @@ static void test_furnace_mmlt(void **state) {
   (void)state;
   rgb one = rgb_gray(1.0);
   check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
+  /* The same with every chain making the same number of mutations (the
+   * default shares them among the lengths in proportion to b_k). */
+  g_even = 1;
+  check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
+  g_even = 0;
 }
 
 static void test_diffuse_sphere(void **state) {
@@ -255,7 +269,7 @@ static void test_determinism(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 3 + 3 + 2 * 2 * 3 + RUNS);
+  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + RUNS);
 }
 
 int main(void) {

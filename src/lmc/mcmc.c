@@ -82,6 +82,17 @@
  * stationary distribution (no burn-in, no start-up bias, up to the
  * bootstrap's finite size).
  *
+ * Allocation (mmlt, and lmc on mmlt's states). A family's share of the
+ * mutations should follow b_g, as it does in Hachisuka et al.'s single
+ * multiplexed chain. Chains are shared in proportion to b_g, but at least
+ * MCMC_MIN_CHAINS per family, so a length with a tiny b (on ring-caustics
+ * lengths 6-8 hold 0.03% of b) would otherwise get 16 full chains' worth of
+ * its costliest mutations. Each family's chains therefore make m_g of every
+ * round's MCMC_ROUND mutations, m_g = MCMC_ROUND (b_g / n_g) / max_h (b_h / n_h)
+ * rounded, at least 1; its buffer is normalised by its own count (any
+ * count is unbiased: a family's image is b_g times its chains' normalised
+ * histogram). --allocate even gives every chain MCMC_ROUND (the old rule).
+ *
  * Determinism. The number of chains is fixed (MCMC_CHAINS, shared among
  * the mmlt families in proportion to b_g, at least MCMC_MIN_CHAINS each), not tied to
  * threads. Each chain owns its random stream seeded from (seed, family,
@@ -89,8 +100,8 @@
  * splats are recorded per chain and then added to the film in chain order
  * (each thread adds the records falling in its band of rows), so under
  * --spp the image is bit-identical for any --threads. Under --time the
- * rounds continue until the clock says stop: every chain makes the same
- * number of mutations (the budget is split evenly across chains by time).
+ * rounds continue until the clock says stop: the chains of a family make the
+ * same number of mutations (the budget is split across chains by rounds).
  * A stop request (Ctrl-C) or the time limit abandons the round in flight;
  * the film always holds whole rounds and is correctly normalised.
  *
@@ -341,6 +352,8 @@ typedef struct mcmc_family {
   int64_t n_large;    /* large-step proposals counted in b_ref */
   double *splat;      /* mmlt: this length's splats, not yet times b (owned; 3 per pixel) */
   int n_chains, first_chain;
+  int m_round;        /* mutations per chain in a full round (1 .. MCMC_ROUND; see Allocation) */
+  int64_t done;       /* mutations per chain of this family so far */
   double *step_scale; /* mmlt, pssmlt: the target's per-coordinate small-step factors (owned) */
 } mcmc_family;
 
@@ -536,15 +549,28 @@ static void mcmc__publish(film *out, mcmc_family *fam, int n_fam, const mcmc_cha
   if (done <= 0) return;
   double v;
   if (norm != MCMC_NORM_BOOT) mcmc__refine_b(fam, n_fam, slots, &v);
-  out->splat_scale = (norm == MCMC_NORM_SCALE ? fam[0].b_ref : 1.0) / (double)done;
-  if (norm != MCMC_NORM_BUFFERS || !compose) return;
+  if (norm != MCMC_NORM_BUFFERS) {
+    out->splat_scale = (norm == MCMC_NORM_SCALE ? fam[0].b_ref : 1.0) / (double)done;
+    return;
+  }
+  /* Per-length buffers: each normalised by its own chains' mutations. */
+  out->splat_scale = 1.0;
+  if (!compose) return;
   int64_t n = 3 * (int64_t)out->width * out->height;
   memset(out->splat, 0, (size_t)n * sizeof(double));
   for (int g = 0; g < n_fam; g++) {
-    if (!fam[g].splat) continue;
-    double b = fam[g].b_ref;
+    if (!fam[g].splat || fam[g].done <= 0) continue;
+    double b = fam[g].b_ref / (double)fam[g].done;
     for (int64_t i = 0; i < n; i++) out->splat[i] += b * fam[g].splat[i];
   }
+}
+
+/* Mutations a chain of family F makes in a round of m (m for a family at
+ * the full rate, else in proportion, at least one). */
+static int64_t mcmc__family_steps(const mcmc_family *F, int64_t m) {
+  if (F->m_round >= MCMC_ROUND) return m;
+  int64_t k = (m * F->m_round + MCMC_ROUND / 2) / MCMC_ROUND;
+  return k < 1 ? 1 : k;
 }
 
 static void mcmc__free_slots(mcmc_chain_slot *slots, int n) {
@@ -771,6 +797,23 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         fprintf(stderr, "lmc: no memory for per-length splat buffers; b from the bootstrap only\n");
     }
   }
+  /* Mutations per round (see Allocation above): in proportion to b_g per
+   * family, so a family held at MCMC_MIN_CHAINS chains makes fewer
+   * mutations per chain. Per-length buffers only: the other two
+   * normalisations share one mutation count. */
+  {
+    double top = 0.0;
+    for (int g = 0; g < n_fam; g++)
+      if (fam[g].n_chains > 0) top = fmax(top, fam[g].b / fam[g].n_chains);
+    for (int g = 0; g < n_fam; g++) {
+      fam[g].m_round = MCMC_ROUND;
+      fam[g].done = 0;
+      if (norm != MCMC_NORM_BUFFERS || rs->mcmc_even || fam[g].n_chains == 0) continue;
+      double w = fam[g].b / fam[g].n_chains / top;
+      int m = (int)floor(MCMC_ROUND * w + 0.5);
+      fam[g].m_round = m < 1 ? 1 : m > MCMC_ROUND ? MCMC_ROUND : m;
+    }
+  }
   slots = calloc((size_t)n_slots, sizeof *slots);
   if (!slots) {
     status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the chains");
@@ -844,8 +887,10 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   {
     int64_t per_chain = INT64_MAX;
     if (by_spp) {
-      int64_t total = rs->spp * (int64_t)W * H;
-      per_chain = (total + n_slots - 1) / n_slots;
+      /* The budget in full-round mutations: sum_g n_g m_g / MCMC_ROUND chains' worth. */
+      int64_t total = rs->spp * (int64_t)W * H, weight = 0;
+      for (int g = 0; g < n_fam; g++) weight += (int64_t)fam[g].n_chains * fam[g].m_round;
+      per_chain = (total * MCMC_ROUND + weight - 1) / weight;
     }
     progress bar;
     progress_init(&bar, rs->integrator, rs->quiet);
@@ -870,7 +915,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
           if (abandon) continue;
           const mc_target *T = sl->chain->target;
           int64_t r0 = sl->chain->scratch ? T->scratch_rays(sl->chain->scratch) : 0;
-          for (int64_t q = 0; q < m; q++) mc_chain_step(sl->chain, mcmc__record, sl);
+          int64_t mg = mcmc__family_steps(&fam[sl->family], m);
+          for (int64_t q = 0; q < mg; q++) mc_chain_step(sl->chain, mcmc__record, sl);
           cnt[tid].rays += T->scratch_rays(sl->chain->scratch) - r0;
           if (render_stop_signal() || (timed && omp_get_wtime() - t0 >= rs->time_limit)) abandon = 1;
         }
@@ -891,6 +937,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         break;
       }
       done_per_chain += m;
+      for (int g = 0; g < n_fam; g++) fam[g].done += mcmc__family_steps(&fam[g], m);
       mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 0);
       if (lrun && lmc_run_after_round(lrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
         /* Stage 1 of lmc --adapt cache ended: its (biased) image is
@@ -906,6 +953,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         }
         if (per_chain != INT64_MAX) per_chain -= done_per_chain;
         done_per_chain = 0;
+        for (int g = 0; g < n_fam; g++) fam[g].done = 0;
         out->splat_scale = 0.0;
         t_chain0 = omp_get_wtime();
       }
@@ -933,7 +981,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
     if (render_stop_signal()) st->interrupted = 1;
     else if (timed && done_per_chain < per_chain) st->timed_out = 1;
-    st->samples = done_per_chain * n_slots;
+    st->samples = 0;
+    for (int g = 0; g < n_fam; g++) st->samples += fam[g].done * fam[g].n_chains;
     st->passes = st->samples / ((int64_t)W * H);
     double chain_seconds = omp_get_wtime() - t_chain0;
 

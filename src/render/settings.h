@@ -54,6 +54,7 @@ typedef struct render_settings {
   int64_t bootstrap;     /* bootstrap paths */
   double bootstrap_error; /* without --bootstrap: draw until b's relative standard error is below this */
   int direct_separate;   /* --direct separate: pt renders direct light, MCMC the rest */
+  int mcmc_even;         /* --allocate even: every chain the same mutations (default: in proportion to b_k) */
   double snapshot;       /* seconds between intermediate images (0: none) */
   /* Called by the render drivers every `snapshot` seconds with the film
    * normalised as if the render stopped then (borrowed for the call) and
