@@ -36,8 +36,10 @@
  *
  * The kernel mixture of the chi-square runs: large step 0.02, Kelemen
  * small step 0.1, LMC the rest (cache: 0.05 of it the independence
- * proposal). Cache runs stage 1 for L/2 steps per chain, then restarts the
- * chains with the frozen cache (the samples of stage 1 are not used).
+ * proposal). Cache runs stage 1 (M = I, Adam's moments recorded) for a
+ * burn-in and then L/2 steps per chain, then restarts the chains with the
+ * frozen cache; as in the renderer, the L/2 samples of stage 1 are kept:
+ * the histograms count both stages.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -234,6 +236,7 @@ typedef struct run_result {
   double var[NB * NB]; /* between-chain variance of a chain's frequency */
   double quad, quad_se;
   int64_t fallback, mala, hits, lookups, screened;
+  int64_t n;           /* samples per chain in the histograms */
 } run_result;
 
 /* Kernel mixture: large step, Kelemen small step, LMC (and, for cache
@@ -253,7 +256,8 @@ static void make_chain(mc_chain **OUT_c, const mc_target *tg, lmc_mala *k, lmc_i
 }
 
 /* R chains of `burn` + L steps each with mode `adapt`; for CACHE, stage 1
- * runs the same chains for `stage1` steps first (their splats discarded). */
+ * runs the same chains for `burn` + `stage1` steps first (the stage1 ones
+ * counted in the histograms, as the renderer keeps them). */
 static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, double p_large,
                      double p_small, int64_t burn, int64_t L, int64_t stage1, uint64_t seed,
                      run_result *OUT) {
@@ -276,14 +280,17 @@ static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, do
   gcache *cache = NULL;
   if (adapt == LMC_ADAPT_CACHE) assert_int_equal(gcache_create(&cache, t->dim, 8000000, &err), LMC_OK);
   lmc_indep ind = {NULL, 0.02, 1.0 / 1024, 1.0 / 64};
-  /* Stage 1 (CACHE only): online Adam, recording into the cache. */
+  /* Stage 1 (CACHE only): M = I with online Adam recording into the cache. */
+  int64_t kept = cache ? stage1 : 0;
   for (int r = 0; r < R_CHAINS; r++) {
     assert_int_equal(lmc_mala_init(&km[r], t->dim, &p, &err), LMC_OK);
     make_chain(&ch[r], &tg, &km[r], NULL, p_large, p_small);
     mc_chain_start(ch[r], seed, 1000 + r, 2000 + r);
+    memset(&hs[r], 0, sizeof hs[r]);
     if (cache) {
       lmc_mala_set_record(&km[r], cache);
-      for (int64_t i = 0; i < stage1; i++) mc_chain_step(ch[r], NULL, NULL);
+      for (int64_t i = 0; i < burn; i++) mc_chain_step(ch[r], NULL, NULL);
+      for (int64_t i = 0; i < stage1; i++) mc_chain_step(ch[r], hist_splat, &hs[r]);
     }
   }
   if (cache) {
@@ -300,7 +307,6 @@ static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, do
     }
   }
   for (int r = 0; r < R_CHAINS; r++) {
-    memset(&hs[r], 0, sizeof hs[r]);
     for (int64_t i = 0; i < burn; i++) mc_chain_step(ch[r], NULL, NULL);
     for (int64_t i = 0; i < L; i++) mc_chain_step(ch[r], hist_splat, &hs[r]);
   }
@@ -309,14 +315,14 @@ static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, do
   for (int c = 0; c < NB * NB; c++) {
     double s = 0.0, s2 = 0.0;
     for (int r = 0; r < R_CHAINS; r++) {
-      double f = hs[r].h[c] / (double)L;
+      double f = hs[r].h[c] / (double)(L + kept);
       s += f, s2 += f * f;
     }
     OUT->p[c] = s / R_CHAINS;
     OUT->var[c] = (s2 - s * s / R_CHAINS) / (R_CHAINS - 1);
   }
   for (int r = 0; r < R_CHAINS; r++) {
-    double f = hs[r].quad / (double)L;
+    double f = hs[r].quad / (double)(L + kept);
     qs += f, qs2 += f * f;
     OUT->screened += ch[r]->screened;
     OUT->fallback += km[r].st.fallback;
@@ -326,6 +332,7 @@ static void run_mode(const toy *t, lmc_adapt adapt, int delayed, double step, do
     mc_chain_destroy(ch[r]);
     lmc_mala_free(&km[r]);
   }
+  OUT->n = L + kept;
   OUT->quad = qs / R_CHAINS;
   OUT->quad_se = sqrt((qs2 - qs * qs / R_CHAINS) / (R_CHAINS - 1) / R_CHAINS);
   gcache_destroy(cache);
@@ -367,7 +374,7 @@ static int check_target(toy_kind kind, int dim, double step, int64_t L, uint64_t
     static run_result rr;
     int delayed = m == 3;
     run_mode(&t, modes[m], delayed, step, 0.02, 0.1, 2000, L, L / 2, seed, &rr);
-    double tau, pv = chi2_ess(&rr, pe, L, &tau);
+    double tau, pv = chi2_ess(&rr, pe, rr.n, &tau);
     printf("  target %d (%d-D) %-8s%s: p = %.3g, tau = %.1f, mala %lld, fallback %lld, lookups %lld (hits %lld), first tests %lld\n",
            (int)kind, dim, mode_name[modes[m]], delayed ? " delayed" : "", pv, tau, (long long)rr.mala,
            (long long)rr.fallback, (long long)rr.lookups, (long long)rr.hits, (long long)rr.screened);

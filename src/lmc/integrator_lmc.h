@@ -30,20 +30,22 @@
  *
  * --adapt cache runs in two stages. Stage 1 takes --cache-fraction of the
  * budget (of the time under --time, of the mutations under --spp): the
- * chains adapt with online Adam and record states; its image is
- * DISCARDED, since the adapting kernel is biased. Then the per-chain
- * records are merged per family (path length) and frozen into k-d trees, the chains restart
- * from the bootstrap's starting states (the driver's job: stage 1's end
- * states carry Adam's bias) and stage 2 renders with the frozen,
- * state-dependent preconditioner. Stage 2 alone makes the image.
- *
+ * chains run plain MALA (M = I, a fixed kernel) while they compute online
+ * Adam moments of their gradients and record states with them; Adam's M
+ * is not used in stage 1, so its image is unbiased and KEPT. Then the
+ * per-chain records are merged per family (path length) and frozen into
+ * k-d trees, the chains restart from the bootstrap's starting states (the
+ * driver's job) and stage 2 renders with the frozen, state-dependent
+ * preconditioner, a fixed kernel given the cache. The image is the sum
+ * over both stages.
+
  * The driver calls, in order: lmc_run_create (the targets: one, or one per
  * length for mmlt states; lmc_run_n_families, lmc_run_family_target), lmc_run_set_chains,
  * lmc_run_chain_kernels per chain, lmc_run_round_limit before and
  * lmc_run_after_round after every round
- * (a return of 1 means stage 1 just ended: drop the splats so far, restart
- * the chains from their starting states, reset the mutation count and take
- * stage 1's mutations off the --spp budget), lmc_run_report, lmc_run_destroy.
+ * (a return of 1 means stage 1 just ended: restart the chains from their
+ * starting states; splats and mutation counts carry on), lmc_run_report,
+ * lmc_run_destroy.
  */
 #ifndef LMC_MCMC_INTEGRATOR_LMC_H
 #define LMC_MCMC_INTEGRATOR_LMC_H

@@ -130,7 +130,7 @@ static void lmc__normalise(int norm, double *M, int n) {
   for (int i = 0; i < n; i++) M[i] *= inv;
 }
 
-/* The chain's Adam M (ADAM, DIMINISH, CACHE stage 1) at a state of key
+/* The chain's Adam M (ADAM, DIMINISH) at a state of key
  * `key`: normalised over the key coordinates, and for DIMINISH mixed with
  * I after normalising. */
 static const double *lmc__precond_chain(lmc_mala *k, const mc_state *x, int key) {
@@ -148,7 +148,10 @@ static const double *lmc__precond_chain(lmc_mala *k, const mc_state *x, int key)
 /* The preconditioner at state x with key `key` (> 0); NULL means I. */
 static const double *lmc__precond(lmc_mala *k, const mc_state *x, int key) {
   if (k->p.adapt == LMC_ADAPT_NONE) return NULL;
-  if (k->p.adapt != LMC_ADAPT_CACHE || !k->stage2) return lmc__precond_chain(k, x, key);
+  /* CACHE stage 1 runs with M = I (Adam's moments are recorded, not used),
+   * so that its image is unbiased and kept. */
+  if (k->p.adapt == LMC_ADAPT_CACHE && !k->stage2) return NULL;
+  if (k->p.adapt != LMC_ADAPT_CACHE) return lmc__precond_chain(k, x, key);
   /* Stage 2: a pure function of x (its first `key` coordinates); the same
    * state as one of the last two lookups gives the same M. */
   size_t bytes = (size_t)x->dim * sizeof(double);

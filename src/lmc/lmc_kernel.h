@@ -23,9 +23,10 @@
  *              gradients so far, updated after every step of the chain
  *              (on_step) and used directly: biased (see adam.h).
  *   DIMINISH   (1 - w_t) I + w_t M_adam with w_t = min(1, t0 / t).
- *   CACHE      stage 1: as ADAM, and every record_stride-th state this
+ *   CACHE      stage 1: M = I, while Adam's moments are updated as for
+ *              ADAM (not used), and every record_stride-th state this
  *              kernel proposed is stored in a gcache with its Adam moments
- *              (the images of stage 1 are the caller's business). Stage 2
+ *              (a fixed kernel: its images are unbiased). Stage 2
  *              (lmc_mala_begin_stage2): M(x) = gcache_precond(cache, x),
  *              a pure function of x, evaluated at x for the forward and at
  *              y for the reverse density.
@@ -144,7 +145,7 @@ typedef struct lmc_mala {
   const gcache *cache;   /* borrowed (stage 2) */
   gcache *record;        /* borrowed (stage 1; NULL: nothing recorded) */
   adam_stats adam;
-  double *M_chain;       /* ADAM, DIMINISH, CACHE stage 1: the chain's current M */
+  double *M_chain;       /* ADAM, DIMINISH: the chain's current M (CACHE stage 1: computed, unused) */
   double *g, *M;         /* scratch */
   double *m1, *m2;       /* scratch for recording */
   /* Stage 2: the last two lookups (state, key, M), reused when the chain

@@ -940,22 +940,13 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       for (int g = 0; g < n_fam; g++) fam[g].done += mcmc__family_steps(&fam[g], m);
       mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 0);
       if (lrun && lmc_run_after_round(lrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
-        /* Stage 1 of lmc --adapt cache ended: its (biased) image is
-         * dropped and the chains restart from their bootstrap states with
-         * the frozen cache; under --spp, stage 1 counts against the budget. */
-        memset(out->splat, 0, 3 * sizeof(double) * (size_t)W * (size_t)H);
-        for (int g = 0; g < n_fam; g++)
-          if (fam[g].splat) memset(fam[g].splat, 0, 3 * sizeof(double) * (size_t)W * (size_t)H);
-        for (int i = 0; i < n_slots; i++) {
-          mc_chain *c = slots[i].chain;
-          memset(c->stats, 0, sizeof c->stats);
-          mc_chain_start(c, rs->seed, slots[i].start_seq, mcmc__chain_seq(slots[i].family, n_slots + i));
-        }
-        if (per_chain != INT64_MAX) per_chain -= done_per_chain;
-        done_per_chain = 0;
-        for (int g = 0; g < n_fam; g++) fam[g].done = 0;
-        out->splat_scale = 0.0;
-        t_chain0 = omp_get_wtime();
+        /* Stage 1 of lmc --adapt cache ended. Its chains ran a fixed kernel
+         * (M = I; Adam's moments were only recorded), so its image stays;
+         * the chains restart from their bootstrap states with the frozen
+         * cache (the kernel of stage 2 is fixed given the cache). */
+        for (int i = 0; i < n_slots; i++)
+          mc_chain_start(slots[i].chain, rs->seed, slots[i].start_seq,
+                         mcmc__chain_seq(slots[i].family, n_slots + i));
       }
       double now = omp_get_wtime();
       if (render_stop_signal()) stop = 1;
