@@ -78,7 +78,7 @@ static void test_default_is_cache(void **state) {
   assert_int_equal(run_lmc(COMMON), 0);
   assert_non_null(strstr(err_text, "lmc: adapt cache,"));
   assert_non_null(strstr(err_text, "lmc: cache: stage 1"));
-  assert_non_null(strstr(err_text, "image discarded"));
+  assert_non_null(strstr(err_text, "image kept"));
   assert_non_null(strstr(err_text, "gradient evaluations/s"));
   assert_non_null(strstr(err_text, "chains stalled"));
 }

@@ -289,7 +289,7 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
     }
     for (int i = 0; i < run->n; i++) lookups += run->mala[i].st.lookups, hits += run->mala[i].st.lookup_hits;
     fprintf(stderr,
-            "lmc: cache: stage 1 %.2f s, %lld mutations per chain (image discarded); %lld entries "
+            "lmc: cache: stage 1 %.2f s, %lld mutations per chain (M = I, image kept); %lld entries "
             "in %d trees over %d families, %.1f MB, built in %.3f s; lookups %lld, %.1f%% with "
             "neighbours\n",
             run->stage1_seconds, (long long)run->stage1_mutations, (long long)entries, trees,
