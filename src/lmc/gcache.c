@@ -301,12 +301,16 @@ static void gcache__knn_visit(gcache_knn_state *s, int64_t node) {
   if (nd->axis < 0) {
     for (int64_t i = nd->begin; i < nd->end; i++) {
       const double *p = s->t->u + i * s->d;
+      /* The partial sum only grows: stop as soon as it reaches the bound
+       * (in 20-60 dimensions most entries are out after a few terms). */
+      double bound = s->found == s->k ? fmin(s->max_d2, s->d2[s->k - 1]) : s->max_d2;
       double dist = 0.0;
-      for (int j = 0; j < s->d; j++) {
+      int j = 0;
+      for (; j < s->d && dist < bound; j++) {
         double e = p[j] - s->q[j];
         dist += e * e;
       }
-      if (dist >= s->max_d2 || (s->found == s->k && dist >= s->d2[s->k - 1])) continue;
+      if (dist >= bound) continue;
       /* Insert into the sorted list of the best k. */
       int at = s->found < s->k ? s->found++ : s->k - 1;
       while (at > 0 && s->d2[at - 1] > dist) {
