@@ -160,6 +160,17 @@ static int lmc_parse_int64(const char *flag, const char *s, int64_t lo, int64_t 
   return 1;
 }
 
+/* A flag with two values: *out = 0 for `first`, 1 for `second`. */
+static int lmc_parse_choice(const char *flag, const char *s, const char *first,
+                            const char *second, int *out) {
+  if (strcmp(s, first) && strcmp(s, second)) {
+    fprintf(stderr, "lmc: flag %s: '%s' is not one of %s, %s\n", flag, s, first, second);
+    return 0;
+  }
+  *out = strcmp(s, second) == 0;
+  return 1;
+}
+
 static int lmc_parse_double(const char *flag, const char *s, double lo, double hi, double *out) {
   char *end;
   errno = 0;
@@ -385,20 +396,15 @@ static int lmc_cmd_render(int argc, char **argv) {
         goto bad;
       cli.set |= SET_BOOTSTRAP;
     } else if (lmc_flag_is(&a, "--direct")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (strcmp(v, "separate") && strcmp(v, "mcmc")) {
-        fprintf(stderr, "lmc: flag --direct: '%s' is not one of separate, mcmc\n", v);
+      int mcmc;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--direct", v, "separate", "mcmc", &mcmc))
         goto bad;
-      }
-      cli.direct_separate = strcmp(v, "separate") == 0;
+      cli.direct_separate = !mcmc;
       cli.set |= SET_DIRECT;
     } else if (lmc_flag_is(&a, "--allocate")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (strcmp(v, "b") && strcmp(v, "even")) {
-        fprintf(stderr, "lmc: flag --allocate: '%s' is not one of b, even\n", v);
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_choice("--allocate", v, "b", "even", &cli.mcmc_even))
         goto bad;
-      }
-      cli.mcmc_even = strcmp(v, "even") == 0;
     } else if (lmc_flag_is(&a, "--adapt")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       if (!lmc_parse_adapt(v, &cli.adapt)) {
@@ -437,19 +443,15 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
         goto bad;
     } else if (lmc_flag_is(&a, "--delayed")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (strcmp(v, "on") && strcmp(v, "off")) {
-        fprintf(stderr, "lmc: flag --delayed: '%s' is not one of on, off\n", v);
+      int off;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--delayed", v, "on", "off", &off))
         goto bad;
-      }
-      cli.delayed = strcmp(v, "on") == 0;
+      cli.delayed = !off;
     } else if (lmc_flag_is(&a, "--lmc-states")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (strcmp(v, "mmlt") && strcmp(v, "pt")) {
-        fprintf(stderr, "lmc: flag --lmc-states: '%s' is not one of mmlt, pt\n", v);
+      int pt;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--lmc-states", v, "mmlt", "pt", &pt))
         goto bad;
-      }
-      cli.lmc_states = strcmp(v, "pt") == 0 ? LMC_STATES_PT : LMC_STATES_MMLT;
+      cli.lmc_states = pt ? LMC_STATES_PT : LMC_STATES_MMLT;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
     } else if (arg[0] == '-') {
