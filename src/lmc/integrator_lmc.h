@@ -38,7 +38,7 @@
  * driver's job) and stage 2 renders with the frozen, state-dependent
  * preconditioner, a fixed kernel given the cache. The image is the sum
  * over both stages.
-
+ *
  * The driver calls, in order: lmc_run_create (the targets: one, or one per
  * length for mmlt states; lmc_run_n_families, lmc_run_family_target), lmc_run_set_chains,
  * lmc_run_chain_kernels per chain, lmc_run_round_limit before and

@@ -233,7 +233,9 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   int key = lmc__gradient(k, x);
   if (key == 0) return;
   adam_update(&k->adam, x->dim, k->g);
-  adam_precond(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
+  /* CACHE stage 1 only records the moments (its M is I). */
+  if (k->p.adapt != LMC_ADAPT_CACHE)
+    adam_precond(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
   /* Stage 1 of CACHE: record every record_stride-th state of our own steps
    * (x->u is valid only after a full kernel's step). */
   if (!own || !k->record || k->p.record_stride <= 0) return;

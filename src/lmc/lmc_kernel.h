@@ -145,7 +145,7 @@ typedef struct lmc_mala {
   const gcache *cache;   /* borrowed (stage 2) */
   gcache *record;        /* borrowed (stage 1; NULL: nothing recorded) */
   adam_stats adam;
-  double *M_chain;       /* ADAM, DIMINISH: the chain's current M (CACHE stage 1: computed, unused) */
+  double *M_chain;       /* ADAM, DIMINISH: the chain's current M (unused by CACHE) */
   double *g, *M;         /* scratch */
   double *m1, *m2;       /* scratch for recording */
   /* Stage 2: the last two lookups (state, key, M), reused when the chain
