@@ -60,24 +60,28 @@
  * b has the same caveat through the starting states).
  *
  * Bootstrap. Sample j of family g is the large step drawn from the stream
- * (seed, hash(g, j)). A first batch of MCMC_BOOT_BATCH per family, then
- * batches of MCMC_BOOT_BATCH times the number of families shared out by
- * Neyman allocation: family g gets a share proportional to sigma_g /
- * sqrt(c_g), its per-sample standard deviation so far over the square root
- * of its rays per sample (deterministic, unlike a time), at least an
- * eighth of an even share. That minimises the standard error of sum_g b_g
- * for the rays spent; on ring-caustics, where the longer lengths' samples
- * are both costlier and (relative to their b) noisier, it reaches 1% with
- * about half the samples an even split needs (1.33% at 2^18 paths per
- * length evenly, 1.01% with the same 2^21 in all allocated). Batches are
- * drawn until that standard error is below 1% of the sum
- * (--bootstrap-error), MCMC_BOOT_CAP
- * samples are drawn in all, or (under --time) a tenth of the time left is
- * spent; --bootstrap
- * N draws exactly N per family. (A sample size that depends on earlier
- * samples makes each b_g's mean biased by O(1/N), as any stopping rule
- * does: far below its noise, and diluted further by the large steps that
- * refine b during the render.) Starting states are chosen by
+ * (seed, hash(g, j)). --bootstrap N draws exactly N per family and takes
+ * b_g from all of them. Otherwise it runs in two phases. The pilot, a
+ * first batch of MCMC_BOOT_BATCH per family, only plans the main phase:
+ * family g's share of every later batch, by Neyman allocation in
+ * proportion to sigma_g / sqrt(c_g) (the pilot's per-sample standard
+ * deviation over the square root of its rays per sample, at least an
+ * eighth of an even share), which minimises the standard error of
+ * sum_g b_g for the rays spent (on ring-caustics about half the samples
+ * of an even split for the same error), and how many samples the main
+ * phase draws: enough for a standard error of 1% of the sum
+ * (--bootstrap-error) by the pilot's figures, at least one batch, at most
+ * MCMC_BOOT_CAP in all and (under --time) what a tenth of the time left
+ * allows. b_g is the mean of the main phase's samples alone. So the
+ * number of samples behind each b_g depends only on the pilot (and on the
+ * clock), never on the samples it averages, and b_g is exactly unbiased.
+ * (The earlier rule, Neyman shares re-estimated after every batch and a
+ * stop once the running standard error fell below 1%, pooled everything:
+ * with heavy-tailed lengths a batch that met a rare bright path raised the
+ * estimated error, so more samples followed and diluted it, while a run
+ * without one stopped early, low. On the torus its per-length sums came
+ * out 2-4% low in both of two 60 s runs.) The pilot's samples still
+ * serve the starting states: they are chosen from all bootstrap samples by
  * systematic resampling in proportion to f, so chains start in the
  * stationary distribution (no burn-in, no start-up bias, up to the
  * bootstrap's finite size).
@@ -117,6 +121,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/bootstrap.h"
 #include "lmc/chain.h"
 #include "lmc/integrator_lmc.h"
 
@@ -341,13 +346,7 @@ static void mcmc__splat_rows(const film *f, double *splat, const film_filter *fi
 typedef struct mcmc_family {
   mc_target target;
   mcmc_scene_target st;
-  double *f;          /* bootstrap values */
-  double *fe;         /* target.eval_expect: its bootstrap values (NULL: b from f) */
-  int64_t n_boot;
-  int64_t boot_cap;   /* room in f (and fe) */
-  int64_t boot_rays;  /* rays the bootstrap spent on this family (its cost per sample) */
-  double b, b_var;    /* estimate of b and the variance of that estimate (bootstrap) */
-  double boot_s, boot_s2; /* sum of f and f^2 over the bootstrap */
+  mc_boot bt;         /* the bootstrap's samples and estimate of b (bootstrap.h) */
   double b_ref, b_ref_var; /* b refined with the chains' large steps, and its variance */
   int64_t n_large;    /* large-step proposals counted in b_ref */
   double *splat;      /* mmlt: this length's splats, not yet times b (owned; 3 per pixel) */
@@ -392,104 +391,49 @@ static uint64_t mcmc__chain_seq(int g, int i) {
   return rng_hash64(((uint64_t)(g + 1) << 44) ^ (1ull << 43) ^ (uint64_t)i);
 }
 
-/* Draws bootstrap samples [n_boot, to[g]) of every family g in parallel
- * (each sample from its own stream, so the values do not depend on
- * threads), then updates the family's b (mcmc__family_b). */
-static void mcmc__family_b(mcmc_family *F, int64_t n);
-static void mcmc__bootstrap_batch(mcmc_family *fam, int n_fam, const int64_t *to, uint64_t seed,
-                                  int nthreads, render_counters *cnt) {
+/* mc_boot_draw_fn over the families: draws bootstrap samples
+ * [bt.n, to[g]) of every family g in parallel (each sample from its own
+ * stream, so the values do not depend on threads); the cost is rays. */
+typedef struct mcmc_boot_ctx {
+  mcmc_family *fam;
+  uint64_t seed;
+  int nthreads;
+  render_counters *cnt;
+} mcmc_boot_ctx;
+
+static void mcmc__bootstrap_draw(void *ctx, mc_boot *boot, int n_fam, const int64_t *to) {
+  mcmc_boot_ctx *C = ctx;
   for (int g = 0; g < n_fam; g++) {
-    mcmc_family *F = &fam[g];
-    int64_t from = F->n_boot;
-#pragma omp parallel num_threads(nthreads)
+    mcmc_family *F = &C->fam[g];
+    mc_boot *B = &boot[g];
+    int64_t from = B->n;
+    const uint64_t seed = C->seed;
+#pragma omp parallel num_threads(C->nthreads)
     {
       /* The target's own scratch (lmc's target has another kind). */
       void *sc = F->target.scratch_create(&F->target);
       int tid = omp_get_thread_num();
 #pragma omp for schedule(dynamic, 256)
       for (int64_t j = from; j < to[g]; j++) {
-        F->f[j] = sc ? mc_eval_independent(&F->target, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
-        if (F->fe) {
+        B->f[j] = sc ? mc_eval_independent(&F->target, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
+        if (B->has_fe) {
           /* An independent sample for b (the one above picks starting states). */
           lmc_indep_sampler smp;
           indep_sampler_init(&smp, seed, mcmc__boot_seq(g, j) ^ MCMC_EXPECT_SEQ);
           double v = sc ? F->target.eval_expect(&F->target, sc, &smp.base) : 0.0;
-          F->fe[j] = v >= 0.0 && isfinite(v) ? v : 0.0;
+          B->fe[j] = v >= 0.0 && isfinite(v) ? v : 0.0;
         }
       }
       if (sc) {
         int64_t rays = F->target.scratch_rays(sc);
 #pragma omp atomic
-        cnt[tid].rays += rays;
+        C->cnt[tid].rays += rays;
 #pragma omp atomic
-        F->boot_rays += rays;
+        B->cost += (double)rays;
       }
       F->target.scratch_destroy(sc);
     }
-    mcmc__family_b(F, to[g] > from ? to[g] : from);
   }
-}
-
-/* Room for n bootstrap samples in F's arrays (grown by doubling); 0 when
- * out of memory. */
-static int mcmc__reserve(mcmc_family *F, int64_t n) {
-  if (n <= F->boot_cap) return 1;
-  int64_t c = F->boot_cap > 0 ? F->boot_cap : n;
-  while (c < n) c *= 2;
-  double *f = realloc(F->f, (size_t)c * sizeof(double));
-  if (!f) return 0;
-  F->f = f;
-  if (F->target.eval_expect) {
-    double *fe = realloc(F->fe, (size_t)c * sizeof(double));
-    if (!fe) return 0;
-    F->fe = fe;
-  }
-  F->boot_cap = c;
-  return 1;
-}
-
-/* The next batch's size per family (Neyman allocation, see Bootstrap
- * above) into to[], within `left` more samples in all; a family whose
- * arrays cannot grow gets none. */
-static void mcmc__bootstrap_allocate(mcmc_family *fam, int n_fam, int64_t left, int64_t *to) {
-  double w[MCMC_MAX_FAMILIES], wsum = 0.0;
-  for (int g = 0; g < n_fam; g++) {
-    const mcmc_family *F = &fam[g];
-    double n = (double)F->n_boot;
-    double sd = n > 0.0 ? sqrt(F->b_var * n) : 0.0;
-    double cost = n > 0.0 ? fmax(1.0, (double)F->boot_rays / n) : 1.0;
-    w[g] = isfinite(sd) ? sd / sqrt(cost) : 0.0;
-    wsum += w[g];
-  }
-  double total = (double)MCMC_BOOT_BATCH * n_fam;
-  if (total > (double)left) total = (double)left;
-  for (int g = 0; g < n_fam; g++) {
-    double share = wsum > 0.0 ? w[g] / wsum : 1.0 / n_fam;
-    int64_t add = (int64_t)(total * share);
-    if (add < MCMC_BOOT_BATCH / 8) add = MCMC_BOOT_BATCH / 8;
-    if (add > left) add = left;
-    left -= add;
-    to[g] = fam[g].n_boot + add;
-    if (!mcmc__reserve(&fam[g], to[g])) to[g] = fam[g].n_boot;
-  }
-}
-
-/* b and the variance of its estimate from samples [0, n) (of fe when the
- * target has eval_expect, else of f). */
-static void mcmc__family_b(mcmc_family *F, int64_t n) {
-  double s = 0.0, s2 = 0.0;
-  const double *f = F->fe ? F->fe : F->f;
-  for (int64_t j = 0; j < n; j++) s += f[j], s2 += f[j] * f[j];
-  double mean = n > 0 ? s / n : 0.0;
-  double var = n > 1 ? fmax(0.0, (s2 - n * mean * mean) / (double)(n - 1)) : 0.0;
-  F->b = mean;
-  F->b_var = n > 0 ? var / n : 0.0;
-  F->n_boot = n;
-  F->boot_s = s;
-  F->boot_s2 = s2;
-  F->b_ref = F->b;
-  F->b_ref_var = F->b_var;
-  F->n_large = 0;
 }
 
 /* Mean and variance of the mean of n samples with sums s, s2. */
@@ -524,7 +468,7 @@ static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot 
         nl += c->stats[q].proposed;
       }
     }
-    mcmc__mean_var(F->boot_s + s, F->boot_s2 + s2, (double)(F->n_boot + nl), &F->b_ref,
+    mcmc__mean_var(F->bt.s + s, F->bt.s2 + s2, (double)(F->bt.n - F->bt.first + nl), &F->b_ref,
                    &F->b_ref_var);
     F->n_large = nl;
     b += F->b_ref;
@@ -698,13 +642,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
     for (int g = 0; g < n_fam; g++) fam[g].target = *lmc_run_family_target(lrun, g);
   }
-  /* The bootstrap's sample arrays: --bootstrap N per family, else a first
-   * batch, grown as the allocation asks (mcmc__reserve); in all at most
-   * MCMC_BOOT_CAP samples. */
-  int64_t cap = rs->bootstrap > 0 ? rs->bootstrap : MCMC_BOOT_BATCH;
-  const int64_t cap_total = rs->bootstrap > 0 ? rs->bootstrap * n_fam : MCMC_BOOT_CAP;
-  for (int g = 0; g < n_fam; g++)
-    if (!mcmc__reserve(&fam[g], cap)) cap = 0;
+  /* The bootstrap keeps eval_expect's samples apart where the target has it. */
+  int cap = 1; /* 0: out of memory */
+  for (int g = 0; g < n_fam; g++) fam[g].bt.has_fe = fam[g].target.eval_expect != NULL;
   if (!is_mmlt && !is_lmc) {
     /* pssmlt: next-event estimation's light-position number u1 of every
      * bounce (lmc's run sets the same on its own target). */
@@ -740,39 +680,50 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     goto done;
   }
 
-  /* Bootstrap: estimate b (to 1% unless --bootstrap says how many), in at
-   * most a tenth of the time left (after --direct separate's pt pass). */
+  /* Bootstrap (bootstrap.h): the pilot (or all of --bootstrap N), then the
+   * main phase planned from it, in at most a tenth of the time left (after
+   * --direct separate's pt pass), at most MCMC_BOOT_CAP samples in all. */
   {
-    const double t_boot = omp_get_wtime(), boot_time = 0.1 * (rs->time_limit - (t_boot - t0));
-    int64_t to[MCMC_MAX_FAMILIES], drawn = 0;
-    for (int batch = 0;; batch++) {
-      if (batch == 0)
-        for (int g = 0; g < n_fam; g++) to[g] = cap;
-      else
-        mcmc__bootstrap_allocate(fam, n_fam, cap_total - drawn, to);
-      int64_t before = drawn;
-      for (int g = 0; g < n_fam; g++) drawn += to[g] - fam[g].n_boot;
-      mcmc__bootstrap_batch(fam, n_fam, to, rs->seed, nthreads, cnt);
-      double b = 0.0, v = 0.0;
-      for (int g = 0; g < n_fam; g++) b += fam[g].b, v += fam[g].b_var;
-      if (rs->bootstrap > 0 || drawn >= cap_total || drawn == before) break;
-      if (b > 0.0 && sqrt(v) < rs->bootstrap_error * b) break;
-      if (timed && omp_get_wtime() - t_boot > boot_time) break;
-      if (render_stop_signal()) break; /* Ctrl-C: the chains below stop at once */
+    const double t_boot = omp_get_wtime();
+    mc_boot_params bp = {
+        .fixed = rs->bootstrap > 0 ? rs->bootstrap : 0,
+        .batch = MCMC_BOOT_BATCH,
+        .cap_total = MCMC_BOOT_CAP,
+        .rel_err = rs->bootstrap_error,
+        .seconds = timed ? 0.1 * (rs->time_limit - (t_boot - t0)) : INFINITY,
+        .stop = render_stop_signal,
+    };
+    mc_boot *boot = malloc((size_t)n_fam * sizeof(mc_boot));
+    int failed = !boot;
+    if (boot) {
+      for (int g = 0; g < n_fam; g++) boot[g] = fam[g].bt;
+      mcmc_boot_ctx bc = {fam, rs->seed, nthreads, cnt};
+      failed = mc_boot_run(boot, n_fam, &bp, mcmc__bootstrap_draw, &bc);
+      for (int g = 0; g < n_fam; g++) fam[g].bt = boot[g];
+      free(boot);
+    }
+    if (failed) {
+      status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bootstrap");
+      goto done;
     }
   }
+  for (int g = 0; g < n_fam; g++) {
+    fam[g].b_ref = fam[g].bt.b;
+    fam[g].b_ref_var = fam[g].bt.b_var;
+    fam[g].n_large = 0;
+  }
   double b_total = 0.0, b_var = 0.0;
-  for (int g = 0; g < n_fam; g++) b_total += fam[g].b, b_var += fam[g].b_var;
+  for (int g = 0; g < n_fam; g++) b_total += fam[g].bt.b, b_var += fam[g].bt.b_var;
   st->mcmc_b_boot = st->mcmc_b = b_total;
   st->mcmc_boot_paths = 0;
-  for (int g = 0; g < n_fam; g++) st->mcmc_boot_paths += fam[g].n_boot;
+  for (int g = 0; g < n_fam; g++) st->mcmc_boot_paths += fam[g].bt.n;
   st->mcmc_b_boot_se = st->mcmc_b_se = sqrt(b_var);
 
   /* Chains: MCMC_CHAINS shared in proportion to b_g (at least MCMC_MIN_CHAINS per
    * family that has any contribution). */
   for (int g = 0; g < n_fam; g++) {
-    if (!(fam[g].b > 0.0)) continue;
-    int nc = (int)floor(MCMC_CHAINS * fam[g].b / b_total + 0.5);
+    if (!(fam[g].bt.b > 0.0)) continue;
+    int nc = (int)floor(MCMC_CHAINS * fam[g].bt.b / b_total + 0.5);
     fam[g].n_chains = nc < MCMC_MIN_CHAINS ? MCMC_MIN_CHAINS : nc;
     fam[g].first_chain = n_slots;
     n_slots += fam[g].n_chains;
@@ -804,12 +755,12 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   {
     double top = 0.0;
     for (int g = 0; g < n_fam; g++)
-      if (fam[g].n_chains > 0) top = fmax(top, fam[g].b / fam[g].n_chains);
+      if (fam[g].n_chains > 0) top = fmax(top, fam[g].bt.b / fam[g].n_chains);
     for (int g = 0; g < n_fam; g++) {
       fam[g].m_round = MCMC_ROUND;
       fam[g].done = 0;
       if (norm != MCMC_NORM_BUFFERS || rs->mcmc_even || fam[g].n_chains == 0) continue;
-      double w = fam[g].b / fam[g].n_chains / top;
+      double w = fam[g].bt.b / fam[g].n_chains / top;
       int m = (int)floor(MCMC_ROUND * w + 0.5);
       fam[g].m_round = m < 1 ? 1 : m > MCMC_ROUND ? MCMC_ROUND : m;
     }
@@ -856,12 +807,12 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     rng pick;
     rng_seed(&pick, rs->seed, mcmc__chain_seq(g, -1));
     double u0 = rng_uniform(&pick), acc = 0.0, total = 0.0;
-    for (int64_t q = 0; q < F->n_boot; q++) total += F->f[q]; /* (b may come from fe) */
+    for (int64_t q = 0; q < F->bt.n; q++) total += F->bt.f[q]; /* (b may come from fe) */
     int64_t j = 0;
     for (int i = 0; i < F->n_chains; i++) {
       mcmc_chain_slot *sl = &slots[F->first_chain + i];
       sl->family = g;
-      sl->scale = (norm == MCMC_NORM_BOOT ? F->b : 1.0) / F->n_chains;
+      sl->scale = (norm == MCMC_NORM_BOOT ? F->bt.b : 1.0) / F->n_chains;
       if (lrun) nk = lmc_run_chain_kernels(lrun, F->first_chain + i, k, p);
       status = mc_chain_create(&sl->chain, &F->target, k, p, nk, err);
       if (status) goto done;
@@ -871,16 +822,15 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         goto done;
       }
       double target = (i + u0) / F->n_chains * total;
-      while (j < F->n_boot - 1 && acc + F->f[j] <= target) acc += F->f[j++];
-      while (j < F->n_boot - 1 && !(F->f[j] > 0.0)) j++;
+      while (j < F->bt.n - 1 && acc + F->bt.f[j] <= target) acc += F->bt.f[j++];
+      while (j < F->bt.n - 1 && !(F->bt.f[j] > 0.0)) j++;
       sl->chain->target = &F->target;
       sl->start_seq = mcmc__boot_seq(g, j);
       mc_chain_start(sl->chain, rs->seed, sl->start_seq, mcmc__chain_seq(g, i));
     }
   }
   for (int g = 0; g < n_fam; g++) {
-    free(fam[g].f), free(fam[g].fe);
-    fam[g].f = fam[g].fe = NULL;
+    mc_boot_free(&fam[g].bt);
   }
 
   /* Chains in rounds. Every chain makes MCMC_ROUND mutations per round. */
@@ -1008,18 +958,23 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
           fprintf(stderr,
                   "lmc: length %-3d b %.5g (%.1f%%, %lld paths), with large steps %.5g (%.1f%%), "
                   "%d chains, proposed %lld, accepted %.1f%%\n",
-                  fam[g].st.length, fam[g].b, 100.0 * sqrt(fam[g].b_var) / fmax(fam[g].b, 1e-300),
-                  (long long)fam[g].n_boot,
+                  fam[g].st.length, fam[g].bt.b,
+                  100.0 * sqrt(fam[g].bt.b_var) / fmax(fam[g].bt.b, 1e-300),
+                  (long long)(fam[g].bt.n - fam[g].bt.first),
                   fam[g].b_ref, 100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
                   fam[g].n_chains, (long long)pr, 100.0 * (double)ac / fmax(1.0, (double)pr));
         }
-      int64_t n_boot = 0;
-      for (int g = 0; g < n_fam; g++) n_boot += fam[g].n_boot;
+      int64_t n_boot = 0, n_pilot = 0;
+      for (int g = 0; g < n_fam; g++) {
+        n_boot += fam[g].bt.n - fam[g].bt.first;
+        n_pilot += fam[g].bt.first;
+      }
       fprintf(stderr,
-              "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s)\n",
+              "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s; "
+              "%lld more planned it)\n",
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
               100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)n_boot,
-              n_fam > 1 ? " over the lengths" : "");
+              n_fam > 1 ? " over the lengths" : "", (long long)n_pilot);
       if (norm != MCMC_NORM_BOOT) {
         double b_ref = 0.0, b_ref_var = 0.0;
         int64_t n_large = 0;
@@ -1055,7 +1010,7 @@ done:
   mcmc__free_slots(slots, n_slots);
   lmc_run_destroy(lrun);
   for (int g = 0; g < n_fam; g++)
-    free(fam[g].f), free(fam[g].fe), free(fam[g].step_scale), free(fam[g].splat);
+    mc_boot_free(&fam[g].bt), free(fam[g].step_scale), free(fam[g].splat);
   free(cnt);
   st->seconds = omp_get_wtime() - t0;
   if (status) film_free(out);
