@@ -23,7 +23,8 @@
  *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
  * give a bit-identical film under --spp, also with mmlt's default, adaptive
- * bootstrap (its batches are shared out by rays counted, not by time), and
+ * bootstrap (a pilot, then planning and estimating streams until b's error
+ * target, shared out by rays counted, not by time), and
  * for lmc with --adapt none, diminish and cache (Adam's statistics, the
  * stage-1 records and the frozen cache are made in chain order).
  *
@@ -203,9 +204,9 @@ static void test_refined_b(void **state) {
 
 /* --- determinism ------------------------------------------------------- */
 
-/* adaptive: the default bootstrap (batches until b's standard error is
- * below --bootstrap-error, Neyman-allocated over mmlt's lengths) instead of
- * a fixed count; returns the bootstrap's size. */
+/* adaptive: the default bootstrap (bootstrap.h: batches until b's standard
+ * error is below --bootstrap-error, Neyman-allocated over mmlt's lengths)
+ * instead of a fixed count; returns the bootstrap's size. */
 static int64_t render_film(const scene *s, const char *integrator, lmc_adapt adapt, uint64_t seed,
                            int threads, int adaptive, film *OUT_f) {
   render_settings rs = settings(s, integrator, 4, seed, threads);

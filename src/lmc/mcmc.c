@@ -59,29 +59,22 @@
  * samples of b_g, far below its O(1/sqrt N) noise (and the bootstrap-only
  * b has the same caveat through the starting states).
  *
- * Bootstrap. Sample j of family g is the large step drawn from the stream
- * (seed, hash(g, j)). --bootstrap N draws exactly N per family and takes
- * b_g from all of them. Otherwise it runs in two phases. The pilot, a
- * first batch of MCMC_BOOT_BATCH per family, only plans the main phase:
- * family g's share of every later batch, by Neyman allocation in
- * proportion to sigma_g / sqrt(c_g) (the pilot's per-sample standard
- * deviation over the square root of its rays per sample, at least an
- * eighth of an even share), which minimises the standard error of
- * sum_g b_g for the rays spent (on ring-caustics about half the samples
- * of an even split for the same error), and how many samples the main
- * phase draws: enough for a standard error of 1% of the sum
- * (--bootstrap-error) by the pilot's figures, at least one batch, at most
- * MCMC_BOOT_CAP in all and (under --time) what a tenth of the time left
- * allows. b_g is the mean of the main phase's samples alone. So the
- * number of samples behind each b_g depends only on the pilot (and on the
- * clock), never on the samples it averages, and b_g is exactly unbiased.
- * (The earlier rule, Neyman shares re-estimated after every batch and a
- * stop once the running standard error fell below 1%, pooled everything:
- * with heavy-tailed lengths a batch that met a rare bright path raised the
- * estimated error, so more samples followed and diluted it, while a run
- * without one stopped early, low. On the torus its per-length sums came
- * out 2-4% low in both of two 60 s runs.) The pilot's samples still
- * serve the starting states: they are chosen from all bootstrap samples by
+ * Bootstrap (bootstrap.h). Sample j of family g is the large step drawn
+ * from the stream (seed, hash(g, j)). --bootstrap N draws exactly N per
+ * family, all in b_g. Otherwise a pilot of MCMC_BOOT_BATCH per family,
+ * then a main phase in batches shared among the families by Neyman
+ * allocation (in proportion to sigma_g / sqrt(c_g), c_g the rays per
+ * sample: on ring-caustics about half the samples of an even split for
+ * the same error), at most MCMC_BOOT_CAP samples in all. Under --time it
+ * runs for a tenth of the time left, on the pilot's shares, and b_g is the
+ * mean of all its samples; under --spp it runs a planning and an
+ * estimating stream side by side until the estimating stream's standard
+ * error, by the planning stream's figures, is 1% of sum_g b_g
+ * (--bootstrap-error), and b_g is the estimating stream's mean. Either
+ * way the number of samples behind b_g does not depend on their values,
+ * so b_g is exactly unbiased (the earlier rule, pooled samples and a stop
+ * once their running error fell below 1%, came out low under heavy
+ * tails). All samples serve the starting states: they are chosen by
  * systematic resampling in proportion to f, so chains start in the
  * stationary distribution (no burn-in, no start-up bias, up to the
  * bootstrap's finite size).
@@ -468,7 +461,7 @@ static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot 
         nl += c->stats[q].proposed;
       }
     }
-    mcmc__mean_var(F->bt.s + s, F->bt.s2 + s2, (double)(F->bt.n - F->bt.first + nl), &F->b_ref,
+    mcmc__mean_var(F->bt.s + s, F->bt.s2 + s2, (double)(F->bt.n_est + nl), &F->b_ref,
                    &F->b_ref_var);
     F->n_large = nl;
     b += F->b_ref;
@@ -960,21 +953,21 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                   "%d chains, proposed %lld, accepted %.1f%%\n",
                   fam[g].st.length, fam[g].bt.b,
                   100.0 * sqrt(fam[g].bt.b_var) / fmax(fam[g].bt.b, 1e-300),
-                  (long long)(fam[g].bt.n - fam[g].bt.first),
+                  (long long)fam[g].bt.n_est,
                   fam[g].b_ref, 100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
                   fam[g].n_chains, (long long)pr, 100.0 * (double)ac / fmax(1.0, (double)pr));
         }
-      int64_t n_boot = 0, n_pilot = 0;
+      int64_t n_boot = 0, n_plan = 0;
       for (int g = 0; g < n_fam; g++) {
-        n_boot += fam[g].bt.n - fam[g].bt.first;
-        n_pilot += fam[g].bt.first;
+        n_boot += fam[g].bt.n_est;
+        n_plan += fam[g].bt.n - fam[g].bt.n_est;
       }
       fprintf(stderr,
               "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s; "
               "%lld more planned it)\n",
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
               100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)n_boot,
-              n_fam > 1 ? " over the lengths" : "", (long long)n_pilot);
+              n_fam > 1 ? " over the lengths" : "", (long long)n_plan);
       if (norm != MCMC_NORM_BOOT) {
         double b_ref = 0.0, b_ref_var = 0.0;
         int64_t n_large = 0;
