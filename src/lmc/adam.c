@@ -14,10 +14,13 @@ lmc_status adam_init(adam_stats *a, int cap, lmc_error *err) {
   a->adam_m1 = calloc((size_t)cap, sizeof(double));
   a->adam_m2 = calloc((size_t)cap, sizeof(double));
   a->count = calloc((size_t)cap, sizeof(int64_t));
-  if (!a->adam_m1 || !a->adam_m2 || !a->count) {
+  a->beta1_t = malloc((size_t)cap * sizeof(double));
+  a->beta2_t = malloc((size_t)cap * sizeof(double));
+  if (!a->adam_m1 || !a->adam_m2 || !a->count || !a->beta1_t || !a->beta2_t) {
     adam_free(a);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "adam: out of memory");
   }
+  for (int i = 0; i < cap; i++) a->beta1_t[i] = a->beta2_t[i] = 1.0;
   return LMC_OK;
 }
 
@@ -26,6 +29,8 @@ void adam_free(adam_stats *a) {
   free(a->adam_m1);
   free(a->adam_m2);
   free(a->count);
+  free(a->beta1_t);
+  free(a->beta2_t);
   memset(a, 0, sizeof *a);
 }
 
@@ -33,6 +38,7 @@ void adam_reset(adam_stats *a) {
   memset(a->adam_m1, 0, (size_t)a->cap * sizeof(double));
   memset(a->adam_m2, 0, (size_t)a->cap * sizeof(double));
   memset(a->count, 0, (size_t)a->cap * sizeof(int64_t));
+  for (int i = 0; i < a->cap; i++) a->beta1_t[i] = a->beta2_t[i] = 1.0;
   a->t = 0;
 }
 
@@ -42,6 +48,8 @@ void adam_update(adam_stats *a, int n, const double *g) {
     a->adam_m1[i] = ADAM_BETA1 * a->adam_m1[i] + (1.0 - ADAM_BETA1) * g[i];
     a->adam_m2[i] = ADAM_BETA2 * a->adam_m2[i] + (1.0 - ADAM_BETA2) * g[i] * g[i];
     a->count[i]++;
+    a->beta1_t[i] *= ADAM_BETA1;
+    a->beta2_t[i] *= ADAM_BETA2;
   }
   a->t++;
 }
@@ -52,8 +60,10 @@ void adam_moments(const adam_stats *a, int i, double *OUT_m1, double *OUT_m2) {
     *OUT_m1 = 0.0, *OUT_m2 = 0.0;
     return;
   }
-  /* Bias correction: divide by 1 - beta^t (t large: 1). */
-  double c1 = 1.0 - pow(ADAM_BETA1, (double)t), c2 = 1.0 - pow(ADAM_BETA2, (double)t);
+  /* Bias correction: divide by 1 - beta^t (t large: 1), with beta^t kept
+   * per coordinate by adam_update (a pow per coordinate and step cost the
+   * diminishing schedule several per cent of its time). */
+  double c1 = 1.0 - a->beta1_t[i], c2 = 1.0 - a->beta2_t[i];
   *OUT_m1 = a->adam_m1[i] / c1;
   *OUT_m2 = a->adam_m2[i] / c2;
 }

@@ -53,6 +53,8 @@ typedef struct adam_stats {
   double *adam_m1;  /* first moment, uncorrected */
   double *adam_m2;  /* second moment, uncorrected */
   int64_t *count;   /* updates per coordinate */
+  double *beta1_t;  /* beta1^count per coordinate (the bias corrections, kept by multiplication) */
+  double *beta2_t;  /* beta2^count per coordinate */
   int64_t t;        /* updates of the whole vector (the diminishing schedule's clock) */
 } adam_stats;
 

@@ -134,6 +134,12 @@ static void lmc__normalise(int norm, double *M, int n) {
  * `key`: normalised over the key coordinates, and for DIMINISH mixed with
  * I after normalising. */
 static const double *lmc__precond_chain(lmc_mala *k, const mc_state *x, int key) {
+  /* Adam's moments change only in on_step, between steps: rebuilding M
+   * here, when a proposal needs it, gives the M of the last update. */
+  if (k->M_chain_stale) {
+    adam_precond(&k->adam, k->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
+    k->M_chain_stale = 0;
+  }
   if (k->p.norm == LMC_NORM_OFF && k->p.adapt != LMC_ADAPT_DIMINISH) return k->M_chain;
   memcpy(k->M, k->M_chain, (size_t)x->dim * sizeof(double));
   lmc__normalise(k->p.norm, k->M, key);
@@ -233,9 +239,9 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   int key = lmc__gradient(k, x);
   if (key == 0) return;
   adam_update(&k->adam, x->dim, k->g);
-  /* CACHE stage 1 only records the moments (its M is I). */
-  if (k->p.adapt != LMC_ADAPT_CACHE)
-    adam_precond(&k->adam, x->dim, k->p.eps, k->p.lo, k->p.hi, k->M_chain);
+  /* CACHE stage 1 only records the moments (its M is I); the others
+   * rebuild M when they next propose (most steps are not theirs). */
+  if (k->p.adapt != LMC_ADAPT_CACHE) k->M_chain_stale = 1;
   /* Stage 1 of CACHE: record every record_stride-th state of our own steps
    * (x->u is valid only after a full kernel's step). */
   if (!own || !k->record || k->p.record_stride <= 0) return;

@@ -146,6 +146,7 @@ typedef struct lmc_mala {
   gcache *record;        /* borrowed (stage 1; NULL: nothing recorded) */
   adam_stats adam;
   double *M_chain;       /* ADAM, DIMINISH: the chain's current M (unused by CACHE) */
+  int M_chain_stale;     /* Adam moved since M_chain was computed (it is rebuilt when next used) */
   double *g, *M;         /* scratch */
   double *m1, *m2;       /* scratch for recording */
   /* Stage 2: the last two lookups (state, key, M), reused when the chain
