@@ -729,6 +729,15 @@ static int lmc_cmd_merge(int argc, char **argv) {
       if (!(out = lmc_flag_value(&a))) status = EXIT_BADINPUT;
       continue;
     }
+    if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      printf("usage: lmc merge A.exr B.exr ... -o OUT.exr\n"
+             "writes the per-pixel mean of the images (all the same size) to OUT.exr;\n"
+             "for independent renders of one scene with the same sample count each.\n"
+             "An image listed k times weighs k times as much (inverse-variance\n"
+             "weights for renders of unequal effort)\n");
+      image_free(&acc);
+      return EXIT_OK;
+    }
     if (argv[a.i][0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc merge A.exr B.exr ... -o OUT.exr)\n",
               argv[a.i]);
@@ -781,6 +790,11 @@ static int lmc_cmd_convert(int argc, char **argv) {
     if (lmc_flag_is(&a, "--exposure")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--exposure", v, 1e-30, 1e30, &exposure))
         return EXIT_BADINPUT;
+    } else if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      printf("usage: lmc convert IN.exr OUT.png [--exposure S]\n"
+             "writes an sRGB PNG preview of a linear image, scaled by S (default:\n"
+             "the exposure lmc render chooses, from the image's own brightness)\n");
+      return EXIT_OK;
     } else if (argv[a.i][0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc convert IN.exr OUT.png [--exposure S])\n",
               argv[a.i]);

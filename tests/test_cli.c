@@ -73,6 +73,19 @@ static void test_help_lists_every_flag(void **state) {
     found++;
   }
   assert_int_equal(found, 9);
+  /* Every other command answers --help with its usage on stdout, exit 0. */
+  static const char *cmds[] = {"compare", "merge", "convert"};
+  int helped = 0;
+  for (size_t i = 0; i < sizeof cmds / sizeof cmds[0]; i++) {
+    char args[64];
+    snprintf(args, sizeof args, "%s --help", cmds[i]);
+    assert_int_equal(run_lmc(args), 0);
+    char usage[64];
+    snprintf(usage, sizeof usage, "usage: lmc %s", cmds[i]);
+    if (!strstr(out_text, usage)) fail_msg("lmc %s --help printed: %s", cmds[i], out_text);
+    helped++;
+  }
+  assert_int_equal(helped, 3);
 }
 
 static void test_bad_flags_exit_2_naming_the_flag(void **state) {
