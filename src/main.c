@@ -73,7 +73,8 @@ static const char *lmc_render_usage =
     "  --bootstrap N            independent paths used to estimate b (default: 10% of --time,\n"
     "                           or under --spp enough for 1%)\n"
     "  --bootstrap-error E      without --bootstrap, under --spp: b's target relative error (0.01)\n"
-    "  --direct separate|mcmc   separate: pt renders direct light, MCMC the rest (default mcmc)\n"
+    "  --direct separate|mcmc   separate: pt renders paths of <= 2 segments, MCMC the longer\n"
+    "                           ones (default); mcmc: MCMC renders every path\n"
     "  --allocate b|even        mmlt, lmc: mutations per path length in proportion to its b\n"
     "                           (default), or the same for every chain\n"
     "\n"
@@ -502,6 +503,9 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
   rs.bootstrap_error = cli.bootstrap_error;
   if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
+  /* The scene's directSamples is a sample count for its own spp: --spp
+   * given here sets both passes. */
+  if (cli.set & SET_SPP) rs.direct_spp = 0;
   rs.mcmc_even = cli.mcmc_even;
   if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
   rs.snapshot = cli.snapshot;

@@ -22,7 +22,10 @@
 
 #include "test_util.h"
 
-#define SCENE "data/analytic/diffuse_sphere.xml"
+/* The furnace: light on paths of every length, so the chains have work
+ * under the default --direct separate (the diffuse sphere's paths all have
+ * one or two segments: pt's pass would render all of it). */
+#define SCENE "data/analytic/furnace.xml"
 #define TMP "/tmp/lmc_test_lmc_cli"
 #define COMMON "render " SCENE " -o " TMP "/img --resolution 16x12 --spp 8 --threads 1 --integrator lmc"
 

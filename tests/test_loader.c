@@ -253,6 +253,53 @@ static int write_texture(void **state) {
   return st == LMC_OK ? 0 : -1;
 }
 
+/* Mitsuba's directSamples / separateDirect on an MLT integrator map to
+ * --direct: absent, the default (separate, the scene's spp); N >= 1:
+ * separate with N samples per pixel for pt's pass; -1: MLT renders every
+ * path; 0 (Mitsuba hides direct light) is a warning and renders it
+ * separately; separateDirect false: MLT renders every path. */
+static void test_direct_samples(void **state) {
+  (void)state;
+  static const struct {
+    const char *prop; /* the integrator's property, or "" */
+    int separate, set;
+    long long spp;
+    int warnings;
+  } cases[] = {
+      {"", 1, 0, 0, 0},
+      {"<integer name=\"directSamples\" value=\"32\"/>", 1, 1, 32, 0},
+      {"<integer name=\"directSamples\" value=\"-1\"/>", 0, 1, 0, 0},
+      {"<integer name=\"directSamples\" value=\"0\"/>", 1, 1, 0, 1},
+      {"<boolean name=\"separateDirect\" value=\"false\"/>", 0, 1, 0, 0},
+  };
+  int checked = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char xml[1024];
+    snprintf(xml, sizeof xml,
+             HEAD "  <integrator type=\"pssmlt\">%s</integrator>\n" SENSOR
+             "  <shape type=\"cube\"/>\n</scene>\n",
+             cases[i].prop);
+    write_text("/tmp/lmc_loader_direct.xml", xml);
+    lmc_warn_set_quiet(1);
+    int before = lmc_warning_count();
+    scene *s = NULL;
+    lmc_error err;
+    lmc_error_clear(&err);
+    lmc_status st = scene_load_xml("/tmp/lmc_loader_direct.xml", NULL, 0, &s, &err);
+    int warnings = lmc_warning_count() - before;
+    lmc_warn_set_quiet(0);
+    if (st != LMC_OK) print_error("case %zu: %s:%d: %s\n", i, err.file, err.line, err.msg);
+    assert_int_equal(st, LMC_OK);
+    assert_int_equal(s->settings.direct_separate, cases[i].separate);
+    assert_int_equal((s->settings.set & SET_DIRECT) != 0, cases[i].set);
+    assert_int_equal(s->settings.direct_spp, cases[i].spp);
+    assert_int_equal(warnings, cases[i].warnings);
+    scene_destroy(s);
+    checked++;
+  }
+  assert_int_equal(checked, 5);
+}
+
 static void test_happy(void **state) {
   (void)state;
   scene *s = NULL;
@@ -479,7 +526,7 @@ int main(void) {
       cmocka_unit_test(test_malformed),       cmocka_unit_test(test_error_in_include),
       cmocka_unit_test(test_warnings),        cmocka_unit_test(test_happy),
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
-      cmocka_unit_test(test_torus_h2mc),
+      cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

@@ -21,6 +21,10 @@
  * that are not exact. Every render must also make spp mutations per pixel
  * (up to less than 10% of whole rounds).
  *
+ * --direct separate (the default of the command line): the same image
+ * means on both scenes with pt rendering the paths of one and two segments
+ * and the chains the rest, and the same determinism.
+ *
  * Determinism: the same seed gives a bit-identical film; --threads 1 and 2
  * give a bit-identical film under --spp, also with mmlt's default, adaptive
  * bootstrap (a pilot, then planning and estimating streams until b's error
@@ -53,6 +57,8 @@
 #define RUNS 6
 static int g_checks;
 static int g_even; /* --allocate even for the renders of check_scene */
+static int g_direct; /* --direct separate for the renders (the CLI's default; 0: mcmc) */
+static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -78,6 +84,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   rs.bootstrap = 16384;
   rs.quiet = 1;
   rs.mcmc_even = g_even;
+  rs.direct_separate = g_direct;
   return rs;
 }
 
@@ -113,7 +120,15 @@ static void check_scene(const char *file, const char *integrator, int64_t spp, c
     /* Whatever the allocation among mmlt's lengths, the budget is spp
      * mutations per pixel, up to whole rounds of every chain. */
     int64_t want = spp * (int64_t)s->cam.width * s->cam.height;
-    assert_true(st.samples >= want && st.samples < want + want / 10);
+    if (g_mcmc_empty) {
+      /* Nothing for the chains to render: b = 0 and no mutation made. */
+      assert_true(st.mcmc_b == 0.0 && st.samples == 0);
+    } else {
+      if (!(st.samples >= want && st.samples < want + want / 10))
+        fprintf(stderr, "  %s %s: %lld mutations for a budget of %lld\n", file, integrator,
+                (long long)st.samples, (long long)want);
+      assert_true(st.samples >= want && st.samples < want + want / 10);
+    }
     lmc_image img;
     assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
     double gs[2][3] = {{0}};
@@ -177,6 +192,28 @@ static void test_diffuse_sphere(void **state) {
   check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
 }
 
+/* --direct separate, the default: pt renders the paths of one and two
+ * segments with spp samples per pixel, MCMC the longer ones (mindepth 3),
+ * into one film. On the furnace a pixel's 1 is split between the two
+ * (the environment seen directly or after one bounce off a lossless
+ * sphere: pt; two or more bounces, inside the glass sphere or between the
+ * spheres: MCMC); the diffuse sphere is convex, so every path has one or
+ * two segments: pt renders the whole image, and the MCMC part, whose b
+ * is 0, must add nothing and not fail. Each group's mean must be exact
+ * within 8 SE; lmc too (its default adaptation, cache), on the sphere. */
+static void test_direct_separate(void **state) {
+  (void)state;
+  g_direct = 1; /* reset by reset_direct whatever happens here */
+  rgb one = rgb_gray(1.0);
+  rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
+  check_scene("furnace.xml", "pssmlt", 16, &one, 1, 0.0);
+  check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
+  g_mcmc_empty = 1;
+  check_scene("diffuse_sphere.xml", "pssmlt", 16, e, 2, 0.0);
+  check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
+  check_scene("diffuse_sphere.xml", "lmc", 16, e, 2, 0.0);
+}
+
 /* --- b refined with the large steps ------------------------------------------- */
 
 static void test_refined_b(void **state) {
@@ -236,11 +273,15 @@ static void test_determinism(void **state) {
   scene *s = load("furnace.xml"), *sphere = load("diffuse_sphere.xml");
   /* lmc with each unbiased adaptation: its Adam statistics, stage-1 records
    * and frozen cache must be as deterministic as the chains. */
-  const char *names[6] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc"};
-  const lmc_adapt adapts[6] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,
-                               LMC_ADAPT_NONE,  LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE};
+  /* The last two: --direct separate (the default), pt's pass and the
+   * chains' in one film. */
+  const char *names[8] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc", "mmlt", "lmc"};
+  const lmc_adapt adapts[8] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE,
+                               LMC_ADAPT_NONE,  LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE,
+                               LMC_ADAPT_CACHE, LMC_ADAPT_CACHE};
   int checked = 0;
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < 8; i++) {
+    g_direct = i >= 6;
     /* The third: mmlt's adaptive bootstrap, several batches shared out by
      * the lengths' costs and variances. */
     const scene *sc = i == 2 ? sphere : s;
@@ -260,14 +301,25 @@ static void test_determinism(void **state) {
     film_free(&c);
     film_free(&d);
   }
-  assert_int_equal(checked, 6);
+  g_direct = 0;
+  assert_int_equal(checked, 8);
   scene_destroy(s);
   scene_destroy(sphere);
 }
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + RUNS);
+  /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, then separate: furnace
+   * 2, sphere 3 x 2 groups; 3 channels each; and the refined b. */
+  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 3 * 2) * 3 + RUNS);
+}
+
+static int reset_direct(void **state) {
+  (void)state;
+  g_direct = 0;
+  g_even = 0;
+  g_mcmc_empty = 0;
+  return 0;
 }
 
 int main(void) {
@@ -275,8 +327,9 @@ int main(void) {
       cmocka_unit_test(test_furnace_pssmlt),
       cmocka_unit_test(test_furnace_mmlt),
       cmocka_unit_test(test_diffuse_sphere),
+      cmocka_unit_test_teardown(test_direct_separate, reset_direct),
       cmocka_unit_test(test_refined_b),
-      cmocka_unit_test(test_determinism),
+      cmocka_unit_test_teardown(test_determinism, reset_direct),
       cmocka_unit_test(test_count),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

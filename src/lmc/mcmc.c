@@ -102,9 +102,11 @@
  * A stop request (Ctrl-C) or the time limit abandons the round in flight;
  * the film always holds whole rounds and is correctly normalised.
  *
- * --direct separate: pt renders paths of length <= 2 first (with --spp
- * samples per pixel, or 15% of --time), into the same film, and MCMC only
- * paths of length >= 3.
+ * --direct separate (the default, as in Mitsuba's pssmlt and in the LMC
+ * paper's implementation): pt renders paths of length <= 2 first (with
+ * --spp samples per pixel, or the scene's directSamples, or 15% of
+ * --time), into the same film, and MCMC only paths of length >= 3.
+ * --direct mcmc leaves every path to MCMC.
  */
 #include "lmc/mcmc.h"
 
@@ -503,10 +505,14 @@ static void mcmc__publish(film *out, mcmc_family *fam, int n_fam, const mcmc_cha
 }
 
 /* Mutations a chain of family F makes in a round of m (m for a family at
- * the full rate, else in proportion, at least one). */
+ * the full rate, else in proportion, rounded up and at least one). Rounded
+ * up, the rounds of a --spp render add up to at least its budget (the
+ * number of rounds is the budget over the families' full-round weight,
+ * rounded up); rounded to the nearest, a short last round could leave a
+ * render a few mutations short. */
 static int64_t mcmc__family_steps(const mcmc_family *F, int64_t m) {
   if (F->m_round >= MCMC_ROUND) return m;
-  int64_t k = (m * F->m_round + MCMC_ROUND / 2) / MCMC_ROUND;
+  int64_t k = (m * F->m_round + MCMC_ROUND - 1) / MCMC_ROUND;
   return k < 1 ? 1 : k;
 }
 
@@ -551,6 +557,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     prs.maxdepth = rs->maxdepth >= 0 && rs->maxdepth < 2 ? rs->maxdepth : 2;
     prs.snapshot = 0.0;
     prs.snapshot_fn = NULL;
+    if (rs->direct_spp > 0) prs.spp = rs->direct_spp;
     if (timed) {
       prs.time_limit = 0.15 * rs->time_limit;
       if (!(rs->set & SET_SPP)) prs.set &= ~(unsigned)SET_SPP;
@@ -721,7 +728,17 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     fam[g].first_chain = n_slots;
     n_slots += fam[g].n_chains;
   }
-  if (n_slots == 0) goto finish; /* a black image */
+  if (n_slots == 0) {
+    /* No bootstrap path carried light: the chains' part of the image is
+     * black (all of it, or all but pt's direct light). */
+    if (!rs->quiet)
+      fprintf(stderr, "lmc: %s's bootstrap found no light on paths of %d or more segments (%lld "
+              "paths): %s\n", rs->integrator, mrs.mindepth > 1 ? mrs.mindepth : 1,
+              (long long)st->mcmc_boot_paths,
+              rs->direct_separate ? "the image is --direct separate's path-traced pass alone"
+                                  : "the image is black");
+    goto finish;
+  }
 
   /* Where the splats go (see Normalisation above). */
   mcmc_norm norm = n_fam == 1 ? MCMC_NORM_SCALE : MCMC_NORM_BUFFERS;

@@ -53,7 +53,8 @@ typedef struct render_settings {
   double sigma;          /* Kelemen small-step scale */
   int64_t bootstrap;     /* bootstrap paths */
   double bootstrap_error; /* without --bootstrap: draw until b's relative standard error is below this */
-  int direct_separate;   /* --direct separate: pt renders direct light, MCMC the rest */
+  int direct_separate;   /* --direct separate (default): pt renders direct light, MCMC the rest */
+  int64_t direct_spp;    /* samples per pixel of that pt pass under --spp (0: spp); Mitsuba's directSamples */
   int mcmc_even;         /* --allocate even: every chain the same mutations (default: in proportion to b_k) */
   double snapshot;       /* seconds between intermediate images (0: none) */
   /* Called by the render drivers every `snapshot` seconds with the film
@@ -90,6 +91,7 @@ static inline render_settings render_settings_default(void) {
   s.sigma = 1.0 / 64.0;
   s.bootstrap = 0;
   s.bootstrap_error = 0.01;
+  s.direct_separate = 1; /* as Mitsuba's pssmlt and the LMC paper's code; see README */
   s.adapt = LMC_ADAPT_CACHE;
   s.lmc_step = 1e-5;
   s.step_range = 1.0;

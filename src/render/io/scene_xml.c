@@ -1188,6 +1188,27 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
       r->largestep = pl;
       r->set |= SET_LARGESTEP;
     }
+    /* Direct light: Mitsuba's directSamples (default 16, pt's samples per
+     * pixel for paths of <= 2 segments; -1: MLT renders them too) and
+     * separateDirect. Our default is separate as well. */
+    long long ds;
+    int sep, found_sep;
+    if ((st = xml__int(B, o, "directSamples", 16, &ds, &found)) != LMC_OK) return st;
+    if (found) {
+      prop *p = xml__find(o, "directSamples");
+      r->direct_separate = ds >= 0;
+      r->direct_spp = ds > 0 ? ds : 0;
+      r->set |= SET_DIRECT;
+      if (ds == 0)
+        lmc_warn(p->file, p->line,
+                 "directSamples 0 (direct light hidden) is not supported: direct light is "
+                 "rendered separately with the scene's samples per pixel");
+    }
+    if ((st = xml__bool(B, o, "separateDirect", 1, &sep, &found_sep)) != LMC_OK) return st;
+    if (found_sep && !(found && ds < 0)) {
+      r->direct_separate = sep;
+      r->set |= SET_DIRECT;
+    }
     static const char *const mlt_silent[] = {"bidirectional", "lambda", "chainLength",
                                              "numChains", "maxChains", "bidirectionalMutation",
                                              "lensPerturbation", "multiChainPerturbation",
