@@ -17,7 +17,9 @@
  * (1.3% with the third mode's 34 more).
  * Equal effort: --spp 128 for each (lmc: mutations per pixel, stage 1 of
  * cache included); lmc's bootstrap is fixed at 131072 paths (it would
- * otherwise dominate the time at this resolution).
+ * otherwise dominate the time at this resolution). lmc runs with the
+ * default --direct separate: pt renders the paths of one and two segments
+ * (128 spp), the chains the longer ones.
  */
 #include <setjmp.h>
 #include <stdarg.h>

@@ -14,8 +14,10 @@
  * Equal effort: --spp 80 for every integrator (MCMC: mutations per pixel).
  * The bootstrap is the default, adaptive one (mmlt: Neyman-allocated over
  * the lengths), run to a 3% standard error instead of 1% to keep the test
- * short: b's error is part of each run's, so of the SE. About 2
- * CPU-minutes in Release.
+ * short: b's error is part of each run's, so of the SE. The renders use
+ * the default --direct separate (pt renders the paths of one and two
+ * segments with the same spp, the chains the rest; test_mcmc_analytic
+ * covers --direct mcmc). About 5 CPU-minutes in Release.
  */
 #include <setjmp.h>
 #include <stdarg.h>
