@@ -32,6 +32,21 @@ static void write_text(const char *path, const char *text) {
 
 static int near(double a, double b, double tol) { return fabs(a - b) <= tol; }
 
+/* Loads path with warnings silenced; *OUT_warnings: how many it raised.
+ * Prints the error when the load fails. */
+static lmc_status load_quiet(const char *path, scene **OUT_s, int *OUT_warnings) {
+  lmc_warn_set_quiet(1);
+  int before = lmc_warning_count();
+  lmc_error err;
+  lmc_error_clear(&err);
+  *OUT_s = NULL;
+  lmc_status st = scene_load_xml(path, NULL, 0, OUT_s, &err);
+  *OUT_warnings = lmc_warning_count() - before;
+  lmc_warn_set_quiet(0);
+  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  return st;
+}
+
 /* ---- Malformed inputs. -------------------------------------------------- */
 
 typedef struct bad_case {
@@ -188,15 +203,9 @@ static void test_warnings(void **state) {
              "    <spectrum name=\"radiance\" value=\"400:1, 700:2\"/>\n"   /* 6: sampled spectrum */
              "  </emitter>\n"
              "</scene>\n");
-  lmc_warn_set_quiet(1);
-  int before = lmc_warning_count();
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml("/tmp/lmc_loader_warn.xml", NULL, 0, &s, &err);
-  int warnings = lmc_warning_count() - before;
-  lmc_warn_set_quiet(0);
-  if (st != LMC_OK) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
+  scene *s;
+  int warnings;
+  lmc_status st = load_quiet("/tmp/lmc_loader_warn.xml", &s, &warnings);
   assert_int_equal(st, LMC_OK);
   assert_non_null(s);
   assert_int_equal(warnings, 6);
@@ -280,15 +289,10 @@ static void test_direct_samples(void **state) {
              "  <shape type=\"cube\"/>\n</scene>\n",
              cases[i].prop);
     write_text("/tmp/lmc_loader_direct.xml", xml);
-    lmc_warn_set_quiet(1);
-    int before = lmc_warning_count();
-    scene *s = NULL;
-    lmc_error err;
-    lmc_error_clear(&err);
-    lmc_status st = scene_load_xml("/tmp/lmc_loader_direct.xml", NULL, 0, &s, &err);
-    int warnings = lmc_warning_count() - before;
-    lmc_warn_set_quiet(0);
-    if (st != LMC_OK) print_error("case %zu: %s:%d: %s\n", i, err.file, err.line, err.msg);
+    scene *s;
+    int warnings;
+    lmc_status st = load_quiet("/tmp/lmc_loader_direct.xml", &s, &warnings);
+    if (st != LMC_OK) print_error("case %zu\n", i);
     assert_int_equal(st, LMC_OK);
     assert_int_equal(s->settings.direct_separate, cases[i].separate);
     assert_int_equal((s->settings.set & SET_DIRECT) != 0, cases[i].set);
