@@ -39,10 +39,12 @@
  * m mutations, and its image is b_g / (n_g m) times the sum of its splats
  * value / f (expected-value splatting, chain.c). Families add.
  *
- * Refining b with the large steps (Kelemen et al. 2002 do the same). A
+ * Refining b with the large steps (Kelemen et al. 2002 do the same; pssmlt
+ * and lmc on pssmlt's states only, see mcmc__refine_b). A
  * large step proposes a fresh uniform state y, so f_g(y) is one more
  * independent sample of exactly what the bootstrap averages (for mmlt, the
- * large step of a length-k chain samples b_k). The chains tally sum f(y),
+ * large step of a length-k chain samples b_k, but with a far heavier tail
+ * than eval_expect's samples, so mmlt's families keep the bootstrap's b). The chains tally sum f(y),
  * sum f(y)^2 and the count of their large-step proposals (chain.h,
  * mc_kernel_stats), and the image uses b_g = (bootstrap sum + large-step
  * sum) / (bootstrap count + large-step count), reduced in chain order so
@@ -441,12 +443,18 @@ static void mcmc__mean_var(double s, double s2, double n, double *OUT_mean, doub
 
 /* b_ref of every family with chains: the bootstrap's samples pooled with
  * its chains' large-step tallies, added in chain order (deterministic).
- * Both are unbiased samples of b_g (the bootstrap's of eval_expect when the
- * target has it, with less variance), so the pooled mean is unbiased. (An
- * inverse-variance weighting of the two means was tried and dropped: with
- * heavy tails a low estimate comes with a low estimated variance, and on
- * ring-caustics it pulled the long lengths' b far down.) Returns the sum of
- * b_ref over the families and its variance in OUT_var. */
+ * Both are unbiased samples of b_g, so the pooled mean is unbiased. A
+ * family whose target has eval_expect (mmlt's and lmc's multiplexed
+ * lengths) keeps its bootstrap b alone: there the bootstrap's samples are
+ * the expectation over the technique coordinate, its large steps one
+ * strategy's value, whose tail is far heavier (on ring-caustics-glass one
+ * large step of length 10 took that length's b from 46 to 3657, and the
+ * render's relative MSE from 0.04 to 4.2; on the torus pooling lowered b
+ * in each of four runs looked at: unbiased, but a typical run darker).
+ * (An inverse-variance weighting of the two means was tried and dropped:
+ * with heavy tails a low estimate comes with a low estimated variance,
+ * and on ring-caustics it pulled the long lengths' b far down.) Returns
+ * the sum of b_ref over the families and its variance in OUT_var. */
 static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot *slots,
                              double *OUT_var) {
   double b = 0.0, v = 0.0;
@@ -454,7 +462,7 @@ static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot 
     mcmc_family *F = &fam[g];
     double s = 0.0, s2 = 0.0;
     int64_t nl = 0;
-    for (int i = 0; i < F->n_chains; i++) {
+    for (int i = 0; i < F->n_chains && !F->bt.has_fe; i++) {
       const mc_chain *c = slots[F->first_chain + i].chain;
       for (int q = 0; q < c->n_kernels; q++) {
         if (c->kernels[q].kind != MC_KERNEL_LARGE) continue;
@@ -966,12 +974,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
               ac += slots[fam[g].first_chain + i].chain->stats[q].accepted;
             }
           fprintf(stderr,
-                  "lmc: length %-3d b %.5g (%.1f%%, %lld paths), with large steps %.5g (%.1f%%), "
+                  "lmc: length %-3d b %.5g (%.1f%%, %lld paths), "
                   "%d chains, proposed %lld, accepted %.1f%%\n",
-                  fam[g].st.length, fam[g].bt.b,
-                  100.0 * sqrt(fam[g].bt.b_var) / fmax(fam[g].bt.b, 1e-300),
-                  (long long)fam[g].bt.n_est,
-                  fam[g].b_ref, 100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
+                  fam[g].st.length, fam[g].b_ref,
+                  100.0 * sqrt(fam[g].b_ref_var) / fmax(fam[g].b_ref, 1e-300),
+                  (long long)(fam[g].bt.n_est + fam[g].n_large),
                   fam[g].n_chains, (long long)pr, 100.0 * (double)ac / fmax(1.0, (double)pr));
         }
       int64_t n_boot = 0, n_plan = 0;
@@ -985,11 +992,12 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
               100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)n_boot,
               n_fam > 1 ? " over the lengths" : "", (long long)n_plan);
-      if (norm != MCMC_NORM_BOOT) {
-        double b_ref = 0.0, b_ref_var = 0.0;
-        int64_t n_large = 0;
-        for (int g = 0; g < n_fam; g++)
-          b_ref += fam[g].b_ref, b_ref_var += fam[g].b_ref_var, n_large += fam[g].n_large;
+      double b_ref = 0.0, b_ref_var = 0.0;
+      int64_t n_large = 0;
+      for (int g = 0; g < n_fam; g++)
+        b_ref += fam[g].b_ref, b_ref_var += fam[g].b_ref_var, n_large += fam[g].n_large;
+      /* Only pssmlt's families pool their large steps (mcmc__refine_b). */
+      if (norm != MCMC_NORM_BOOT && n_large > 0) {
         fprintf(stderr, "lmc: b with large steps = %.6g +- %.2g (%.2f%%, %lld large steps more)\n",
                 b_ref, sqrt(b_ref_var), 100.0 * sqrt(b_ref_var) / fmax(b_ref, 1e-300),
                 (long long)n_large);
