@@ -40,13 +40,14 @@
  * value / f (expected-value splatting, chain.c). Families add.
  *
  * Refining b with the large steps (Kelemen et al. 2002 do the same; pssmlt
- * and lmc on pssmlt's states only, see mcmc__refine_b). A
- * large step proposes a fresh uniform state y, so f_g(y) is one more
- * independent sample of exactly what the bootstrap averages (for mmlt, the
- * large step of a length-k chain samples b_k, but with a far heavier tail
- * than eval_expect's samples, so mmlt's families keep the bootstrap's b). The chains tally sum f(y),
- * sum f(y)^2 and the count of their large-step proposals (chain.h,
- * mc_kernel_stats), and the image uses b_g = (bootstrap sum + large-step
+ * and lmc on pssmlt's states only, see mcmc__refine_b). A large step
+ * proposes a fresh uniform state y, so f_g(y) is one more independent
+ * sample of exactly what the bootstrap averages (for mmlt, the large step
+ * of a length-k chain samples b_k too, but with a far heavier tail than
+ * eval_expect's samples, so mmlt's families keep the bootstrap's b). The
+ * chains tally sum f(y), sum f(y)^2 and the count of their large-step
+ * proposals (chain.h, mc_kernel_stats), and the image uses
+ * b_g = (bootstrap sum + large-step
  * sum) / (bootstrap count + large-step count), reduced in chain order so
  * that under --spp the image stays bit-identical for any --threads. The
  * splats are therefore kept apart from b: pssmlt and lmc multiply the film
