@@ -64,6 +64,8 @@ static const char *lmc_render_usage =
     "  --maxdepth N             longest path in segments, Mitsuba's maxDepth (-1: unbounded)\n"
     "  --rrdepth N              Russian roulette from this length on (default 5)\n"
     "  --resolution WxH         film size (keeps the field of view)\n"
+    "  --sampler NAME           pt, bdpt: independent | sobol (Owen-scrambled, stratified\n"
+    "                           across a pixel's samples) (default: the scene's, else independent)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
     "  --snapshot S             also write OUT-<seconds>s.exr every S seconds\n"
     "\n"
@@ -397,6 +399,13 @@ static int lmc_cmd_render(int argc, char **argv) {
           !lmc_parse_int64("--bootstrap", v, 1, INT64_MAX / 2, &cli.bootstrap))
         goto bad;
       cli.set |= SET_BOOTSTRAP;
+    } else if (lmc_flag_is(&a, "--sampler")) {
+      int sobol;
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_choice("--sampler", v, "independent", "sobol", &sobol))
+        goto bad;
+      cli.sampler = sobol ? LMC_SAMPLER_SOBOL : LMC_SAMPLER_INDEPENDENT;
+      cli.set |= SET_SAMPLER;
     } else if (lmc_flag_is(&a, "--direct")) {
       int mcmc;
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--direct", v, "separate", "mcmc", &mcmc))
@@ -503,6 +512,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
   rs.bootstrap_error = cli.bootstrap_error;
   if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
+  if (cli.set & SET_SAMPLER) rs.sampler = cli.sampler;
   /* The scene's directSamples is a sample count for its own spp: --spp
    * given here sets both passes. */
   if (cli.set & SET_SPP) rs.direct_spp = 0;

@@ -14,9 +14,11 @@
  * environment; mixed pixels are left out. Within a group all pixels share
  * one expectation, so the spread of their values estimates the standard
  * error of the group mean: SE = sd / sqrt(n). Each group mean must lie
- * within 5 SE of the exact value (two integrators x ~4 groups x 3
- * channels = ~24 comparisons; at 5 sigma the chance of a false alarm is
- * about 24 * 5.7e-7). Groups of zero variance (pure environment) must be
+ * within 5 SE of the exact value (two integrators x two samplers x ~4
+ * groups x 3 channels = ~48 comparisons; at 5 sigma the chance of a false
+ * alarm is about 48 * 5.7e-7). With the Sobol sampler the pixels are still
+ * independent of one another (each has its own scrambles), so the spread
+ * across a group still gives the SE. Groups of zero variance (pure environment) must be
  * exact to rounding.
  */
 #include <setjmp.h>
@@ -56,8 +58,8 @@ static int pixel_group(const scene *s, int x, int y) {
 
 /* Renders `path` with `integrator` and checks every group against `expect`
  * (per group, per channel). Returns the number of group-channel checks. */
-static int check_scene(const char *path, const char *integrator, int64_t spp,
-                       const rgb expect[MAX_GROUPS], int min_groups) {
+static int check_scene(const char *path, const char *integrator, int sampler, int64_t spp,
+                       const rgb expect[MAX_GROUPS], int min_groups, double *OUT_var0) {
   scene *s = NULL;
   lmc_error err;
   lmc_error_clear(&err);
@@ -71,6 +73,7 @@ static int check_scene(const char *path, const char *integrator, int64_t spp,
   rs.set |= SET_SPP;
   rs.threads = 2;
   rs.seed = 7;
+  rs.sampler = sampler;
   rs.quiet = 1;
   film f;
   render_stats rst;
@@ -104,10 +107,12 @@ static int check_scene(const char *path, const char *integrator, int64_t spp,
       double n = gs[g].n, mean = gs[g].sum[c] / n;
       double var = fmax(0.0, (gs[g].sum2[c] - n * mean * mean) / (n - 1.0));
       double se = sqrt(var / n);
+      if (g == 0 && OUT_var0) OUT_var0[c] = var;
       double tol = fmax(5.0 * se, 1e-6 * fabs(ex[c]));
       if (fabs(mean - ex[c]) > tol)
-        fail_msg("%s with %s: group %d channel %d: mean %.6f, expected %.6f (SE %.2e, %d pixels)",
-                 path, integrator, g, c, mean, ex[c], se, gs[g].n);
+        fail_msg("%s with %s (sampler %d): group %d channel %d: mean %.6f, expected %.6f "
+                 "(SE %.2e, %d pixels)",
+                 path, integrator, sampler, g, c, mean, ex[c], se, gs[g].n);
       checks++;
     }
   }
@@ -123,9 +128,11 @@ static void test_furnace(void **state) {
   rgb one[MAX_GROUPS];
   for (int g = 0; g < MAX_GROUPS; g++) one[g] = rgb_gray(1.0);
   int checks = 0;
-  checks += check_scene("data/analytic/furnace.xml", "pt", 32, one, 4);
-  checks += check_scene("data/analytic/furnace.xml", "bdpt", 32, one, 4);
-  assert_int_equal(checks, 2 * 4 * 3);
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++) {
+    checks += check_scene("data/analytic/furnace.xml", "pt", smp, 32, one, 4, NULL);
+    checks += check_scene("data/analytic/furnace.xml", "bdpt", smp, 32, one, 4, NULL);
+  }
+  assert_int_equal(checks, 2 * 2 * 4 * 3);
 }
 
 static void test_diffuse_sphere(void **state) {
@@ -134,9 +141,25 @@ static void test_diffuse_sphere(void **state) {
   for (int g = 0; g < MAX_GROUPS; g++) ex[g] = rgb_make(1.0, 2.0, 4.0);
   ex[0] = rgb_make(0.5, 1.0, 2.0); /* the sphere is mesh 0 */
   int checks = 0;
-  checks += check_scene("data/analytic/diffuse_sphere.xml", "pt", 32, ex, 2);
-  checks += check_scene("data/analytic/diffuse_sphere.xml", "bdpt", 32, ex, 2);
-  assert_int_equal(checks, 2 * 2 * 3);
+  double var[2][2][3]; /* [sampler][integrator][channel] of the sphere's pixels */
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++) {
+    checks += check_scene("data/analytic/diffuse_sphere.xml", "pt", smp, 32, ex, 2, var[smp][0]);
+    checks += check_scene("data/analytic/diffuse_sphere.xml", "bdpt", smp, 32, ex, 2, var[smp][1]);
+  }
+  assert_int_equal(checks, 2 * 2 * 2 * 3);
+  /* The Sobol sampler's pixels vary less. The sphere's pixel values are
+   * independent and there are hundreds of them, so each variance is known
+   * to within sqrt(2 / n) < 10%, and halving it cannot happen by chance
+   * (measured: a fifth for pt and for bdpt). */
+  for (int it = 0; it < 2; it++)
+    for (int c = 0; c < 3; c++)
+      if (!(var[LMC_SAMPLER_SOBOL][it][c] < 0.5 * var[LMC_SAMPLER_INDEPENDENT][it][c]))
+        fail_msg("%s channel %d: Sobol pixel variance %.3g, independent %.3g", it ? "bdpt" : "pt",
+                 c, var[LMC_SAMPLER_SOBOL][it][c], var[LMC_SAMPLER_INDEPENDENT][it][c]);
+      else
+        printf("%s channel %d: pixel variance %.3g (sobol) vs %.3g (independent)\n",
+               it ? "bdpt" : "pt", c, var[LMC_SAMPLER_SOBOL][it][c],
+               var[LMC_SAMPLER_INDEPENDENT][it][c]);
 }
 
 int main(void) {

@@ -66,13 +66,13 @@ static void test_help_lists_every_flag(void **state) {
   assert_non_null(strstr(out_text, "compare"));
   assert_int_equal(run_lmc("render --help"), 0);
   static const char *flags[] = {"-o", "--integrator", "--spp", "--time", "--threads", "--seed",
-                                "--maxdepth", "--resolution", "-D"};
+                                "--maxdepth", "--resolution", "-D", "--sampler"};
   int found = 0;
   for (size_t i = 0; i < sizeof flags / sizeof flags[0]; i++) {
     if (!strstr(out_text, flags[i])) fail_msg("render --help does not mention %s", flags[i]);
     found++;
   }
-  assert_int_equal(found, 9);
+  assert_int_equal(found, 10);
   /* Every other command answers --help with its usage on stdout, exit 0. */
   static const char *cmds[] = {"compare", "merge", "convert"};
   int helped = 0;
@@ -99,6 +99,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       {"render " SCENE " --integrator=foo", "foo"},
       {"render " SCENE " --resolution 10by10", "--resolution"},
       {"render " SCENE " --threads", "--threads"},
+      {"render " SCENE " --sampler halton", "--sampler"},
       {"render " SCENE " -D novalue", "-D"},
       {"render no/such/scene.xml", "no/such/scene.xml"},
       {"frobnicate", "frobnicate"},
@@ -112,7 +113,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       fail_msg("lmc %s: stderr does not name '%s': %s", cases[i].args, cases[i].needle, err_text);
     n++;
   }
-  assert_int_equal(n, 10);
+  assert_int_equal(n, 11);
 }
 
 /* Reads an EXR written by the CLI; fails the test when it cannot. */

@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "render/io/io.h"
+#include "render/sampler.h"
 
 #define DATA "data/loader/"
 
@@ -304,6 +305,46 @@ static void test_direct_samples(void **state) {
   assert_int_equal(checked, 5);
 }
 
+/* <sampler type>: independent and Mitsuba's ldsampler/sobol map without a
+ * word, the other stratifying samplers to sobol with a warning, an unknown
+ * one to independent with a warning; no <sampler>: independent. */
+static void test_sampler_type(void **state) {
+  (void)state;
+  static const struct {
+    const char *type; /* "" for no <sampler> */
+    int sampler, warnings;
+  } cases[] = {
+      {"", LMC_SAMPLER_INDEPENDENT, 0},           {"independent", LMC_SAMPLER_INDEPENDENT, 0},
+      {"ldsampler", LMC_SAMPLER_SOBOL, 0},        {"sobol", LMC_SAMPLER_SOBOL, 0},
+      {"stratified", LMC_SAMPLER_SOBOL, 1},       {"halton", LMC_SAMPLER_SOBOL, 1},
+      {"hammersley", LMC_SAMPLER_SOBOL, 1},       {"magic", LMC_SAMPLER_INDEPENDENT, 1},
+  };
+  int checked = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char smp[256] = "", xml[1024];
+    if (cases[i].type[0])
+      snprintf(smp, sizeof smp,
+               "<sampler type=\"%s\"><integer name=\"sampleCount\" value=\"8\"/></sampler>",
+               cases[i].type);
+    snprintf(xml, sizeof xml,
+             HEAD "  <sensor type=\"perspective\">%s</sensor>\n"
+                  "  <shape type=\"cube\"/>\n</scene>\n",
+             smp);
+    write_text("/tmp/lmc_loader_sampler.xml", xml);
+    scene *s;
+    int warnings;
+    lmc_status st = load_quiet("/tmp/lmc_loader_sampler.xml", &s, &warnings);
+    if (st != LMC_OK) print_error("case %zu\n", i);
+    assert_int_equal(st, LMC_OK);
+    assert_int_equal(s->settings.sampler, cases[i].sampler);
+    assert_int_equal(warnings, cases[i].warnings);
+    if (cases[i].type[0]) assert_int_equal(s->settings.spp, 8);
+    scene_destroy(s);
+    checked++;
+  }
+  assert_int_equal(checked, 8);
+}
+
 static void test_happy(void **state) {
   (void)state;
   scene *s = NULL;
@@ -531,6 +572,7 @@ int main(void) {
       cmocka_unit_test(test_warnings),        cmocka_unit_test(test_happy),
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
       cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
+      cmocka_unit_test(test_sampler_type),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

@@ -1,8 +1,8 @@
 /*
  * test_threads.c: the image does not depend on the thread count (issue 6).
  *
- * pt and bdpt must write bit-identical EXRs for --threads 1, 2 and 3 with
- * the same seed (render.c: per-sample random streams, camera estimates
+ * pt and bdpt (with either sampler) must write bit-identical EXRs for
+ * --threads 1, 2 and 3 with the same seed (render.c: per-sample random streams, camera estimates
  * added per pixel in pass order, bdpt's light-tracing splats recorded per
  * row and replayed in row order). The scene is the Cornell box at a small
  * resolution, so bdpt's splats land all over the film and rows are shared
@@ -85,12 +85,13 @@ static int64_t differing(const char *a, const char *b) {
   return diff;
 }
 
-static void check_integrator(const char *integrator) {
+/* `integrator` may carry further flags; `label` names the files. */
+static void check_integrator(const char *label, const char *integrator) {
   char n1[64], n2[64], n3[64], other[64];
-  snprintf(n1, sizeof n1, "%s_t1", integrator);
-  snprintf(n2, sizeof n2, "%s_t2", integrator);
-  snprintf(n3, sizeof n3, "%s_t3", integrator);
-  snprintf(other, sizeof other, "%s_seed2", integrator);
+  snprintf(n1, sizeof n1, "%s_t1", label);
+  snprintf(n2, sizeof n2, "%s_t2", label);
+  snprintf(n3, sizeof n3, "%s_t3", label);
+  snprintf(other, sizeof other, "%s_seed2", label);
   assert_int_equal(render(integrator, 1, 7, n1), 0);
   assert_int_equal(render(integrator, 2, 7, n2), 0);
   assert_int_equal(render(integrator, 3, 7, n3), 0);
@@ -115,12 +116,14 @@ static void check_integrator(const char *integrator) {
 
 static void test_pt_independent_of_threads(void **state) {
   (void)state;
-  check_integrator("pt");
+  check_integrator("pt", "pt");
+  check_integrator("pt_sobol", "pt --sampler sobol");
 }
 
 static void test_bdpt_independent_of_threads(void **state) {
   (void)state;
-  check_integrator("bdpt");
+  check_integrator("bdpt", "bdpt");
+  check_integrator("bdpt_sobol", "bdpt --sampler sobol");
 }
 
 /* Renders the loaded scene into f with `threads` threads. */

@@ -182,20 +182,32 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
           row_splats.log = logs ? &logs[y - yb] : NULL;
           for (int x = 0; x < W; x++) {
             /* One sample of pixel (x, y) in this pass, from its own stream. */
-            lmc_indep_sampler smp;
+            union {
+              lmc_indep_sampler indep;
+              lmc_sobol_sampler sobol;
+            } smp_store;
+            lmc_sampler *smp;
             uint64_t pixel = (uint64_t)y * (uint64_t)W + (uint64_t)x;
-            indep_sampler_init(&smp, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
+            if (rs->sampler == LMC_SAMPLER_SOBOL) {
+              sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
+                                 use_bdpt ? &sampler_layout_bdpt : &sampler_layout_pt);
+              smp = &smp_store.sobol.base;
+            } else {
+              indep_sampler_init(&smp_store.indep, rs->seed,
+                                 pixel * 0x100000001b3ull + (uint64_t)pass);
+              smp = &smp_store.indep.base;
+            }
             double dx, dy;
-            double u1 = sampler_next(&smp.base), u2 = sampler_next(&smp.base);
+            double u1 = sampler_next(smp), u2 = sampler_next(smp);
             filter_sample(&s->filter, u1, u2, &dx, &dy);
             double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
             rgb L;
             if (use_bdpt) {
-              L = bdpt_li(s, rs, &smp.base, rx, ry, &row_splats, cnt);
+              L = bdpt_li(s, rs, smp, rx, ry, &row_splats, cnt);
             } else {
               vec3 org, dir;
               camera_generate_ray(&s->cam, rx, ry, &org, &dir);
-              L = pt_li(s, rs, &smp.base, org, dir, cnt);
+              L = pt_li(s, rs, smp, org, dir, cnt);
             }
             if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX ||
                 fabs(L.b) > FLT_MAX) {

@@ -21,7 +21,8 @@ enum {
   SET_MINDEPTH = 1 << 7,
   SET_ADAPT = 1 << 8,
   SET_BOOTSTRAP = 1 << 9,
-  SET_DIRECT = 1 << 10
+  SET_DIRECT = 1 << 10,
+  SET_SAMPLER = 1 << 11
 };
 
 /* LMC preconditioner adaptation (--adapt). */
@@ -48,6 +49,7 @@ typedef struct render_settings {
   double time_limit;     /* seconds; 0 = none (spp decides) */
   int threads;           /* 0 = all cores */
   uint64_t seed;
+  int sampler;           /* pt and bdpt: LMC_SAMPLER_INDEPENDENT or _SOBOL (render/sampler.h) */
   /* MCMC (src/lmc) */
   double largestep;      /* large-step probability */
   double sigma;          /* Kelemen small-step scale */

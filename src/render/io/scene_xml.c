@@ -47,6 +47,7 @@
 
 #include "render/io/io.h"
 #include "render/io/props.h"
+#include "render/sampler.h"
 
 #define XML_PI 3.14159265358979323846
 
@@ -1063,6 +1064,23 @@ static lmc_status xml__sensor(builder *B, pset *o) {
     if (found && !B->spp_from_dpt && spp > 0) {
       B->s->settings.spp = spp;
       B->s->settings.set |= SET_SPP;
+    }
+    /* Mitsuba's ldsampler is padded (0,2)-sequences, as our sobol; its other
+     * stratifying samplers are rendered with ours. Under --sampler the
+     * command line decides. */
+    const char *kind = sampler->type[0] ? sampler->type : "independent";
+    if (strcmp(kind, "independent") == 0) {
+      B->s->settings.sampler = LMC_SAMPLER_INDEPENDENT;
+    } else if (strcmp(kind, "ldsampler") == 0 || strcmp(kind, "sobol") == 0) {
+      B->s->settings.sampler = LMC_SAMPLER_SOBOL;
+    } else if (strcmp(kind, "stratified") == 0 || strcmp(kind, "halton") == 0 ||
+               strcmp(kind, "hammersley") == 0) {
+      lmc_warn(sampler->file, sampler->line,
+               "sampler \"%s\": rendered with lmc's scrambled Sobol sampler", kind);
+      B->s->settings.sampler = LMC_SAMPLER_SOBOL;
+    } else {
+      lmc_warn(sampler->file, sampler->line,
+               "unsupported sampler type \"%s\": using the independent sampler", kind);
     }
     static const char *const silent[] = {"scramble", "dimension", NULL};
     xml__accept(sampler, silent);
