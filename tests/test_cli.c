@@ -289,7 +289,8 @@ static void test_torus_renders_unmodified(void **state) {
   assert_int_equal(rendered, 2);
 }
 
-/* merge averages; convert writes a PNG of the same size. */
+/* merge averages, with weights when given; convert writes a PNG of the same
+ * size. */
 static void test_merge_and_convert(void **state) {
   (void)state;
   lmc_image A, B;
@@ -307,6 +308,18 @@ static void test_merge_and_convert(void **state) {
   int checked = 0;
   for (int i = 0; i < 18; i++, checked++) assert_near(M.data[i], 0.5 * (i + 3 * i + 1), 1e-5);
   assert_int_equal(checked, 18);
+  /* Weighted: A with weight 3, B with 1 (the flag as --weight=W too). */
+  assert_int_equal(
+      run_lmc("merge --weight 3 " TMP "/mA.exr --weight=1 " TMP "/mB.exr -o " TMP "/mW.exr"), 0);
+  lmc_image W = read_exr(TMP "/mW.exr");
+  for (int i = 0; i < 18; i++, checked++) assert_near(W.data[i], 0.75 * i + 0.25 * (3 * i + 1), 1e-5);
+  assert_int_equal(checked, 36);
+  image_free(&W);
+  /* A weight must be positive and followed by an image. */
+  assert_int_equal(run_lmc("merge --weight 0 " TMP "/mA.exr -o " TMP "/mX.exr"), 2);
+  assert_non_null(strstr(err_text, "--weight"));
+  assert_int_equal(run_lmc("merge " TMP "/mA.exr --weight 2 -o " TMP "/mX.exr"), 2);
+  assert_non_null(strstr(err_text, "--weight"));
   assert_int_equal(run_lmc("convert " TMP "/mM.exr " TMP "/mM.png --exposure 0.01"), 0);
   lmc_image P = {0};
   assert_int_equal(image_read(TMP "/mM.png", 0, &P, &err), LMC_OK);
