@@ -26,10 +26,8 @@ $lmc merge "$tmp/half1.exr" "$tmp/half2.exr" -o "$dir/reference.exr"
 halves=$($lmc compare "$tmp/half1.exr" "$tmp/half2.exr" | sed -n 's/^relmse: //p')
 $lmc render "$dir/scene.xml" --integrator bdpt --time 60 --seed 3 -q -o "$tmp/short.exr"
 short=$($lmc compare "$tmp/short.exr" "$dir/reference.exr" | sed -n 's/^relmse: //p')
-python3 - "$halves" "$short" "$dir" "$minutes" <<'PY'
-import sys
-halves, short, d, m = float(sys.argv[1]), float(sys.argv[2]), sys.argv[3], sys.argv[4]
-ref = halves / 4.0
-print(f"{d}: bdpt, 2 x {m} min; relmse(halves) {halves:.6g}; reference relmse ~ {ref:.6g}; "
-      f"60 s bdpt relmse {short:.6g}; margin {short / ref:.1f}x")
-PY
+awk -v halves="$halves" -v short="$short" -v d="$dir" -v m="$minutes" 'BEGIN {
+  ref = halves / 4.0
+  printf "%s: bdpt, 2 x %s min; relmse(halves) %.6g; reference relmse ~ %.6g; 60 s bdpt relmse %.6g; margin %.1fx\n",
+         d, m, halves, ref, short, short / ref
+}'
