@@ -48,6 +48,17 @@ static lmc_status load_quiet(const char *path, scene **OUT_s, int *OUT_warnings)
   return st;
 }
 
+/* Writes `xml` to `path` and loads it with load_quiet; case i of a table,
+ * whose load must succeed. */
+static scene *load_case_ok(const char *path, const char *xml, size_t i, int *OUT_warnings) {
+  write_text(path, xml);
+  scene *s;
+  lmc_status st = load_quiet(path, &s, OUT_warnings);
+  if (st != LMC_OK) print_error("case %zu\n", i);
+  assert_int_equal(st, LMC_OK);
+  return s;
+}
+
 /* ---- Malformed inputs. -------------------------------------------------- */
 
 typedef struct bad_case {
@@ -289,12 +300,8 @@ static void test_direct_samples(void **state) {
              HEAD "  <integrator type=\"pssmlt\">%s</integrator>\n" SENSOR
              "  <shape type=\"cube\"/>\n</scene>\n",
              cases[i].prop);
-    write_text("/tmp/lmc_loader_direct.xml", xml);
-    scene *s;
     int warnings;
-    lmc_status st = load_quiet("/tmp/lmc_loader_direct.xml", &s, &warnings);
-    if (st != LMC_OK) print_error("case %zu\n", i);
-    assert_int_equal(st, LMC_OK);
+    scene *s = load_case_ok("/tmp/lmc_loader_direct.xml", xml, i, &warnings);
     assert_int_equal(s->settings.direct_separate, cases[i].separate);
     assert_int_equal((s->settings.set & SET_DIRECT) != 0, cases[i].set);
     assert_int_equal(s->settings.direct_spp, cases[i].spp);
@@ -330,12 +337,8 @@ static void test_sampler_type(void **state) {
              HEAD "  <sensor type=\"perspective\">%s</sensor>\n"
                   "  <shape type=\"cube\"/>\n</scene>\n",
              smp);
-    write_text("/tmp/lmc_loader_sampler.xml", xml);
-    scene *s;
     int warnings;
-    lmc_status st = load_quiet("/tmp/lmc_loader_sampler.xml", &s, &warnings);
-    if (st != LMC_OK) print_error("case %zu\n", i);
-    assert_int_equal(st, LMC_OK);
+    scene *s = load_case_ok("/tmp/lmc_loader_sampler.xml", xml, i, &warnings);
     assert_int_equal(s->settings.sampler, cases[i].sampler);
     assert_int_equal(warnings, cases[i].warnings);
     if (cases[i].type[0]) assert_int_equal(s->settings.spp, 8);

@@ -85,7 +85,7 @@ static double sampler__unit(uint32_t x, uint64_t low) {
 static double sobol_next(lmc_sampler *self) {
   lmc_sobol_sampler *s = (lmc_sobol_sampler *)self;
   int k = s->stream;
-  if (s->st[k].left == 0) {
+  if (s->st[k].next == s->st[k].size) {
     /* Start the stream's next group: its keys, the shuffled index, the point. */
     uint32_t g = s->st[k].group++;
     int n = sampler__group_size(s->layout, k, g);
@@ -97,10 +97,9 @@ static double sobol_next(lmc_sampler *self) {
     s->st[k].value[0] = sampler__unit(sampler_owen_scramble(x, (uint32_t)scr), low);
     if (n == 2)
       s->st[k].value[1] = sampler__unit(sampler_owen_scramble(y, (uint32_t)(scr >> 32)), low >> 32);
-    s->st[k].left = n;
+    s->st[k].size = n;
     s->st[k].next = 0;
   }
-  s->st[k].left--;
   return s->st[k].value[s->st[k].next++];
 }
 
@@ -118,7 +117,7 @@ void sobol_sampler_init(lmc_sobol_sampler *s, uint64_t seed, uint64_t pixel, uin
   s->stream = LMC_STREAM_CAMERA;
   for (int k = 0; k < LMC_STREAM_COUNT; k++) {
     s->st[k].group = 0;
-    s->st[k].left = 0;
+    s->st[k].size = 0;
     s->st[k].next = 0;
   }
 }

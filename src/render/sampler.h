@@ -105,7 +105,7 @@ typedef struct lmc_sobol_sampler {
   int stream;
   struct {
     uint32_t group;   /* groups started so far */
-    int left, next;   /* numbers of the current group not yet taken; which is next */
+    int size, next;   /* the current group's size; which of its numbers is next */
     double value[2];  /* the current group */
   } st[LMC_STREAM_COUNT];
 } lmc_sobol_sampler;
