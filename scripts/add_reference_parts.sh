@@ -92,10 +92,11 @@ if awk -v e="$e_ref" 'BEGIN { exit !(e <= 0) }'; then
 fi
 
 # 4. The inverse-variance merge.
+# The weights, the new reference's error, the reference's weight in parts
+# and how far the reference should move (e_ref - e_new).
 n=${#seeds[@]}
-w_ref=$(awk -v e="$e_ref" 'BEGIN { printf "%.6g", 1 / e }')
-w_part=$(awk -v e="$e_part" 'BEGIN { printf "%.6g", 1 / e }')
-e_new=$(awk -v a="$w_ref" -v b="$w_part" -v n="$n" 'BEGIN { printf "%.6g", 1 / (a + n * b) }')
+read -r w_ref w_part e_new worth expected <<< "$(awk -v er="$e_ref" -v ep="$e_part" -v n="$n" 'BEGIN {
+  en = 1 / (1 / er + n / ep); printf "%.6g %.6g %.6g %.3g %.3g\n", 1 / er, 1 / ep, en, ep / er, er - en }')"
 prev="$work/reference-before-${seeds[0]}.exr"
 cp "$dir/reference.exr" "$prev"
 args=(--weight "$w_ref" "$prev")
@@ -109,7 +110,7 @@ echo "  relmse between the parts of each pair:${pairs}"
 echo "  each part against the previous reference:${against}"
 echo "  a part's own relmse e_part = $e_part"
 echo "  the previous reference's own relmse, measured: $e_measured${LMC_REF_ERROR:+ (used: LMC_REF_ERROR = $LMC_REF_ERROR)}"
-echo "  e_ref = $e_ref (weight 1/e_ref = $w_ref parts' worth: $(awk -v a="$w_ref" -v b="$w_part" 'BEGIN { printf "%.3g", a / b }'))"
+echo "  e_ref = $e_ref (weight 1/e_ref = $w_ref parts' worth: $worth)"
 echo "  the new reference's own relmse = $e_new"
-echo "  relmse between the previous reference and the new one: $moved ($(awk -v a="$e_ref" -v b="$e_new" 'BEGIN { printf "%.3g", a - b }') expected)"
+echo "  relmse between the previous reference and the new one: $moved ($expected expected)"
 echo "  wrote $dir/reference.exr (the previous one: $prev)"
