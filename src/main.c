@@ -387,6 +387,28 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--largestep", v, 0, 1, &cli.largestep))
         goto bad;
       cli.set |= SET_LARGESTEP;
+    } else if (lmc_flag_is(&a, "--small-step")) {
+      int gauss;
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_choice("--small-step", v, "kelemen", "gauss", &gauss))
+        goto bad;
+      cli.small_gauss = gauss;
+      cli.set |= SET_SMALL_STEP;
+    } else if (lmc_flag_is(&a, "--chains")) {
+      int64_t n;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--chains", v, 1, 1 << 20, &n)) goto bad;
+      cli.chains = (int)n;
+      cli.set |= SET_CHAINS;
+    } else if (lmc_flag_is(&a, "--roughness-threshold")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--roughness-threshold", v, 0, 1e6, &cli.rough_min))
+        goto bad;
+      cli.set |= SET_ROUGH;
+    } else if (lmc_flag_is(&a, "--largestep-scale")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--largestep-scale", v, 0, 1e6, &cli.largestep_scale))
+        goto bad;
+      cli.set |= SET_LARGESTEP_SCALE;
     } else if (lmc_flag_is(&a, "--sigma")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--sigma", v, 1e-9, 1, &cli.sigma))
         goto bad;
@@ -451,6 +473,30 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) ||
           !lmc_parse_double("--cache-fraction", v, 0, 0.99, &cli.cache_fraction))
         goto bad;
+    } else if (lmc_flag_is(&a, "--cache-gradient")) {
+      int off;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--cache-gradient", v, "on", "off", &off))
+        goto bad;
+      cli.cache_gradient = !off;
+    } else if (lmc_flag_is(&a, "--cache-drift")) {
+      int off;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--cache-drift", v, "on", "off", &off))
+        goto bad;
+      cli.cache_no_drift = off;
+    } else if (lmc_flag_is(&a, "--cache-step")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--cache-step", v, 1e-9, 0.5, &cli.cache_step))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--cache-prior")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--cache-prior", v, 1e-9, 0.5, &cli.cache_prior))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--cache-radius")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--cache-radius", v, 1e-9, 1.0, &cli.cache_radius))
+        goto bad;
+    } else if (lmc_flag_is(&a, "--cache-k")) {
+      int64_t n;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--cache-k", v, 1, 32, &n)) goto bad;
+      cli.cache_k = (int)n;
     } else if (lmc_flag_is(&a, "--iso-prob")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
         goto bad;
@@ -459,11 +505,25 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--delayed", v, "on", "off", &off))
         goto bad;
       cli.delayed = !off;
-    } else if (lmc_flag_is(&a, "--lmc-states")) {
-      int pt;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--lmc-states", v, "mmlt", "pt", &pt))
+    } else if (lmc_flag_is(&a, "--states")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (!strcmp(v, "pt")) cli.mcmc_states = MCMC_STATES_PT;
+      else if (!strcmp(v, "mmlt")) cli.mcmc_states = MCMC_STATES_MMLT;
+      else if (!strcmp(v, "bdpt")) cli.mcmc_states = MCMC_STATES_BDPT;
+      else {
+        fprintf(stderr, "lmc: flag --states: '%s' is not pt, mmlt or bdpt\n", v);
         goto bad;
-      cli.lmc_states = pt ? LMC_STATES_PT : LMC_STATES_MMLT;
+      }
+      cli.set |= SET_STATES;
+    } else if (lmc_flag_is(&a, "--lmc-states")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (!strcmp(v, "mmlt")) cli.lmc_states = LMC_STATES_MMLT;
+      else if (!strcmp(v, "pt")) cli.lmc_states = LMC_STATES_PT;
+      else if (!strcmp(v, "bdpt")) cli.lmc_states = LMC_STATES_BDPT;
+      else {
+        fprintf(stderr, "lmc: flag --lmc-states: '%s' is not one of mmlt, pt, bdpt\n", v);
+        goto bad;
+      }
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
     } else if (arg[0] == '-') {
@@ -510,6 +570,10 @@ static int lmc_cmd_render(int argc, char **argv) {
   if ((cli.set & SET_TIME) && !(cli.set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
   if (cli.set & SET_LARGESTEP) rs.largestep = cli.largestep;
   if (cli.set & SET_SIGMA) rs.sigma = cli.sigma;
+  if (cli.set & SET_SMALL_STEP) rs.small_gauss = cli.small_gauss;
+  if (cli.set & SET_LARGESTEP_SCALE) rs.largestep_scale = cli.largestep_scale;
+  if (cli.set & SET_ROUGH) rs.rough_min = cli.rough_min;
+  if (cli.set & SET_CHAINS) rs.chains = cli.chains;
   if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
   rs.bootstrap_error = cli.bootstrap_error;
   if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
@@ -518,6 +582,7 @@ static int lmc_cmd_render(int argc, char **argv) {
    * given here sets both passes. */
   if (cli.set & SET_SPP) rs.direct_spp = 0;
   rs.mcmc_even = cli.mcmc_even;
+  if (cli.set & SET_STATES) rs.mcmc_states = cli.mcmc_states;
   if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
   rs.snapshot = cli.snapshot;
   rs.lmc_step = cli.lmc_step;
@@ -528,6 +593,12 @@ static int lmc_cmd_render(int argc, char **argv) {
   rs.grad_bound = cli.grad_bound;
   rs.cache_fraction = cli.cache_fraction;
   rs.iso_prob = cli.iso_prob;
+  rs.cache_gradient = cli.cache_gradient;
+  rs.cache_step = cli.cache_step;
+  rs.cache_prior = cli.cache_prior;
+  rs.cache_radius = cli.cache_radius;
+  rs.cache_k = cli.cache_k;
+  rs.cache_no_drift = cli.cache_no_drift;
   rs.lmc_states = cli.lmc_states;
   rs.delayed = cli.delayed;
   rs.set |= cli.set;

@@ -43,7 +43,7 @@
 #include "lmc/chain.h"
 #include "test_util.h"
 
-#define N_CHI2_TESTS 11
+#define N_CHI2_TESTS 14
 static int g_chi2_tests;
 
 /* --- toy targets -------------------------------------------------------- */
@@ -308,6 +308,35 @@ static void test_lazy_coordinates(void **state) {
   }
 }
 
+/* The Gaussian small step (its owed steps replayed as one of variance
+ * n sigma^2) on the ring and on the lazy density, alone and with large
+ * steps. */
+static void test_gauss_small(void **state) {
+  (void)state;
+  enum { NB = 10, N = 20000 };
+  double prob[NB * NB], hist[NB * NB];
+  mc_kernel k[2] = {mc_kernel_small_gauss(0.03), mc_kernel_large()};
+  double p1[1] = {1.0}, p2[2] = {0.7, 0.3};
+  toy_ctx ring = {toy_ring, 0};
+  mc_target t = toy_target(&ring, 2);
+  exact_bins(toy_ring, 2, NB, prob);
+  chain_histogram(&t, k, p1, 1, 1.0, N, 100, NB, 2, hist);
+  check_chi2("ring gauss", hist, prob, NB * NB, N);
+  toy_ctx lazy = {NULL, 1};
+  t = toy_target(&lazy, 2);
+  for (int by = 0; by < NB; by++)
+    for (int bx = 0; bx < NB; bx++) {
+      double y0 = (double)by / NB, y1 = (double)(by + 1) / NB;
+      double area = 1.0 / NB;
+      prob[by * NB + bx] = bx < NB / 2 ? area * 0.5 * ((y1 - y0) + 2.0 * (y1 * y1 - y0 * y0))
+                                       : (by == 0 ? area * 0.5 : 0.0);
+    }
+  chain_histogram(&t, k, p1, 1, 5.0, N, 100, NB, 2, hist);
+  check_chi2("lazy gauss", hist, prob, NB * NB, N);
+  chain_histogram(&t, k, p2, 2, 5.0, N, 100, NB, 2, hist);
+  check_chi2("lazy gauss mixture", hist, prob, NB * NB, N);
+}
+
 static void test_full_kernel_asymmetric(void **state) {
   (void)state;
   toy_ctx c = {toy_linear, 0};
@@ -434,6 +463,7 @@ int main(void) {
       cmocka_unit_test(test_bimodal_1d),
       cmocka_unit_test(test_ring_2d),
       cmocka_unit_test(test_lazy_coordinates),
+      cmocka_unit_test(test_gauss_small),
       cmocka_unit_test(test_full_kernel_asymmetric),
       cmocka_unit_test(test_delayed_acceptance),
       cmocka_unit_test(test_expected_value_splatting),

@@ -32,7 +32,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PSS_MAX_REPLAY 64
+#define PSS_MAX_REPLAY 16
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 struct mc_pss {
   lmc_sampler base; /* reads coordinates (the target draws from it) */
@@ -45,6 +48,7 @@ struct mc_pss {
   int64_t iter, last_large;
   int large;        /* the proposal being evaluated is a large step */
   double s1, s2;    /* the chain's small step (owed steps are replayed with it) */
+  double log_ratio; /* log(s2 / s1) (Kelemen) */
   const double *scale; /* per-coordinate factor on s1, s2 (target.h; NULL: 1) */
   rng *r;
   int64_t *overflow;
@@ -52,10 +56,24 @@ struct mc_pss {
 
 /* --- the small step ------------------------------------------------------- */
 
+/* A standard normal number (Box-Muller; one of the pair). */
+static double chain__normal(rng *r) {
+  double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
+  return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
+}
+
+/* The Gaussian small step of n owed iterations: x + sqrt(n) sigma N(0, 1)
+ * wrapped into [0, 1) (n steps of N(0, sigma^2) add up to one of n sigma^2). */
+static double chain__gauss(double x, double sigma, int64_t n, rng *r) {
+  double y = x + sigma * sqrt((double)n) * chain__normal(r);
+  y -= floor(y);
+  return y < 1.0 ? y : 0.0;
+}
+
 /* Kelemen's mutation: +-r with r log-uniform in (s1, s2], wrapped. */
-static double chain__kelemen(double x, double s1, double s2, rng *r) {
+static double chain__kelemen(double x, double s2, double log_ratio, rng *r) {
   double xi = rng_uniform(r), sign = rng_uniform(r) < 0.5 ? -1.0 : 1.0;
-  double d = s2 * exp(-log(s2 / s1) * xi);
+  double d = s2 * exp(-log_ratio * xi);
   double y = x + sign * d;
   y -= floor(y);
   return y < 1.0 ? y : 0.0;
@@ -85,9 +103,11 @@ static double pss__get(mc_pss *p, int i) {
       double sc = p->scale ? p->scale[i] : 1.0;
       if (n > PSS_MAX_REPLAY) {
         p->val[i] = rng_uniform(p->r);
+      } else if (sc > 0.0 && p->s1 == 0.0) {
+        if (n > 0) p->val[i] = chain__gauss(p->val[i], sc * p->s2, n, p->r);
       } else if (sc > 0.0) {
         for (int64_t k = 0; k < n; k++)
-          p->val[i] = chain__kelemen(p->val[i], sc * p->s1, sc * p->s2, p->r);
+          p->val[i] = chain__kelemen(p->val[i], sc * p->s2, p->log_ratio, p->r);
       }
     }
     p->mod[i] = p->iter;
@@ -161,6 +181,12 @@ mc_kernel mc_kernel_large(void) {
   return k;
 }
 
+mc_kernel mc_kernel_small_gauss(double sigma) {
+  mc_kernel k = mc_kernel_small(0.0, sigma);
+  k.name = "small";
+  return k;
+}
+
 mc_kernel mc_kernel_small(double s1, double s2) {
   mc_kernel k = {0};
   k.name = "small";
@@ -198,11 +224,15 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
     }
     if (!(prob[i] >= 0.0))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_create: bad probability");
-    if (k[i].kind == MC_KERNEL_SMALL && !(k[i].s1 > 0.0 && k[i].s1 < k[i].s2 && k[i].s2 < 0.5))
+    if (k[i].kind == MC_KERNEL_SMALL && !(k[i].s1 >= 0.0 && k[i].s1 < k[i].s2 && k[i].s2 < 0.5))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0,
-                           "mc_chain_create: small step needs 0 < s1 < s2 < 1/2");
+                           "mc_chain_create: small step needs 0 < s1 < s2 < 1/2 "
+                           "(Gaussian: s1 = 0, 0 < sigma < 1/2)");
     if (k[i].kind == MC_KERNEL_TECHNIQUE && (k[i].coord < 0 || k[i].coord >= target->dim))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_create: bad technique coordinate");
+    if (k[i].kind == MC_KERNEL_TECHNIQUE && target->n_labels > 0)
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                           "mc_chain_create: no technique kernel on a labelled target");
     if (k[i].kind == MC_KERNEL_FULL && (!k[i].propose || !k[i].log_density))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_create: full kernel without densities");
     total += prob[i];
@@ -222,11 +252,23 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   p->touched = calloc((size_t)D, sizeof(int));
   c->x.u = calloc((size_t)D, sizeof(double));
   c->y.u = calloc((size_t)D, sizeof(double));
+  c->sub = calloc((size_t)D, sizeof(int));
   c->x.grad = calloc((size_t)D, sizeof(double));
   c->y.grad = calloc((size_t)D, sizeof(double));
   if (!p->val || !p->bak || !p->mod || !p->mod_bak || !p->touched || !c->x.u || !c->y.u ||
-      !c->x.grad || !c->y.grad)
+      !c->x.grad || !c->y.grad || !c->sub)
     goto oom;
+  if (target->n_labels > 0) {
+    if (!target->eval_label || !target->eval_all) {
+      mc_chain_destroy(c);
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                           "mc_chain_create: labelled target without eval_label/eval_all");
+    }
+    c->cy = calloc((size_t)target->n_labels, sizeof *c->cy);
+    c->cx = calloc((size_t)target->n_labels, sizeof *c->cx);
+    c->drawn = calloc((size_t)D, sizeof *c->drawn);
+    if (!c->cy || !c->cx || !c->drawn) goto oom;
+  }
   c->x.dim = c->y.dim = D;
   p->dim = D;
   for (int s = 0, off = 0; s < LMC_STREAM_COUNT; s++) {
@@ -239,6 +281,7 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   p->r = &c->r;
   p->s1 = s1;
   p->s2 = s2;
+  p->log_ratio = s1 > 0.0 ? log(s2 / s1) : 0.0;
   p->scale = target->step_scale;
   p->overflow = &c->overflow;
   c->target = target;
@@ -254,6 +297,12 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   if (target->scratch_create) {
     c->scratch = target->scratch_create(target);
     if (!c->scratch) goto oom;
+    /* Labelled targets with relabel: the roulette's evaluation of the
+     * current state must leave the proposal's work in c->scratch. */
+    if (target->n_labels > 0 && target->relabel) {
+      c->scratch_alt = target->scratch_create(target);
+      if (!c->scratch_alt) goto oom;
+    }
   }
   *OUT_chain = c;
   return LMC_OK;
@@ -276,9 +325,14 @@ void mc_chain_destroy(mc_chain *c) {
   }
   free(c->x.u);
   free(c->y.u);
+  free(c->sub);
   free(c->x.grad);
   free(c->y.grad);
+  free(c->cy);
+  free(c->cx);
+  free(c->drawn);
   if (c->scratch && c->target->scratch_destroy) c->target->scratch_destroy(c->scratch);
+  if (c->scratch_alt && c->target->scratch_destroy) c->target->scratch_destroy(c->scratch_alt);
   free(c);
 }
 
@@ -288,11 +342,15 @@ static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
   pss__rewind(c->pss);
   st->grad_ok = 0;
   st->grad_eval = want_grad != 0;
-  int rc = c->target->eval(c->target, c->scratch, &c->pss->base, &st->v,
-                           want_grad ? st->grad : NULL, &st->grad_ok);
+  const mc_target *T = c->target;
+  int rc = T->n_labels > 0 ? T->eval_label(T, c->scratch, &c->pss->base, st->label, &st->v,
+                                           want_grad ? st->grad : NULL, &st->grad_ok)
+                           : T->eval(T, c->scratch, &c->pss->base, &st->v,
+                                     want_grad ? st->grad : NULL, &st->grad_ok);
+  if (T->n_labels == 0 || !T->relabel) st->v.f_large = st->v.f;
   if (rc != 0 || !(st->v.f >= 0.0) || !isfinite(st->v.f)) {
     if (rc != 0) c->eval_failures++;
-    st->v.f = 0.0;
+    st->v.f = st->v.f_large = 0.0;
     st->grad_ok = 0;
   }
 }
@@ -321,18 +379,136 @@ static void chain__regrad(mc_chain *c) {
   chain__regrad_state(c, &c->x);
 }
 
+/* Sums the labels' f (labelled targets), dropping non-finite or negative
+ * entries; returns the count kept. */
+static int chain__clean(mc_contrib *cb, int n, double *OUT_sum) {
+  int m = 0;
+  double sum = 0.0;
+  for (int j = 0; j < n; j++) {
+    double f = cb[j].v.f;
+    if (!(f > 0.0) || !isfinite(f)) continue;
+    cb[m++] = cb[j];
+    sum += f;
+  }
+  *OUT_sum = isfinite(sum) ? sum : 0.0;
+  return isfinite(sum) ? m : 0;
+}
+
+/* A label of cb[0..n-1] chosen in proportion to f with the uniform u. */
+static int chain__pick(const mc_contrib *cb, int n, double sum, double u) {
+  double target = u * sum, acc = 0.0;
+  for (int j = 0; j < n - 1; j++) {
+    acc += cb[j].v.f;
+    if (target < acc) return j;
+  }
+  return n - 1;
+}
+
+/* Makes label cb's state current (labelled targets): the numbers u of
+ * the large step are rewritten into the label's coordinates (relabel),
+ * the value scaled by the Jacobian. */
+static void chain__take(mc_chain *c, const mc_contrib *cb, double *u) {
+  const mc_target *T = c->target;
+  c->x.label = cb->label;
+  c->x.v = cb->v;
+  c->x.v.f_large = cb->v.f;
+  c->x.grad_ok = c->x.grad_eval = 0;
+  if (!T->relabel) return;
+  double jac = T->relabel(T, c->scratch, cb->label, u, &c->r);
+  if (!(jac >= 0.0) || !isfinite(jac)) jac = 0.0;
+  c->x.v.f *= jac;
+  c->x.v.value = rgb_scale(c->x.v.value, jac);
+  if (!(c->x.v.f > 0.0) || !isfinite(c->x.v.f)) {
+    /* Not for a consistent target; a state of f = 0 accepts any
+     * proposal (chain.c's ratio), so the chain leaves it at once. */
+    c->x.v.f = 0.0;
+    c->x.v.value = rgb_zero();
+  }
+}
+
 double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_seq) {
   mc_pss *p = c->pss;
+  const mc_target *T = c->target;
   for (int i = 0; i < p->dim; i++) p->mod[i] = 0;
   p->iter = 0;
   p->last_large = 0;
   rng_seed(&c->r, seed, seq);
   pss__begin(p, 1);
+  if (T->n_labels > 0) {
+    /* Every label of the starting numbers; the state takes one in
+     * proportion to its f (drawn from the chain's own stream). */
+    pss__rewind(p);
+    int n = T->eval_all(T, c->scratch, &p->base, -1, c->cy);
+    n = chain__clean(c->cy, n < 0 ? 0 : n, &c->sum_x);
+    pss__accept(p);
+    rng_seed(&c->r, seed, chain_seq);
+    double u = rng_uniform(&c->r);
+    memset(&c->x.v, 0, sizeof c->x.v);
+    c->x.label = 0;
+    c->x.grad_ok = c->x.grad_eval = 0;
+    if (n > 0) {
+      int j = chain__pick(c->cy, n, c->sum_x, u);
+      chain__take(c, &c->cy[j], p->val);
+    } else {
+      c->sum_x = 0.0;
+    }
+    c->steps = 0;
+    c->x.from_large = 1;
+    return c->x.v.f;
+  }
   chain__eval(c, &c->x, 0);
   pss__accept(p);
   rng_seed(&c->r, seed, chain_seq);
   c->steps = 0;
+  c->x.from_large = 1;
   return c->x.v.f;
+}
+
+lmc_status mc_chain_set_kernels(mc_chain *c, const mc_kernel *k, const double *prob, int n,
+                                lmc_error *err) {
+  if (n < 1 || n > MC_MAX_KERNELS)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_set_kernels: %d kernels", n);
+  for (int i = 0; i < n; i++) {
+    if (k[i].kind == MC_KERNEL_SMALL && (k[i].s1 != c->pss->s1 || k[i].s2 != c->pss->s2))
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                           "mc_chain_set_kernels: the small step must stay the chain's");
+    if (k[i].kind == MC_KERNEL_FULL && (!k[i].propose || !k[i].log_density))
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_set_kernels: full kernel without densities");
+  }
+  c->with_grad = 0;
+  for (int i = 0; i < n; i++) {
+    /* A kernel that changes starts its statistics afresh. */
+    int same = i < c->n_kernels && c->kernels[i].kind == k[i].kind &&
+               c->kernels[i].propose == k[i].propose && c->kernels[i].self == k[i].self;
+    if (!same) memset(&c->stats[i], 0, sizeof c->stats[i]);
+    c->kernels[i] = k[i];
+    if (k[i].needs_grad) c->with_grad = 1;
+  }
+  c->n_kernels = n;
+  mc_chain_set_probs(c, prob);
+  return LMC_OK;
+}
+
+void mc_chain_set_probs(mc_chain *c, const double *prob) {
+  double total = 0.0, acc = 0.0;
+  for (int i = 0; i < c->n_kernels; i++) total += prob[i] > 0.0 ? prob[i] : 0.0;
+  if (!(total > 0.0)) return;
+  for (int i = 0; i < c->n_kernels; i++) {
+    acc += (prob[i] > 0.0 ? prob[i] : 0.0) / total;
+    c->cdf[i] = acc;
+  }
+  c->cdf[c->n_kernels - 1] = 1.0;
+}
+
+int64_t mc_chain_rays(const mc_chain *c) {
+  const mc_target *T = c->target;
+  if (!T->scratch_rays) return 0;
+  return (c->scratch ? T->scratch_rays(c->scratch) : 0) +
+         (c->scratch_alt ? T->scratch_rays(c->scratch_alt) : 0);
+}
+
+int mc_chain_max_splats(const mc_chain *c) {
+  return c->target->n_labels > 0 ? c->target->n_labels + 1 : 2;
 }
 
 /* The independent sampler of mc_eval_independent: one uniform per read, in
@@ -354,10 +530,132 @@ double mc_eval_independent(const mc_target *t, void *scratch, uint64_t seed, uin
   mc_value v;
   memset(&v, 0, sizeof v);
   int ok = 0;
+  if (t->n_labels > 0) {
+    /* F(u), the sum over the labels (target.h). */
+    mc_contrib local[64];
+    mc_contrib *cb = t->n_labels <= 64 ? local : malloc((size_t)t->n_labels * sizeof *cb);
+    double sum = 0.0;
+    if (cb) {
+      int n = t->eval_all(t, scratch, &smp.base, -1, cb);
+      chain__clean(cb, n < 0 ? 0 : n, &sum);
+      if (cb != local) free(cb);
+    }
+    v.f = sum;
+    if (OUT_value) *OUT_value = v;
+    return sum;
+  }
   if (t->eval(t, scratch, &smp.base, &v, NULL, &ok) != 0 || !(v.f >= 0.0) || !isfinite(v.f))
     v.f = 0.0;
   if (OUT_value) *OUT_value = v;
   return v.f;
+}
+
+/* The recording sampler of the labelled large step: fresh uniforms from
+ * the chain's stream, each kept in y.u at its coordinate (numbers past a
+ * stream's block are fresh and not kept, as pss__next's). */
+typedef struct chain__rec {
+  lmc_sampler base;
+  mc_chain *c;
+  int stream, pos[LMC_STREAM_COUNT];
+} chain__rec;
+
+static double chain__rec_next(lmc_sampler *self) {
+  chain__rec *r = (chain__rec *)self;
+  mc_chain *c = r->c;
+  mc_pss *p = c->pss;
+  double u = rng_uniform(&c->r);
+  int k = r->stream;
+  if (r->pos[k] >= p->stream_dim[k]) {
+    c->overflow++;
+    return u;
+  }
+  int i = p->stream_off[k] + r->pos[k]++;
+  c->y.u[i] = u;
+  c->drawn[c->n_drawn++] = i;
+  return u;
+}
+
+static void chain__rec_stream(lmc_sampler *self, int stream) {
+  chain__rec *r = (chain__rec *)self;
+  if (stream >= 0 && stream < LMC_STREAM_COUNT) r->stream = stream;
+}
+
+/* F of the current state: every label evaluated at its coordinates, the
+ * state's own label counted with its stored f (so that F >= f exactly). */
+static double chain__sum_current(mc_chain *c) {
+  const mc_target *T = c->target;
+  mc_pss *p = c->pss;
+  pss__materialise(p, c->x.u);
+  pss__rewind(p);
+  c->sum_evals++;
+  int n = T->eval_all(T, c->scratch_alt ? c->scratch_alt : c->scratch, &p->base, c->x.label, c->cx);
+  double sum = c->x.v.f_large;
+  for (int j = 0; j < n; j++) {
+    double f = c->cx[j].v.f;
+    if (c->cx[j].label != c->x.label && f > 0.0 && isfinite(f)) sum += f;
+  }
+  return isfinite(sum) ? sum : c->x.v.f_large;
+}
+
+/* The large step of a labelled target (chain.h). */
+static void chain__large_labelled(mc_chain *c, int ki, mc_splat_fn splat, void *ctx) {
+  const mc_target *T = c->target;
+  mc_pss *p = c->pss;
+
+  /* Propose a fresh u' and evaluate every label there. */
+  chain__rec rec = {{chain__rec_next, chain__rec_stream}, c, 0, {0}};
+  c->n_drawn = 0;
+  int n = T->eval_all(T, c->scratch, &rec.base, -1, c->cy);
+  double sum_y;
+  n = chain__clean(c->cy, n < 0 ? 0 : n, &sum_y);
+  c->n_cy = n;
+  mc_kernel_stats *ks = &c->stats[ki];
+  ks->proposed++;
+  ks->f_sum += sum_y;
+  ks->f_sum2 += sum_y * sum_y;
+
+  /* a = min(1, F(u') / F(u)), with F(u) from the roulette when unknown. */
+  double a_hat = 0.0, a = 0.0;
+  double fx = c->x.v.f_large;
+  if (!(sum_y > 0.0)) {
+    a_hat = a = 0.0;
+  } else if (!(fx > 0.0)) {
+    a_hat = a = 1.0;
+  } else if (c->sum_x > 0.0) {
+    a_hat = a = fmin(1.0, sum_y / c->sum_x);
+  } else {
+    double pr = fmin(1.0, sum_y / fx);
+    if (rng_uniform(&c->r) < pr) {
+      c->sum_x = chain__sum_current(c);
+      a = fmin(1.0, sum_y / c->sum_x);
+      a_hat = fmin(1.0, a / pr);
+    }
+  }
+
+  /* Expected-value splatting: the proposal over all its labels. */
+  if (splat) {
+    if (a_hat > 0.0)
+      for (int j = 0; j < n; j++) splat(ctx, &c->cy[j].v, a_hat / sum_y);
+    if (a_hat < 1.0 && c->x.v.f > 0.0) splat(ctx, &c->x.v, (1.0 - a_hat) / c->x.v.f);
+  }
+
+  /* Accept with probability a (a_hat is a / p after a roulette that
+   * evaluated, 0 after one that did not). */
+  ks->accept_sum += a_hat;
+  int accepted = a_hat > 0.0 && (a_hat >= 1.0 || rng_uniform(&c->r) < a_hat);
+  if (accepted) {
+    int j = chain__pick(c->cy, n, sum_y, rng_uniform(&c->r));
+    ks->accepted++;
+    chain__take(c, &c->cy[j], c->y.u);
+    c->x.from_large = 1;
+    pss__begin(p, 1);
+    for (int q = 0; q < c->n_drawn; q++) pss__set(p, c->drawn[q], c->y.u[c->drawn[q]]);
+    pss__accept(p);
+    c->sum_x = sum_y;
+  }
+  c->steps++;
+  for (int i = 0; i < c->n_kernels; i++)
+    if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, accepted);
 }
 
 int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
@@ -368,6 +666,11 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   int ki = 0;
   while (ki < c->n_kernels - 1 && uk >= c->cdf[ki]) ki++;
   mc_kernel *k = &c->kernels[ki];
+  if (k->kind == MC_KERNEL_LARGE && c->target->n_labels > 0) {
+    chain__large_labelled(c, ki, splat, ctx);
+    return ki;
+  }
+  c->y.label = c->x.label;
 
   /* Propose y and evaluate it; log_ratio = log q(x|y) - log q(y|x). With
    * delayed acceptance, screen = the log of a1(y, x) / a1(x, y) (chain.h),
@@ -375,11 +678,23 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   double log_ratio = 0.0, screen = 0.0;
   int full = k->kind == MC_KERNEL_FULL;
   if (full) {
-    pss__materialise(p, c->x.u);
+    /* A kernel on a subset of the coordinates reads and writes those
+     * alone; the others take the lazy vector's small step (chain.h). */
+    int n_sub = k->coords ? k->coords(k->self, &c->x, c->sub) : -1;
+    if (n_sub >= 0) {
+      p->large = 0;
+      for (int q = 0; q < n_sub; q++) c->x.u[c->sub[q]] = pss__get(p, c->sub[q]);
+    } else {
+      pss__materialise(p, c->x.u);
+    }
     if (k->needs_grad && !c->x.grad_eval) chain__regrad(c);
     pss__begin(p, 0);
     double log_fwd = k->propose(k->self, &c->r, &c->x, c->y.u);
-    for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
+    if (n_sub >= 0) {
+      for (int q = 0; q < n_sub; q++) pss__set(p, c->sub[q], c->y.u[c->sub[q]]);
+    } else {
+      for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
+    }
     int delayed = k->log_screen && c->x.v.f > 0.0;
     chain__eval(c, &c->y, k->needs_grad && !delayed);
     if (delayed && c->y.v.f > 0.0) {
@@ -440,6 +755,8 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     mc_state t = c->x;
     c->x = c->y;
     c->y = t;
+    c->x.from_large = k->kind == MC_KERNEL_LARGE;
+    c->sum_x = 0.0; /* labelled targets: F of the new state is not known */
   } else {
     pss__reject(p);
   }

@@ -24,7 +24,7 @@
  * scaled by b / (number of steps) is an unbiased estimate). Zero weights
  * are not splatted.
  *
- * Kernels. Two are built in and work on the lazy vector: the large step
+ * Kernels. Built in, on the lazy vector: the large step
  * (every coordinate a fresh uniform; an independence proposal whose
  * density is 1, so the ratio is f(y) / f(x)) and Kelemen's small step
  * (each coordinate moves by +-r, r = s2 exp(-log(s2/s1) xi), wrapped into
@@ -42,6 +42,28 @@
  * with a stored estimate at the current state is the pseudo-marginal
  * method (Andrieu and Roberts 2009), still exact. Targets size their blocks
  * so this is rare (it is counted: mc_chain.overflow).
+ *
+ * Labelled targets (target.h, n_labels > 0: the state is (u, l)). Every
+ * kernel but the large step keeps the label and evaluates f(u, l) alone
+ * (eval_label). The large step proposes a fresh uniform u' (drawn and
+ * recorded apart from the lazy vector), evaluates every label there
+ * (eval_all) and picks l' with probability f(u', l') / F(u'),
+ * F = sum_l f(., l): an independence proposal whose Metropolis-Hastings
+ * ratio is F(u') / F(u). F(u) of the current state is known when that
+ * state came from a large step; after a small step it is not, and is
+ * computed only when needed, by a Russian roulette that keeps the step
+ * exact: since F(u) >= f(u, l), a = min(1, F(u') / F(u)) is at most
+ * p = min(1, F(u') / f(u, l)); with probability p the chain evaluates
+ * every label at the current state (the coordinates the label does not
+ * read are brought up to date first, a valid move for coordinates the
+ * target ignores) and accepts with probability a / p, else rejects. The
+ * acceptance probability is p (a / p) = a. The splats use the unbiased
+ * estimate a^ = 1{evaluated} a / p of a (a^ <= 1): the current state gets
+ * 1 - a^, and the proposal a^ spread over all its labels, each label's
+ * value weighted by 1 / F(u') (the expectation of the proposal's splat
+ * over the label choice: every strategy of a fresh BDPT sample splats,
+ * as in Kelemen et al.'s bidirectional PSSMLT, while the chain moves to
+ * one of them).
  *
  * Ownership: a chain borrows its target, its kernels and their `self`; it
  * owns its vectors and scratch. One chain is driven by one thread at a
@@ -64,6 +86,8 @@ typedef struct mc_state {
   double *grad; /* df/du (owned by the chain; valid when grad_ok) */
   int grad_ok;  /* 1 when grad holds the gradient of f at u */
   int grad_eval; /* 1 when the state was evaluated with its gradient (grad_ok meaningful) */
+  int label;    /* labelled targets: the state's label */
+  int from_large; /* the state came from an accepted large step (no other move since) */
 } mc_state;
 
 typedef enum mc_kernel_kind {
@@ -109,19 +133,33 @@ typedef struct mc_kernel {
   const char *name; /* for the statistics lines */
   mc_kernel_kind kind;
   int needs_grad;   /* states must be evaluated with their gradient */
-  double s1, s2;    /* MC_KERNEL_SMALL: offsets log-uniform in (s1, s2], s2 < 1/2; all
-                       small steps of one chain share them (default 1/1024, 1/64) */
+  double s1, s2;    /* MC_KERNEL_SMALL: offsets log-uniform in (s1, s2], s2 < 1/2, or for
+                       s1 = 0 Gaussian offsets of standard deviation s2; all small
+                       steps of one chain share them (default 1/1024, 1/64) */
   int coord;        /* MC_KERNEL_TECHNIQUE: the coordinate redrawn */
   void *self;
   double (*propose)(void *self, rng *r, const mc_state *x, double *OUT_y);
   double (*log_density)(void *self, const mc_state *from, const double *to_u);
   double (*log_screen)(void *self, const mc_state *from, const double *to_u, double f_to);
   void (*on_step)(void *self, const mc_state *current, int accepted);
+  /* coords(self, x, OUT_idx) (may be NULL: all): a full kernel that
+   * moves only some coordinates, written to OUT_idx (room for dim),
+   * chosen by x's label alone. The chain then brings only those up to
+   * date in x->u (the others are stale there: propose and log_density
+   * must not read them) and takes only those from OUT_y; every other
+   * coordinate gets the lazy vector's small step, a symmetric factor of
+   * the proposal that cancels in the ratio. */
+  int (*coords)(void *self, const mc_state *x, int *OUT_idx);
 } mc_kernel;
 
 /* Built-in kernels. */
 mc_kernel mc_kernel_large(void);
 mc_kernel mc_kernel_small(double s1, double s2);
+/* The Gaussian small step: every coordinate moves by N(0, sigma^2) (times
+ * the target's step scale), wrapped into [0, 1); symmetric. Owed steps are
+ * replayed as one step of variance n sigma^2. As a kernel it is
+ * MC_KERNEL_SMALL with s1 = 0, s2 = sigma. */
+mc_kernel mc_kernel_small_gauss(double sigma);
 mc_kernel mc_kernel_technique(int coord);
 
 #define MC_MAX_KERNELS 8
@@ -154,9 +192,19 @@ typedef struct mc_chain {
   mc_pss *pss;                /* the lazy vector of the current state */
   mc_state x, y;              /* current and proposed (x.u valid after a full step) */
   void *scratch;              /* the target's per-chain scratch */
+  void *scratch_alt;          /* a second one (labelled targets with relabel, chain.c) */
   int64_t steps;
   int64_t overflow;           /* coordinates drawn past a stream's block */
   int64_t eval_failures;      /* target evaluations that returned an error */
+  /* Labelled targets (see above). */
+  mc_contrib *cy;             /* the large-step proposal's labels (n_labels) */
+  mc_contrib *cx;             /* the current state's, when the roulette evaluates them */
+  int n_cy;
+  double sum_x;               /* F of the current state, 0 when not known */
+  int *drawn;                 /* coordinates the large-step proposal drew */
+  int n_drawn;
+  int64_t sum_evals;          /* current states evaluated for F (the roulette) */
+  int *sub;                   /* scratch: a subset kernel's coordinates */
 } mc_chain;
 
 /* Creates a chain for `target` with kernels k[0..n-1] chosen with
@@ -172,6 +220,24 @@ void mc_chain_destroy(mc_chain *c);
  * states). Then reseeds the chain's own stream with (seed, chain_seq).
  * Returns f of the starting state. */
 double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_seq);
+
+/* Replaces the chain's kernels (as mc_chain_create takes them; the small
+ * step must keep the chain's s1, s2). The state is kept; a kernel that
+ * differs from the one it replaces starts its statistics afresh. */
+lmc_status mc_chain_set_kernels(mc_chain *c, const mc_kernel *k, const double *prob, int n,
+                                lmc_error *err);
+
+/* Sets the kernel probabilities (normalised here; as many as the chain has
+ * kernels). Each step is then a mixture with the new weights: still a
+ * kernel that leaves the target invariant, so a schedule of weights fixed
+ * in advance (the large-step scale of mcmc.c) keeps the chain exact. */
+void mc_chain_set_probs(mc_chain *c, const double *prob);
+
+/* Rays traced in the chain's scratches so far (the target's scratch_rays). */
+int64_t mc_chain_rays(const mc_chain *c);
+
+/* The most splats one step makes (2; labelled targets n_labels + 1). */
+int mc_chain_max_splats(const mc_chain *c);
 
 /* One Metropolis-Hastings step; splats through splat(ctx, ...) when not
  * NULL. Returns the kernel index used. */

@@ -41,6 +41,7 @@ typedef struct gcache_anchor {
 
 struct gcache {
   int max_dim;
+  int *len;          /* vector length of each key 1 .. max_dim (keyed caches; else len[d] = d) */
   int frozen;
   double *rec;       /* stage 1 records */
   int64_t rec_top, rec_cap;
@@ -61,13 +62,32 @@ lmc_status gcache_create(gcache **OUT_c, int max_dim, int64_t capacity, lmc_erro
   c->rec_cap = capacity;
   c->rec = capacity > 0 ? malloc((size_t)capacity * sizeof(double)) : NULL;
   c->count = calloc((size_t)max_dim + 1, sizeof(int64_t));
-  if ((capacity > 0 && !c->rec) || !c->count) {
+  c->len = calloc((size_t)max_dim + 1, sizeof(int));
+  if ((capacity > 0 && !c->rec) || !c->count || !c->len) {
     gcache_destroy(c);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "gcache: out of memory");
   }
+  for (int d = 0; d <= max_dim; d++) c->len[d] = d;
   *OUT_c = c;
   return LMC_OK;
 }
+
+lmc_status gcache_create_keyed(gcache **OUT_c, int n_keys, const int *len, int64_t capacity,
+                               lmc_error *err) {
+  lmc_status st = gcache_create(OUT_c, n_keys, capacity, err);
+  if (st) return st;
+  for (int d = 1; d <= n_keys; d++) {
+    if (len[d - 1] < 1) {
+      gcache_destroy(*OUT_c);
+      *OUT_c = NULL;
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0, "gcache: key %d has length %d", d, len[d - 1]);
+    }
+    (*OUT_c)->len[d] = len[d - 1];
+  }
+  return LMC_OK;
+}
+
+int gcache_len(const gcache *c, int key) { return key >= 1 && key <= c->max_dim ? c->len[key] : 0; }
 
 static void gcache__free_trees(gcache *c) {
   if (!c->trees) return;
@@ -87,19 +107,21 @@ void gcache_destroy(gcache *c) {
   gcache__free_trees(c);
   free(c->rec);
   free(c->count);
+  free(c->len);
   free(c);
 }
 
 int gcache_add(gcache *c, int dim, const double *u, const double *m1, const double *m2, double f) {
   if (c->frozen || dim < 1 || dim > c->max_dim) return 0;
-  int64_t need = 3 * (int64_t)dim + 2;
+  int L = c->len[dim];
+  int64_t need = 3 * (int64_t)L + 2;
   if (c->rec_top + need > c->rec_cap) return 0;
   double *r = c->rec + c->rec_top;
   r[0] = (double)dim;
   r[1] = f;
-  memcpy(r + 2, u, (size_t)dim * sizeof(double));
-  memcpy(r + 2 + dim, m1, (size_t)dim * sizeof(double));
-  memcpy(r + 2 + 2 * dim, m2, (size_t)dim * sizeof(double));
+  memcpy(r + 2, u, (size_t)L * sizeof(double));
+  memcpy(r + 2 + L, m1, (size_t)L * sizeof(double));
+  memcpy(r + 2 + 2 * L, m2, (size_t)L * sizeof(double));
   c->rec_top += need;
   c->count[dim]++;
   c->total++;
@@ -110,9 +132,9 @@ void gcache_merge(gcache *dst, const gcache *src) {
   if (dst->frozen || src->frozen) return;
   for (int64_t at = 0; at < src->rec_top;) {
     const double *r = src->rec + at;
-    int dim = (int)r[0];
-    if (!gcache_add(dst, dim, r + 2, r + 2 + dim, r + 2 + 2 * dim, r[1])) return;
-    at += 3 * (int64_t)dim + 2;
+    int dim = (int)r[0], L = src->len[dim];
+    if (!gcache_add(dst, dim, r + 2, r + 2 + L, r + 2 + 2 * L, r[1])) return;
+    at += 3 * (int64_t)L + 2;
   }
 }
 
@@ -128,7 +150,7 @@ int64_t gcache_bytes(const gcache *c) {
   if (c->trees)
     for (int d = 1; d <= c->max_dim; d++) {
       const gcache_tree *t = &c->trees[d];
-      b += t->n * (3 * d + 1) * (int64_t)sizeof(double) + t->n_nodes * (int64_t)sizeof(gcache_node);
+      b += t->n * (3 * c->len[d] + 1) * (int64_t)sizeof(double) + t->n_nodes * (int64_t)sizeof(gcache_node);
     }
   return b;
 }
@@ -240,7 +262,7 @@ lmc_status gcache_freeze(gcache *c, int anchors, int64_t max_per_dim, lmc_error 
     gcache_tree *t = &c->trees[d];
     int64_t n = keep[d];
     if (n == 0) continue;
-    size_t nd = (size_t)n * (size_t)d;
+    size_t nd = (size_t)n * (size_t)c->len[d];
     t->u = malloc(nd * sizeof(double));
     t->m1 = malloc(nd * sizeof(double));
     t->m2 = malloc(nd * sizeof(double));
@@ -253,16 +275,16 @@ lmc_status gcache_freeze(gcache *c, int anchors, int64_t max_per_dim, lmc_error 
   }
   for (int64_t at = 0; at < c->rec_top;) {
     const double *r = c->rec + at;
-    int d = (int)r[0];
-    at += 3 * (int64_t)d + 2;
+    int d = (int)r[0], L = c->len[d];
+    at += 3 * (int64_t)L + 2;
     int64_t j = seen[d]++;
     if (keep[d] < c->count[d] && (j * keep[d]) / c->count[d] == ((j + 1) * keep[d]) / c->count[d])
       continue;
     gcache_tree *t = &c->trees[d];
     int64_t i = t->n++;
-    memcpy(t->u + i * d, r + 2, (size_t)d * sizeof(double));
-    memcpy(t->m1 + i * d, r + 2 + d, (size_t)d * sizeof(double));
-    memcpy(t->m2 + i * d, r + 2 + 2 * d, (size_t)d * sizeof(double));
+    memcpy(t->u + i * L, r + 2, (size_t)L * sizeof(double));
+    memcpy(t->m1 + i * L, r + 2 + L, (size_t)L * sizeof(double));
+    memcpy(t->m2 + i * L, r + 2 + 2 * L, (size_t)L * sizeof(double));
     t->f[i] = r[1];
   }
   free(keep), free(seen);
@@ -272,7 +294,7 @@ lmc_status gcache_freeze(gcache *c, int anchors, int64_t max_per_dim, lmc_error 
   for (int d = 1; d <= c->max_dim; d++) {
     gcache_tree *t = &c->trees[d];
     if (t->n == 0) continue;
-    gcache__build(t, d, 0, t->n);
+    gcache__build(t, c->len[d], 0, t->n);
   }
   if (gcache__anchors(c, anchors) < 0) goto oom;
   free(c->rec);
@@ -338,7 +360,7 @@ static int gcache__knn(const gcache *c, int dim, const double *u, int k, double 
   if (k > GCACHE_MAX_K) k = GCACHE_MAX_K;
   const gcache_tree *t = &c->trees[dim];
   if (t->n == 0) return 0;
-  gcache_knn_state s = {t, dim, k, 0, max_d2, u, OUT_idx, OUT_d2};
+  gcache_knn_state s = {t, c->len[dim], k, 0, max_d2, u, OUT_idx, OUT_d2};
   gcache__knn_visit(&s, 0);
   return s.found;
 }
@@ -348,14 +370,21 @@ int gcache_knn(const gcache *c, int dim, const double *u, int k, int64_t *OUT_id
   return gcache__knn(c, dim, u, k, INFINITY, OUT_idx, OUT_d2);
 }
 
+int gcache_knn_within(const gcache *c, int dim, const double *u, int k, double max_d2,
+                      int64_t *OUT_idx, double *OUT_d2) {
+  int found = gcache__knn(c, dim, u, k, max_d2 * (1.0 + 1e-12), OUT_idx, OUT_d2);
+  while (found > 0 && OUT_d2[found - 1] > max_d2) found--;
+  return found;
+}
+
 const double *gcache_entry_u(const gcache *c, int dim, int64_t i) {
-  return c->trees[dim].u + i * dim;
+  return c->trees[dim].u + i * c->len[dim];
 }
 const double *gcache_entry_m1(const gcache *c, int dim, int64_t i) {
-  return c->trees[dim].m1 + i * dim;
+  return c->trees[dim].m1 + i * c->len[dim];
 }
 const double *gcache_entry_m2(const gcache *c, int dim, int64_t i) {
-  return c->trees[dim].m2 + i * dim;
+  return c->trees[dim].m2 + i * c->len[dim];
 }
 double gcache_entry_f(const gcache *c, int dim, int64_t i) { return c->trees[dim].f[i]; }
 
@@ -364,12 +393,13 @@ int gcache_precond(const gcache *c, int dim, const double *u, const gcache_param
   int64_t idx[GCACHE_MAX_K];
   double d2[GCACHE_MAX_K];
   /* Only neighbours within the radius count (the search prunes beyond it). */
-  double r2 = p->radius * p->radius * (double)dim;
+  int L = gcache_len(c, dim);
+  double r2 = p->radius * p->radius * (double)L;
   int found = gcache__knn(c, dim, u, p->k, r2 * (1.0 + 1e-12), idx, d2);
   while (found > 0 && d2[found - 1] > r2) found--;
   if (found == 0) {
     double one = 1.0 < p->lo ? p->lo : (1.0 > p->hi ? p->hi : 1.0);
-    for (int i = 0; i < dim; i++) OUT_M[i] = one;
+    for (int i = 0; i < L; i++) OUT_M[i] = one;
     return 0;
   }
   /* Inverse-distance weights, h = 1e-6 keeps a coincident entry finite. */
@@ -379,9 +409,9 @@ int gcache_precond(const gcache *c, int dim, const double *u, const gcache_param
     wsum += w[j];
   }
   const gcache_tree *t = &c->trees[dim];
-  for (int i = 0; i < dim; i++) {
+  for (int i = 0; i < L; i++) {
     double v = 0.0;
-    for (int j = 0; j < found; j++) v += w[j] * t->m2[idx[j] * dim + i];
+    for (int j = 0; j < found; j++) v += w[j] * t->m2[idx[j] * L + i];
     /* A coordinate whose gradient was exactly 0 at every neighbour (a
      * discrete choice) gets 1, as adam_precond gives it. */
     OUT_M[i] = v == 0.0 ? 1.0 : 1.0 / (p->eps + sqrt(v / wsum));
@@ -394,8 +424,9 @@ int gcache_anchor_count(const gcache *c) { return c->frozen ? c->n_anchors : 0; 
 
 void gcache_indep_sample(const gcache *c, int D, double sigma, rng *r, double *OUT_u) {
   const gcache_anchor *a = &c->anchors[rng_uniform_u32(r, (uint32_t)c->n_anchors)];
-  const double *p = c->trees[a->dim].u + a->idx * a->dim;
-  int d = a->dim < D ? a->dim : D;
+  int L = c->len[a->dim];
+  const double *p = c->trees[a->dim].u + a->idx * L;
+  int d = L < D ? L : D;
   for (int i = 0; i < d; i++) OUT_u[i] = mala_wrap(p[i] + sigma * mala_std_normal(r));
   for (int i = d; i < D; i++) OUT_u[i] = rng_uniform(r);
 }
@@ -412,8 +443,9 @@ double gcache_indep_log_density(const gcache *c, int D, double sigma, const doub
   double lmax = -INFINITY, sum = 0.0;
   for (int k = 0; k < K; k++) {
     const gcache_anchor *a = &c->anchors[k];
-    const double *p = c->trees[a->dim].u + a->idx * a->dim;
-    int d = a->dim < D ? a->dim : D;
+    int L = c->len[a->dim];
+    const double *p = c->trees[a->dim].u + a->idx * L;
+    int d = L < D ? L : D;
     double q = 0.0, l = 0.0;
     for (int i = 0; i < d; i++) {
       double e = mala_torus_diff(u[i], p[i]);

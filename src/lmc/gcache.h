@@ -63,6 +63,14 @@ typedef struct gcache_params {
 /* An empty cache for states of 1 .. max_dim coordinates, holding at most
  * `capacity` doubles of entries (an entry of dimension d takes 3 d + 2). */
 lmc_status gcache_create(gcache **OUT_c, int max_dim, int64_t capacity, lmc_error *err);
+/* A keyed cache: entries of key k (1 .. n_keys) are vectors of len[k - 1]
+ * coordinates, each key its own tree (a key stands where a dimension
+ * stands in the calls below; keys are the labels of a labelled target,
+ * target.h, each with its own coordinates). */
+lmc_status gcache_create_keyed(gcache **OUT_c, int n_keys, const int *len, int64_t capacity,
+                               lmc_error *err);
+/* The vector length of key (dimension) k: k itself for gcache_create. */
+int gcache_len(const gcache *c, int key);
 /* Frees c (NULL allowed). */
 void gcache_destroy(gcache *c);
 
@@ -92,6 +100,10 @@ int64_t gcache_bytes(const gcache *c);
  * OUT_idx: entry indices within that dimension; OUT_d2: squared distances. */
 int gcache_knn(const gcache *c, int dim, const double *u, int k, int64_t *OUT_idx,
                double *OUT_d2);
+/* The same for entries within squared distance max_d2 only (a far
+ * cheaper search when few are that near). */
+int gcache_knn_within(const gcache *c, int dim, const double *u, int k, double max_d2,
+                      int64_t *OUT_idx, double *OUT_d2);
 /* Entry i of dimension dim (frozen): its state, moments and target value. */
 const double *gcache_entry_u(const gcache *c, int dim, int64_t i);
 const double *gcache_entry_m1(const gcache *c, int dim, int64_t i);

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/bdpt_states.h"
 #include "lmc/gcache.h"
 #include "lmc/lmc_kernel.h"
 #include "lmc/mcmc.h"
@@ -23,6 +24,7 @@
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */
 #define LMC_CACHE_PER_DIM 256                /* entries kept per tree (lookup cost: brute force in high dimensions) */
+#define LMC_CACHE_PER_LABEL 3000             /* labelled states: entries per label (the paper's implementation's size) */
 #define LMC_INDEP_SIGMA 0.01                 /* its Gaussian width per coordinate */
 #define LMC_STALL_STEPS 10000                /* a chain this long without acceptance is stalled */
 
@@ -30,6 +32,7 @@
 typedef struct lmc__family {
   mc_target target;
   lmc_bdpt_target bctx;  /* mmlt states: the target's context */
+  mc_bdpt_states bst;    /* bdpt states: the target's context */
   int length;            /* mmlt states: k; pt states: 0 */
   double *step_scale;    /* the target's and the kernels' step scale (owned) */
   lmc_kernel_params kp;
@@ -45,6 +48,8 @@ struct lmc_run {
   int n;                 /* chains */
   int *chain_fam;        /* per chain: its family */
   lmc_mala *mala;        /* per chain */
+  lmc_cwalk *cwalk;      /* per chain: stage 2 of --adapt cache on labelled states */
+  int cwalk_on;          /* stage 2 runs the cached walk (no gradients) */
   gcache **rec;          /* per chain, stage 1 */
   int stage1;            /* cache mode, stage 1 running */
   int64_t stage1_mutations;
@@ -56,7 +61,7 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
                           int unbounded, int kmin, int kmax, lmc_error *err) {
   *OUT_run = NULL;
   lmc_run *run = calloc(1, sizeof *run);
-  int multiplexed = rs->lmc_states == LMC_STATES_MMLT;
+  int multiplexed = rs->lmc_states == LMC_STATES_MMLT, bdpt = rs->lmc_states == LMC_STATES_BDPT;
   int n_fam = multiplexed ? (kmax >= kmin ? kmax - kmin + 1 : 0) : 1;
   if (run) run->fam = calloc((size_t)(n_fam > 0 ? n_fam : 1), sizeof *run->fam);
   if (!run || !run->fam) {
@@ -73,6 +78,12 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
     if (multiplexed) {
       F->length = kmin + g;
       lmc_bdpt_target_init(T, &F->bctx, s, rs, F->length);
+    } else if (bdpt) {
+      lmc_status st = mc_bdpt_states_init(T, &F->bst, s, rs, kmin, kmax, err);
+      if (st) {
+        lmc_run_destroy(run);
+        return st;
+      }
     } else {
       lmc_target_init(T, &run->tctx, s, rs, unbounded);
     }
@@ -85,7 +96,9 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
     /* The coordinates that pick a light triangle, as mmlt and pssmlt: a
      * smaller step for the chain's Kelemen step and a factor c^2 on MALA's
      * preconditioner (lmc_kernel.h). */
-    if (multiplexed) {
+    if (bdpt) {
+      memcpy(F->step_scale, T->step_scale, (size_t)T->dim * sizeof(double));
+    } else if (multiplexed) {
       for (int i = 0; i < T->dim; i++) F->step_scale[i] = 1.0;
       F->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
       F->step_scale[mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 2] = u1_scale;
@@ -104,14 +117,17 @@ void lmc_run_destroy(lmc_run *run) {
   if (!run) return;
   for (int i = 0; i < run->n; i++) {
     lmc_mala_free(&run->mala[i]);
+    if (run->cwalk) lmc_cwalk_free(&run->cwalk[i]);
     if (run->rec) gcache_destroy(run->rec[i]);
   }
   free(run->mala);
+  free(run->cwalk);
   free(run->rec);
   free(run->chain_fam);
   for (int g = 0; g < run->n_fam; g++) {
     gcache_destroy(run->fam[g].cache);
     free(run->fam[g].step_scale);
+    mc_bdpt_states_free(&run->fam[g].bst);
   }
   free(run->fam);
   free(run);
@@ -124,19 +140,47 @@ int lmc_run_in_stage1(const lmc_run *run) { return run->stage1; }
 int64_t lmc_run_stage1_mutations(const lmc_run *run) { return run->stage1_mutations; }
 
 int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch) {
-  return run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_nan_samples(scratch) : 0;
+  switch (run->rs.lmc_states) {
+  case LMC_STATES_MMLT: return lmc_bdpt_scratch_nan_samples(scratch);
+  case LMC_STATES_BDPT: return mc_bdpt_states_nan_samples(scratch);
+  default: return 0;
+  }
 }
 
 static int64_t lmc__grad_evals(const lmc_run *run, const void *scratch) {
-  return run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_grad_evals(scratch)
-                                               : lmc_target_scratch_grad_evals(scratch);
+  switch (run->rs.lmc_states) {
+  case LMC_STATES_MMLT: return lmc_bdpt_scratch_grad_evals(scratch);
+  case LMC_STATES_BDPT: return mc_bdpt_states_grad_evals(scratch);
+  default: return lmc_target_scratch_grad_evals(scratch);
+  }
+}
+
+/* A cache (stage-1 record or merged) of `capacity` doubles for family F:
+ * keyed by label for labelled targets (lmc_mala_set_target), else by
+ * dimension. */
+static lmc_status lmc__record_create(const lmc__family *F, int64_t capacity, gcache **OUT_c,
+                                     lmc_error *err) {
+  const mc_target *T = &F->target;
+  if (!T->label_coords) return gcache_create(OUT_c, T->dim, capacity, err);
+  int *len = malloc((size_t)T->n_labels * sizeof(int)), *idx = malloc((size_t)T->dim * sizeof(int));
+  if (!len || !idx) {
+    free(len), free(idx);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+  }
+  for (int l = 0; l < T->n_labels; l++) {
+    len[l] = T->label_coords(T, l, idx);
+    if (len[l] < 1) len[l] = 1;
+  }
+  lmc_status st = gcache_create_keyed(OUT_c, T->n_labels, len, capacity, err);
+  free(len), free(idx);
+  return st;
 }
 
 /* An empty frozen cache: M = I everywhere (a valid stage-2 kernel). */
-static gcache *lmc__empty_cache(int dim) {
+static gcache *lmc__empty_cache(const lmc__family *F) {
   gcache *c = NULL;
   lmc_error err;
-  if (gcache_create(&c, dim, 0, &err) != LMC_OK) return NULL;
+  if (lmc__record_create(F, 0, &c, &err) != LMC_OK) return NULL;
   if (gcache_freeze(c, 0, 0, &err) != LMC_OK) {
     gcache_destroy(c);
     return NULL;
@@ -146,16 +190,17 @@ static gcache *lmc__empty_cache(int dim) {
 
 lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err) {
   run->mala = calloc((size_t)n, sizeof *run->mala);
+  run->cwalk = calloc((size_t)n, sizeof *run->cwalk);
   run->rec = calloc((size_t)n, sizeof *run->rec);
   run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
-  if (!run->mala || !run->rec || !run->chain_fam)
+  if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam)
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
   run->chains_start = omp_get_wtime();
   if (!run->stage1 && run->rs.adapt == LMC_ADAPT_CACHE) {
     /* --cache-fraction 0: stage 2 with empty caches. */
     for (int g = 0; g < run->n_fam; g++)
-      if (!(run->fam[g].cache = lmc__empty_cache(run->fam[g].target.dim)))
+      if (!(run->fam[g].cache = lmc__empty_cache(&run->fam[g])))
         return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
   for (int i = 0; i < n; i++) {
@@ -164,12 +209,19 @@ lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error 
     run->chain_fam[i] = g;
     lmc_status st = lmc_mala_init(&run->mala[i], F->target.dim, &F->kp, err);
     if (st) return st;
+    if (F->target.label_coords) lmc_mala_set_target(&run->mala[i], &F->target);
     if (run->stage1) {
-      st = gcache_create(&run->rec[i], F->target.dim, LMC_CACHE_DOUBLES / n, err);
+      st = lmc__record_create(F, LMC_CACHE_DOUBLES / n, &run->rec[i], err);
       if (st) return st;
       lmc_mala_set_record(&run->mala[i], run->rec[i]);
     } else if (run->rs.adapt == LMC_ADAPT_CACHE) {
       lmc_mala_begin_stage2(&run->mala[i], F->cache);
+      if (!run->rs.cache_gradient && F->target.label_coords) {
+        lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
+        st = lmc_cwalk_init(&run->cwalk[i], &F->target, F->cache, &cp, err);
+        if (st) return st;
+        run->cwalk_on = 1;
+      }
     }
   }
   return LMC_OK;
@@ -182,12 +234,20 @@ int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) 
   double tech = F->length >= 2 ? LMC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
-  OUT_k[n] = mc_kernel_small(F->kp.s1, F->kp.s2), OUT_p[n++] = iso;
+  OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
+                                 : mc_kernel_small(F->kp.s1, F->kp.s2);
+  OUT_p[n++] = iso;
   /* Paths of one or two segments (emitters seen directly, direct light on
    * a surface) get Kelemen's step instead of MALA: f is smooth there, and a
    * gradient costs more than the few more mutations it saves. */
   if (F->length >= 1 && F->length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
-  OUT_k[n] = lmc_mala_kernel(&run->mala[i]), OUT_p[n++] = fmax(0.0, 1.0 - large - iso - indep - tech);
+  /* Stage 2 of --adapt cache on labelled states: the cached walk in
+   * MALA's slot (no gradients), unless --cache-gradient on. */
+  if (run->cwalk_on && run->cwalk[i].cache)
+    OUT_k[n] = lmc_cwalk_kernel(&run->cwalk[i]);
+  else
+    OUT_k[n] = lmc_mala_kernel(&run->mala[i]);
+  OUT_p[n++] = fmax(0.0, 1.0 - large - iso - indep - tech);
   if (tech > 0.0) {
     /* The technique coordinate is the first of the connect stream. */
     OUT_k[n] = mc_kernel_technique(mc_target_stream_offset(&F->target, LMC_STREAM_CONNECT));
@@ -210,23 +270,32 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
     lmc__family *F = &run->fam[g];
     int dim = F->target.dim;
     int64_t total = 0;
+    int max_len = dim;
     for (int i = 0; i < run->n; i++)
-      if (run->chain_fam[i] == g) total += gcache_size(run->rec[i]) * (3 * dim + 2);
-    if (gcache_create(&F->cache, dim, total, &err) == LMC_OK) {
+      if (run->chain_fam[i] == g) total += gcache_size(run->rec[i]) * (3 * max_len + 2);
+    if (lmc__record_create(F, total, &F->cache, &err) == LMC_OK) {
       for (int i = 0; i < run->n; i++)
         if (run->chain_fam[i] == g) gcache_merge(F->cache, run->rec[i]);
-      if (gcache_freeze(F->cache, LMC_ANCHORS, LMC_CACHE_PER_DIM, &err) != LMC_OK) {
+      int64_t per_key = F->target.label_coords ? LMC_CACHE_PER_LABEL : LMC_CACHE_PER_DIM;
+      if (gcache_freeze(F->cache, LMC_ANCHORS, per_key, &err) != LMC_OK) {
         gcache_destroy(F->cache);
         F->cache = NULL;
       }
     }
     /* Out of memory: an empty frozen cache still gives a valid (isotropic) kernel. */
-    if (!F->cache) F->cache = lmc__empty_cache(dim);
+    if (!F->cache) F->cache = lmc__empty_cache(F);
     F->indep.cache = F->cache;
   }
+  run->cwalk_on = !run->rs.cache_gradient;
   for (int i = 0; i < run->n; i++) {
     gcache_destroy(run->rec[i]);
     run->rec[i] = NULL;
+    const lmc__family *F = &run->fam[run->chain_fam[i]];
+    if (run->cwalk_on && F->target.label_coords) {
+      lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
+      if (lmc_cwalk_init(&run->cwalk[i], &F->target, F->cache, &cp, &err) != LMC_OK)
+        run->cwalk_on = 0; /* out of memory: the gradient-evaluating stage 2 */
+    }
     lmc_mala_begin_stage2(&run->mala[i], run->fam[run->chain_fam[i]].cache);
     /* Statistics count stage 2 only (the recorded count stays). */
     int64_t recorded = run->mala[i].st.recorded, full = run->mala[i].st.record_full;
@@ -263,17 +332,28 @@ int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elaps
   return 1;
 }
 
+/* Steps of the chains since they were last started (stage 2 of the cache). */
+static double lmc__steps(mc_chain *const *chains, int n) {
+  double s = 0.0;
+  for (int i = 0; i < n; i++) s += (double)chains[i]->steps;
+  return s;
+}
+
 void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
   int multiplexed = run->rs.lmc_states == LMC_STATES_MMLT;
+  int bdpt = run->rs.lmc_states == LMC_STATES_BDPT;
   const lmc__family *F0 = &run->fam[0];
   fprintf(stderr,
           "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
           "iso %g, light-triangle step scale %g\n",
-          mode[adapt], multiplexed ? "multiplexed bidirectional (mmlt)" : "unidirectional (pt)",
+          mode[adapt],
+          multiplexed ? "multiplexed bidirectional (mmlt)"
+          : bdpt      ? "bidirectional over every length (bdpt)"
+                      : "unidirectional (pt)",
           F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi, F0->kp.grad_bound, run->rs.iso_prob,
-          multiplexed ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
+          multiplexed || bdpt ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
           : F0->target.dim > PT_DIMS_CAMERA + 1 ? F0->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
   /* The caches. */
   if (run->rs.adapt == LMC_ADAPT_CACHE) {
@@ -288,6 +368,17 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       bytes += (double)gcache_bytes(c);
     }
     for (int i = 0; i < run->n; i++) lookups += run->mala[i].st.lookups, hits += run->mala[i].st.lookup_hits;
+    int64_t cw_pr = 0, cw_ac = 0;
+    for (int i = 0; i < run->n && run->cwalk_on; i++) {
+      lookups += run->cwalk[i].st.lookups, hits += run->cwalk[i].st.hits;
+      cw_pr += run->cwalk[i].st.proposed, cw_ac += run->cwalk[i].st.accepted;
+    }
+    if (run->cwalk_on)
+      fprintf(stderr,
+              "lmc: stage 2: cached walk (no gradients), proposed %lld, accepted %lld (%.1f%%), "
+              "%.4g mutations/s\n",
+              (long long)cw_pr, (long long)cw_ac, 100.0 * (double)cw_ac / fmax(1.0, (double)cw_pr),
+              lmc__steps(chains, n) / fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds));
     fprintf(stderr,
             "lmc: cache: stage 1 %.2f s, %lld mutations per chain (M = I, image kept); %lld entries "
             "in %d trees over %d families, %.1f MB, built in %.3f s; lookups %lld, %.1f%% with "
@@ -305,7 +396,7 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
     int flen = run->fam[run->chain_fam[i]].length;
     for (int t = 0; t < 2; t++)
       for (int k = 0; k < LMC_STAT_KEYS; k++) {
-        int len = flen > 0 ? flen : t == 0 ? lmc_target_length_of_key(k) : 0;
+        int len = flen > 0 ? flen : t == 0 && !bdpt ? lmc_target_length_of_key(k) : 0;
         if (len >= MAXL) len = MAXL - 1;
         pr[t][len] += st->key_proposed[t][k];
         ac[t][len] += st->key_accepted[t][k];

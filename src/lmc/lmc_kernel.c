@@ -61,13 +61,16 @@ lmc_status lmc_mala_init(lmc_mala *k, int dim, const lmc_kernel_params *p, lmc_e
   k->M = malloc(n * sizeof(double));
   k->m1 = malloc(n * sizeof(double));
   k->m2 = malloc(n * sizeof(double));
+  k->cidx = malloc(n * sizeof(int));
+  k->cu = malloc(n * sizeof(double));
+  k->last_label = -1;
   for (int j = 0; j < 2; j++) {
     k->memo_u[j] = malloc(n * sizeof(double));
     k->memo_M[j] = malloc(n * sizeof(double));
     k->memo_key[j] = -1;
   }
-  if (!k->M_chain || !k->g || !k->M || !k->m1 || !k->m2 || !k->memo_u[0] || !k->memo_u[1] ||
-      !k->memo_M[0] || !k->memo_M[1]) {
+  if (!k->M_chain || !k->g || !k->M || !k->m1 || !k->m2 || !k->cidx || !k->cu || !k->memo_u[0] ||
+      !k->memo_u[1] || !k->memo_M[0] || !k->memo_M[1]) {
     lmc_mala_free(k);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
@@ -78,12 +81,13 @@ lmc_status lmc_mala_init(lmc_mala *k, int dim, const lmc_kernel_params *p, lmc_e
 void lmc_mala_free(lmc_mala *k) {
   if (!k) return;
   adam_free(&k->adam);
-  free(k->M_chain), free(k->g), free(k->M), free(k->m1), free(k->m2);
+  free(k->M_chain), free(k->g), free(k->M), free(k->m1), free(k->m2), free(k->cidx), free(k->cu);
   for (int j = 0; j < 2; j++) free(k->memo_u[j]), free(k->memo_M[j]);
   memset(k, 0, sizeof *k);
 }
 
 void lmc_mala_set_record(lmc_mala *k, gcache *record) { k->record = record; }
+void lmc_mala_set_target(lmc_mala *k, const mc_target *target) { k->target = target; }
 
 void lmc_mala_begin_stage2(lmc_mala *k, const gcache *cache) {
   k->cache = cache;
@@ -235,6 +239,14 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   int adapting = k->p.adapt == LMC_ADAPT_ADAM || k->p.adapt == LMC_ADAPT_DIMINISH ||
                  (k->p.adapt == LMC_ADAPT_CACHE && !k->stage2);
   if (!adapting) return;
+  /* Labelled targets: the moments follow one label's coordinates, from
+   * the last large step on (as the paper's implementation restarts them). */
+  int labelled = k->target && k->target->label_coords;
+  if (labelled && accepted && (x->label != k->last_label || x->from_large)) {
+    adam_reset(&k->adam);
+    k->last_label = x->label;
+    k->M_chain_stale = 1;
+  }
   /* Update Adam with the current state's gradient of log f. */
   int key = lmc__gradient(k, x);
   if (key == 0) return;
@@ -246,6 +258,19 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
    * (x->u is valid only after a full kernel's step). */
   if (!own || !k->record || k->p.record_stride <= 0) return;
   if (++k->own_steps % k->p.record_stride) return;
+  if (labelled) {
+    /* Under the key label + 1, at the label's coordinates. */
+    int n = k->target->label_coords(k->target, x->label, k->cidx);
+    for (int i = 0; i < n; i++) {
+      k->cu[i] = x->u[k->cidx[i]];
+      adam_moments(&k->adam, k->cidx[i], &k->m1[i], &k->m2[i]);
+    }
+    if (n > 0 && gcache_add(k->record, x->label + 1, k->cu, k->m1, k->m2, x->v.f))
+      k->st.recorded++;
+    else
+      k->st.record_full++;
+    return;
+  }
   for (int i = 0; i < key; i++) adam_moments(&k->adam, i, &k->m1[i], &k->m2[i]);
   if (gcache_add(k->record, key, x->u, k->m1, k->m2, x->v.f))
     k->st.recorded++;
@@ -265,6 +290,176 @@ mc_kernel lmc_mala_kernel(lmc_mala *k) {
   kn.log_density = lmc__log_density;
   if (k->p.delayed) kn.log_screen = lmc__log_screen;
   kn.on_step = lmc__on_step;
+  return kn;
+}
+
+/* ---- The cached walk ---------------------------------------------------- */
+
+lmc_cwalk_params lmc_cwalk_params_default(void) {
+  lmc_cwalk_params p;
+  p.step = 0.005;
+  p.prior = 0.005;
+  p.drift_max = 5.0;
+  p.k = 5;
+  p.radius = 0.01;
+  p.eps = 1e-3;
+  p.lo = 0.01;
+  p.hi = 100.0;
+  return p;
+}
+
+lmc_cwalk_params lmc_cwalk_params_from_settings(const render_settings *rs) {
+  lmc_cwalk_params p = lmc_cwalk_params_default();
+  if (rs->cache_step > 0.0) p.step = rs->cache_step;
+  if (rs->cache_prior > 0.0) p.prior = rs->cache_prior;
+  if (rs->cache_radius > 0.0) p.radius = rs->cache_radius;
+  if (rs->cache_k > 0) p.k = rs->cache_k < GCACHE_MAX_K ? rs->cache_k : GCACHE_MAX_K;
+  if (rs->cache_no_drift) p.drift_max = 0.0;
+  return p;
+}
+
+lmc_status lmc_cwalk_init(lmc_cwalk *k, const mc_target *target, const gcache *cache,
+                          const lmc_cwalk_params *p, lmc_error *err) {
+  memset(k, 0, sizeof *k);
+  if (!target->label_coords || !cache)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "lmc: the cached walk needs a labelled target and a cache");
+  k->p = *p;
+  k->target = target;
+  k->cache = cache;
+  k->scale = target->step_scale;
+  k->dim = target->dim;
+  size_t n = (size_t)target->dim;
+  k->idx = malloc(n * sizeof(int));
+  k->v = malloc(n * sizeof(double));
+  k->mean = malloc(n * sizeof(double));
+  k->sd = malloc(n * sizeof(double));
+  int ok = k->idx && k->v && k->mean && k->sd;
+  for (int j = 0; j < 2; j++) {
+    k->memo_v[j] = malloc(n * sizeof(double));
+    k->memo_mean[j] = malloc(n * sizeof(double));
+    k->memo_sd[j] = malloc(n * sizeof(double));
+    k->memo_label[j] = -1;
+    ok = ok && k->memo_v[j] && k->memo_mean[j] && k->memo_sd[j];
+  }
+  if (!ok) {
+    lmc_cwalk_free(k);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
+  }
+  return LMC_OK;
+}
+
+void lmc_cwalk_free(lmc_cwalk *k) {
+  if (!k) return;
+  free(k->idx), free(k->v), free(k->mean), free(k->sd);
+  for (int j = 0; j < 2; j++) free(k->memo_v[j]), free(k->memo_mean[j]), free(k->memo_sd[j]);
+  memset(k, 0, sizeof *k);
+}
+
+/* The Gaussian at state x (see lmc_kernel.h) into k->mean, k->sd over the
+ * label's coordinates k->idx (k->v: x there); returns their count. */
+static int lmc__cwalk_gauss(lmc_cwalk *k, const mc_state *x) {
+  int n = k->target->label_coords(k->target, x->label, k->idx);
+  for (int i = 0; i < n; i++) k->v[i] = x->u[k->idx[i]];
+  /* The same state as one of the last two: the same Gaussian. */
+  for (int j = 0; j < 2; j++)
+    if (k->memo_label[j] == x->label && k->memo_n[j] == n &&
+        !memcmp(k->memo_v[j], k->v, (size_t)n * sizeof(double))) {
+      memcpy(k->mean, k->memo_mean[j], (size_t)n * sizeof(double));
+      memcpy(k->sd, k->memo_sd[j], (size_t)n * sizeof(double));
+      return n;
+    }
+  const lmc_cwalk_params *p = &k->p;
+  int key = x->label + 1, found = 0;
+  int64_t nb[GCACHE_MAX_K];
+  double d2[GCACHE_MAX_K];
+  k->st.lookups++;
+  if (n > 0 && key <= gcache_max_dim(k->cache) && gcache_len(k->cache, key) == n &&
+      gcache_size_dim(k->cache, key) > 0) {
+    found = gcache_knn_within(k->cache, key, k->v, p->k, p->radius * p->radius * (double)n, nb, d2);
+  }
+  if (found == 0) {
+    for (int i = 0; i < n; i++) k->mean[i] = 0.0, k->sd[i] = p->prior;
+  } else {
+    k->st.hits++;
+    double w[GCACHE_MAX_K], wsum = 0.0;
+    for (int j = 0; j < found; j++) w[j] = 1.0 / (d2[j] * d2[j] + 1e-6), wsum += w[j];
+    double inv_prior2 = 1.0 / (p->prior * p->prior), s2 = p->step * p->step;
+    for (int i = 0; i < n; i++) {
+      double m1 = 0.0, m2 = 0.0;
+      for (int j = 0; j < found; j++) {
+        m1 += w[j] * gcache_entry_m1(k->cache, key, nb[j])[i];
+        m2 += w[j] * gcache_entry_m2(k->cache, key, nb[j])[i];
+      }
+      m1 /= wsum, m2 /= wsum;
+      double M = adam_precond_from_m2(m2, p->eps, p->lo, p->hi);
+      double cov = 1.0 / (1.0 / (s2 * (M + 1.0)) + inv_prior2);
+      double dr = m1 < -p->drift_max ? -p->drift_max : m1 > p->drift_max ? p->drift_max : m1;
+      k->mean[i] = dr * cov / 2.0;
+      k->sd[i] = sqrt(cov);
+    }
+  }
+  /* In the state's coordinates (the step scale c of the rescaled ones). */
+  if (k->scale)
+    for (int i = 0; i < n; i++) k->mean[i] *= k->scale[k->idx[i]], k->sd[i] *= k->scale[k->idx[i]];
+  int j = k->memo_next;
+  k->memo_next ^= 1;
+  k->memo_label[j] = x->label;
+  k->memo_n[j] = n;
+  memcpy(k->memo_v[j], k->v, (size_t)n * sizeof(double));
+  memcpy(k->memo_mean[j], k->mean, (size_t)n * sizeof(double));
+  memcpy(k->memo_sd[j], k->sd, (size_t)n * sizeof(double));
+  return n;
+}
+
+/* log q(to | from) of the Gaussian now in k (for `from`'s n coordinates). */
+static double lmc__cwalk_log_q(const lmc_cwalk *k, int n, const double *to_u) {
+  double l = 0.0;
+  for (int i = 0; i < n; i++) {
+    if (!(k->sd[i] > 0.0)) continue; /* a coordinate the step scale keeps fixed */
+    l += mala_log_wrapped_normal(to_u[k->idx[i]], k->v[i] + k->mean[i], k->sd[i]);
+  }
+  return l;
+}
+
+static double lmc__cwalk_propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  lmc_cwalk *k = self;
+  k->own = 1;
+  k->st.proposed++;
+  int n = lmc__cwalk_gauss(k, x); /* (the chain takes only the label's coordinates) */
+  for (int i = 0; i < n; i++)
+    if (k->sd[i] > 0.0) OUT_y[k->idx[i]] = mala_wrap(k->v[i] + k->mean[i] + k->sd[i] * mala_std_normal(r));
+  return lmc__cwalk_log_q(k, n, OUT_y);
+}
+
+static double lmc__cwalk_log_density(void *self, const mc_state *from, const double *to_u) {
+  lmc_cwalk *k = self;
+  int n = lmc__cwalk_gauss(k, from);
+  return lmc__cwalk_log_q(k, n, to_u);
+}
+
+static void lmc__cwalk_on_step(void *self, const mc_state *x, int accepted) {
+  lmc_cwalk *k = self;
+  (void)x;
+  if (k->own && accepted) k->st.accepted++;
+  k->own = 0;
+}
+
+static int lmc__cwalk_coords(void *self, const mc_state *x, int *OUT_idx) {
+  lmc_cwalk *k = self;
+  return k->target->label_coords(k->target, x->label, OUT_idx);
+}
+
+mc_kernel lmc_cwalk_kernel(lmc_cwalk *k) {
+  mc_kernel kn;
+  memset(&kn, 0, sizeof kn);
+  kn.name = "cache-walk";
+  kn.kind = MC_KERNEL_FULL;
+  kn.needs_grad = 0;
+  kn.self = k;
+  kn.propose = lmc__cwalk_propose;
+  kn.log_density = lmc__cwalk_log_density;
+  kn.on_step = lmc__cwalk_on_step;
+  kn.coords = lmc__cwalk_coords;
   return kn;
 }
 

@@ -141,6 +141,10 @@ typedef struct lmc_mala_stats {
 typedef struct lmc_mala {
   lmc_kernel_params p;
   int dim;
+  const mc_target *target; /* borrowed: labelled targets record by label (lmc_mala_set_target) */
+  int last_label;        /* the label Adam's moments belong to (labelled targets) */
+  int *cidx;             /* scratch: a label's coordinates */
+  double *cu;            /* scratch: the state at them */
   int stage2;            /* CACHE: lookups in `cache` instead of online Adam */
   const gcache *cache;   /* borrowed (stage 2) */
   gcache *record;        /* borrowed (stage 1; NULL: nothing recorded) */
@@ -168,11 +172,76 @@ void lmc_mala_free(lmc_mala *k);
 mc_kernel lmc_mala_kernel(lmc_mala *k);
 /* CACHE stage 1: where states are recorded (NULL: nowhere). */
 void lmc_mala_set_record(lmc_mala *k, gcache *record);
+/* A labelled target with label_coords (target.h): stage 1 then records a
+ * state under the key label + 1 with its label's coordinates and their
+ * moments (a keyed cache, gcache_create_keyed), and Adam's moments start
+ * afresh when the label changes or a large step moved the state. */
+void lmc_mala_set_target(lmc_mala *k, const mc_target *target);
 /* CACHE: switch to stage 2 with a frozen cache. */
 void lmc_mala_begin_stage2(lmc_mala *k, const gcache *cache);
 
 /* The cache key k(x) of a state (0 without a gradient). */
 int lmc_state_key(const mc_state *x);
+
+/* ---- The cached walk: stage 2 of --adapt cache without gradients --------
+ *
+ * Luan et al.'s implementation runs stage 2 of its cache on cached moments
+ * alone: at a state x of label l the proposal is a diagonal Gaussian on the
+ * label's coordinates (label_coords), from the moments (m1, m2) of x's
+ * nearest cached neighbours of the same label, k of them within radius
+ * sqrt(n) r (n coordinates), weighted by 1 / (d^2 + 1e-6) (d^2 the
+ * squared distance):
+ *     M_i = clamp(1 / (eps + sqrt(m2_i)), lo, hi)
+ *     cov_i = 1 / (1 / (step^2 (M_i + 1)) + 1 / prior^2)
+ *     mean_i = clamp(m1_i, -drift_max, drift_max) cov_i / 2   (0 without drift)
+ * and with no neighbour N(0, prior^2) per coordinate. m1 is Adam's first
+ * moment of grad log f (the momentum): its drift replaces the gradient, so
+ * a step costs one evaluation of f and no derivative. The Gaussian is a
+ * pure function of x through the frozen cache, so q(y | x) and q(x | y)
+ * (the same construction at y) are exact, and the chain is a fixed,
+ * reversible kernel. Coordinates other than the label's stay put, which
+ * both directions share. The step scale c of the target (a light's
+ * triangle choice) scales mean and standard deviation of its coordinate.
+ */
+typedef struct lmc_cwalk_params {
+  double step;        /* step (the paper's implementation: 0.005) */
+  double prior;       /* prior standard deviation (0.005) */
+  double drift_max;   /* clamp of m1 (5; 0: no drift) */
+  int k;              /* neighbours (5) */
+  double radius;      /* r (0.01) */
+  double eps, lo, hi; /* M's clamp (1e-3, 0.01, 100) */
+} lmc_cwalk_params;
+
+lmc_cwalk_params lmc_cwalk_params_default(void);
+/* The defaults with render settings' --cache-step, --cache-prior,
+ * --cache-radius, --cache-k and --cache-drift where given. */
+lmc_cwalk_params lmc_cwalk_params_from_settings(const render_settings *rs);
+
+typedef struct lmc_cwalk_stats {
+  int64_t proposed, accepted;
+  int64_t lookups, hits;
+} lmc_cwalk_stats;
+
+typedef struct lmc_cwalk {
+  lmc_cwalk_params p;
+  const mc_target *target; /* borrowed, labelled, with label_coords */
+  const gcache *cache;     /* borrowed, frozen, keyed by label + 1 */
+  const double *scale;     /* borrowed (NULL: 1): the target's step scale */
+  int dim;
+  int *idx;                /* scratch: the label's coordinates */
+  double *v, *mean, *sd;   /* scratch: at them */
+  /* The last two Gaussians (state, label), reused for the same state. */
+  double *memo_v[2], *memo_mean[2], *memo_sd[2];
+  int memo_label[2], memo_n[2], memo_next;
+  int own;                 /* the step in progress was proposed here */
+  lmc_cwalk_stats st;
+} lmc_cwalk;
+
+lmc_status lmc_cwalk_init(lmc_cwalk *k, const mc_target *target, const gcache *cache,
+                          const lmc_cwalk_params *p, lmc_error *err);
+void lmc_cwalk_free(lmc_cwalk *k);
+/* The mc_kernel (kind FULL, no gradient) over k; k must outlive the chain. */
+mc_kernel lmc_cwalk_kernel(lmc_cwalk *k);
 
 /* The cache's independence proposal (gcache_indep_*) as a kernel. Without
  * a cache (or anchors) it makes Kelemen's small step (s1, s2) instead, so

@@ -93,7 +93,7 @@
  * count is unbiased: a family's image is b_g times its chains' normalised
  * histogram). --allocate even gives every chain MCMC_ROUND (the old rule).
  *
- * Determinism. The number of chains is fixed (MCMC_CHAINS, shared among
+ * Determinism. The number of chains is fixed (--chains, default MCMC_CHAINS, shared among
  * the mmlt families in proportion to b_g, at least MCMC_MIN_CHAINS each), not tied to
  * threads. Each chain owns its random stream seeded from (seed, family,
  * chain). Chains advance in rounds of MCMC_ROUND mutations each; a round's
@@ -119,6 +119,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/bdpt_states.h"
 #include "lmc/bootstrap.h"
 #include "lmc/chain.h"
 #include "lmc/integrator_lmc.h"
@@ -126,6 +127,10 @@
 #define MCMC_CHAINS 256
 #define MCMC_MIN_CHAINS 16 /* per mmlt family: one stuck chain must not carry a whole length */
 #define MCMC_MMLT_SIGMA 0.05 /* mmlt's default small-step scale (see mcmc_render_run) */
+#define MCMC_GAUSS_SIGMA 0.01 /* --small-step gauss: default standard deviation (the LMC
+                                 paper's implementation's perturbStdDev) */
+#define MCMC_LARGESTEP_SCALE_AFTER 0.1 /* --largestep-scale applies after this share of
+                                          the chains' budget (the paper's LS_RATIO) */
 #define MCMC_ROUND 64
 #define MCMC_BOOT_BATCH 8192
 #define MCMC_BOOT_CAP (1 << 22) /* bootstrap samples in all, over the families */
@@ -305,11 +310,23 @@ typedef struct mcmc_chain_slot {
   double scale;     /* b_g / n_g */
   uint64_t start_seq; /* bootstrap sample the chain started from */
   mcmc_splat *rec;  /* this round's splats */
-  int n_rec;
+  int n_rec, cap_rec;
+  int rec_failed;   /* a splat was dropped: no memory to grow rec */
 } mcmc_chain_slot;
 
 static void mcmc__record(void *ctx, const mc_value *v, double weight) {
   mcmc_chain_slot *sl = ctx;
+  if (sl->n_rec == sl->cap_rec) {
+    /* A labelled large step splats every strategy of its sample: grow
+     * (rarely: the buffer keeps its size across rounds). */
+    mcmc_splat *r = realloc(sl->rec, 2 * (size_t)sl->cap_rec * sizeof *r);
+    if (!r) {
+      sl->rec_failed = 1;
+      return;
+    }
+    sl->rec = r;
+    sl->cap_rec *= 2;
+  }
   mcmc_splat *r = &sl->rec[sl->n_rec++];
   r->rx = v->rx;
   r->ry = v->ry;
@@ -352,6 +369,7 @@ typedef struct mcmc_family {
   int m_round;        /* mutations per chain in a full round (1 .. MCMC_ROUND; see Allocation) */
   int64_t done;       /* mutations per chain of this family so far */
   double *step_scale; /* mmlt, pssmlt: the target's per-coordinate small-step factors (owned) */
+  mc_bdpt_states bst; /* --states bdpt: the labelled target's context (bdpt_states.h) */
 } mcmc_family;
 
 /* The small-step factor for the coordinate that picks an area light's
@@ -525,6 +543,18 @@ static int64_t mcmc__family_steps(const mcmc_family *F, int64_t m) {
   return k < 1 ? 1 : k;
 }
 
+/* Scales the probability of c's large step (kernel 0) by `scale`, at most
+ * to 1, and the other kernels' together by what is left. */
+static void mcmc__scale_large(mc_chain *c, double scale) {
+  double p[MC_MAX_KERNELS], prev = 0.0;
+  for (int q = 0; q < c->n_kernels; q++) p[q] = c->cdf[q] - prev, prev = c->cdf[q];
+  if (c->kernels[0].kind != MC_KERNEL_LARGE || !(p[0] < 1.0)) return;
+  double pl = fmin(1.0, p[0] * scale), rest = (1.0 - pl) / (1.0 - p[0]);
+  p[0] = pl;
+  for (int q = 1; q < c->n_kernels; q++) p[q] *= rest;
+  mc_chain_set_probs(c, p);
+}
+
 static void mcmc__free_slots(mcmc_chain_slot *slots, int n) {
   if (!slots) return;
   for (int i = 0; i < n; i++) {
@@ -540,11 +570,13 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   int is_mmlt = !strcmp(rs->integrator, "mmlt");
   int is_lmc = !strcmp(rs->integrator, "lmc"); /* integrator_lmc.h */
   /* Families per path length: mmlt, and lmc on mmlt's states. */
-  int multiplexed = is_mmlt || (is_lmc && rs->lmc_states == LMC_STATES_MMLT);
+  int bdpt_states = is_lmc ? rs->lmc_states == LMC_STATES_BDPT : rs->mcmc_states == MCMC_STATES_BDPT;
+  int multiplexed = !bdpt_states && (is_mmlt || (is_lmc && rs->lmc_states == LMC_STATES_MMLT));
   lmc_run *lrun = NULL;
   if (!is_mmlt && !is_lmc && strcmp(rs->integrator, "pssmlt"))
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
                          "integrator %s is not built on this framework yet", rs->integrator);
+  if (bdpt_states) is_mmlt = 0; /* one family; mmlt's per-length machinery is not used */
   const int W = s->cam.width, H = s->cam.height;
   const int nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
   const int timed = rs->time_limit > 0.0;
@@ -556,7 +588,10 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
    * on ring-caustics at 20 s, once the light-position steps were scaled
    * (mcmc_light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
    * for 1/64, 0.03, 0.1 and 0.2, one run each). */
-  const double sigma = (rs->set & SET_SIGMA) || !multiplexed ? rs->sigma : MCMC_MMLT_SIGMA;
+  const double sigma = (rs->set & SET_SIGMA)  ? rs->sigma
+                       : rs->small_gauss      ? MCMC_GAUSS_SIGMA
+                       : !multiplexed         ? rs->sigma
+                                              : MCMC_MMLT_SIGMA;
 
   /* Direct lighting by pt first, when asked (--direct separate). */
   render_settings mrs = *rs;
@@ -608,7 +643,22 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
               rs->integrator, kmax);
   }
-  if (!multiplexed) {
+  if (bdpt_states) {
+    /* One family over every length (see mcmc__bdpt_eval_label). */
+    kmax = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_MMLT;
+    if (kmax > BDPT_MAX_VERTICES - 2) kmax = BDPT_MAX_VERTICES - 2;
+    kmin = mrs.mindepth > 1 ? mrs.mindepth : 1;
+    if (rs->maxdepth < 0 && !rs->quiet)
+      fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
+              rs->integrator, kmax);
+    mcmc_family *F = &fam[n_fam++];
+    F->st = (mcmc_scene_target){s, mrs, 0, 1, margin, area};
+    status = mc_bdpt_states_init(&F->target, &F->bst, s, &mrs, kmin, kmax, err);
+    if (status) {
+      film_free(out);
+      return status;
+    }
+  } else if (!multiplexed) {
     int bounces = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_PT;
     mcmc_family *F = &fam[n_fam++];
     F->st = (mcmc_scene_target){s, mrs, 0, 1, margin, area};
@@ -623,7 +673,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       F->target.stream_dim[LMC_STREAM_CONNECT] = 1 + BDPT_DIMS_CONNECT;
     }
   }
-  for (int g = 0; g < n_fam; g++) {
+  for (int g = 0; g < n_fam && !bdpt_states; g++) {
     mc_target *T = &fam[g].target;
     T->ctx = &fam[g].st;
     T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
@@ -654,7 +704,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   /* The bootstrap keeps eval_expect's samples apart where the target has it. */
   int cap = 1; /* 0: out of memory */
   for (int g = 0; g < n_fam; g++) fam[g].bt.has_fe = fam[g].target.eval_expect != NULL;
-  if (!is_mmlt && !is_lmc) {
+  if (bdpt_states) {
+    /* (bdpt_states.c sets its own step scale) */
+  } else if (!is_mmlt && !is_lmc) {
     /* pssmlt: next-event estimation's light-position number u1 of every
      * bounce (lmc's run sets the same on its own target). */
     mc_target *T = &fam[0].target;
@@ -732,7 +784,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
    * family that has any contribution). */
   for (int g = 0; g < n_fam; g++) {
     if (!(fam[g].bt.b > 0.0)) continue;
-    int nc = (int)floor(MCMC_CHAINS * fam[g].bt.b / b_total + 0.5);
+    int n_chains = rs->chains > 0 ? rs->chains : MCMC_CHAINS;
+    int nc = (int)floor(n_chains * fam[g].bt.b / b_total + 0.5);
     fam[g].n_chains = nc < MCMC_MIN_CHAINS ? MCMC_MIN_CHAINS : nc;
     fam[g].first_chain = n_slots;
     n_slots += fam[g].n_chains;
@@ -804,7 +857,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   for (int g = 0; g < n_fam; g++) {
     mcmc_family *F = &fam[g];
     if (F->n_chains == 0) continue;
-    mc_kernel k[MC_MAX_KERNELS] = {mc_kernel_large(), mc_kernel_small(1.0 / 1024.0, sigma),
+    mc_kernel k[MC_MAX_KERNELS] = {mc_kernel_large(),
+                                   rs->small_gauss ? mc_kernel_small_gauss(sigma)
+                                                   : mc_kernel_small(1.0 / 1024.0, sigma),
                                    mc_kernel_technique(0)};
     double large = rs->largestep;
     double p[MC_MAX_KERNELS] = {large, 1.0 - large, 0.0};
@@ -816,8 +871,10 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       p[2] = 0.1 * (1.0 - large);
       nk = 3;
     }
-    if (!(sigma > 1.0 / 1024.0 && sigma < 0.5)) {
-      status = lmc_error_set(err, LMC_EINVAL, NULL, 0, "--sigma must lie in (1/1024, 1/2)");
+    if (!(sigma > (rs->small_gauss ? 0.0 : 1.0 / 1024.0) && sigma < 0.5)) {
+      status = lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                             rs->small_gauss ? "--sigma must lie in (0, 1/2)"
+                                             : "--sigma must lie in (1/1024, 1/2)");
       goto done;
     }
 
@@ -835,7 +892,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       if (lrun) nk = lmc_run_chain_kernels(lrun, F->first_chain + i, k, p);
       status = mc_chain_create(&sl->chain, &F->target, k, p, nk, err);
       if (status) goto done;
-      sl->rec = malloc(2 * MCMC_ROUND * sizeof(mcmc_splat));
+      sl->cap_rec = 2 * MCMC_ROUND;
+      sl->rec = malloc((size_t)sl->cap_rec * sizeof(mcmc_splat));
       if (!sl->rec) {
         status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the splats");
         goto done;
@@ -866,6 +924,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     double t_chain0 = omp_get_wtime(), next_snapshot = rs->snapshot;
     int64_t done_per_chain = 0;
     volatile int stop = 0;
+    /* --largestep-scale: from MCMC_LARGESTEP_SCALE_AFTER of the chains'
+     * budget on (of their mutations under --spp, of their time under --time). */
+    int ls_pending = rs->largestep_scale != 1.0;
     while (done_per_chain < per_chain && !stop) {
       int64_t m = per_chain - done_per_chain < MCMC_ROUND ? per_chain - done_per_chain : MCMC_ROUND;
       if (lrun) {
@@ -882,11 +943,10 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
           mcmc_chain_slot *sl = &slots[i];
           sl->n_rec = 0;
           if (abandon) continue;
-          const mc_target *T = sl->chain->target;
-          int64_t r0 = sl->chain->scratch ? T->scratch_rays(sl->chain->scratch) : 0;
+          int64_t r0 = mc_chain_rays(sl->chain);
           int64_t mg = mcmc__family_steps(&fam[sl->family], m);
           for (int64_t q = 0; q < mg; q++) mc_chain_step(sl->chain, mcmc__record, sl);
-          cnt[tid].rays += T->scratch_rays(sl->chain->scratch) - r0;
+          cnt[tid].rays += mc_chain_rays(sl->chain) - r0;
           if (render_stop_signal() || (timed && omp_get_wtime() - t0 >= rs->time_limit)) abandon = 1;
         }
         /* Add the records in chain order, each thread to its band of rows. */
@@ -907,15 +967,33 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       }
       done_per_chain += m;
       for (int g = 0; g < n_fam; g++) fam[g].done += mcmc__family_steps(&fam[g], m);
+      if (ls_pending) {
+        double share = by_spp ? (double)done_per_chain / (double)per_chain
+                              : (omp_get_wtime() - t_chain0) / fmax(1e-9, rs->time_limit - (t_chain0 - t0));
+        if (share >= MCMC_LARGESTEP_SCALE_AFTER) {
+          for (int i = 0; i < n_slots; i++) mcmc__scale_large(slots[i].chain, rs->largestep_scale);
+          ls_pending = 0;
+        }
+      }
       mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 0);
       if (lrun && lmc_run_after_round(lrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
         /* Stage 1 of lmc --adapt cache ended. Its chains ran a fixed kernel
          * (M = I; Adam's moments were only recorded), so its image stays;
          * the chains restart from their bootstrap states with the frozen
          * cache (the kernel of stage 2 is fixed given the cache). */
-        for (int i = 0; i < n_slots; i++)
+        for (int i = 0; i < n_slots; i++) {
+          mc_kernel k2[MC_MAX_KERNELS];
+          double p2[MC_MAX_KERNELS];
+          int nk2 = lmc_run_chain_kernels(lrun, i, k2, p2);
+          if (mc_chain_set_kernels(slots[i].chain, k2, p2, nk2, err) != LMC_OK) {
+            status = LMC_EINVAL;
+            goto done;
+          }
+          if (!ls_pending && rs->largestep_scale != 1.0)
+            mcmc__scale_large(slots[i].chain, rs->largestep_scale);
           mc_chain_start(slots[i].chain, rs->seed, slots[i].start_seq,
                          mcmc__chain_seq(slots[i].family, n_slots + i));
+        }
       }
       double now = omp_get_wtime();
       if (render_stop_signal()) stop = 1;
@@ -1023,13 +1101,16 @@ finish:
   }
   for (int i = 0; i < n_slots; i++)
     if (slots && slots[i].chain && slots[i].chain->scratch)
-      st->nan_samples += is_lmc ? lmc_run_scratch_nan_samples(lrun, slots[i].chain->scratch)
-                                : ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
+      st->nan_samples += is_lmc        ? lmc_run_scratch_nan_samples(lrun, slots[i].chain->scratch)
+                         : bdpt_states ? mc_bdpt_states_nan_samples(slots[i].chain->scratch) +
+                                             mc_bdpt_states_nan_samples(slots[i].chain->scratch_alt)
+                                       : ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
 done:
   mcmc__free_slots(slots, n_slots);
   lmc_run_destroy(lrun);
   for (int g = 0; g < n_fam; g++)
-    mc_boot_free(&fam[g].bt), free(fam[g].step_scale), free(fam[g].splat);
+    mc_boot_free(&fam[g].bt), free(fam[g].step_scale), free(fam[g].splat),
+        mc_bdpt_states_free(&fam[g].bst);
   free(cnt);
   st->seconds = omp_get_wtime() - t0;
   if (status) film_free(out);

@@ -41,7 +41,15 @@ typedef struct mc_value {
   double f;      /* the target value (>= 0, finite); scenes: luminance of `value` */
   rgb value;     /* what the state adds to the image (scenes; toy targets: f, f, f) */
   double rx, ry; /* raster position of that contribution (scenes) */
+  double f_large; /* labelled targets: f in the large step's coordinates (f without the
+                     Jacobian of relabel, below); the chain keeps it, targets need not */
 } mc_value;
+
+/* One label's part of an evaluation of every label at once (eval_all). */
+typedef struct mc_contrib {
+  int label;
+  mc_value v;
+} mc_contrib;
 
 typedef struct mc_target mc_target;
 struct mc_target {
@@ -69,6 +77,43 @@ struct mc_target {
    * strategies of their MIS-weighted contributions, i.e. the expectation
    * over the technique coordinate). Used for the normalisation only. */
   double (*eval_expect)(const mc_target *t, void *scratch, lmc_sampler *smp);
+  /* Optional (n_labels 0: none): labelled states. A state is then a
+   * coordinate vector u and a label l in 0 .. n_labels-1 (the multiplexed
+   * bidirectional states of mcmc.c: l is a BDPT strategy (s, t)), with the
+   * target f(u, l); the chain samples u and l jointly. eval_label evaluates
+   * f(u, l) (eval is not used). eval_all evaluates every label for the same
+   * numbers at once, writing the labels with f > 0 to OUT (room for
+   * n_labels entries) and returning their count; their sum
+   * F(u) = sum_l f(u, l) is what the bootstrap averages (b = E[F]), and the
+   * chain's large step proposes a fresh u with a label chosen in
+   * proportion to f(u, l) (chain.h). f(u, l) from eval_label must equal
+   * the label's entry of eval_all for the same numbers.
+   *
+   * A labelled target may give each label its own coordinates (relabel,
+   * may be NULL). The numbers a large step draws are then the "large-step
+   * coordinates" u; once the chain has picked label l for them,
+   * relabel(t, scratch, l, u, r) rewrites u in place into l's coordinates
+   * v (scratch still holding that eval_all's work; r: a generator for the
+   * numbers v leaves free) and returns the Jacobian |du/dv| >= 0 of the
+   * change, so that the state's density in v is f |du/dv|: eval_label
+   * reads v and reports OUT_value->f and value in v's measure, and
+   * f_large, the same state's f in u's measure (f / |du/dv|). eval_all
+   * with from_label >= 0 reads numbers that are in label from_label's
+   * coordinates and reports every label's f in u's measure (the current
+   * state's F); with from_label -1 the numbers are large-step coordinates.
+   * A target without relabel ignores from_label. */
+  int n_labels;
+  int (*eval_label)(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
+                    mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok);
+  int (*eval_all)(const mc_target *t, void *scratch, lmc_sampler *smp, int from_label,
+                  mc_contrib *OUT);
+  double (*relabel)(const mc_target *t, void *scratch, int label, double *u, rng *r);
+  /* Optional (labelled targets): the coordinates a label's value varies
+   * with smoothly (its continuous numbers, not its discrete choices),
+   * written to OUT_idx (room for dim) in a fixed order; returns their
+   * count. LMC's cache keys its entries by label and these coordinates
+   * (gcache.h). */
+  int (*label_coords)(const mc_target *t, int label, int *OUT_idx);
 };
 
 /* First coordinate of stream k. */

@@ -280,6 +280,23 @@ int bsdf_flags(const bsdf *b) {
 
 int bsdf_is_delta(const bsdf *b) { return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC; }
 
+int bsdf_is_rough(const bsdf *b, double rough_min) {
+  switch (b->type) {
+  case BSDF_DIFFUSE:
+    return 1.0 > rough_min;
+  case BSDF_PHONG:
+    /* A diffuse part makes it rough; a pure lobe of exponent n is as wide
+     * as a Beckmann lobe of alpha = sqrt(2 / (n + 2)) (Walter et al. 2007). */
+    if (rgb_luminance(tex_mean(&b->diffuse)) > 0.0) return 1.0 > rough_min;
+    return sqrt(2.0 / (b->exponent + 2.0)) > rough_min;
+  case BSDF_ROUGHCONDUCTOR:
+  case BSDF_ROUGHDIELECTRIC:
+    return b->alpha > rough_min;
+  default:
+    return 0; /* delta lobes: smooth conductor and dielectric, plastic's coating */
+  }
+}
+
 /* ---- Dispatch ------------------------------------------------------------ */
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */

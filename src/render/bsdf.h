@@ -101,6 +101,13 @@ int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, d
 int bsdf_flags(const bsdf *b);
 /* 1 when every lobe is a delta (no point in light sampling at this vertex). */
 int bsdf_is_delta(const bsdf *b);
+/* 1 when the model has no delta lobe and a roughness above rough_min
+ * (diffuse counts as 1, phong as 1 with a diffuse part and else as the
+ * Beckmann alpha of its lobe, sqrt(2 / (n + 2)), the rough models as their
+ * alpha): its
+ * sampled directions may then be parametrized absolutely (integrator.h,
+ * bdpt_param), as the LMC paper's implementation does above 0.05. */
+int bsdf_is_rough(const bsdf *b, double rough_min);
 
 /* Fresnel reflectance of a dielectric interface; cos_i may be negative
  * (coming from inside); eta = int/ext. *cos_t gets the signed cosine of the

@@ -163,7 +163,38 @@ typedef struct bdpt_vertex {
   vec3 dir;        /* vertices at infinity: the direction the light travels */
   vec3 wo;         /* SURFACE: unit direction towards the previous vertex of its subpath */
   surface_hit hit; /* SURFACE: the shading point */
+  /* The direction this vertex scattered into (bdpt_param below): */
+  int rough;       /* 1 when its BSDF is rough (bsdf_is_rough): the direction has an
+                      absolute parametrization */
+  double sph[2];   /* rough: the direction's spherical coordinates (bdpt_sphere_dir) */
+  double jac;      /* rough: d(direction numbers) / d(spherical coordinates) = pdf J,
+                      pdf the BSDF's solid-angle density of the direction and J the
+                      sphere map's; 1 otherwise */
 } bdpt_vertex;
+
+/* How a subpath reads its direction numbers (the MCMC reparametrization,
+ * mcmc.c's bdpt states). By default a surface vertex draws its direction
+ * by BSDF sampling from (u1, u2), relative to its shading frame. At a
+ * rough vertex (bsdf_is_rough) with index < abs_until, (u1, u2) are
+ * instead the absolute spherical coordinates of the world direction
+ * (bdpt_sphere_dir): the direction stays put when the vertex before it
+ * moves, as in the LMC paper's implementation (after Li et al.'s H2MC),
+ * where BSDF-relative numbers would swing it round with the shading
+ * frame. The throughputs stay those of BSDF sampling (f cos / pdf) either
+ * way, so values, Russian roulette and MIS weights are the same functions
+ * of the path; the vertex's `jac` is the Jacobian between the two
+ * parametrizations, by which a target in the absolute numbers differs. */
+typedef struct bdpt_param {
+  int abs_until;      /* vertices of index < abs_until read absolute directions when rough */
+  double rough_min;   /* bsdf_is_rough's threshold */
+} bdpt_param;
+
+/* World direction of spherical coordinates (v1, v2) in [0,1)^2: azimuth
+ * 2 pi v1, polar angle pi v2 from +z; *OUT_jac (may be NULL) gets the
+ * solid angle per unit (v1, v2), J = 2 pi^2 sin(pi v2). */
+vec3 bdpt_sphere_dir(double v1, double v2, double *OUT_jac);
+/* Its inverse: the coordinates of a unit direction, and J. */
+void bdpt_sphere_coords(vec3 w, double *OUT_v1, double *OUT_v2, double *OUT_jac);
 
 /* Subpath lengths for render settings: at most max_camera camera vertices
  * and max_light light vertices (maxdepth + 1 and maxdepth, capped). */
@@ -171,15 +202,22 @@ void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OU
 
 /* The camera subpath through raster point (rx, ry) from the current stream
  * of smp (BDPT_DIMS_PER_VERTEX per surface vertex); path[0] is the camera.
- * Returns the number of vertices written (1 ... max_vertices). */
+ * Returns the number of vertices written (1 ... max_vertices). par (may
+ * be NULL: BSDF sampling everywhere) is the parametrization. */
 int bdpt_camera_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
                         double ry, int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt);
+int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                          double ry, int max_vertices, const bdpt_param *par,
+                          bdpt_vertex *OUT_path, render_counters *cnt);
 
 /* The light subpath from the current stream of smp (BDPT_DIMS_LIGHT_START,
  * then BDPT_DIMS_PER_VERTEX per surface vertex); path[0] is the light.
  * Returns the number of vertices written (0 ... max_vertices). */
 int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                        int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt);
+int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                         int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
+                         render_counters *cnt);
 
 /* Evaluates the single strategy (s, t): the first t vertices of cam joined
  * with the first s of lp (for s = 1 the light is sampled afresh from

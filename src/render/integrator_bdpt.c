@@ -220,6 +220,28 @@ static double bdpt__pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex
 }
 
 /* ---------------------------------------------------------------------------
+ * The sphere map of absolute directions (bdpt_param).
+ */
+
+vec3 bdpt_sphere_dir(double v1, double v2, double *OUT_jac) {
+  double phi = 2.0 * M_PI * v1, theta = M_PI * v2;
+  double st = sin(theta);
+  if (OUT_jac) *OUT_jac = 2.0 * M_PI * M_PI * fabs(st);
+  return v3(st * cos(phi), st * sin(phi), cos(theta));
+}
+
+void bdpt_sphere_coords(vec3 w, double *OUT_v1, double *OUT_v2, double *OUT_jac) {
+  double phi = atan2(w.y, w.x);
+  if (phi < 0.0) phi += 2.0 * M_PI;
+  double v1 = phi / (2.0 * M_PI);
+  double theta = acos(w.z < -1.0 ? -1.0 : w.z > 1.0 ? 1.0 : w.z);
+  double v2 = theta / M_PI;
+  *OUT_v1 = v1 < 1.0 ? v1 : 0.0;
+  *OUT_v2 = v2 < 1.0 ? v2 : nextafter(1.0, 0.0);
+  if (OUT_jac) *OUT_jac = 2.0 * M_PI * M_PI * sin(theta);
+}
+
+/* ---------------------------------------------------------------------------
  * Random walks.
  */
 
@@ -230,13 +252,14 @@ static double bdpt__pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex
 static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                       transport_mode mode, vec3 org, vec3 dir, double tmin, rgb beta,
                       double pdf_dir, int planar, bdpt_vertex *path, int n, int max_vertices,
-                      render_counters *cnt) {
+                      const bdpt_param *par, render_counters *cnt) {
   double eta_scale = 1.0; /* radiance compression undone for Russian roulette */
   while (n < max_vertices) {
     bdpt_vertex *prev = &path[n - 1];
     bdpt_vertex *v = &path[n];
     memset(v, 0, sizeof *v);
     v->beta = beta;
+    v->jac = 1.0;
 
     /* Find the next vertex; a camera ray that escapes ends on the
      * infinite lights. */
@@ -269,14 +292,42 @@ static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *s
     double u_rr = sampler_next(smp);
     if (n >= max_vertices) break;
 
-    /* Sample the BSDF for the next direction. */
+    /* Sample the BSDF for the next direction, or read it (absolute). */
     const surface_hit *h = &v->hit;
     vec3 wo_l, wi_l;
     if (!bdpt__side_ok(h, v->wo, &wo_l)) break;
+    v->rough = par && bsdf_is_rough(h->bsdf, par->rough_min);
     bsdf_sample bs;
-    if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) break;
-    vec3 wi = frame_to_world(&h->sh, bs.wi);
-    if (!bdpt__side_ok(h, wi, &wi_l)) break;
+    vec3 wi;
+    if (v->rough && n - 1 < par->abs_until) {
+      /* The direction's spherical coordinates; the BSDF's value and
+       * density there make the same sample weight f cos / pdf. */
+      double J;
+      wi = bdpt_sphere_dir(u1, u2, &J);
+      if (!bdpt__side_ok(h, wi, &wi_l)) break;
+      double pdf;
+      rgb f = bsdf_eval_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l, mode, &pdf);
+      int trans = wi_l.z * wo_l.z < 0.0;
+      double eta = !trans ? 1.0 : wi_l.z < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
+      if (!(pdf > 0.0) || !isfinite(pdf)) break;
+      bs.wi = wi_l, bs.f = f, bs.pdf = pdf, bs.eta = eta;
+      bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
+      bs.weight = rgb_scale(f, fabs(wi_l.z) / pdf);
+      if (!rgb_isfinite(bs.weight) || rgb_is_black(bs.weight)) break;
+      v->sph[0] = u1, v->sph[1] = u2;
+      v->jac = pdf * J;
+      (void)u_lobe;
+    } else {
+      if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) break;
+      wi = frame_to_world(&h->sh, bs.wi);
+      if (!bdpt__side_ok(h, wi, &wi_l)) break;
+      if (v->rough) {
+        /* Where this direction lies in the absolute parametrization. */
+        double J;
+        bdpt_sphere_coords(wi, &v->sph[0], &v->sph[1], &J);
+        v->jac = bsdf_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l) * J;
+      }
+    }
     double pdf_fwd_sa = bs.pdf;
     double pdf_rev_sa = bsdf_pdf(h->bsdf, h->tu, h->tv, bs.wi, wo_l);
     if (bs.flags & BSDF_DELTA) {
@@ -318,6 +369,12 @@ void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OU
 
 int bdpt_camera_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
                         double ry, int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt) {
+  return bdpt_camera_subpath_p(sc, rs, smp, rx, ry, max_vertices, NULL, OUT_path, cnt);
+}
+
+int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                          double ry, int max_vertices, const bdpt_param *par,
+                          bdpt_vertex *OUT_path, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (max_vertices < 1) return 0;
   bdpt_vertex *z0 = &OUT_path[0];
@@ -331,11 +388,17 @@ int bdpt_camera_subpath(const scene *sc, const render_settings *rs, lmc_sampler 
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
   double pdf_dir = camera_pdf_dir(&sc->cam, dir);
   return bdpt__walk(sc, rs, smp, TRANSPORT_RADIANCE, org, dir, 0.0, rgb_gray(1.0), pdf_dir, 0,
-                    OUT_path, 1, max_vertices, cnt);
+                    OUT_path, 1, max_vertices, par, cnt);
 }
 
 int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                        int max_vertices, bdpt_vertex *OUT_path, render_counters *cnt) {
+  return bdpt_light_subpath_p(sc, rs, smp, max_vertices, NULL, OUT_path, cnt);
+}
+
+int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                         int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
+                         render_counters *cnt) {
   /* The emitter's numbers (always taken). */
   double u_light = sampler_next(smp);
   double u1 = sampler_next(smp), u2 = sampler_next(smp);
@@ -383,7 +446,7 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
   }
   double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, les.p) : 0.0;
   return bdpt__walk(sc, rs, smp, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far,
-                    OUT_path, 1, max_vertices, cnt);
+                    OUT_path, 1, max_vertices, par, cnt);
 }
 
 /* ---------------------------------------------------------------------------

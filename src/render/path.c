@@ -688,6 +688,7 @@ static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings 
   c->A = &ps->A;
   c->smp = smp;
   c->replay = replay;
+  c->jac = 1.0;
 }
 
 void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int want_grad,
@@ -707,6 +708,7 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
   if (rays) *rays += c.rays;
   ev->value = adrgb_value(L);
   ev->lum = rgb_luminance(ev->value);
+  ev->jac = c.jac;
   ev->rx = rx.v;
   ev->ry = ry.v;
   ev->flags = c.flags;

@@ -96,6 +96,8 @@ typedef struct path_eval {
   unsigned flags;   /* PATH_* of the vertices and emitters used */
   int length;       /* segments of the longest contributing path (0: none) */
   int n_diff;       /* tangent length of pass 2 */
+  double jac;       /* path_eval_bdpt_abs: the Jacobian of the absolute directions that
+                       value includes (value / jac is path_eval_bdpt's); 1 otherwise */
   uint64_t topology; /* hash of the discrete choices: triangles hit, shadow rays,
                         lights, light triangles, envmap pixels, lobes, roulette.
                         Equal hashes: the same branch of f (up to rare side-rule flips) */
@@ -143,6 +145,17 @@ lmc_status path_eval_pt(const scene *sc, const render_settings *rs, lmc_sampler 
 lmc_status path_eval_bdpt(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
                           int t, int want_grad, path_scratch *ps, path_eval *OUT_eval,
                           int64_t *rays);
+
+/* The same strategy with absolute directions (integrator.h, bdpt_param) at
+ * every scattering vertex of its two subpaths whose BSDF is rougher than
+ * rough_min: bdpt_camera_subpath_p and bdpt_light_subpath_p with
+ * abs_until t - 1 and s - 1, as mcmc.c's bdpt states read a state of label
+ * (s, t). value (and its gradient) is in the absolute numbers' measure:
+ * the contribution times the product of those vertices' pdf J, which
+ * OUT_eval->jac reports. rough_min >= 1: path_eval_bdpt. */
+lmc_status path_eval_bdpt_abs(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
+                              int t, double rough_min, int want_grad, path_scratch *ps,
+                              path_eval *OUT_eval, int64_t *rays);
 
 /* ---- A sampler over stored vectors, for replaying and perturbing paths ---
  * Each stream is a growable array; reading past its end draws a fresh

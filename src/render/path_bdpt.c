@@ -61,7 +61,21 @@
 /* The strategy handed to the estimator through path__ctx.arg. */
 typedef struct pbd__strategy {
   int s, t;
+  double rough_min; /* absolute directions at scattering vertices rougher than this (>= 1: none) */
 } pbd__strategy;
+
+/* bdpt_sphere_dir in duals: the world direction of spherical coordinates
+ * (v1, v2), and J = 2 pi^2 sin(pi v2). */
+static adv3 pbd__sphere_dir(ad_arena *A, ad v1, ad v2, ad *OUT_jac) {
+  ad phi = ad_mul_s(A, v1, 2.0 * M_PI), theta = ad_mul_s(A, v2, M_PI);
+  ad st = ad_sin(A, theta);
+  *OUT_jac = ad_mul_s(A, ad_fabs(A, st), 2.0 * M_PI * M_PI);
+  adv3 w;
+  w.x = ad_mul(A, st, ad_cos(A, phi));
+  w.y = ad_mul(A, st, ad_sin(A, phi));
+  w.z = ad_cos(A, theta);
+  return w;
+}
 
 /* ---------------------------------------------------------------------------
  * Vertex queries (integrator_bdpt.c's, on dual vertices).
@@ -445,6 +459,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
     memset(v, 0, sizeof *v);
     v->beta = beta;
     v->pdf_rev = ad_const(A, 0.0);
+    v->jac = ad_const(A, 1.0);
 
     /* Find the next vertex; a camera ray that escapes ends on the
      * infinite lights. */
@@ -476,20 +491,44 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
     ad u_rr = path__draw(c, 0);
     if (n >= max_vertices) break;
 
-    /* Sample the BSDF for the next direction. */
+    /* Sample the BSDF for the next direction, or read it (absolute). */
     const path__hit *h = &v->hit;
     adv3 wo_l, wi_l;
     int ok = pbd__side_ok(c, h, v->wo, &wo_l);
     path__topo(c, ok);
     if (!ok) break;
     bsdf_sample_ad bs;
-    ok = bsdf_sample_f_ad(A, h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs);
-    path__topo(c, ok ? bs.flags : -1);
-    if (!ok) break;
-    adv3 wi = adv3_to_world(A, &h->sh, bs.wi);
-    ok = pbd__side_ok(c, h, wi, &wi_l);
-    path__topo(c, ok);
-    if (!ok) break;
+    adv3 wi;
+    const pbd__strategy *strat = c->arg;
+    if (strat->rough_min < 1.0 && bsdf_is_rough(h->bsdf, strat->rough_min)) {
+      /* The direction's spherical coordinates (integrator_bdpt.c's walk). */
+      ad J;
+      wi = pbd__sphere_dir(A, u1, u2, &J);
+      ok = pbd__side_ok(c, h, wi, &wi_l);
+      path__topo(c, ok);
+      if (!ok) break;
+      adrgb f = bsdf_eval_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
+      ad pdf = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l);
+      int trans = wi_l.z.v * wo_l.z.v < 0.0;
+      ok = pdf.v > 0.0 && isfinite(pdf.v) && !path__rgb_black(f);
+      path__topo(c, ok ? 1 + trans : -1);
+      if (!ok) break;
+      bs.wi = wi_l;
+      bs.pdf = pdf;
+      bs.weight = adrgb_scale(A, f, ad_div(A, ad_fabs(A, wi_l.z), pdf));
+      bs.eta = !trans ? 1.0 : wi_l.z.v < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
+      bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
+      v->jac = ad_mul(A, pdf, J);
+      (void)u_lobe;
+    } else {
+      ok = bsdf_sample_f_ad(A, h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs);
+      path__topo(c, ok ? bs.flags : -1);
+      if (!ok) break;
+      wi = adv3_to_world(A, &h->sh, bs.wi);
+      ok = pbd__side_ok(c, h, wi, &wi_l);
+      path__topo(c, ok);
+      if (!ok) break;
+    }
     ad pdf_fwd_sa = bs.pdf;
     ad pdf_rev_sa = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, bs.wi, wo_l);
     v->lobe = path__lobe_flag(bs.flags);
@@ -537,7 +576,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
                   &vh->sh.s.x,  &vh->sh.s.y,  &vh->sh.s.z,  &vh->sh.t.x,  &vh->sh.t.y,
                   &vh->sh.t.z,  &vh->sh.n.x,  &vh->sh.n.y,  &vh->sh.n.z,  &vh->tu,
                   &vh->tv,      &prev->pdf_rev, &beta.r,    &beta.g,      &beta.b,
-                  &dir.x,       &dir.y,       &dir.z,       &pdf_dir};
+                  &dir.x,       &dir.y,       &dir.z,       &pdf_dir,     &v->jac};
     path__keep(c, mark, keep, (int)(sizeof keep / sizeof keep[0]));
     vh->p = v->p;
     v->pdf_rev = ad_const(A, 0.0);
@@ -872,6 +911,14 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   size_t mark = ad_arena_mark(A);
   ad w = ad_arena_rewind_keep(A, mark, pbd__mis_weight(c, cam, t, lp, s, samp));
   *OUT_L = adrgb_scale(A, L, w);
+  /* Absolute directions: the value in their measure. */
+  if (st->rough_min < 1.0) {
+    ad jac = ad_const(A, 1.0);
+    for (int j = 1; j <= t - 2; j++) jac = ad_mul(A, jac, cam[j].jac);
+    for (int j = 1; j <= s - 2; j++) jac = ad_mul(A, jac, lp[j].jac);
+    c->jac = jac.v;
+    *OUT_L = adrgb_scale(A, *OUT_L, jac);
+  }
   if (!path__rgb_black(*OUT_L)) {
     c->flags |= emit | lobes;
     c->length = length;
@@ -881,7 +928,15 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
 lmc_status path_eval_bdpt(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
                           int t, int want_grad, path_scratch *ps, path_eval *OUT_eval,
                           int64_t *rays) {
-  pbd__strategy st = {s, t};
+  pbd__strategy st = {s, t, 2.0};
+  path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, pbd__estimate, &st);
+  return LMC_OK;
+}
+
+lmc_status path_eval_bdpt_abs(const scene *sc, const render_settings *rs, lmc_sampler *smp, int s,
+                              int t, double rough_min, int want_grad, path_scratch *ps,
+                              path_eval *OUT_eval, int64_t *rays) {
+  pbd__strategy st = {s, t, rough_min};
   path__run(sc, rs, smp, want_grad, ps, OUT_eval, rays, pbd__estimate, &st);
   return LMC_OK;
 }

@@ -50,6 +50,8 @@ typedef struct path__bdv {
   adv3 dir;        /* vertices at infinity: the direction the light travels */
   adv3 wo;         /* SURFACE: towards the previous vertex of its subpath */
   path__hit hit;   /* SURFACE */
+  ad jac;          /* the direction it scattered into was absolute: pdf J (integrator.h,
+                      bdpt_param); else 1 */
 } path__bdv;
 
 #define PATH__MAX_HITS 1024
@@ -96,6 +98,7 @@ typedef struct path__ctx {
   unsigned flags;
   int length;
   const void *arg; /* the estimator's parameters (path_eval_bdpt: the strategy) */
+  double jac;      /* the estimator's Jacobian factor in the value (1: none; path_eval.jac) */
 } path__ctx;
 
 /* A dual with the given value and the tangent coef * d_a (the chain rule

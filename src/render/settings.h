@@ -22,7 +22,12 @@ enum {
   SET_ADAPT = 1 << 8,
   SET_BOOTSTRAP = 1 << 9,
   SET_DIRECT = 1 << 10,
-  SET_SAMPLER = 1 << 11
+  SET_SAMPLER = 1 << 11,
+  SET_SMALL_STEP = 1 << 12,
+  SET_LARGESTEP_SCALE = 1 << 13,
+  SET_STATES = 1 << 14,
+  SET_ROUGH = 1 << 15,
+  SET_CHAINS = 1 << 16
 };
 
 /* LMC preconditioner adaptation (--adapt). */
@@ -36,8 +41,19 @@ typedef enum lmc_adapt {
 /* The states LMC's chains live in (--lmc-states). */
 typedef enum lmc_states {
   LMC_STATES_MMLT = 0, /* multiplexed bidirectional: length, strategy (s, t), primary samples */
-  LMC_STATES_PT        /* pssmlt's: the unidirectional path tracer's primary samples */
+  LMC_STATES_PT,       /* pssmlt's: the unidirectional path tracer's primary samples */
+  LMC_STATES_BDPT      /* one family over every length: a BDPT sample and one strategy
+                          (src/lmc/bdpt_states.h) */
 } lmc_states;
+
+/* The state space of pssmlt's and mmlt's chains (--states). */
+typedef enum mcmc_states {
+  MCMC_STATES_DEFAULT = 0, /* the integrator's own: pssmlt pt, mmlt per-length families */
+  MCMC_STATES_PT,          /* the unidirectional path tracer's primary samples (pssmlt) */
+  MCMC_STATES_MMLT,        /* one family of chains per path length (Hachisuka et al. 2014) */
+  MCMC_STATES_BDPT         /* one family over every length; a state is a BDPT sample's numbers
+                              and one of its strategies (mcmc.c) */
+} mcmc_states;
 
 typedef struct render_settings {
   unsigned set;          /* SET_* bits of the fields chosen explicitly */
@@ -52,12 +68,19 @@ typedef struct render_settings {
   int sampler;           /* pt and bdpt: LMC_SAMPLER_INDEPENDENT or _SOBOL (render/sampler.h) */
   /* MCMC (src/lmc) */
   double largestep;      /* large-step probability */
-  double sigma;          /* Kelemen small-step scale */
+  double sigma;          /* Kelemen small-step scale (the Gaussian's standard deviation) */
+  int small_gauss;       /* --small-step gauss: Gaussian small steps instead of Kelemen's */
+  double largestep_scale; /* the large-step probability times this after the first tenth of
+                             the chains' budget (the LMC paper's largestepscale; 1: none) */
   int64_t bootstrap;     /* bootstrap paths */
   double bootstrap_error; /* without --bootstrap: draw until b's relative standard error is below this */
   int direct_separate;   /* --direct separate (default): pt renders direct light, MCMC the rest */
   int64_t direct_spp;    /* samples per pixel of that pt pass under --spp (0: spp); Mitsuba's directSamples */
   int mcmc_even;         /* --allocate even: every chain the same mutations (default: in proportion to b_k) */
+  int mcmc_states;       /* --states: mcmc_states */
+  int chains;            /* --chains: Markov chains (0: mcmc.c's default) */
+  double rough_min;      /* bdpt states: absolute directions at vertices rougher than this
+                            (--roughness-threshold; >= 1: none) */
   double snapshot;       /* seconds between intermediate images (0: none) */
   /* Called by the render drivers every `snapshot` seconds with the film
    * normalised as if the render stopped then (borrowed for the call) and
@@ -73,6 +96,11 @@ typedef struct render_settings {
   double grad_bound;     /* |g| is truncated to this norm */
   double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
   double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
+  int cache_gradient;    /* --cache-gradient on: stage 2 of the cache evaluates gradients (MALA
+                            with the cached M) instead of the cached walk (lmc_kernel.h) */
+  double cache_step, cache_prior, cache_radius; /* the cached walk's (0: its defaults) */
+  int cache_k;           /* its neighbours (0: default) */
+  int cache_no_drift;    /* --cache-drift off: no drift from the cached first moment */
   int lmc_states;        /* lmc's state space: LMC_STATES_MMLT (default) or _PT */
   int delayed;           /* --delayed on: Langevin proposals get a gradient-free first test (off) */
   int mala;              /* the <dpt> block asked for MALA */
@@ -91,6 +119,8 @@ static inline render_settings render_settings_default(void) {
   s.seed = 1;
   s.largestep = 0.3;
   s.sigma = 1.0 / 64.0;
+  s.largestep_scale = 1.0;
+  s.rough_min = 0.05;
   s.bootstrap = 0;
   s.bootstrap_error = 0.01;
   s.direct_separate = 1; /* as Mitsuba's pssmlt and the LMC paper's code; see README */

@@ -1318,6 +1318,35 @@ static lmc_status xml__dpt(builder *B, pset *o) {
     r->bootstrap = v;
     r->set |= SET_BOOTSTRAP;
   }
+  /* The rest of dpt's options that have a counterpart here. */
+  if ((st = xml__float(B, o, "largestepscale", 1.0, &d, &found)) != LMC_OK) return st;
+  if (found) {
+    if (!(d >= 0.0) || !isfinite(d))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "largestepscale must be >= 0");
+    r->largestep_scale = d;
+    r->set |= SET_LARGESTEP_SCALE;
+  }
+  if ((st = xml__float(B, o, "roughnessthreshold", 0.05, &d, &found)) != LMC_OK) return st;
+  if (found) {
+    if (!(d >= 0.0) || !isfinite(d))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughnessthreshold must be >= 0");
+    r->rough_min = d;
+    r->set |= SET_ROUGH;
+  }
+  if ((st = xml__int(B, o, "numchains", 128, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    if (v < 1 || v > (1 << 20))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "numchains must lie in [1, 2^20]");
+    r->chains = (int)v;
+    r->set |= SET_CHAINS;
+  }
+  if ((st = xml__int(B, o, "directspp", 256, &v, &found)) != LMC_OK) return st;
+  if (found) {
+    if (v < 0) return xml__fail(B, LMC_EPARSE, o->file, o->line, "directspp must be >= 0");
+    r->direct_separate = v > 0;
+    r->direct_spp = v;
+    r->set |= SET_DIRECT;
+  }
   for (int i = 0; i < o->n_props; i++) {
     prop *p = &o->props[i];
     if (p->used) continue;

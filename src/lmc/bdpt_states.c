@@ -1,0 +1,396 @@
+/*
+ * bdpt_states.c: the bdpt states as a labelled mc_target (see
+ * bdpt_states.h for the model).
+ *
+ * Per-label evaluation (eval_label) traces just the strategy's two
+ * subpaths, t camera and s light vertices (for s = 1 the light sample of
+ * the connect triple of camera vertex t; the 3 (t - 2) numbers before it
+ * are drawn and do not change f), with the label's absolute directions.
+ * The whole sample (eval_all) is bdpt_li's loop, every strategy of a
+ * length in [kmin, kmax] recorded apart; for a current state of label l
+ * the scattering vertices of l's subpaths read absolute directions and the
+ * rest BSDF-relative ones (the numbers l leaves free), all in the large
+ * step's measure.
+ */
+#include "lmc/bdpt_states.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lmc/mcmc.h"
+#include "render/integrator.h"
+#include "render/path.h"
+
+typedef struct bs__scratch {
+  render_counters cnt;
+  bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
+  path_scratch *ps; /* for gradients, made on first use */
+  int64_t rays_grad, grad_evals;
+} bs__scratch;
+
+static void *bs__scratch_create(const mc_target *t) {
+  (void)t;
+  return calloc(1, sizeof(bs__scratch));
+}
+
+static void bs__scratch_destroy(void *scratch) {
+  bs__scratch *sc = scratch;
+  if (!sc) return;
+  path_scratch_destroy(sc->ps);
+  free(sc);
+}
+
+static int64_t bs__scratch_rays(const void *scratch) {
+  const bs__scratch *sc = scratch;
+  return sc->cnt.rays + sc->rays_grad;
+}
+
+int64_t mc_bdpt_states_grad_evals(const void *scratch) {
+  return scratch ? ((const bs__scratch *)scratch)->grad_evals : 0;
+}
+
+int64_t mc_bdpt_states_nan_samples(const void *scratch) {
+  return scratch ? ((const bs__scratch *)scratch)->cnt.nan_samples : 0;
+}
+
+int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label) {
+  if (label < 0 || label >= ctx->n_labels) return 0;
+  return ctx->strat[label].s + ctx->strat[label].t - 1;
+}
+
+/* Value and f of a contribution c at (rx, ry); non-finite ones are
+ * dropped (and counted). */
+static void bs__value(mc_value *v, rgb c, double rx, double ry, render_counters *cnt) {
+  v->rx = rx;
+  v->ry = ry;
+  if (!rgb_isfinite(c)) {
+    cnt->nan_samples++;
+    c = rgb_zero();
+  }
+  double f = rgb_luminance(c);
+  if (!(f > 0.0) || !isfinite(f)) {
+    f = 0.0;
+    c = rgb_zero();
+  }
+  v->value = c;
+  v->f = v->f_large = f;
+}
+
+/* The raster point of the film numbers (u0, u1): uniform over the film
+ * grown by the filter radius. */
+static void bs__raster(const mc_bdpt_states *st, double u0, double u1, double *rx, double *ry) {
+  double r = st->margin;
+  *rx = -r + u0 * (st->s->cam.width + 2.0 * r);
+  *ry = -r + u1 * (st->s->cam.height + 2.0 * r);
+}
+
+/* The product of the jac of strategy (s, t)'s scattering vertices. */
+static double bs__jacobian(const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s) {
+  double jac = 1.0;
+  for (int j = 1; j <= t - 2; j++) jac *= cam[j].jac;
+  for (int j = 1; j <= s - 2; j++) jac *= lp[j].jac;
+  return jac;
+}
+
+/* ---- The gradient (path_eval_bdpt_abs through a film adapter) ----------- */
+
+/* path_eval_bdpt_abs reads the raster position as u0 W, u1 H; the state's
+ * film numbers cover the film grown by r. The adapter hands it
+ * (-r + u (W + 2r)) / W (outside [0, 1) near the border, which the camera
+ * accepts); the chain rule factor (W + 2r) / W goes on those two
+ * derivatives. */
+typedef struct bs__adapter {
+  lmc_sampler base;
+  lmc_sampler *inner;
+  int stream, pos[LMC_STREAM_COUNT];
+  double r, W, H;
+} bs__adapter;
+
+static double bs__adapter_next(lmc_sampler *self) {
+  bs__adapter *a = (bs__adapter *)self;
+  int p = a->pos[a->stream]++;
+  double u = sampler_next(a->inner);
+  if (a->stream == LMC_STREAM_CAMERA && p < 2)
+    return p == 0 ? (-a->r + u * (a->W + 2.0 * a->r)) / a->W : (-a->r + u * (a->H + 2.0 * a->r)) / a->H;
+  return u;
+}
+
+static void bs__adapter_use_stream(lmc_sampler *self, int stream) {
+  bs__adapter *a = (bs__adapter *)self;
+  a->stream = stream;
+  sampler_use_stream(a->inner, stream);
+}
+
+static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, int ss, int tt,
+                         mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
+  const mc_bdpt_states *st = t->ctx;
+  if (!sc->ps) {
+    lmc_error err;
+    if (path_scratch_create(&sc->ps, &err) != LMC_OK) return -1;
+  }
+  bs__adapter a;
+  memset(&a, 0, sizeof a);
+  a.base.next = bs__adapter_next;
+  a.base.use_stream = bs__adapter_use_stream;
+  a.inner = smp;
+  a.r = st->margin;
+  a.W = st->s->cam.width;
+  a.H = st->s->cam.height;
+  path_eval pe;
+  if (path_eval_bdpt_abs(st->s, &st->rs, &a.base, ss, tt, st->rough_min, 1, sc->ps, &pe,
+                         &sc->rays_grad) != LMC_OK)
+    return -1;
+  sc->grad_evals++;
+  double scale = tt == 1 ? 1.0 : st->area;
+  bs__value(OUT_value, rgb_scale(pe.value, scale), pe.rx, pe.ry, &sc->cnt);
+  OUT_value->f_large = pe.jac > 0.0 ? OUT_value->f / pe.jac : 0.0;
+
+  /* The gradient of f per coordinate of the state. */
+  memset(OUT_grad, 0, (size_t)t->dim * sizeof(double));
+  if (!(OUT_value->f > 0.0) || !pe.grad_ok) return 0;
+  int ok = 0;
+  for (int i = 0; i < pe.n_coords; i++) {
+    const path_coord *pc = &pe.coords[i];
+    if (!pc->diff || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
+    if (pc->pos >= t->stream_dim[pc->stream]) continue;
+    double d = pc->dlum * scale;
+    if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
+      d *= pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
+    if (!isfinite(d)) return 0; /* no usable gradient at this state */
+    OUT_grad[mc_target_stream_offset(t, pc->stream) + pc->pos] += d;
+    ok = 1;
+  }
+  *OUT_grad_ok = ok;
+  return 0;
+}
+
+/* ---- The target ------------------------------------------------------------- */
+
+static int bs__eval_label(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
+                          mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
+  const mc_bdpt_states *st = t->ctx;
+  bs__scratch *sc = scratch;
+  if (OUT_grad_ok) *OUT_grad_ok = 0;
+  memset(OUT_value, 0, sizeof *OUT_value);
+  if (label < 0 || label >= st->n_labels) return -1;
+  int ss = st->strat[label].s, tt = st->strat[label].t;
+  if (OUT_grad) return bs__eval_grad(t, sc, smp, ss, tt, OUT_value, OUT_grad, OUT_grad_ok);
+  const scene *s = st->s;
+
+  /* The light sample of s = 1: the connect triple of camera vertex t. */
+  double uc[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
+  if (ss == 1) {
+    sampler_use_stream(smp, LMC_STREAM_CONNECT);
+    for (int i = 0; i < BDPT_DIMS_CONNECT * (tt - 2); i++) (void)sampler_next(smp);
+    for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
+  }
+  /* The two subpaths, just long enough for (s, t), in the label's own
+   * coordinates. */
+  double rx = 0.0, ry = 0.0;
+  if (tt >= 2) {
+    sampler_use_stream(smp, LMC_STREAM_CAMERA);
+    double u0 = sampler_next(smp), u1 = sampler_next(smp);
+    bs__raster(st, u0, u1, &rx, &ry);
+  }
+  bdpt_param pc = {tt - 1, st->rough_min}, pl = {ss - 1, st->rough_min};
+  int nc = bdpt_camera_subpath_p(s, &st->rs, smp, rx, ry, tt, &pc, sc->cam, &sc->cnt);
+  if (nc < tt) return 0;
+  if (ss >= 2) {
+    sampler_use_stream(smp, LMC_STREAM_LIGHT);
+    int nl = bdpt_light_subpath_p(s, &st->rs, smp, ss, &pl, sc->lp, &sc->cnt);
+    if (nl < ss) return 0;
+  }
+  double prx = rx, pry = ry;
+  rgb c = bdpt_connect(s, sc->cam, tt, sc->lp, ss, uc, &prx, &pry, NULL, &sc->cnt);
+  if (tt != 1) c = rgb_scale(c, st->area);
+  bs__value(OUT_value, c, prx, pry, &sc->cnt);
+  /* The density in the label's coordinates. */
+  double jac = st->rough_min < 1.0 ? bs__jacobian(sc->cam, tt, sc->lp, ss) : 1.0;
+  OUT_value->f *= jac;
+  OUT_value->value = rgb_scale(OUT_value->value, jac);
+  if (!(OUT_value->f > 0.0) || !isfinite(OUT_value->f)) {
+    OUT_value->f = OUT_value->f_large = 0.0;
+    OUT_value->value = rgb_zero();
+  }
+  return 0;
+}
+
+static int bs__eval_all(const mc_target *t, void *scratch, lmc_sampler *smp, int from_label,
+                        mc_contrib *OUT) {
+  const mc_bdpt_states *st = t->ctx;
+  bs__scratch *sc = scratch;
+  const scene *s = st->s;
+  /* Both subpaths as long as the longest length needs; a current state's
+   * label's scattering vertices read their absolute directions. */
+  bdpt_param pc = {0, st->rough_min}, pl = {0, st->rough_min};
+  if (from_label >= 0 && from_label < st->n_labels) {
+    pc.abs_until = st->strat[from_label].t - 1;
+    pl.abs_until = st->strat[from_label].s - 1;
+  }
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  double u0 = sampler_next(smp), u1 = sampler_next(smp), rx, ry;
+  bs__raster(st, u0, u1, &rx, &ry);
+  int nc = bdpt_camera_subpath_p(s, &st->rs, smp, rx, ry, st->kmax + 1, &pc, sc->cam, &sc->cnt);
+  sampler_use_stream(smp, LMC_STREAM_LIGHT);
+  int nl = bdpt_light_subpath_p(s, &st->rs, smp, st->kmax, &pl, sc->lp, &sc->cnt);
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+
+  /* Every strategy of a length in [kmin, kmax], as bdpt_li. */
+  int n = 0, stride = st->kmax + 2;
+  for (int tt = 1; tt <= nc; tt++) {
+    double uc[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
+    if (tt >= 2)
+      for (int k = 0; k < BDPT_DIMS_CONNECT; k++) uc[k] = sampler_next(smp);
+    for (int ss = 0; ss + tt - 1 <= st->kmax; ss++) {
+      if (ss >= 2 && ss > nl) break;
+      int label = st->label_of[ss * stride + tt];
+      if (label < 0) continue;
+      double prx = rx, pry = ry;
+      rgb c = bdpt_connect(s, sc->cam, tt, sc->lp, ss, uc, &prx, &pry, NULL, &sc->cnt);
+      if (rgb_is_black(c)) continue;
+      if (tt != 1) c = rgb_scale(c, st->area);
+      bs__value(&OUT[n].v, c, prx, pry, &sc->cnt);
+      if (!(OUT[n].v.f > 0.0)) continue;
+      OUT[n++].label = label;
+    }
+  }
+  return n;
+}
+
+/* The label (s, t)'s coordinates from the large step's (bdpt_states.h):
+ * the rough scattering vertices z_1 .. z_{t-2}, y_1 .. y_{s-2} get the
+ * spherical coordinates of their direction and a fresh lobe number; the
+ * Jacobian is the product of their pdf J. */
+static double bs__relabel(const mc_target *t, void *scratch, int label, double *u, rng *r) {
+  const mc_bdpt_states *st = t->ctx;
+  const bs__scratch *sc = scratch;
+  int ss = st->strat[label].s, tt = st->strat[label].t;
+  double jac = 1.0;
+  int cam0 = mc_target_stream_offset(t, LMC_STREAM_CAMERA) + 2;
+  for (int j = 1; j <= tt - 2; j++) {
+    const bdpt_vertex *v = &sc->cam[j];
+    if (!v->rough) continue;
+    int i = cam0 + BDPT_DIMS_PER_VERTEX * (j - 1);
+    u[i] = rng_uniform(r), u[i + 1] = v->sph[0], u[i + 2] = v->sph[1];
+    jac *= v->jac;
+  }
+  int lp0 = mc_target_stream_offset(t, LMC_STREAM_LIGHT) + BDPT_DIMS_LIGHT_START;
+  for (int j = 1; j <= ss - 2; j++) {
+    const bdpt_vertex *v = &sc->lp[j];
+    if (!v->rough) continue;
+    int i = lp0 + BDPT_DIMS_PER_VERTEX * (j - 1);
+    u[i] = rng_uniform(r), u[i + 1] = v->sph[0], u[i + 2] = v->sph[1];
+    jac *= v->jac;
+  }
+  return jac;
+}
+
+/* The continuous numbers of strategy (s, t), in this order: the film
+ * position (t >= 2); the direction of each scattering camera vertex z_1
+ * .. z_{t-2}; the emission's position and direction (s >= 2) and the
+ * direction of each scattering light vertex y_1 .. y_{s-2}; the point on
+ * the light of s = 1. */
+static int bs__label_coords(const mc_target *t, int label, int *OUT_idx) {
+  const mc_bdpt_states *st = t->ctx;
+  if (label < 0 || label >= st->n_labels) return 0;
+  int ss = st->strat[label].s, tt = st->strat[label].t, n = 0;
+  int c0 = mc_target_stream_offset(t, LMC_STREAM_CAMERA);
+  if (tt >= 2) OUT_idx[n++] = c0, OUT_idx[n++] = c0 + 1;
+  for (int j = 1; j <= tt - 2; j++) {
+    int i = c0 + 2 + BDPT_DIMS_PER_VERTEX * (j - 1);
+    OUT_idx[n++] = i + 1, OUT_idx[n++] = i + 2;
+  }
+  int l0 = mc_target_stream_offset(t, LMC_STREAM_LIGHT);
+  if (ss >= 2) {
+    for (int k = 1; k < BDPT_DIMS_LIGHT_START; k++) OUT_idx[n++] = l0 + k;
+    for (int j = 1; j <= ss - 2; j++) {
+      int i = l0 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (j - 1);
+      OUT_idx[n++] = i + 1, OUT_idx[n++] = i + 2;
+    }
+  }
+  if (ss == 1) {
+    int i = mc_target_stream_offset(t, LMC_STREAM_CONNECT) + BDPT_DIMS_CONNECT * (tt - 2);
+    OUT_idx[n++] = i + 1, OUT_idx[n++] = i + 2;
+  }
+  return n;
+}
+
+lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const scene *s,
+                               const render_settings *rs, int kmin, int kmax, lmc_error *err) {
+  memset(OUT_target, 0, sizeof *OUT_target);
+  memset(ctx, 0, sizeof *ctx);
+  if (kmin < 1) kmin = 1;
+  if (kmax > BDPT_MAX_VERTICES - 2) kmax = BDPT_MAX_VERTICES - 2;
+  if (kmax < kmin)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "bdpt states: no length in [%d, %d]", kmin, kmax);
+  ctx->s = s;
+  ctx->rs = *rs;
+  ctx->rs.mindepth = -1;
+  ctx->rs.maxdepth = kmax;
+  ctx->margin = s->filter.radius;
+  ctx->area = (s->cam.width + 2.0 * ctx->margin) * (s->cam.height + 2.0 * ctx->margin);
+  ctx->rough_min = rs->rough_min;
+  ctx->kmin = kmin, ctx->kmax = kmax;
+
+  /* The labels: length k has t = 1 .. k + 1, s = k + 1 - t, without
+   * (1, 1); length 1 has (0, 2) alone (bdpt_connect's rules). */
+  int stride = kmax + 2;
+  ctx->strat = malloc((size_t)stride * (size_t)stride * sizeof *ctx->strat);
+  ctx->label_of = malloc((size_t)stride * (size_t)stride * sizeof *ctx->label_of);
+  if (!ctx->strat || !ctx->label_of) {
+    mc_bdpt_states_free(ctx);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the strategies");
+  }
+  for (int i = 0; i < stride * stride; i++) ctx->label_of[i] = -1;
+  int n = 0;
+  for (int k = kmin; k <= kmax; k++)
+    for (int tt = 1; tt <= k + 1; tt++) {
+      int ss = k + 1 - tt;
+      if ((ss == 1 && tt == 1) || (k == 1 && tt != 2)) continue;
+      ctx->strat[n] = (mc_strategy){ss, tt};
+      ctx->label_of[ss * stride + tt] = (short)n++;
+    }
+  ctx->n_labels = n;
+
+  mc_target *T = OUT_target;
+  T->stream_dim[LMC_STREAM_CAMERA] = 2 + BDPT_DIMS_PER_VERTEX * (kmax + 1);
+  T->stream_dim[LMC_STREAM_LIGHT] = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (kmax + 1);
+  T->stream_dim[LMC_STREAM_CONNECT] = BDPT_DIMS_CONNECT * (kmax + 1);
+  T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
+  T->ctx = ctx;
+  T->scratch_create = bs__scratch_create;
+  T->scratch_destroy = bs__scratch_destroy;
+  T->scratch_rays = bs__scratch_rays;
+  T->n_labels = n;
+  T->eval_label = bs__eval_label;
+  T->eval_all = bs__eval_all;
+  if (ctx->rough_min < 1.0) T->relabel = bs__relabel;
+  T->label_coords = bs__label_coords;
+
+  /* The light-position numbers u1 of the emission and of every connect
+   * triple pick an area light's triangle (mcmc_light_u1_scale). */
+  ctx->step_scale = malloc((size_t)T->dim * sizeof(double));
+  if (!ctx->step_scale) {
+    mc_bdpt_states_free(ctx);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the strategies");
+  }
+  double u1_scale = mcmc_light_u1_scale(s);
+  for (int i = 0; i < T->dim; i++) ctx->step_scale[i] = 1.0;
+  ctx->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
+  int c0 = mc_target_stream_offset(T, LMC_STREAM_CONNECT);
+  for (int i = 1; i < T->stream_dim[LMC_STREAM_CONNECT]; i += BDPT_DIMS_CONNECT)
+    ctx->step_scale[c0 + i] = u1_scale;
+  T->step_scale = ctx->step_scale;
+  return LMC_OK;
+}
+
+void mc_bdpt_states_free(mc_bdpt_states *ctx) {
+  if (!ctx) return;
+  free(ctx->strat);
+  free(ctx->label_of);
+  free(ctx->step_scale);
+  ctx->strat = NULL;
+  ctx->label_of = NULL;
+  ctx->step_scale = NULL;
+}

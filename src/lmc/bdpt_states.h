@@ -1,0 +1,85 @@
+/*
+ * bdpt_states.h: the bdpt states (--states bdpt) as a labelled mc_target
+ * (target.h), for pssmlt, mmlt and lmc.
+ *
+ * A state is the numbers of one BDPT sample in bdpt_li's layout
+ * (integrator.h: the film position and the camera subpath, the light
+ * subpath, one connect triple per camera vertex) and a label, one strategy
+ * (s, t) of a path length in [kmin, kmax]. One family of chains covers
+ * every length. The target of label (s, t) is the strategy's MIS-weighted
+ * contribution (A L for t >= 2, A = (W + 2r)(H + 2r) the film grown by
+ * the filter radius r; the light-tracing splat for t = 1), so the labels'
+ * sum F(u) is the whole BDPT sample and b = E[F] is BDPT's estimate of the
+ * image's sum, with BDPT's variance: no per-length normalisation.
+ *
+ * Kernels (chain.h). Small steps and LMC's steps keep the label, move the
+ * numbers of its two subpaths (and for s = 1 its light sample) and
+ * evaluate that strategy alone, at the cost of its own rays. The large
+ * step draws a whole BDPT sample, splats every strategy of it and moves
+ * to one chosen in proportion to its contribution, with the exact ratio
+ * F(u') / F(u). This is the state space of the LMC paper's implementation
+ * (Luan et al. 2020, on Li et al.'s dpt), whose large step uses an
+ * inexact ratio in place of F(u); here F(u) of a state moved by small
+ * steps is computed by a Russian roulette when needed (chain.h).
+ *
+ * Absolute directions (rough_min < 1). A label's own coordinates read the
+ * direction of every rough scattering vertex of its subpaths (a BSDF with
+ * no delta lobe and roughness above rough_min, bsdf_is_rough) as world
+ * spherical coordinates (integrator.h, bdpt_param), so that a small step
+ * of the camera's numbers leaves the later directions in place instead of
+ * swinging them round with the shading frame: paths through a glass box
+ * to the sun, a door gap or a caustic stay valid under small moves of
+ * their first vertices. The large step samples BSDF-relative numbers;
+ * relabel rewrites the chosen strategy's rough directions into spherical
+ * coordinates (their lobe numbers, unused there, fresh), and the state's
+ * density in its coordinates is f times the product of pdf J over those
+ * vertices (BSDF density times the sphere map's solid angle per unit
+ * square). The LMC paper's implementation does the same above roughness
+ * 0.05 (its roughnessThreshold), with the discrete numbers perturbed too.
+ *
+ * Gradients (lmc): eval_label with a gradient runs path_eval_bdpt_abs
+ * (render/path.h) on the same numbers, the plain evaluation otherwise
+ * (the same value to about 1e-9, and faster).
+ */
+#ifndef LMC_MCMC_BDPT_STATES_H
+#define LMC_MCMC_BDPT_STATES_H
+
+#include <stdint.h>
+
+#include "lmc/target.h"
+#include "render/error.h"
+#include "render/scene.h"
+#include "render/settings.h"
+
+typedef struct mc_strategy {
+  int s, t;
+} mc_strategy;
+
+typedef struct mc_bdpt_states {
+  const scene *s;      /* borrowed */
+  render_settings rs;  /* mindepth -1, maxdepth kmax: the labels decide */
+  double margin, area; /* filter radius r, (W + 2r)(H + 2r) */
+  double rough_min;    /* absolute directions above this roughness (>= 1: none) */
+  int kmin, kmax;
+  int n_labels;
+  mc_strategy *strat;  /* owned: label -> (s, t) */
+  short *label_of;     /* owned: label of (s, t) at s (kmax + 2) + t, -1 for none */
+  double *step_scale;  /* owned: the target's step_scale (light-position numbers) */
+} mc_bdpt_states;
+
+/* Sets up *OUT_target over ctx (both owned by the caller; ctx must outlive
+ * the target and be freed with mc_bdpt_states_free) for the lengths kmin ..
+ * kmax of scene s, with rs's depths, roulette and rs->rough_min. */
+lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const scene *s,
+                               const render_settings *rs, int kmin, int kmax, lmc_error *err);
+void mc_bdpt_states_free(mc_bdpt_states *ctx);
+
+/* Path length (segments) of a label. */
+int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label);
+
+/* Counters of a scratch of the target: gradient evaluations, non-finite
+ * contributions dropped. */
+int64_t mc_bdpt_states_grad_evals(const void *scratch);
+int64_t mc_bdpt_states_nan_samples(const void *scratch);
+
+#endif
