@@ -515,15 +515,16 @@ static int lmc_cmd_render(int argc, char **argv) {
         goto bad;
       }
       cli.set |= SET_STATES;
-    } else if (lmc_flag_is(&a, "--lmc-states")) {
+    } else if (lmc_flag_is(&a, "--lmc-states")) { /* the name --states had for lmc alone */
       if (!(v = lmc_flag_value(&a))) goto bad;
-      if (!strcmp(v, "mmlt")) cli.lmc_states = LMC_STATES_MMLT;
-      else if (!strcmp(v, "pt")) cli.lmc_states = LMC_STATES_PT;
-      else if (!strcmp(v, "bdpt")) cli.lmc_states = LMC_STATES_BDPT;
+      if (!strcmp(v, "mmlt")) cli.mcmc_states = MCMC_STATES_MMLT;
+      else if (!strcmp(v, "pt")) cli.mcmc_states = MCMC_STATES_PT;
+      else if (!strcmp(v, "bdpt")) cli.mcmc_states = MCMC_STATES_BDPT;
       else {
         fprintf(stderr, "lmc: flag --lmc-states: '%s' is not one of mmlt, pt, bdpt\n", v);
         goto bad;
       }
+      cli.set |= SET_STATES;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
     } else if (arg[0] == '-') {
@@ -599,7 +600,6 @@ static int lmc_cmd_render(int argc, char **argv) {
   rs.cache_radius = cli.cache_radius;
   rs.cache_k = cli.cache_k;
   rs.cache_no_drift = cli.cache_no_drift;
-  rs.lmc_states = cli.lmc_states;
   rs.delayed = cli.delayed;
   rs.set |= cli.set;
   rs.threads = cli.threads;

@@ -396,7 +396,12 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
     int flen = run->fam[run->chain_fam[i]].length;
     for (int t = 0; t < 2; t++)
       for (int k = 0; k < LMC_STAT_KEYS; k++) {
-        int len = flen > 0 ? flen : t == 0 && !bdpt ? lmc_target_length_of_key(k) : 0;
+        int len = flen > 0                ? flen
+                  : t != 0                ? 0
+                  : bdpt                  ? (k > 0 && k < LMC_STAT_KEYS - 1
+                                                 ? mc_bdpt_states_length(&run->fam[0].bst, k - 1)
+                                                 : MAXL - 1)
+                                          : lmc_target_length_of_key(k);
         if (len >= MAXL) len = MAXL - 1;
         pr[t][len] += st->key_proposed[t][k];
         ac[t][len] += st->key_accepted[t][k];

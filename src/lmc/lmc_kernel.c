@@ -229,7 +229,10 @@ static void lmc__on_step(void *self, const mc_state *x, int accepted) {
   k->own_step = 0;
   /* Statistics: per key of the state proposed from, and stalls. */
   if (own) {
-    int t = k->own_key == 0, b = k->own_key < LMC_STAT_KEYS ? k->own_key : LMC_STAT_KEYS - 1;
+    /* Labelled targets count by label + 1 (the integrator maps labels to
+     * path lengths), others by key. */
+    int stat = k->own_key == 0 ? 0 : k->target && k->target->label_coords ? x->label + 1 : k->own_key;
+    int t = k->own_key == 0, b = stat < LMC_STAT_KEYS ? stat : LMC_STAT_KEYS - 1;
     k->st.key_proposed[t][b]++;
     k->st.key_accepted[t][b] += accepted != 0;
   }

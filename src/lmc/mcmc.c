@@ -139,6 +139,7 @@
 #define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* mmlt's per-length splat buffers, at most */
 #define MCMC_UNBOUNDED_PT 128  /* pt bounces kept in the state when maxdepth is -1 */
 #define MCMC_UNBOUNDED_MMLT 24 /* mmlt's longest path when maxdepth is -1 */
+#define MCMC_UNBOUNDED_BDPT (BDPT_MAX_VERTICES - 2) /* the bdpt states' (subpaths of 63 vertices) */
 #define MCMC_UNBOUNDED_LMC 16  /* lmc's bounces kept in the state when maxdepth is -1 */
 
 int mcmc_is_integrator(const char *name) {
@@ -569,14 +570,24 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   memset(st, 0, sizeof *st);
   int is_mmlt = !strcmp(rs->integrator, "mmlt");
   int is_lmc = !strcmp(rs->integrator, "lmc"); /* integrator_lmc.h */
-  /* Families per path length: mmlt, and lmc on mmlt's states. */
-  int bdpt_states = is_lmc ? rs->lmc_states == LMC_STATES_BDPT : rs->mcmc_states == MCMC_STATES_BDPT;
-  int multiplexed = !bdpt_states && (is_mmlt || (is_lmc && rs->lmc_states == LMC_STATES_MMLT));
   lmc_run *lrun = NULL;
   if (!is_mmlt && !is_lmc && strcmp(rs->integrator, "pssmlt"))
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
                          "integrator %s is not built on this framework yet", rs->integrator);
-  if (bdpt_states) is_mmlt = 0; /* one family; mmlt's per-length machinery is not used */
+  /* The state space (--states): mmlt's own are its per-length families,
+   * pssmlt's and lmc's the bdpt states. */
+  int states = rs->mcmc_states != MCMC_STATES_DEFAULT ? rs->mcmc_states
+               : is_mmlt                            ? MCMC_STATES_MMLT
+                                                    : MCMC_STATES_BDPT;
+  int bdpt_states = states == MCMC_STATES_BDPT;
+  /* Families per path length: mmlt's states (for mmlt, or lmc on them). */
+  int multiplexed = states == MCMC_STATES_MMLT;
+  is_mmlt = multiplexed && !is_lmc; /* mmlt's own kernels (the technique mutation) */
+  render_settings lrs_states = *rs;
+  lrs_states.lmc_states = states == MCMC_STATES_PT     ? LMC_STATES_PT
+                          : states == MCMC_STATES_MMLT ? LMC_STATES_MMLT
+                                                       : LMC_STATES_BDPT;
+  rs = &lrs_states;
   const int W = s->cam.width, H = s->cam.height;
   const int nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
   const int timed = rs->time_limit > 0.0;
@@ -645,7 +656,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   }
   if (bdpt_states) {
     /* One family over every length (see mcmc__bdpt_eval_label). */
-    kmax = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_MMLT;
+    kmax = rs->maxdepth >= 0 ? rs->maxdepth : MCMC_UNBOUNDED_BDPT;
     if (kmax > BDPT_MAX_VERTICES - 2) kmax = BDPT_MAX_VERTICES - 2;
     kmin = mrs.mindepth > 1 ? mrs.mindepth : 1;
     if (rs->maxdepth < 0 && !rs->quiet)

@@ -1227,7 +1227,15 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
       r->direct_separate = sep;
       r->set |= SET_DIRECT;
     }
-    static const char *const mlt_silent[] = {"bidirectional", "lambda", "chainLength",
+    /* Mitsuba's bidirectional (default true): pssmlt on a BDPT sample, our
+     * bdpt states; false: on a path tracer's samples. */
+    int bidir, found_bidir;
+    if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, &found_bidir)) != LMC_OK) return st;
+    if (found_bidir) {
+      r->mcmc_states = bidir ? MCMC_STATES_BDPT : MCMC_STATES_PT;
+      r->set |= SET_STATES;
+    }
+    static const char *const mlt_silent[] = {"lambda", "chainLength",
                                              "numChains", "maxChains", "bidirectionalMutation",
                                              "lensPerturbation", "multiChainPerturbation",
                                              "causticPerturbation", "manifoldPerturbation",
@@ -1275,13 +1283,17 @@ static lmc_status xml__dpt(builder *B, pset *o) {
   r->mala = mala;
   r->h2mc = h2mc;
   if (strcmp(integ, "mcmc") == 0) {
+    /* dpt's chains live in the bdpt states (bidirectional, the default) or
+     * on a path tracer's samples. */
+    r->mcmc_states = bidir ? MCMC_STATES_BDPT : MCMC_STATES_PT;
+    r->set |= SET_STATES;
     if (mala) {
       xml__set_integrator(r, "lmc");
     } else if (h2mc) {
       lmc_warn(o->file, o->line, "H2MC is not implemented yet: using lmc");
       xml__set_integrator(r, "lmc");
     } else {
-      xml__set_integrator(r, bidir ? "mmlt" : "pssmlt");
+      xml__set_integrator(r, "pssmlt");
     }
   } else if (strcmp(integ, "pt") == 0 || strcmp(integ, "mc") == 0) {
     xml__set_integrator(r, bidir && integ[1] == 'c' ? "bdpt" : "pt");
