@@ -123,7 +123,7 @@ static double vec_next(lmc_sampler *self) {
 static void vec_stream(lmc_sampler *self, int stream) { ((vec_smp *)self)->stream = stream; }
 
 static vec_smp vec_at(const mc_target *T, double *u) {
-  vec_smp v = {{vec_next, vec_stream}, T, u, 0, {0}};
+  vec_smp v = {{vec_next, vec_stream, NULL}, T, u, 0, {0}};
   return v;
 }
 

@@ -82,7 +82,7 @@ static void test_default_is_cache(void **state) {
   assert_non_null(strstr(err_text, "lmc: adapt cache,"));
   assert_non_null(strstr(err_text, "lmc: cache: stage 1"));
   assert_non_null(strstr(err_text, "image kept"));
-  assert_non_null(strstr(err_text, "gradient evaluations/s"));
+  assert_non_null(strstr(err_text, " gradient evaluations ("));
   assert_non_null(strstr(err_text, "chains stalled"));
 }
 
@@ -128,12 +128,34 @@ static void test_delayed_flag(void **state) {
   assert_int_equal(checked, 4);
 }
 
+/* Stage 2 of --adapt cache (all of it with --cache-fraction 0) evaluates
+ * no gradient by default: its cached walk proposes from the cache alone.
+ * --cache-gradient on brings back the gradient-evaluating stage 2. */
+static void test_stage2_without_gradients(void **state) {
+  (void)state;
+  int rc = run_lmc(COMMON " --adapt cache --cache-fraction 0");
+  if (rc != 0) print_error("%s", err_text);
+  assert_int_equal(rc, 0);
+  assert_non_null(strstr(err_text, "lmc: stage 2: cached walk (no gradients), proposed "));
+  assert_null(strstr(err_text, "cached walk (no gradients), proposed 0,"));
+  assert_non_null(strstr(err_text, "lmc: 0 gradient evaluations ("));
+  rc = run_lmc(COMMON " --adapt cache --cache-fraction 0 --cache-gradient on");
+  assert_int_equal(rc, 0);
+  assert_null(strstr(err_text, "cached walk"));
+  assert_non_null(strstr(err_text, " gradient evaluations ("));
+  assert_null(strstr(err_text, "lmc: 0 gradient evaluations ("));
+  rc = run_lmc(COMMON " --adapt cache --cache-gradient maybe");
+  assert_int_equal(rc, 2);
+  assert_non_null(strstr(err_text, "--cache-gradient"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_each_mode_selected),
       cmocka_unit_test(test_default_is_cache),
       cmocka_unit_test(test_invalid_mode),
       cmocka_unit_test(test_delayed_flag),
+      cmocka_unit_test(test_stage2_without_gradients),
   };
   return cmocka_run_group_tests(tests, setup, NULL);
 }

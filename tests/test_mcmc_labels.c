@@ -34,9 +34,11 @@
 
 #include "chi2.h"
 #include "lmc/chain.h"
+#include "lmc/gcache.h"
+#include "lmc/lmc_kernel.h"
 #include "test_util.h"
 
-#define N_CHI2_TESTS 6
+#define N_CHI2_TESTS 8
 #define NBIN 65 /* 20 + 25 + 20 */
 static int g_chi2_tests;
 
@@ -380,6 +382,133 @@ static void test_label_errors(void **state) {
   assert_null(ch);
 }
 
+/* ---- The cached walk (lmc_kernel.h) on the toy -------------------------
+ * Label 0 and 2 move u0, label 1 (u0, u1). A keyed cache holds synthetic
+ * moments on a grid of states, so that the Gaussian's mean and width
+ * change from state to state (and states far from the grid get the
+ * prior's); with large steps mixed in, the chain must still sample the
+ * joint target exactly (a wrong reverse density would bias it). */
+static int lab_coords(const mc_target *t, int label, int *OUT_idx) {
+  (void)t;
+  OUT_idx[0] = 0;
+  if (label == 1) OUT_idx[1] = 1;
+  return label == 1 ? 2 : 1;
+}
+
+static gcache *lab_cache(void) {
+  int len[3] = {1, 2, 1};
+  gcache *c = NULL;
+  lmc_error err;
+  assert_int_equal(gcache_create_keyed(&c, 3, len, 1 << 16, &err), LMC_OK);
+  int added = 0;
+  for (int l = 0; l < 3; l++)
+    for (int i = 0; i < 12; i++)
+      for (int j = 0; j < (l == 1 ? 12 : 1); j++) {
+        /* Entries on the left half only: the right half has no neighbour. */
+        double u[2] = {0.02 + 0.04 * i, 0.04 + 0.08 * j};
+        double m1[2] = {400.0 * sin(7.0 * u[0]), -300.0 * cos(5.0 * u[1])};
+        double m2[2] = {0.01 + 3.0 * u[0] * u[0], 0.5 + u[1]};
+        added += gcache_add(c, l + 1, u, m1, m2, 1.0);
+      }
+  assert_int_equal(added, 12 + 144 + 12);
+  assert_int_equal(gcache_freeze(c, 0, 0, &err), LMC_OK);
+  return c;
+}
+
+static void test_cached_walk(void **state) {
+  (void)state;
+  mc_target t = lab_target();
+  t.label_coords = lab_coords;
+  gcache *cache = lab_cache();
+  lmc_cwalk_params cp = lmc_cwalk_params_default();
+  cp.step = 0.05, cp.prior = 0.08, cp.radius = 0.06, cp.k = 3, cp.drift_max = 50.0;
+  lmc_cwalk cw;
+  lmc_error err;
+  assert_int_equal(lmc_cwalk_init(&cw, &t, cache, &cp, &err), LMC_OK);
+  mc_kernel k[3] = {mc_kernel_large(), lmc_cwalk_kernel(&cw), mc_kernel_small(1.0 / 1024.0, 1.0 / 16.0)};
+  double p[3] = {0.2, 0.6, 0.2};
+  enum { N = 20000, BURN = 60 };
+  double prob[NBIN], hist[NBIN], expct[NBIN];
+  lab_exact(prob);
+  mc_chain *ch = NULL;
+  assert_int_equal(mc_chain_create(&ch, &t, k, p, 3, &err), LMC_OK);
+  memset(hist, 0, sizeof hist);
+  for (int i = 0; i < N; i++) {
+    lab_start(ch, 31, (uint64_t)i * 100000u, 0x5eed1000u + (uint64_t)i);
+    for (int q = 0; q < BURN; q++) mc_chain_step(ch, NULL, NULL);
+    hist[lab_bin(ch->x.v.rx, ch->x.v.ry)] += 1.0;
+  }
+  for (int b = 0; b < NBIN; b++) expct[b] = prob[b] * N;
+  int dof;
+  double stat;
+  double pv = chi2_pvalue(hist, expct, NBIN, 5.0, &dof, &stat);
+  double alpha = chi2_sidak(1e-3, N_CHI2_TESTS);
+  print_message("  cached walk: %lld proposed, %lld accepted, %lld lookups, %lld with "
+                "neighbours; chi2 %.1f, dof %d\n",
+                (long long)cw.st.proposed, (long long)cw.st.accepted, (long long)cw.st.lookups,
+                (long long)cw.st.hits, stat, dof);
+  assert_true(pv > alpha);
+  assert_true(dof >= 40);
+  g_chi2_tests++;
+  /* Both kinds of Gaussian were used, and moves were accepted. */
+  assert_true(cw.st.hits > cw.st.lookups / 10 && cw.st.hits < cw.st.lookups * 9 / 10);
+  assert_true(cw.st.accepted > cw.st.proposed / 10);
+  mc_chain_destroy(ch);
+  lmc_cwalk_free(&cw);
+  gcache_destroy(cache);
+}
+
+/* q(y | x) of the cached walk integrates to one and its samples follow it
+ * (at a state with neighbours, so the mean is shifted and the widths
+ * differ): a histogram of 200000 proposals of u0 against the density. */
+static void test_cached_walk_density(void **state) {
+  (void)state;
+  mc_target t = lab_target();
+  t.label_coords = lab_coords;
+  gcache *cache = lab_cache();
+  lmc_cwalk_params cp = lmc_cwalk_params_default();
+  cp.step = 0.05, cp.prior = 0.08, cp.radius = 0.06, cp.k = 3, cp.drift_max = 50.0;
+  lmc_cwalk cw;
+  lmc_error err;
+  assert_int_equal(lmc_cwalk_init(&cw, &t, cache, &cp, &err), LMC_OK);
+  mc_kernel kn = lmc_cwalk_kernel(&cw);
+  double xu[2] = {0.21, 0.37}, yu[2], grad[2] = {0.0, 0.0};
+  mc_state x = {2, xu, {1.0, {1.0, 1.0, 1.0}, 0.0, 0.0, 1.0}, grad, 0, 0, 1, 0};
+  enum { NB = 40, N = 200000 };
+  double hist[NB] = {0}, dens[NB] = {0};
+  rng r;
+  rng_seed(&r, 41, 1);
+  for (int i = 0; i < N; i++) {
+    kn.propose(kn.self, &r, &x, yu);
+    int b = (int)(yu[0] * NB);
+    hist[b < NB ? b : NB - 1] += 1.0;
+  }
+  assert_true(cw.st.hits > 0);
+  /* The density of u0 alone: integrate q over u1 on a grid. */
+  double total = 0.0;
+  const int sub = 50;
+  for (int b = 0; b < NB; b++)
+    for (int i = 0; i < sub; i++)
+      for (int j = 0; j < 200; j++) {
+        double to[2] = {(b + (i + 0.5) / sub) / NB, (j + 0.5) / 200.0};
+        double q = exp(kn.log_density(kn.self, &x, to)) / (sub * NB * 200.0);
+        dens[b] += q;
+        total += q;
+      }
+  print_message("  cached walk density integrates to %.6f\n", total);
+  assert_near(total, 1.0, 1e-3);
+  double expct[NB];
+  for (int b = 0; b < NB; b++) expct[b] = dens[b] * N;
+  int dof;
+  double stat;
+  double pv = chi2_pvalue(hist, expct, NB, 5.0, &dof, &stat);
+  assert_true(pv > chi2_sidak(1e-3, N_CHI2_TESTS));
+  assert_true(dof >= 10);
+  g_chi2_tests++;
+  lmc_cwalk_free(&cw);
+  gcache_destroy(cache);
+}
+
 static void test_count(void **state) {
   (void)state;
   assert_int_equal(g_chi2_tests, N_CHI2_TESTS);
@@ -390,6 +519,8 @@ int main(void) {
       cmocka_unit_test(test_label_histograms),
       cmocka_unit_test(test_label_splatting),
       cmocka_unit_test(test_label_errors),
+      cmocka_unit_test(test_cached_walk),
+      cmocka_unit_test(test_cached_walk_density),
       cmocka_unit_test(test_count),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -4,8 +4,9 @@
  *
  * Per-label evaluation (eval_label) traces just the strategy's two
  * subpaths, t camera and s light vertices (for s = 1 the light sample of
- * the connect triple of camera vertex t; the 3 (t - 2) numbers before it
- * are drawn and do not change f), with the label's absolute directions.
+ * the connect triple of camera vertex t, skipped to: the 3 (t - 2) numbers
+ * before it belong to other strategies), with the label's absolute
+ * directions.
  * The whole sample (eval_all) is bdpt_li's loop, every strategy of a
  * length in [kmin, kmax] recorded apart; for a current state of label l
  * the scattering vertices of l's subpaths read absolute directions and the
@@ -182,7 +183,7 @@ static int bs__eval_label(const mc_target *t, void *scratch, lmc_sampler *smp, i
   double uc[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
   if (ss == 1) {
     sampler_use_stream(smp, LMC_STREAM_CONNECT);
-    for (int i = 0; i < BDPT_DIMS_CONNECT * (tt - 2); i++) (void)sampler_next(smp);
+    sampler_skip(smp, BDPT_DIMS_CONNECT * (tt - 2));
     for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
   }
   /* The two subpaths, just long enough for (s, t), in the label's own

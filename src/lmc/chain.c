@@ -33,6 +33,7 @@
 #include <string.h>
 
 #define PSS_MAX_REPLAY 16
+#define PSS_STEP_TABLE 256 /* Kelemen's step lengths, tabulated (chain__kelemen) */
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
@@ -48,7 +49,7 @@ struct mc_pss {
   int64_t iter, last_large;
   int large;        /* the proposal being evaluated is a large step */
   double s1, s2;    /* the chain's small step (owed steps are replayed with it) */
-  double log_ratio; /* log(s2 / s1) (Kelemen) */
+  double step_table[PSS_STEP_TABLE + 1]; /* Kelemen: (s1 / s2)^(i / PSS_STEP_TABLE) */
   const double *scale; /* per-coordinate factor on s1, s2 (target.h; NULL: 1) */
   rng *r;
   int64_t *overflow;
@@ -71,11 +72,22 @@ static double chain__gauss(double x, double sigma, int64_t n, rng *r) {
 }
 
 /* Kelemen's mutation: +-r with r log-uniform in (s1, s2], wrapped. */
-static double chain__kelemen(double x, double s2, double log_ratio, rng *r) {
-  double xi = rng_uniform(r), sign = rng_uniform(r) < 0.5 ? -1.0 : 1.0;
-  double d = s2 * exp(-log_ratio * xi);
+/* The step lengths of Kelemen's mutation for xi in [0, 1] on a table of
+ * PSS_STEP_TABLE intervals, (s1 / s2)^xi at the nodes and linear between
+ * them: the length is a fixed function of xi in both directions, so the
+ * step stays symmetric, and a read costs no exp. */
+
+static double chain__kelemen(double x, double s2, const double *table, rng *r) {
+  /* One 32-bit draw: the sign from its top bit, xi from the other 31. */
+  uint32_t bits = rng_next_u32(r);
+  double sign = (bits >> 31) ? -1.0 : 1.0;
+  double t = (double)(bits & 0x7fffffffu) * (PSS_STEP_TABLE * 0x1.0p-31);
+  int i = (int)t;
+  double d = s2 * (table[i] + (t - i) * (table[i + 1] - table[i]));
+  /* Wrapped into [0, 1) (|sign d| < 1/2). */
   double y = x + sign * d;
-  y -= floor(y);
+  if (y < 0.0) y += 1.0;
+  else if (y >= 1.0) y -= 1.0;
   return y < 1.0 ? y : 0.0;
 }
 
@@ -107,7 +119,7 @@ static double pss__get(mc_pss *p, int i) {
         if (n > 0) p->val[i] = chain__gauss(p->val[i], sc * p->s2, n, p->r);
       } else if (sc > 0.0) {
         for (int64_t k = 0; k < n; k++)
-          p->val[i] = chain__kelemen(p->val[i], sc * p->s2, p->log_ratio, p->r);
+          p->val[i] = chain__kelemen(p->val[i], sc * p->s2, p->step_table, p->r);
       }
     }
     p->mod[i] = p->iter;
@@ -131,6 +143,11 @@ static double pss__next(lmc_sampler *self) {
     return rng_uniform(p->r);
   }
   return pss__get(p, p->stream_off[k] + p->pos[k]++);
+}
+
+static void pss__skip(lmc_sampler *self, int n) {
+  mc_pss *p = (mc_pss *)self;
+  p->pos[p->stream] += n;
 }
 
 static void pss__use_stream(lmc_sampler *self, int stream) {
@@ -278,10 +295,12 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   }
   p->base.next = pss__next;
   p->base.use_stream = pss__use_stream;
+  p->base.skip_n = pss__skip;
   p->r = &c->r;
   p->s1 = s1;
   p->s2 = s2;
-  p->log_ratio = s1 > 0.0 ? log(s2 / s1) : 0.0;
+  for (int i = 0; i <= PSS_STEP_TABLE; i++)
+    p->step_table[i] = s1 > 0.0 ? exp(-log(s2 / s1) * i / PSS_STEP_TABLE) : 0.0;
   p->scale = target->step_scale;
   p->overflow = &c->overflow;
   c->target = target;
@@ -526,6 +545,7 @@ double mc_eval_independent(const mc_target *t, void *scratch, uint64_t seed, uin
   chain__indep smp;
   smp.base.next = chain__indep_next;
   smp.base.use_stream = chain__indep_stream;
+  smp.base.skip_n = NULL;
   rng_seed(&smp.r, seed, seq);
   mc_value v;
   memset(&v, 0, sizeof v);
@@ -603,7 +623,7 @@ static void chain__large_labelled(mc_chain *c, int ki, mc_splat_fn splat, void *
   mc_pss *p = c->pss;
 
   /* Propose a fresh u' and evaluate every label there. */
-  chain__rec rec = {{chain__rec_next, chain__rec_stream}, c, 0, {0}};
+  chain__rec rec = {{chain__rec_next, chain__rec_stream, NULL}, c, 0, {0}};
   c->n_drawn = 0;
   int n = T->eval_all(T, c->scratch, &rec.base, -1, c->cy);
   double sum_y;

@@ -428,6 +428,7 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   if (fpr)
     fprintf(stderr, "lmc: mala fallback (no gradient, Kelemen step) proposed %lld, accepted %lld (%.1f%%)\n",
             (long long)fpr, (long long)fac, 100.0 * (double)fac / (double)fpr);
-  fprintf(stderr, "lmc: %.4g gradient evaluations/s (%lld states re-evaluated for their gradient); %lld of %d chains stalled (%d+ steps without an accepted move)\n",
-          (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)regrad, (long long)stalled, run->n, LMC_STALL_STEPS);
+  fprintf(stderr, "lmc: %lld gradient evaluations (%.4g/s; %lld states re-evaluated for their gradient); %lld of %d chains stalled (%d+ steps without an accepted move)\n",
+          (long long)grad_evals, (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)regrad,
+          (long long)stalled, run->n, LMC_STALL_STEPS);
 }

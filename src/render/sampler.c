@@ -22,6 +22,7 @@ rng *sampler_indep_rng(lmc_sampler *s) {
 void indep_sampler_init(lmc_indep_sampler *s, uint64_t seed, uint64_t seq) {
   s->base.next = indep_next;
   s->base.use_stream = indep_use_stream;
+  s->base.skip_n = NULL;
   rng_seed(&s->r, rng_hash64(seed), rng_hash64(seq ^ 0x5851f42d4c957f2dull));
 }
 
@@ -111,6 +112,7 @@ void sobol_sampler_init(lmc_sobol_sampler *s, uint64_t seed, uint64_t pixel, uin
                         const sampler_layout *layout) {
   s->base.next = sobol_next;
   s->base.use_stream = sobol_use_stream;
+  s->base.skip_n = NULL;
   s->layout = layout;
   s->key = rng_hash64(rng_hash64(seed ^ 0x2545f4914f6cdd1dull) ^ pixel);
   s->index = index;

@@ -32,9 +32,21 @@ struct lmc_sampler {
   double (*next)(lmc_sampler *self);
   /* Switches to `stream`, resuming where that stream stopped. */
   void (*use_stream)(lmc_sampler *self, int stream);
+  /* Optional (NULL: draw and drop): moves past the next n numbers of the
+   * current stream without reading them (a primary sample vector need not
+   * bring them up to date). */
+  void (*skip_n)(lmc_sampler *self, int n);
 };
 
 static inline double sampler_next(lmc_sampler *s) { return s->next(s); }
+/* Moves past the next n numbers of the current stream. */
+static inline void sampler_skip(lmc_sampler *s, int n) {
+  if (s->skip_n) {
+    s->skip_n(s, n);
+  } else {
+    for (int i = 0; i < n; i++) (void)s->next(s);
+  }
+}
 static inline void sampler_use_stream(lmc_sampler *s, int stream) { s->use_stream(s, stream); }
 
 /* Which sampler the image integrators (pt, bdpt) use (--sampler). */
