@@ -84,7 +84,7 @@ font=/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf
 # The reference's scene copy of a mode with a sample count and a seed; its
 # output lands beside it as <name>_timeuse_<t>s.exr (dpt works there).
 ref_xml() { # mode spp seed name -> path of the XML
-  local mode=$1 spp=$2 seed=$3 name=$4 src
+  local mode=$1 spp=$2 name=$4 src
   case $mode in
     pssmlt) src=$runs_dir/$scene/pssmlt_$ref_suffix.xml ;;
     lmc) src=$runs_dir/$scene/lmc_$ref_suffix.xml ;;
@@ -94,7 +94,7 @@ ref_xml() { # mode spp seed name -> path of the XML
   local dst=$runs_dir/$scene/bench_$name.xml
   sed -e "s|name=\"spp\" *value=\"[0-9]*\"|name=\"spp\" value=\"$spp\"|" \
       -e "/<film /,/<\/film>/s|<string name=\"filename\" value=\"[^\"]*\"/>|<string name=\"filename\" value=\"bench_$name\"/>|" \
-      -e "s|</dpt>|<integer name=\"seedoffset\" value=\"$((seed * 1000))\"/></dpt>|" "$src" >"$dst"
+      "$src" >"$dst"
   echo "$dst"
 }
 
@@ -105,7 +105,8 @@ ref_run() {
   xml=$(ref_xml "$mode" "$spp" "$seed" "$name") || return 1
   rm -f "$runs_dir/$scene"/bench_"$name"_timeuse_*.exr
   t0=$(date +%s.%N)
-  DPT_NUM_THREADS=$threads "$bin" "$xml" >"$out/$name.log" 2>&1 || return 1
+  # (dpt takes its seed from the command line: --seedoffset overrides the XML's)
+  DPT_NUM_THREADS=$threads "$bin" --seedoffset $((seed * 1000)) "$xml" >"$out/$name.log" 2>&1 || return 1
   t1=$(date +%s.%N)
   mv "$runs_dir/$scene"/bench_"$name"_timeuse_*.exr "$out/$name.exr"
   rm -f "$xml"

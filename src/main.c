@@ -69,10 +69,23 @@ static const char *lmc_render_usage =
     "                           else independent)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
     "  --snapshot S             also write OUT-<seconds>s.exr every S seconds\n"
-    "\n"
+    "\n";
+/* (in two parts: C caps a string literal's guaranteed length) */
+static const char *lmc_render_usage_mcmc =
     "MCMC (pssmlt, mmlt, lmc; --spp counts mutations per pixel):\n"
+    "  --states KIND            the chains' states: bdpt (a BDPT sample and one of its\n"
+    "                           strategies, every length in one family; pssmlt's and lmc's\n"
+    "                           default) | mmlt (one family per length; mmlt's default) |\n"
+    "                           pt (a path tracer's samples)\n"
+    "  --roughness-threshold R  bdpt states: directions of BSDFs rougher than R are moved\n"
+    "                           as absolute world directions (default 0.3; 1: never)\n"
     "  --largestep P            large-step probability (default 0.3)\n"
-    "  --sigma S                Kelemen small-step scale (default 1/64; mmlt 0.05)\n"
+    "  --largestep-scale X      the large-step probability times X after the first tenth of\n"
+    "                           the budget (the LMC paper's largestepscale; default 1)\n"
+    "  --small-step KIND        kelemen (offsets log-uniform in (1/1024, S]) | gauss (normal\n"
+    "                           offsets of standard deviation S) (default kelemen)\n"
+    "  --sigma S                small-step scale (default 1/64; mmlt 0.05; gauss 0.01)\n"
+    "  --chains N               Markov chains (default 256)\n"
     "  --bootstrap N            independent paths used to estimate b (default: 10% of --time,\n"
     "                           or under --spp enough for 1%)\n"
     "  --bootstrap-error E      without --bootstrap, under --spp: b's target relative error (0.01)\n"
@@ -90,7 +103,16 @@ static const char *lmc_render_usage =
     "  --grad-bound B           truncate |grad log f| to B (default 1e3)\n"
     "  --cache-fraction F       --adapt cache: share of the budget for stage 1 (default 0.1)\n"
     "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.4)\n"
-    "  --lmc-states KIND        lmc's chains: mmlt (multiplexed bidirectional, default) | pt\n"
+    "  --lmc-states KIND        the same as --states\n"
+    "  --cache-gradient on|off  --adapt cache, bdpt states: stage 2 evaluates gradients (MALA\n"
+    "                           with the cached M) instead of the cached walk (default off)\n"
+    "  --cache-step S           the cached walk: cov = 1 / (1 / (S^2 (M + 1)) + 1 / P^2)\n"
+    "                           (default 0.005)\n"
+    "  --cache-prior P          its prior standard deviation, the width where no entry is\n"
+    "                           near (default 0.005)\n"
+    "  --cache-radius R         its neighbours lie within R sqrt(n) (default 0.01)\n"
+    "  --cache-k K              its neighbours (default 5)\n"
+    "  --cache-drift on|off     drift from the cached first moment (default on)\n"
     "  --delayed on|off         Langevin proposals first tested without their gradient\n"
     "                           (delayed acceptance, exact; default off)\n"
     "  -q, --quiet              no progress bar\n"
@@ -328,6 +350,7 @@ static int lmc_cmd_render(int argc, char **argv) {
     int64_t iv;
     if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
       fputs(lmc_render_usage, stdout);
+      fputs(lmc_render_usage_mcmc, stdout);
       free(defines);
       return EXIT_OK;
     } else if (lmc_flag_is(&a, "-o") || lmc_flag_is(&a, "--output")) {
@@ -538,7 +561,7 @@ static int lmc_cmd_render(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "lmc render: no scene given\n%s", lmc_render_usage);
+    fprintf(stderr, "lmc render: no scene given\n%s%s", lmc_render_usage, lmc_render_usage_mcmc);
     goto bad;
   }
 

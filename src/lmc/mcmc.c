@@ -371,6 +371,7 @@ typedef struct mcmc_family {
   int64_t done;       /* mutations per chain of this family so far */
   double *step_scale; /* mmlt, pssmlt: the target's per-coordinate small-step factors (owned) */
   mc_bdpt_states bst; /* --states bdpt: the labelled target's context (bdpt_states.h) */
+  int no_pool;        /* b is not refined with the large steps (mmlt's states, see mcmc__refine_b) */
 } mcmc_family;
 
 /* The small-step factor for the coordinate that picks an area light's
@@ -453,6 +454,147 @@ static void mcmc__bootstrap_draw(void *ctx, mc_boot *boot, int n_fam, const int6
   }
 }
 
+/* --- mmlt's b_k from whole BDPT samples -------------------------------------
+ *
+ * Every independent BDPT sample (the bdpt states' eval_all, bdpt_states.h)
+ * holds one estimate of every length's b_k at once: the sum of the MIS-
+ * weighted contributions of that length's strategies, which is what mmlt's
+ * eval_expect averages family by family. Drawn together, each length gets
+ * every sample at the cost of one sample of the longest, instead of a share
+ * of the bootstrap's (Neyman allocation starved the long lengths, whose
+ * heavy-tailed b_k then read low in a typical short render). Samples come
+ * in blocks of MCMC_SHARED_BLOCK, each block from its own streams and
+ * summed by one thread in order, the block sums added in block order: the
+ * estimate does not depend on the threads. The number of blocks depends on
+ * the clock (--time) or on a pilot of MCMC_SHARED_PILOT blocks alone
+ * (--spp), never on the samples it averages, so each b_k is unbiased. */
+#define MCMC_SHARED_BLOCK 1024
+#define MCMC_SHARED_PILOT 8
+#define MCMC_SHARED_SEQ 0x3c6ef372fe94f82bull
+
+typedef struct mcmc_shared_b {
+  int n_len;          /* lengths kmin .. kmin + n_len - 1; column n_len: all lengths */
+  int64_t blocks, cap;
+  double *sum, *sum2; /* [block][length] */
+} mcmc_shared_b;
+
+/* Draws blocks [from, to) of the shared samples. */
+static void mcmc__shared_draw(const mc_target *T, const mc_bdpt_states *ctx, int kmin,
+                              uint64_t seed, int nthreads, mcmc_shared_b *sb, int64_t from,
+                              int64_t to, render_counters *cnt) {
+#pragma omp parallel num_threads(nthreads)
+  {
+    void *sc = T->scratch_create(T);
+    mc_contrib *cb = malloc((size_t)T->n_labels * sizeof *cb);
+    double *f = malloc((size_t)sb->n_len * sizeof *f);
+    int tid = omp_get_thread_num();
+#pragma omp for schedule(dynamic, 1)
+    for (int64_t blk = from; blk < to; blk++) {
+      int w = sb->n_len + 1;
+      double *s1 = sb->sum + blk * w, *s2 = sb->sum2 + blk * w;
+      for (int k = 0; k < w; k++) s1[k] = s2[k] = 0.0;
+      if (!sc || !cb || !f) continue;
+      for (int j = 0; j < MCMC_SHARED_BLOCK; j++) {
+        lmc_indep_sampler smp;
+        indep_sampler_init(&smp, seed, rng_hash64(MCMC_SHARED_SEQ ^ (uint64_t)(blk * MCMC_SHARED_BLOCK + j)));
+        int n = T->eval_all(T, sc, &smp.base, -1, cb);
+        for (int k = 0; k < sb->n_len; k++) f[k] = 0.0;
+        for (int q = 0; q < n; q++) {
+          int k = mc_bdpt_states_length(ctx, cb[q].label) - kmin;
+          double v = cb[q].v.f;
+          if (k >= 0 && k < sb->n_len && v > 0.0 && isfinite(v)) f[k] += v;
+        }
+        double tot = 0.0;
+        for (int k = 0; k < sb->n_len; k++) s1[k] += f[k], s2[k] += f[k] * f[k], tot += f[k];
+        s1[sb->n_len] += tot, s2[sb->n_len] += tot * tot;
+      }
+    }
+    if (sc) {
+      int64_t rays = T->scratch_rays(sc);
+#pragma omp atomic
+      cnt[tid].rays += rays;
+    }
+    T->scratch_destroy(sc);
+    free(cb), free(f);
+  }
+}
+
+/* b_k of the lengths kmin .. kmin + n_fam - 1 (fam[g] has length kmin + g)
+ * from whole BDPT samples, into fam[g].bt.b, b_var, n_est, s, s2; seconds:
+ * the time for them (INFINITY under --spp: then a pilot plans the count for
+ * a standard error of rel_err of sum_k b_k); fixed > 0: exactly that many
+ * samples. Returns 0, or -1 when out of memory. */
+static int mcmc__shared_b(const scene *s, const render_settings *rs, mcmc_family *fam, int n_fam,
+                          int kmin, int64_t fixed, double seconds, double rel_err, int nthreads,
+                          render_counters *cnt) {
+  render_settings brs = *rs;
+  brs.rough_min = 2.0;
+  mc_target T;
+  mc_bdpt_states ctx;
+  lmc_error err;
+  if (mc_bdpt_states_init(&T, &ctx, s, &brs, kmin, kmin + n_fam - 1, &err) != LMC_OK) return -1;
+  mcmc_shared_b sb = {n_fam, 0, 0, NULL, NULL};
+  double t0 = omp_get_wtime();
+  int64_t cap = (MCMC_BOOT_CAP + MCMC_SHARED_BLOCK - 1) / MCMC_SHARED_BLOCK;
+  int64_t want = fixed > 0 ? (fixed + MCMC_SHARED_BLOCK - 1) / MCMC_SHARED_BLOCK : cap;
+  int status = 0;
+  for (;;) {
+    /* The next batch: the pilot, then batches of blocks for every thread. */
+    int64_t to = sb.blocks == 0 ? (fixed > 0 ? want : MCMC_SHARED_PILOT)
+                                : sb.blocks + 4 * (int64_t)nthreads;
+    if (to > want) to = want;
+    if (to <= sb.blocks) break;
+    if (to > sb.cap) {
+      int64_t c = sb.cap ? 2 * sb.cap : 64;
+      while (c < to) c *= 2;
+      double *a = realloc(sb.sum, (size_t)(c * (n_fam + 1)) * sizeof(double));
+      if (!a) { status = -1; break; }
+      sb.sum = a;
+      double *b = realloc(sb.sum2, (size_t)(c * (n_fam + 1)) * sizeof(double));
+      if (!b) { status = -1; break; }
+      sb.sum2 = b;
+      sb.cap = c;
+    }
+    mcmc__shared_draw(&T, &ctx, kmin, rs->seed, nthreads, &sb, sb.blocks, to, cnt);
+    int first = sb.blocks == 0;
+    sb.blocks = to;
+    if (fixed > 0) break;
+    if (render_stop_signal()) break;
+    if (isfinite(seconds)) {
+      if (omp_get_wtime() - t0 >= seconds) break;
+    } else if (first) {
+      /* Plan the count from the pilot alone: the standard error of
+       * sum_k b_k is sigma / sqrt(N). The pilot's samples are kept apart
+       * from the estimate below (they decided its size). */
+      double s1 = 0.0, s2 = 0.0, n = (double)sb.blocks * MCMC_SHARED_BLOCK;
+      for (int64_t blk = 0; blk < sb.blocks; blk++)
+        s1 += sb.sum[blk * (n_fam + 1) + n_fam], s2 += sb.sum2[blk * (n_fam + 1) + n_fam];
+      double mean = s1 / n, var = fmax(0.0, s2 / n - mean * mean);
+      double need = mean > 0.0 ? var / (rel_err * rel_err * mean * mean) : 0.0;
+      want = MCMC_SHARED_PILOT + (int64_t)ceil(need / MCMC_SHARED_BLOCK);
+      if (want > cap) want = cap;
+      if (want < 2 * MCMC_SHARED_PILOT) want = 2 * MCMC_SHARED_PILOT;
+    }
+  }
+  /* The estimate: every block but the planning pilot's under --spp. */
+  int64_t b0 = (fixed > 0 || isfinite(seconds)) ? 0 : MCMC_SHARED_PILOT;
+  if (b0 >= sb.blocks) b0 = 0;
+  double n = (double)(sb.blocks - b0) * MCMC_SHARED_BLOCK;
+  for (int g = 0; g < n_fam && status == 0; g++) {
+    double s1 = 0.0, s2 = 0.0;
+    for (int64_t blk = b0; blk < sb.blocks; blk++)
+      s1 += sb.sum[blk * (n_fam + 1) + g], s2 += sb.sum2[blk * (n_fam + 1) + g];
+    mc_boot *B = &fam[g].bt;
+    B->s = s1, B->s2 = s2, B->n_est = (int64_t)n;
+    B->b = n > 0.0 ? s1 / n : 0.0;
+    double var = n > 1.0 ? fmax(0.0, (s2 - n * B->b * B->b) / (n - 1.0)) : 0.0;
+    B->b_var = n > 0.0 ? var / n : 0.0;
+  }
+  free(sb.sum), free(sb.sum2);
+  mc_bdpt_states_free(&ctx);
+  return status;
+}
+
 /* Mean and variance of the mean of n samples with sums s, s2. */
 static void mcmc__mean_var(double s, double s2, double n, double *OUT_mean, double *OUT_var) {
   double mean = n > 0.0 ? s / n : 0.0;
@@ -482,7 +624,7 @@ static double mcmc__refine_b(mcmc_family *fam, int n_fam, const mcmc_chain_slot 
     mcmc_family *F = &fam[g];
     double s = 0.0, s2 = 0.0;
     int64_t nl = 0;
-    for (int i = 0; i < F->n_chains && !F->bt.has_fe; i++) {
+    for (int i = 0; i < F->n_chains && !F->no_pool; i++) {
       const mc_chain *c = slots[F->first_chain + i].chain;
       for (int q = 0; q < c->n_kernels; q++) {
         if (c->kernels[q].kind != MC_KERNEL_LARGE) continue;
@@ -714,7 +856,10 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   }
   /* The bootstrap keeps eval_expect's samples apart where the target has it. */
   int cap = 1; /* 0: out of memory */
-  for (int g = 0; g < n_fam; g++) fam[g].bt.has_fe = fam[g].target.eval_expect != NULL;
+  /* (mmlt's states estimate b from whole BDPT samples instead, below: their
+   * bootstrap samples pick starting states only) */
+  for (int g = 0; g < n_fam; g++) fam[g].bt.has_fe = 0;
+  int64_t shared_paths = 0;
   if (bdpt_states) {
     /* (bdpt_states.c sets its own step scale) */
   } else if (!is_mmlt && !is_lmc) {
@@ -758,7 +903,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   {
     const double t_boot = omp_get_wtime();
     mc_boot_params bp = {
-        .fixed = rs->bootstrap > 0 ? rs->bootstrap : 0,
+        /* mmlt's states: a pilot per family for the starting states alone */
+        .fixed = multiplexed ? MCMC_BOOT_BATCH : rs->bootstrap > 0 ? rs->bootstrap : 0,
         .batch = MCMC_BOOT_BATCH,
         .cap_total = MCMC_BOOT_CAP,
         .rel_err = rs->bootstrap_error,
@@ -774,6 +920,16 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       for (int g = 0; g < n_fam; g++) fam[g].bt = boot[g];
       free(boot);
     }
+    /* mmlt's states: b_k from whole BDPT samples (mcmc__shared_b) in the
+     * rest of the bootstrap's time; the families' own samples only pick
+     * the starting states. */
+    if (!failed && multiplexed) {
+      double left = timed ? bp.seconds - (omp_get_wtime() - t_boot) : INFINITY;
+      failed = mcmc__shared_b(s, &mrs, fam, n_fam, kmin, rs->bootstrap > 0 ? rs->bootstrap : 0,
+                              timed ? fmax(left, 0.0) : INFINITY, rs->bootstrap_error, nthreads,
+                              cnt) != 0;
+      shared_paths = fam[0].bt.n_est;
+    }
     if (failed) {
       status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bootstrap");
       goto done;
@@ -783,12 +939,14 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     fam[g].b_ref = fam[g].bt.b;
     fam[g].b_ref_var = fam[g].bt.b_var;
     fam[g].n_large = 0;
+    fam[g].no_pool = multiplexed;
   }
   double b_total = 0.0, b_var = 0.0;
   for (int g = 0; g < n_fam; g++) b_total += fam[g].bt.b, b_var += fam[g].bt.b_var;
   st->mcmc_b_boot = st->mcmc_b = b_total;
   st->mcmc_boot_paths = 0;
   for (int g = 0; g < n_fam; g++) st->mcmc_boot_paths += fam[g].bt.n;
+  st->mcmc_boot_paths += shared_paths;
   st->mcmc_b_boot_se = st->mcmc_b_se = sqrt(b_var);
 
   /* Chains: MCMC_CHAINS shared in proportion to b_g (at least MCMC_MIN_CHAINS per
@@ -1076,12 +1234,18 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         n_boot += fam[g].bt.n_est;
         n_plan += fam[g].bt.n - fam[g].bt.n_est;
       }
+      if (multiplexed) {
+        /* b from shared whole BDPT samples; the families' own picked the starts */
+        n_boot = shared_paths;
+        n_plan = 0;
+        for (int g = 0; g < n_fam; g++) n_plan += fam[g].bt.n;
+      }
       fprintf(stderr,
               "lmc: %d chains, %.4g mutations/s; b = %.6g +- %.2g (%.2f%%, %lld bootstrap paths%s; "
-              "%lld more planned it)\n",
+              "%lld more for planning and starting states)\n",
               n_slots, (double)st->samples / fmax(chain_seconds, 1e-9), b_total, sqrt(b_var),
               100.0 * sqrt(b_var) / fmax(b_total, 1e-300), (long long)n_boot,
-              n_fam > 1 ? " over the lengths" : "", (long long)n_plan);
+              multiplexed ? " (whole BDPT samples, every length)" : "", (long long)n_plan);
       double b_ref = 0.0, b_ref_var = 0.0;
       int64_t n_large = 0;
       for (int g = 0; g < n_fam; g++)

@@ -120,7 +120,7 @@ static inline render_settings render_settings_default(void) {
   s.largestep = 0.3;
   s.sigma = 1.0 / 64.0;
   s.largestep_scale = 1.0;
-  s.rough_min = 0.05;
+  s.rough_min = 0.3;
   s.bootstrap = 0;
   s.bootstrap_error = 0.01;
   s.direct_separate = 1; /* as Mitsuba's pssmlt and the LMC paper's code; see README */

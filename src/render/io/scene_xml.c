@@ -1231,8 +1231,8 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
      * bdpt states; false: on a path tracer's samples. */
     int bidir, found_bidir;
     if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, &found_bidir)) != LMC_OK) return st;
-    if (found_bidir) {
-      r->mcmc_states = bidir ? MCMC_STATES_BDPT : MCMC_STATES_PT;
+    if (found_bidir && !bidir) {
+      r->mcmc_states = MCMC_STATES_PT;
       r->set |= SET_STATES;
     }
     static const char *const mlt_silent[] = {"lambda", "chainLength",
@@ -1285,8 +1285,10 @@ static lmc_status xml__dpt(builder *B, pset *o) {
   if (strcmp(integ, "mcmc") == 0) {
     /* dpt's chains live in the bdpt states (bidirectional, the default) or
      * on a path tracer's samples. */
-    r->mcmc_states = bidir ? MCMC_STATES_BDPT : MCMC_STATES_PT;
-    r->set |= SET_STATES;
+    if (!bidir) {
+      r->mcmc_states = MCMC_STATES_PT;
+      r->set |= SET_STATES;
+    }
     if (mala) {
       xml__set_integrator(r, "lmc");
     } else if (h2mc) {
