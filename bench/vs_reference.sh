@@ -12,10 +12,11 @@
 # mode, its h2mc.xml with h2mc and mala off, and its LMC mode, lmc.xml),
 # as shipped and in the exact variant (chain resets compiled out), each
 # for SECONDS (default 30) of wall time including loading and the direct
-# pass (the reference takes a sample count: one short calibration run
-# per mode sets it), then each of our integrators in OURS (default
-# "mmlt pssmlt lmc"; an entry NAME:FLAG=VALUE:... adds --FLAG VALUE to
-# the render) with --time SECONDS. It prints one table (written to
+# pass (the reference takes a sample count: two calibration runs per mode
+# set it, and each render's wall time corrects it for the next), then
+# each of our integrators in OURS (default "mmlt pssmlt lmc"; an entry
+# NAME:FLAG=VALUE:... adds --FLAG VALUE to the render) with --time
+# SECONDS. It prints one table (written to
 # OUT_DIR/table.md): wall time, relative MSE against each renderer's own
 # converged image (mean over the runs, its standard error and each run's),
 # the mean ratio against it, mutations per second of the chains, the
@@ -34,6 +35,7 @@
 #                      beside bin/, which the build script fills)
 #   LMC_CONVERGED      our converged image of the scene (EXR at that size)
 #   LMC_REF_CONVERGED  the reference's own converged image
+#   LMC_GRID_EXPOSURE  the grid's exposure (default 1)
 # Without a converged image the relmse column of that renderer reads "-".
 # Needs ImageMagick's montage for the grid (apt-get install imagemagick).
 set -euo pipefail
@@ -52,7 +54,7 @@ while getopts "s:t:n:i:m:j:b:o:h" opt; do
     j) threads=$OPTARG ;;
     b) build=$OPTARG ;;
     o) out=$OPTARG ;;
-    *) sed -n '2,39p' "$0"; exit 2 ;;
+    *) sed -n '2,40p' "$0"; exit 2 ;;
   esac
 done
 lmc=$root/$build/lmc
@@ -124,17 +126,32 @@ ref_figures() { # log -> "mutations/s|acceptance|b"
     END { printf "%.3g|%s|%s", (n >= 3 && e[3] > 0) ? m / e[3] : 0, acc, b }'
 }
 
-# Calibration: the sample count that makes a mode's wall time secs.
-declare -A spp_of
+# Calibration: the sample count that makes a mode's wall time secs. Two
+# runs (4 spp, then the count predicted for half the time) fit wall time
+# as a line in spp; after every render the count of that mode and variant
+# is corrected by the wall time it took (the machine's speed drifts).
+declare -A spp_of fixed_of
 if [ "$have_ref" = 1 ]; then
   for mode in $modes; do
-    w=$(ref_run "$LMC_REF_DPT" "$mode" 4 0 "calib-$mode") || { echo "vs_reference: the reference failed (see $out/calib-$mode.log)" >&2; exit 1; }
+    w1=$(ref_run "$LMC_REF_DPT" "$mode" 4 0 "calib-$mode") || { echo "vs_reference: the reference failed (see $out/calib-$mode.log)" >&2; exit 1; }
     mc=$(tr '\r' '\n' <"$out/calib-$mode.log" | awk '/^Elapsed time:/ { e = substr($0, 14) } END { print e }')
-    spp_of[$mode]=$(awk -v w="$w" -v m="$mc" -v t="$secs" 'BEGIN {
-      fixed = w - m; s = 4 * (t - fixed) / m; if (s < 1) s = 1; printf "%d", s + 0.5 }')
-    echo "vs_reference: $mode: calibration ${w} s at 4 spp (chains ${mc} s): ${spp_of[$mode]} spp for ${secs} s" >&2
+    s2=$(awk -v w="$w1" -v m="$mc" -v t="$secs" 'BEGIN {
+      s = 4 * (t / 2 - (w - m)) / m; if (s < 8) s = 8; printf "%d", s + 0.5 }')
+    w2=$(ref_run "$LMC_REF_DPT" "$mode" "$s2" 0 "calib2-$mode") || { echo "vs_reference: the reference failed (see $out/calib2-$mode.log)" >&2; exit 1; }
+    read -r spp fixed < <(awk -v w1="$w1" -v w2="$w2" -v s2="$s2" -v t="$secs" 'BEGIN {
+      slope = (w2 - w1) / (s2 - 4); if (slope <= 0) slope = w2 / s2
+      fixed = w1 - 4 * slope; s = (t - fixed) / slope; if (s < 1) s = 1
+      printf "%d %.3f\n", s + 0.5, fixed }')
+    for variant in shipped exact; do spp_of[$mode-$variant]=$spp; done
+    fixed_of[$mode]=$fixed
+    echo "vs_reference: $mode: calibration ${w1} s at 4 spp, ${w2} s at $s2 spp: $spp spp for ${secs} s" >&2
   done
 fi
+# The next count of a mode and variant after a render of spp that took w s.
+recalibrate() { # mode variant spp w
+  spp_of[$1-$2]=$(awk -v s="$3" -v w="$4" -v f="${fixed_of[$1]}" -v t="$secs" 'BEGIN {
+    if (w - f > 0 && t - f > 0) s = s * (t - f) / (w - f); if (s < 1) s = 1; printf "%d", s + 0.5 }')
+}
 
 # The renders.
 declare -A rel walls rate acc bval ratio
@@ -152,7 +169,9 @@ for seed in $(seq 1 "$runs"); do
         key="reference $mode ($variant)"
         name="ref-$mode-$variant-s$seed"
         echo "  $key, seed $seed ..." >&2
-        w=$(ref_run "$bin" "$mode" "${spp_of[$mode]}" "$seed" "$name") || { echo "vs_reference: $key failed (see $out/$name.log)" >&2; continue; }
+        spp=${spp_of[$mode-$variant]}
+        w=$(ref_run "$bin" "$mode" "$spp" "$seed" "$name") || { echo "vs_reference: $key failed (see $out/$name.log)" >&2; continue; }
+        recalibrate "$mode" "$variant" "$spp" "$w"
         walls[$key]="${walls[$key]:-}${walls[$key]:+ }$w"
         IFS='|' read -r r a b <<<"$(ref_figures "$out/$name.log")"
         rate[$key]="${rate[$key]:-}${rate[$key]:+ }$r"
@@ -221,18 +240,18 @@ table=$out/table.md
 } >"$table"
 cat "$table"
 
-# The grid: the first seed's renders at one exposure (the converged
-# image's automatic one), labelled.
+# The grid: the first seed's renders and the converged image, all at one
+# exposure (LMC_GRID_EXPOSURE, default 1), labelled.
 if command -v montage >/dev/null; then
-  exposure=0
+  exposure=${LMC_GRID_EXPOSURE:-1}
   if [ -n "${LMC_CONVERGED:-}" ] && [ -f "$LMC_CONVERGED" ]; then
-    "$lmc" convert "$LMC_CONVERGED" "$out/converged.png" >/dev/null
+    "$lmc" convert "$LMC_CONVERGED" "$out/converged.png" --exposure "$exposure" >/dev/null
   fi
   tiles=()
   for f in "$out"/*-s1.exr; do
     [ -f "$f" ] || continue
     png=${f%.exr}.png
-    "$lmc" convert "$f" "$png" --exposure 1 >/dev/null
+    "$lmc" convert "$f" "$png" --exposure "$exposure" >/dev/null
     label=$(basename "${f%-s1.exr}")
     tiles+=(-label "$label" "$png")
   done
@@ -243,7 +262,6 @@ if command -v montage >/dev/null; then
     montage "${fopt[@]}" -pointsize 11 "${tiles[@]}" -tile 4x -geometry +3+3 "$out/grid.png"
     echo "vs_reference: wrote $out/grid.png" >&2
   fi
-  : "$exposure"
 else
   echo "vs_reference: montage not found; no grid (apt-get install imagemagick)" >&2
 fi
