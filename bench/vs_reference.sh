@@ -18,7 +18,8 @@
 # NAME:FLAG=VALUE:... adds --FLAG VALUE to the render) with --time
 # SECONDS. It prints one table (written to
 # OUT_DIR/table.md): wall time, relative MSE against each renderer's own
-# converged image (mean over the runs, its standard error and each run's),
+# converged image (mean over the runs, its standard error and each run's;
+# trimmed: without the worst 0.1% of pixels),
 # the mean ratio against it, mutations per second of the chains, the
 # acceptance per kernel and b with its standard error where the renderer
 # reports them; and writes OUT_DIR/grid.png, every render of the first
@@ -33,7 +34,8 @@
 #   LMC_REF_DPT_EXACT  its exact variant (bin/dpt-ref-exact)
 #   LMC_REF_RUNS       the reference's scene copies (default: the runs/ folder
 #                      beside bin/, which the build script fills)
-#   LMC_CONVERGED      our converged image of the scene (EXR at that size)
+#   LMC_CONVERGED      our converged image of the scene (EXR at that size;
+#                      default scenes/<scene>/reference.exr, see its README)
 #   LMC_REF_CONVERGED  the reference's own converged image
 #   LMC_GRID_EXPOSURE  the grid's exposure (default 1)
 # Without a converged image the relmse column of that renderer reads "-".
@@ -54,7 +56,7 @@ while getopts "s:t:n:i:m:j:b:o:h" opt; do
     j) threads=$OPTARG ;;
     b) build=$OPTARG ;;
     o) out=$OPTARG ;;
-    *) sed -n '2,40p' "$0"; exit 2 ;;
+    *) sed -n '2,42p' "$0"; exit 2 ;;
   esac
 done
 lmc=$root/$build/lmc
@@ -81,6 +83,7 @@ if [ "$have_ref" = 1 ] && [ ! -d "$runs_dir/$scene" ]; then
 fi
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
+LMC_CONVERGED=${LMC_CONVERGED:-$root/scenes/$scene/reference.exr}
 font=/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf
 
 # The reference's scene copy of a mode with a sample count and a seed; its
@@ -154,7 +157,7 @@ recalibrate() { # mode variant spp w
 }
 
 # The renders.
-declare -A rel walls rate acc bval ratio
+declare -A rel trim walls rate acc bval ratio
 rows=()
 add() { # key value
   local k=$1 v=$2
@@ -180,6 +183,7 @@ for seed in $(seq 1 "$runs"); do
         if [ -n "${LMC_REF_CONVERGED:-}" ] && [ -f "$LMC_REF_CONVERGED" ]; then
           cmp=$("$lmc" compare "$out/$name.exr" "$LMC_REF_CONVERGED")
           add "$key" "$(sed -n 's/^relmse: //p' <<<"$cmp")"
+          trim[$key]="${trim[$key]:-}${trim[$key]:+ }$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")"
           ratio[$key]="${ratio[$key]:-}${ratio[$key]:+ }$(sed -n 's/^mean_ratio: //p' <<<"$cmp")"
         fi
         [[ " ${rows[*]} " == *" $key "* ]] || rows+=("$key")
@@ -212,6 +216,7 @@ for seed in $(seq 1 "$runs"); do
     if [ -n "${LMC_CONVERGED:-}" ] && [ -f "$LMC_CONVERGED" ]; then
       cmp=$("$lmc" compare "$out/$stem.exr" "$LMC_CONVERGED")
       add "$key" "$(sed -n 's/^relmse: //p' <<<"$cmp")"
+      trim[$key]="${trim[$key]:-}${trim[$key]:+ }$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")"
       ratio[$key]="${ratio[$key]:-}${ratio[$key]:+ }$(sed -n 's/^mean_ratio: //p' <<<"$cmp")"
     fi
     [[ " ${rows[*]} " == *" $key "* ]] || rows+=("$key")
@@ -229,13 +234,14 @@ table=$out/table.md
 {
   echo "$scene at $res, ${secs} s, $threads threads, $runs run(s); $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg); $(date -u +%Y-%m-%d)"
   echo
-  echo "| renderer and mode | wall s | relmse (runs) | mean ratio | mutations/s | acceptance | b |"
-  echo "| --- | --- | --- | --- | --- | --- | --- |"
+  echo "| renderer and mode | wall s | relmse (runs) | trimmed | mean ratio | mutations/s | acceptance | b |"
+  echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
   for k in "${rows[@]}"; do
-    echo "| $k | $(mean <<<"${walls[$k]:-}") | $(mean_se <<<"${rel[$k]:-}") | $(mean <<<"${ratio[$k]:-}") | $(mean <<<"${rate[$k]:-}") | ${acc[$k]:--} | ${bval[$k]:--} |"
+    echo "| $k | $(mean <<<"${walls[$k]:-}") | $(mean_se <<<"${rel[$k]:-}") | $(mean <<<"${trim[$k]:-}") | $(mean <<<"${ratio[$k]:-}") | $(mean <<<"${rate[$k]:-}") | ${acc[$k]:--} | ${bval[$k]:--} |"
   done
   echo
-  echo "relmse: each render against its own renderer's converged image"
+  echo "relmse: each render against its own renderer's converged image; trimmed:"
+  echo "the same without the worst 0.1% of pixels (lmc compare's relmse_trimmed)"
   echo "(lmc: ${LMC_CONVERGED:-none}; reference: ${LMC_REF_CONVERGED:-none})."
 } >"$table"
 cat "$table"

@@ -33,8 +33,14 @@ void mc_boot_free(mc_boot *bt) {
 void mc_boot_update(mc_boot *bt, int64_t n) {
   const double *fe = bt->has_fe ? bt->fe : bt->f;
   double s = 0.0, s2 = 0.0, ps = 0.0, ps2 = 0.0;
-  int64_t m = 0, pm = 0;
-  for (int64_t j = 0; j < n; j++) {
+  int64_t m = 0, pm = 0, j0 = 0;
+  if (bt->upd_n > 0 && bt->upd_n <= n && bt->upd_first == bt->first &&
+      bt->upd_split == bt->split) {
+    j0 = bt->upd_n;
+    s = bt->s, s2 = bt->s2, m = bt->n_est;
+    ps = bt->upd_ps, ps2 = bt->upd_ps2, pm = bt->n_plan;
+  }
+  for (int64_t j = j0; j < n; j++) {
     int est = j >= bt->first && (!bt->split || (j - bt->first) % 2 == 1);
     if (est) {
       s += fe[j], s2 += fe[j] * fe[j], m++;
@@ -42,6 +48,8 @@ void mc_boot_update(mc_boot *bt, int64_t n) {
       ps += fe[j], ps2 += fe[j] * fe[j], pm++;
     }
   }
+  bt->upd_n = n, bt->upd_first = bt->first, bt->upd_split = bt->split;
+  bt->upd_ps = ps, bt->upd_ps2 = ps2;
   double mean = m > 0 ? s / (double)m : 0.0;
   double var = m > 1 ? fmax(0.0, (s2 - (double)m * mean * mean) / (double)(m - 1)) : 0.0;
   double pmean = pm > 0 ? ps / (double)pm : 0.0;
@@ -107,7 +115,7 @@ int mc_boot_run(mc_boot *boot, int n_fam, const mc_boot_params *p, mc_boot_draw_
   /* The pilot (or all of a fixed size): every sample estimates for now. */
   const int64_t pilot = p->fixed > 0 ? p->fixed : p->batch;
   for (int g = 0; g < n_fam; g++) {
-    boot[g].n = boot[g].first = 0;
+    boot[g].n = boot[g].first = boot[g].upd_n = 0;
     boot[g].split = 0;
     if (!mc_boot_reserve(&boot[g], pilot)) {
       status = 1;

@@ -60,6 +60,11 @@ typedef struct mc_boot {
   double plan_b,
       plan_var; /* the other samples (pilot, planning stream): mean, per-sample variance */
   int64_t n_plan;
+  /* mc_boot_update's running sums over samples [0, upd_n), valid while
+   * first and split are those they were summed under */
+  int64_t upd_n, upd_first;
+  int upd_split;
+  double upd_ps, upd_ps2;
 } mc_boot;
 
 /* Fills samples [boot[g].n, to[g]) of every family g (f, and fe when
@@ -81,7 +86,9 @@ typedef struct mc_boot_params {
 int mc_boot_reserve(mc_boot *bt, int64_t n);
 /* Frees the arrays. */
 void mc_boot_free(mc_boot *bt);
-/* Sets n and recomputes both streams' figures from samples [0, n). */
+/* Sets n and recomputes both streams' figures from samples [0, n): from
+ * the last call's sums when first and split are unchanged and n did not
+ * shrink (the same additions in the same order, so the same figures). */
 void mc_boot_update(mc_boot *bt, int64_t n);
 /* Neyman's shares from the planning figures (plan_var, cost, n) into
  * OUT_share[n_fam] (summing to 1). */
