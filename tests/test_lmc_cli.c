@@ -139,11 +139,14 @@ static void test_stage2_without_gradients(void **state) {
   assert_non_null(strstr(err_text, "lmc: stage 2: cached walk (no gradients), proposed "));
   assert_null(strstr(err_text, "cached walk (no gradients), proposed 0,"));
   assert_non_null(strstr(err_text, "lmc: 0 gradient evaluations ("));
+  assert_non_null(strstr(err_text, "with neighbours), 0 gradient evaluations\n"));
   rc = run_lmc(COMMON " --adapt cache --cache-fraction 0 --cache-gradient on");
   assert_int_equal(rc, 0);
   assert_null(strstr(err_text, "cached walk"));
   assert_non_null(strstr(err_text, " gradient evaluations ("));
   assert_null(strstr(err_text, "lmc: 0 gradient evaluations ("));
+  assert_non_null(strstr(err_text, "lmc: stage 2: Langevin proposals with the cached M, "));
+  assert_null(strstr(err_text, "with neighbours), 0 gradient evaluations\n"));
   rc = run_lmc(COMMON " --adapt cache --cache-gradient maybe");
   assert_int_equal(rc, 2);
   assert_non_null(strstr(err_text, "--cache-gradient"));

@@ -54,6 +54,7 @@ struct lmc_run {
   int stage1;            /* cache mode, stage 1 running */
   int64_t stage1_mutations;
   double stage1_seconds, build_seconds;
+  int64_t stage1_grad_evals; /* gradient evaluations when stage 2 began */
   double chains_start;   /* omp_get_wtime() when the chains were set up */
 };
 
@@ -332,6 +333,10 @@ int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elaps
   return 1;
 }
 
+void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c) {
+  run->stage1_grad_evals += lmc__grad_evals(run, c->scratch);
+}
+
 /* Steps of the chains since they were last started (stage 2 of the cache). */
 static double lmc__steps(mc_chain *const *chains, int n) {
   double s = 0.0;
@@ -358,7 +363,7 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   /* The caches. */
   if (run->rs.adapt == LMC_ADAPT_CACHE) {
     int trees = 0;
-    int64_t entries = 0, lookups = 0, hits = 0;
+    int64_t entries = 0;
     double bytes = 0.0;
     for (int g = 0; g < run->n_fam; g++) {
       const gcache *c = run->fam[g].cache;
@@ -367,25 +372,36 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       entries += gcache_size(c);
       bytes += (double)gcache_bytes(c);
     }
-    for (int i = 0; i < run->n; i++) lookups += run->mala[i].st.lookups, hits += run->mala[i].st.lookup_hits;
-    int64_t cw_pr = 0, cw_ac = 0;
-    for (int i = 0; i < run->n && run->cwalk_on; i++) {
-      lookups += run->cwalk[i].st.lookups, hits += run->cwalk[i].st.hits;
-      cw_pr += run->cwalk[i].st.proposed, cw_ac += run->cwalk[i].st.accepted;
+    int64_t cw_pr = 0, cw_ac = 0, s2_lookups = 0, s2_hits = 0, s2_grads = -run->stage1_grad_evals;
+    for (int i = 0; i < run->n; i++) {
+      if (run->cwalk_on) {
+        s2_lookups += run->cwalk[i].st.lookups, s2_hits += run->cwalk[i].st.hits;
+        cw_pr += run->cwalk[i].st.proposed, cw_ac += run->cwalk[i].st.accepted;
+      }
+      s2_lookups += run->mala[i].st.lookups, s2_hits += run->mala[i].st.lookup_hits;
     }
+    for (int i = 0; i < n; i++) s2_grads += lmc__grad_evals(run, chains[i]->scratch);
+    double s2_rate = lmc__steps(chains, n) /
+                     fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds);
     if (run->cwalk_on)
       fprintf(stderr,
               "lmc: stage 2: cached walk (no gradients), proposed %lld, accepted %lld (%.1f%%), "
-              "%.4g mutations/s\n",
+              "%.4g mutations/s, %lld lookups (%.1f%% with neighbours), %lld gradient "
+              "evaluations\n",
               (long long)cw_pr, (long long)cw_ac, 100.0 * (double)cw_ac / fmax(1.0, (double)cw_pr),
-              lmc__steps(chains, n) / fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds));
+              s2_rate, (long long)s2_lookups, 100.0 * (double)s2_hits / fmax(1.0, (double)s2_lookups),
+              (long long)s2_grads);
+    else
+      fprintf(stderr,
+              "lmc: stage 2: Langevin proposals with the cached M, %.4g mutations/s, %lld lookups "
+              "(%.1f%% with neighbours), %lld gradient evaluations\n",
+              s2_rate, (long long)s2_lookups, 100.0 * (double)s2_hits / fmax(1.0, (double)s2_lookups),
+              (long long)s2_grads);
     fprintf(stderr,
             "lmc: cache: stage 1 %.2f s, %lld mutations per chain (M = I, image kept); %lld entries "
-            "in %d trees over %d families, %.1f MB, built in %.3f s; lookups %lld, %.1f%% with "
-            "neighbours\n",
+            "in %d trees over %d families, %.1f MB, built in %.3f s\n",
             run->stage1_seconds, (long long)run->stage1_mutations, (long long)entries, trees,
-            run->n_fam, bytes / 1048576.0, run->build_seconds, (long long)lookups,
-            100.0 * (double)hits / fmax(1.0, (double)lookups));
+            run->n_fam, bytes / 1048576.0, run->build_seconds);
   }
   /* Per proposal type and path length (of the state proposed from). */
   enum { MAXL = 32 };

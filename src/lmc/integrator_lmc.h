@@ -123,6 +123,10 @@ int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p);
  * --time), seconds since the render began. Returns 1 when stage 1 ended
  * now (see above), 0 otherwise. */
 int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed);
+/* Adds the gradient evaluations chain c has made so far to stage 1's
+ * count (call for every chain when stage 1 has ended, before stage 2's
+ * first round), so that the report can give stage 2's own. */
+void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c);
 /* The most mutations per chain the next round may make (stage 1 ends on
  * its share of an --spp budget exactly; INT64_MAX: no limit). */
 int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t budget);

@@ -1154,6 +1154,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         for (int i = 0; i < n_slots; i++) {
           mc_kernel k2[MC_MAX_KERNELS];
           double p2[MC_MAX_KERNELS];
+          lmc_run_note_stage1_chain(lrun, slots[i].chain);
           int nk2 = lmc_run_chain_kernels(lrun, i, k2, p2);
           if (mc_chain_set_kernels(slots[i].chain, k2, p2, nk2, err) != LMC_OK) {
             status = LMC_EINVAL;
