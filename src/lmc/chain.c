@@ -32,7 +32,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PSS_MAX_REPLAY 16
+#define PSS_MAX_REPLAY 64 /* 16 made mmlt worse on ring-caustics: 0.0141 against 0.0108 at 60 s */
 #define PSS_STEP_TABLE 256 /* Kelemen's step lengths, tabulated (chain__kelemen) */
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
