@@ -159,9 +159,13 @@ recalibrate() { # mode variant spp w
 # The renders.
 declare -A rel trim walls rate acc bval ratio
 rows=()
-add() { # key value
-  local k=$1 v=$2
-  rel[$k]="${rel[$k]:-}${rel[$k]:+ }$v"
+# Records lmc compare's figures of one render of row key against a converged image.
+add_cmp() { # key image converged
+  local cmp
+  cmp=$("$lmc" compare "$2" "$3")
+  rel[$1]="${rel[$1]:-}${rel[$1]:+ }$(sed -n 's/^relmse: //p' <<<"$cmp")"
+  trim[$1]="${trim[$1]:-}${trim[$1]:+ }$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")"
+  ratio[$1]="${ratio[$1]:-}${ratio[$1]:+ }$(sed -n 's/^mean_ratio: //p' <<<"$cmp")"
 }
 for seed in $(seq 1 "$runs"); do
   if [ "$have_ref" = 1 ]; then
@@ -181,10 +185,7 @@ for seed in $(seq 1 "$runs"); do
         acc[$key]=$a
         bval[$key]="$b"
         if [ -n "${LMC_REF_CONVERGED:-}" ] && [ -f "$LMC_REF_CONVERGED" ]; then
-          cmp=$("$lmc" compare "$out/$name.exr" "$LMC_REF_CONVERGED")
-          add "$key" "$(sed -n 's/^relmse: //p' <<<"$cmp")"
-          trim[$key]="${trim[$key]:-}${trim[$key]:+ }$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")"
-          ratio[$key]="${ratio[$key]:-}${ratio[$key]:+ }$(sed -n 's/^mean_ratio: //p' <<<"$cmp")"
+          add_cmp "$key" "$out/$name.exr" "$LMC_REF_CONVERGED"
         fi
         [[ " ${rows[*]} " == *" $key "* ]] || rows+=("$key")
       done
@@ -214,10 +215,7 @@ for seed in $(seq 1 "$runs"); do
       "$out/$stem.log" | paste -sd, - | sed 's/,/, /g')
     bval[$key]=$(sed -n 's/.*; b = \([0-9.e+]*\) +- \([0-9.e+-]*\) (\([0-9.]*%\).*/\1 +- \3/p' "$out/$stem.log" | tail -1)
     if [ -n "${LMC_CONVERGED:-}" ] && [ -f "$LMC_CONVERGED" ]; then
-      cmp=$("$lmc" compare "$out/$stem.exr" "$LMC_CONVERGED")
-      add "$key" "$(sed -n 's/^relmse: //p' <<<"$cmp")"
-      trim[$key]="${trim[$key]:-}${trim[$key]:+ }$(sed -n 's/^relmse_trimmed: //p' <<<"$cmp")"
-      ratio[$key]="${ratio[$key]:-}${ratio[$key]:+ }$(sed -n 's/^mean_ratio: //p' <<<"$cmp")"
+      add_cmp "$key" "$out/$stem.exr" "$LMC_CONVERGED"
     fi
     [[ " ${rows[*]} " == *" $key "* ]] || rows+=("$key")
   done

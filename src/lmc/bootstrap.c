@@ -37,8 +37,8 @@ void mc_boot_update(mc_boot *bt, int64_t n) {
   if (bt->upd_n > 0 && bt->upd_n <= n && bt->upd_first == bt->first &&
       bt->upd_split == bt->split) {
     j0 = bt->upd_n;
-    s = bt->s, s2 = bt->s2, m = bt->n_est;
-    ps = bt->upd_ps, ps2 = bt->upd_ps2, pm = bt->n_plan;
+    s = bt->upd_s, s2 = bt->upd_s2, m = bt->upd_m;
+    ps = bt->upd_ps, ps2 = bt->upd_ps2, pm = bt->upd_pm;
   }
   for (int64_t j = j0; j < n; j++) {
     int est = j >= bt->first && (!bt->split || (j - bt->first) % 2 == 1);
@@ -49,7 +49,8 @@ void mc_boot_update(mc_boot *bt, int64_t n) {
     }
   }
   bt->upd_n = n, bt->upd_first = bt->first, bt->upd_split = bt->split;
-  bt->upd_ps = ps, bt->upd_ps2 = ps2;
+  bt->upd_s = s, bt->upd_s2 = s2, bt->upd_m = m;
+  bt->upd_ps = ps, bt->upd_ps2 = ps2, bt->upd_pm = pm;
   double mean = m > 0 ? s / (double)m : 0.0;
   double var = m > 1 ? fmax(0.0, (s2 - (double)m * mean * mean) / (double)(m - 1)) : 0.0;
   double pmean = pm > 0 ? ps / (double)pm : 0.0;

@@ -60,11 +60,12 @@ typedef struct mc_boot {
   double plan_b,
       plan_var; /* the other samples (pilot, planning stream): mean, per-sample variance */
   int64_t n_plan;
-  /* mc_boot_update's running sums over samples [0, upd_n), valid while
-   * first and split are those they were summed under */
-  int64_t upd_n, upd_first;
+  /* mc_boot_update's own running sums over samples [0, upd_n) (both
+   * streams), valid while first and split are those they were summed
+   * under */
+  int64_t upd_n, upd_first, upd_m, upd_pm;
   int upd_split;
-  double upd_ps, upd_ps2;
+  double upd_s, upd_s2, upd_ps, upd_ps2;
 } mc_boot;
 
 /* Fills samples [boot[g].n, to[g]) of every family g (f, and fe when

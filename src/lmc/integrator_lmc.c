@@ -383,20 +383,17 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
     for (int i = 0; i < n; i++) s2_grads += lmc__grad_evals(run, chains[i]->scratch);
     double s2_rate = lmc__steps(chains, n) /
                      fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds);
+    char what[96];
     if (run->cwalk_on)
-      fprintf(stderr,
-              "lmc: stage 2: cached walk (no gradients), proposed %lld, accepted %lld (%.1f%%), "
-              "%.4g mutations/s, %lld lookups (%.1f%% with neighbours), %lld gradient "
-              "evaluations\n",
-              (long long)cw_pr, (long long)cw_ac, 100.0 * (double)cw_ac / fmax(1.0, (double)cw_pr),
-              s2_rate, (long long)s2_lookups, 100.0 * (double)s2_hits / fmax(1.0, (double)s2_lookups),
-              (long long)s2_grads);
+      snprintf(what, sizeof what, "cached walk (no gradients), proposed %lld, accepted %lld (%.1f%%)",
+               (long long)cw_pr, (long long)cw_ac, 100.0 * (double)cw_ac / fmax(1.0, (double)cw_pr));
     else
-      fprintf(stderr,
-              "lmc: stage 2: Langevin proposals with the cached M, %.4g mutations/s, %lld lookups "
-              "(%.1f%% with neighbours), %lld gradient evaluations\n",
-              s2_rate, (long long)s2_lookups, 100.0 * (double)s2_hits / fmax(1.0, (double)s2_lookups),
-              (long long)s2_grads);
+      snprintf(what, sizeof what, "Langevin proposals with the cached M");
+    fprintf(stderr,
+            "lmc: stage 2: %s, %.4g mutations/s, %lld lookups (%.1f%% with neighbours), %lld "
+            "gradient evaluations\n",
+            what, s2_rate, (long long)s2_lookups,
+            100.0 * (double)s2_hits / fmax(1.0, (double)s2_lookups), (long long)s2_grads);
     fprintf(stderr,
             "lmc: cache: stage 1 %.2f s, %lld mutations per chain (M = I, image kept); %lld entries "
             "in %d trees over %d families, %.1f MB, built in %.3f s\n",

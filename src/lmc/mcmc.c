@@ -586,7 +586,6 @@ static int mcmc__shared_b(const scene *s, const render_settings *rs, mcmc_family
       s1 += sb.sum[blk * (n_fam + 1) + g], s2 += sb.sum2[blk * (n_fam + 1) + g];
     mc_boot *B = &fam[g].bt;
     B->s = s1, B->s2 = s2, B->n_est = (int64_t)n;
-    B->upd_n = 0; /* its sums are no longer mc_boot_update's */
     B->b = n > 0.0 ? s1 / n : 0.0;
     double var = n > 1.0 ? fmax(0.0, (s2 - n * B->b * B->b) / (n - 1.0)) : 0.0;
     B->b_var = n > 0.0 ? var / n : 0.0;
