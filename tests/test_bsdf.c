@@ -14,7 +14,8 @@
  *     for plastic; D(m) cos(theta_m) and the visible-normal density
  *     integrate to 1;
  *   - sample consistency: f and pdf of a sample equal bsdf_eval and
- *     bsdf_pdf at that direction, and weight = f |cos| / pdf;
+ *     bsdf_pdf at that direction, weight = f |cos| / pdf, and a reverse
+ *     density the sampler computed equals bsdf_pdf(wi, wo);
  *   - energy: diffuse albedo = reflectance, plastic albedo in closed form
  *     (F_i + (1 - F_i) kd, linear mode), phong and rough models at most 1,
  *     a perfect mirror ("none") reflects exactly 1;
@@ -289,7 +290,7 @@ static void test_sample_consistency(void **state) {
   int n = make_configs(cfg);
   rng r;
   rng_seed(&r, 4242, 1);
-  long checked = 0, bad = 0;
+  long checked = 0, checked_rev = 0, bad = 0;
   for (int i = 0; i < n; i++) {
     const config *c = &cfg[i];
     for (int j = 0; j < 2000; j++) {
@@ -302,6 +303,12 @@ static void test_sample_consistency(void **state) {
       rgb w = rgb_scale(f, fabs(s.wi.z) / pdf);
       int ok = fabs(v3_len(s.wi) - 1.0) < 1e-12 && rgb_rel_err(f, s.f) < 1e-9 &&
                rel_err(pdf, s.pdf) < 1e-9 && rgb_rel_err(w, s.weight) < 1e-9 && pdf > 0.0;
+      /* A reverse density computed in the same pass is bsdf_pdf(wi, wo). */
+      if (s.has_pdf_rev) {
+        double rev = bsdf_pdf(&c->b, 0.5, 0.5, s.wi, c->wo);
+        ok = ok && (rev == 0.0 ? s.pdf_rev == 0.0 : rel_err(rev, s.pdf_rev) < 1e-9);
+        checked_rev++;
+      }
       /* The flags say which side wi is on. */
       int side_ok = (s.flags & BSDF_TRANSMISSION) ? (s.wi.z * c->wo.z < 0.0) : 1;
       if (!(s.flags & BSDF_TRANSMISSION) && !c->b.twosided) side_ok = s.wi.z * c->wo.z > 0.0;
@@ -316,6 +323,7 @@ static void test_sample_consistency(void **state) {
     }
   }
   assert_true(checked > 100000);
+  assert_true(checked_rev > 20000); /* the rough models compute it */
   assert_int_equal(bad, 0);
 }
 

@@ -80,6 +80,11 @@ typedef struct bsdf_sample {
   rgb weight;   /* f |cos wi| / pdf */
   double eta;   /* relative IOR crossed (1 for reflection) */
   int flags;    /* the lobe sampled: BSDF_REFLECTION/TRANSMISSION | DIFFUSE/GLOSSY/DELTA */
+  /* has_pdf_rev: the model computed pdf_rev = bsdf_pdf(wi, wo), the density
+   * of the reverse direction, in the same pass (bidirectional MIS needs it);
+   * else the caller asks bsdf_pdf. */
+  int has_pdf_rev;
+  double pdf_rev;
 } bsdf_sample;
 
 /* Fills the defaults Mitsuba uses for the model `type`. */

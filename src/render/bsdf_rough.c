@@ -50,25 +50,33 @@
  * texture); OUT_pdf = NULL skips the pdf. Each value is computed with the
  * same operations, in the same order, whatever the caller asks for. */
 static rgb bsdf__rc_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
-                             double *OUT_pdf) {
+                             double *OUT_pdf, double *OUT_pdf_rev) {
   if (OUT_pdf) *OUT_pdf = 0.0;
+  if (OUT_pdf_rev) *OUT_pdf_rev = 0.0;
   if (wo.z <= 0.0 || wi.z <= 0.0) return rgb_zero();
   vec3 h = v3_normalize(v3_add(wo, wi));
   double d = mf_D(b->dist, b->alpha, h);
   int need_f = want_f && d != 0.0;
-  /* G1(wo, h): shared by G and the visible-normal density. */
-  double g1o = 0.0;
+  /* G1(wo, h): shared by G and the visible-normal density; G1(wi, h) by G
+   * and the reverse one. */
+  double g1o = 0.0, g1i = 0.0;
   if (need_f || (OUT_pdf && b->sample_visible)) g1o = mf_G1(b->dist, b->alpha, wo, h);
+  if (need_f || (OUT_pdf_rev && b->sample_visible)) g1i = mf_G1(b->dist, b->alpha, wi, h);
 
-  /* pdf = p_m(h) / (4 wi.h). */
+  /* pdf = p_m(h) / (4 wi.h); the reverse density p_m'(h) / (4 wo.h), the
+   * normal drawn from wi's side. */
   if (OUT_pdf) {
     double wih = v3_dot(wi, h);
     if (wih > 0.0) *OUT_pdf = mf_pdf_known(d, g1o, wo, h, b->sample_visible) / (4.0 * wih);
   }
+  if (OUT_pdf_rev) {
+    double woh = v3_dot(wo, h);
+    if (woh > 0.0) *OUT_pdf_rev = mf_pdf_known(d, g1i, wi, h, b->sample_visible) / (4.0 * woh);
+  }
 
   /* f = F D G / (4 cos_o cos_i) ks, G = G1(wi, h) G1(wo, h). */
   if (!need_f) return rgb_zero();
-  double g = mf_G1(b->dist, b->alpha, wi, h) * g1o;
+  double g = g1i * g1o;
   if (g == 0.0) return rgb_zero();
   rgb fr = fresnel_conductor(v3_dot(wo, h), b->cond_eta, b->cond_k);
   rgb ks = tex_eval(&b->specular, tu, tv);
@@ -78,19 +86,19 @@ static rgb bsdf__rc_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
 rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
                               transport_mode mode) {
   (void)mode;
-  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, NULL);
+  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, NULL, NULL);
 }
 
 double bsdf__roughconductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
   double pdf;
-  bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 0, &pdf);
+  bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 0, &pdf, NULL);
   return pdf;
 }
 
 rgb bsdf__roughconductor_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
                                   transport_mode mode, double *OUT_pdf) {
   (void)mode;
-  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, OUT_pdf);
+  return bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, OUT_pdf, NULL);
 }
 
 int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
@@ -102,9 +110,12 @@ int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, do
   if (wom <= 0.0) return 0;
   vec3 wi = v3_normalize(v3_reflect(wo, m));
   if (wi.z <= 0.0) return 0;
-  double pdf;
-  rgb f = bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, &pdf);
-  return bsdf__finish(out, wi, f, pdf, 1.0, BSDF_REFLECTION | BSDF_GLOSSY);
+  double pdf, pdf_rev;
+  rgb f = bsdf__rc_eval_pdf(b, tu, tv, wo, wi, 1, &pdf, &pdf_rev);
+  int ok = bsdf__finish(out, wi, f, pdf, 1.0, BSDF_REFLECTION | BSDF_GLOSSY);
+  out->pdf_rev = pdf_rev;
+  out->has_pdf_rev = 1;
+  return ok;
 }
 
 /* ---- roughdielectric ----------------------------------------------------- */
@@ -136,8 +147,9 @@ static int bsdf__rd_half(const bsdf *b, vec3 wo, vec3 wi, vec3 *h, double *e, in
  * too: G1(v, h) with v = +-wo is G1(wo, h) exactly, as G1 only sees the
  * product (v.h) v.z and v.z^2. */
 static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
-                             transport_mode mode, double *OUT_pdf) {
+                             transport_mode mode, double *OUT_pdf, double *OUT_pdf_rev) {
   if (OUT_pdf) *OUT_pdf = 0.0;
+  if (OUT_pdf_rev) *OUT_pdf_rev = 0.0;
   if (wo.z == 0.0 || wi.z == 0.0) return rgb_zero();
   vec3 h;
   double e;
@@ -168,6 +180,30 @@ static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
     }
   }
 
+  /* The reverse density (wi sampled at wo's place), as pdf(wi, wo) defines
+   * it: the same h, the roles of wo.h and wi.h swapped, e replaced by 1 / e
+   * (so the refraction Jacobian becomes |wo.h| / (wo.h + e wi.h)^2), the
+   * normal drawn from wi's side; F is that of the same h. */
+  if (OUT_pdf_rev && !(woh * wo.z <= 0.0 || wih * wi.z <= 0.0)) {
+    vec3 v = wi.z > 0.0 ? wi : v3_neg(wi);
+    double pm;
+    if (b->sample_visible) {
+      double dv = d != 0.0 ? d : mf_D(b->dist, b->alpha, h);
+      pm = mf_pdf_known(dv, mf_G1(b->dist, b->alpha, v, h), v, h, 1);
+    } else {
+      pm = mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wi.z), v, h, 0);
+    }
+    double fr_rev = fresnel_dielectric(wih, b->eta, NULL);
+    if (pm != 0.0) {
+      if (reflect) {
+        *OUT_pdf_rev = fr_rev * pm / (4.0 * fabs(woh));
+      } else {
+        double den = woh + e * wih;
+        if (den != 0.0) *OUT_pdf_rev = (1.0 - fr_rev) * pm * fabs(woh) / (den * den);
+      }
+    }
+  }
+
   /* The value. */
   if (!need_f) return rgb_zero();
   double g = mf_G1(b->dist, b->alpha, wi, h) * g1o;
@@ -186,18 +222,18 @@ static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
 
 rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
                                transport_mode mode) {
-  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, NULL);
+  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, NULL, NULL);
 }
 
 double bsdf__roughdielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
   double pdf;
-  bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 0, TRANSPORT_RADIANCE, &pdf);
+  bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 0, TRANSPORT_RADIANCE, &pdf, NULL);
   return pdf;
 }
 
 rgb bsdf__roughdielectric_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
                                    transport_mode mode, double *OUT_pdf) {
-  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, OUT_pdf);
+  return bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, OUT_pdf, NULL);
 }
 
 int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,
@@ -228,7 +264,10 @@ int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, d
     flags = BSDF_TRANSMISSION | BSDF_GLOSSY;
     eta_out = cos_t < 0.0 ? b->eta : 1.0 / b->eta;
   }
-  double pdf;
-  rgb f = bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, &pdf);
-  return bsdf__finish(out, wi, f, pdf, eta_out, flags);
+  double pdf, pdf_rev;
+  rgb f = bsdf__rd_eval_pdf(b, tu, tv, wo, wi, 1, mode, &pdf, &pdf_rev);
+  int ok = bsdf__finish(out, wi, f, pdf, eta_out, flags);
+  out->pdf_rev = pdf_rev;
+  out->has_pdf_rev = 1;
+  return ok;
 }

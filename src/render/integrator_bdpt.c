@@ -310,7 +310,7 @@ static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *s
       int trans = wi_l.z * wo_l.z < 0.0;
       double eta = !trans ? 1.0 : wi_l.z < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
       if (!(pdf > 0.0) || !isfinite(pdf)) break;
-      bs.wi = wi_l, bs.f = f, bs.pdf = pdf, bs.eta = eta;
+      bs.wi = wi_l, bs.f = f, bs.pdf = pdf, bs.eta = eta, bs.has_pdf_rev = 0;
       bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
       bs.weight = rgb_scale(f, fabs(wi_l.z) / pdf);
       if (!rgb_isfinite(bs.weight) || rgb_is_black(bs.weight)) break;
@@ -329,7 +329,7 @@ static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *s
       }
     }
     double pdf_fwd_sa = bs.pdf;
-    double pdf_rev_sa = bsdf_pdf(h->bsdf, h->tu, h->tv, bs.wi, wo_l);
+    double pdf_rev_sa = bs.has_pdf_rev ? bs.pdf_rev : bsdf_pdf(h->bsdf, h->tu, h->tv, bs.wi, wo_l);
     if (bs.flags & BSDF_DELTA) {
       /* Delta lobes: densities read as one in the MIS walk (remap0). */
       v->delta = 1;
