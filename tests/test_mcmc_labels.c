@@ -36,6 +36,7 @@
 #include "lmc/chain.h"
 #include "lmc/gcache.h"
 #include "lmc/lmc_kernel.h"
+#include "lmc/mala.h"
 #include "test_util.h"
 
 #define N_CHI2_TESTS 8
@@ -495,6 +496,22 @@ static void test_cached_walk_density(void **state) {
         dens[b] += q;
         total += q;
       }
+  /* log q term by term: the walk's sum (nearest images summed apart) is
+   * the sum of mala_log_wrapped_normal over the coordinates it moves. */
+  int n_cmp = 0, n_far = 0;
+  for (int i = 0; i < 2000; i++) {
+    double to[2] = {rng_uniform(&r), rng_uniform(&r)};
+    double lq = kn.log_density(kn.self, &x, to), ref = 0.0;
+    for (int c = 0; c < 2; c++) {
+      double mu = cw.v[c] + cw.mean[c];
+      ref += mala_log_wrapped_normal(to[cw.idx[c]], mu, cw.sd[c]);
+      if (fabs(mala_torus_diff(to[cw.idx[c]], mu)) > 0.4) n_far++;
+    }
+    assert_true(fabs(lq - ref) <= 1e-12 * fmax(1.0, fabs(ref)));
+    n_cmp++;
+  }
+  assert_int_equal(n_cmp, 2000);
+  assert_true(n_far > 100); /* the far images' branch was compared too */
   print_message("  cached walk density integrates to %.6f\n", total);
   assert_near(total, 1.0, 1e-3);
   double expct[NB];

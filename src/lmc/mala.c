@@ -33,6 +33,13 @@ double mala_std_normal(rng *r) {
   return sqrt(-2.0 * log(u1)) * cos(MALA_TWO_PI * u2);
 }
 
+void mala_std_normal_pair(rng *r, double *OUT_z0, double *OUT_z1) {
+  double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
+  double rad = sqrt(-2.0 * log(u1));
+  *OUT_z0 = rad * cos(MALA_TWO_PI * u2);
+  *OUT_z1 = rad * sin(MALA_TWO_PI * u2);
+}
+
 double mala_log_wrapped_normal(double y, double mu, double sigma) {
   /* The nearest image: d0 in [-1/2, 1/2). */
   double d0 = mala_torus_diff(y, mu);

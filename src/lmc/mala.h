@@ -73,6 +73,8 @@ double mala_truncate(int n, double *g, double bound);
 
 /* A standard normal deviate (Box-Muller, one of the pair; two uniforms). */
 double mala_std_normal(rng *r);
+/* Two independent standard normal numbers from one Box-Muller pair. */
+void mala_std_normal_pair(rng *r, double *OUT_z0, double *OUT_z1);
 
 /* Wraps a real number into [0, 1). */
 static inline double mala_wrap(double y) {
