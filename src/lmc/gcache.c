@@ -438,7 +438,7 @@ double gcache_indep_log_density(const gcache *c, int D, double sigma, const doub
    * sigma is small against the distance to the next one (the test of
    * mala_log_wrapped_normal): then its log is -d^2 / (2 sigma^2) + lnorm,
    * summed cheaply; other coordinates take the full function. */
-  double inv = 0.5 / (sigma * sigma), lnorm = -log(sigma) - 0.91893853320467274178;
+  double inv = 0.5 / (sigma * sigma), lnorm = -log(sigma) - MALA_LOG_SQRT_TWO_PI;
   /* log (1/K sum_k exp(l_k)) with the log-sum-exp shift by the largest l_k. */
   double lmax = -INFINITY, sum = 0.0;
   for (int k = 0; k < K; k++) {
@@ -449,7 +449,7 @@ double gcache_indep_log_density(const gcache *c, int D, double sigma, const doub
     double q = 0.0, l = 0.0;
     for (int i = 0; i < d; i++) {
       double e = mala_torus_diff(u[i], p[i]);
-      if ((1.0 - 2.0 * fabs(e)) * inv > 40.0)
+      if (mala_nearest_image_exact(e, inv))
         q += e * e;
       else
         l += mala_log_wrapped_normal(u[i], p[i], sigma) - lnorm;

@@ -428,16 +428,16 @@ static double lmc__cwalk_log_q(const lmc_cwalk *k, int n, const double *to_u) {
     double mu = k->v[i] + k->mean[i];
     double d0 = mala_torus_diff(to_u[k->idx[i]], mu);
     double inv = 0.5 / (sd * sd);
-    if ((1.0 - 2.0 * fabs(d0)) * inv > 40.0 && sd > 1e-100 && sd < 1.0) {
+    if (mala_nearest_image_exact(d0, inv) && sd > 1e-100) {
       l -= d0 * d0 * inv;
-      prod *= sd;
+      prod *= sd; /* stays a normal number: >= 1e-150 * 1e-100 */
       n_fast++;
-      if (prod < 1e-250) l += log(prod), prod = 1.0;
+      if (prod < 1e-150) l += log(prod), prod = 1.0;
     } else {
       l += mala_log_wrapped_normal(to_u[k->idx[i]], mu, sd);
     }
   }
-  return l - log(prod) - n_fast * 0.91893853320467274178;
+  return l - log(prod) - n_fast * MALA_LOG_SQRT_TWO_PI;
 }
 
 static double lmc__cwalk_propose(void *self, rng *r, const mc_state *x, double *OUT_y) {

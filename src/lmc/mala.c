@@ -8,7 +8,6 @@
 #include <stddef.h>
 
 #define MALA_TWO_PI 6.28318530717958647692
-#define MALA_LOG_SQRT_TWO_PI 0.91893853320467274178
 
 double mala_norm(int n, const double *g) {
   double s = 0.0;
@@ -59,8 +58,7 @@ double mala_log_wrapped_normal(double y, double mu, double sigma) {
    * (at least 1 - 2 |d0| farther in squared distance): its weight
    * exp(-(1 - 2 |d0|) / (2 sigma^2)) is below e^-40 relative, under
    * rounding, and the nearest image alone is exact to double precision. */
-  if ((1.0 - 2.0 * fabs(d0)) * inv > 40.0)
-    return -d0 * d0 * inv - log(sigma) - MALA_LOG_SQRT_TWO_PI;
+  if (mala_nearest_image_exact(d0, inv)) return -d0 * d0 * inv - log(sigma) - MALA_LOG_SQRT_TWO_PI;
   /* Images d0 + k and d0 - k relative to the nearest: exponent
    * -((d0 + k)^2 - d0^2) / (2 sigma^2) = -k (k + 2 d0) / (2 sigma^2). Both
    * grow with k, so once a pair adds less than 1e-18 of the sum the rest
@@ -80,8 +78,8 @@ void mala_sample_c(int n, const double *x, const double *g, const double *M, con
                    double s, rng *r, double *OUT_y) {
   /* Box-Muller gives two independent normals per pair of uniforms. */
   for (int i = 0; i < n; i += 2) {
-    double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
-    double rad = sqrt(-2.0 * log(u1)), z[2] = {rad * cos(MALA_TWO_PI * u2), rad * sin(MALA_TWO_PI * u2)};
+    double z[2];
+    mala_std_normal_pair(r, &z[0], &z[1]);
     for (int j = 0; j < 2 && i + j < n; j++) {
       double m = M ? M[i + j] : 1.0, ci = c ? c[i + j] : 1.0;
       double mu = x[i + j] + 0.5 * s * ci * m * g[i + j];

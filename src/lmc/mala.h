@@ -76,6 +76,17 @@ double mala_std_normal(rng *r);
 /* Two independent standard normal numbers from one Box-Muller pair. */
 void mala_std_normal_pair(rng *r, double *OUT_z0, double *OUT_z1);
 
+/* log sqrt(2 pi), the normal density's constant. */
+#define MALA_LOG_SQRT_TWO_PI 0.91893853320467274178
+
+/* 1 when the wrapped normal of inv = 1 / (2 sigma^2) at nearest-image
+ * offset d0 is its nearest image alone to double precision: the next image
+ * is at least 1 - 2 |d0| farther in squared distance, so its weight is
+ * below e^-40 relative. */
+static inline int mala_nearest_image_exact(double d0, double inv) {
+  return (1.0 - 2.0 * fabs(d0)) * inv > 40.0;
+}
+
 /* Wraps a real number into [0, 1). */
 static inline double mala_wrap(double y) {
   double w = y - floor(y);

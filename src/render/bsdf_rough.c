@@ -144,8 +144,8 @@ static int bsdf__rd_half(const bsdf *b, vec3 wo, vec3 wi, vec3 *h, double *e, in
 /* f and pdf of one (wo, wi) pair in one pass, as bsdf__rc_eval_pdf: the
  * half vector, wo.h, wi.h and F are shared, and with visible-normal
  * sampling (same roughness for sampling and evaluation) D(h) and G1(wo, h)
- * too: G1(v, h) with v = +-wo is G1(wo, h) exactly, as G1 only sees the
- * product (v.h) v.z and v.z^2. */
+ * too, and G1(wi, h) with the reverse density: G1(v, h) with v = +-wo is
+ * G1(wo, h) exactly, as G1 only sees the product (v.h) v.z and v.z^2. */
 static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int want_f,
                              transport_mode mode, double *OUT_pdf, double *OUT_pdf_rev) {
   if (OUT_pdf) *OUT_pdf = 0.0;
@@ -157,11 +157,15 @@ static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
   if (!bsdf__rd_half(b, wo, wi, &h, &e, &reflect)) return rgb_zero();
   double woh = v3_dot(wo, h), wih = v3_dot(wi, h);
   double fr = fresnel_dielectric(woh, b->eta, NULL);
+  int vis_pdf = b->sample_visible && (OUT_pdf || OUT_pdf_rev);
   double d = 0.0;
-  if (want_f || (OUT_pdf && b->sample_visible)) d = mf_D(b->dist, b->alpha, h);
+  if (want_f || vis_pdf) d = mf_D(b->dist, b->alpha, h);
   int need_f = want_f && d != 0.0;
-  double g1o = 0.0;
+  /* G1(wo, h) serves G and the visible-normal density, G1(wi, h) G and the
+   * reverse one. */
+  double g1o = 0.0, g1i = 0.0;
   if (need_f || (OUT_pdf && b->sample_visible)) g1o = mf_G1(b->dist, b->alpha, wo, h);
+  if (need_f || (OUT_pdf_rev && b->sample_visible)) g1i = mf_G1(b->dist, b->alpha, wi, h);
 
   /* The density. A valid configuration has wo and wi on the sides of h
    * their z says; the normal was drawn from the side of wo. */
@@ -186,13 +190,8 @@ static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
    * normal drawn from wi's side; F is that of the same h. */
   if (OUT_pdf_rev && !(woh * wo.z <= 0.0 || wih * wi.z <= 0.0)) {
     vec3 v = wi.z > 0.0 ? wi : v3_neg(wi);
-    double pm;
-    if (b->sample_visible) {
-      double dv = d != 0.0 ? d : mf_D(b->dist, b->alpha, h);
-      pm = mf_pdf_known(dv, mf_G1(b->dist, b->alpha, v, h), v, h, 1);
-    } else {
-      pm = mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wi.z), v, h, 0);
-    }
+    double pm = b->sample_visible ? mf_pdf_known(d, g1i, v, h, 1)
+                                  : mf_pdf(b->dist, bsdf__rd_sample_alpha(b, wi.z), v, h, 0);
     double fr_rev = fresnel_dielectric(wih, b->eta, NULL);
     if (pm != 0.0) {
       if (reflect) {
@@ -206,7 +205,7 @@ static rgb bsdf__rd_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 
 
   /* The value. */
   if (!need_f) return rgb_zero();
-  double g = mf_G1(b->dist, b->alpha, wi, h) * g1o;
+  double g = g1i * g1o;
   if (g == 0.0) return rgb_zero();
   if (reflect) {
     rgb ks = tex_eval(&b->specular, tu, tv);
