@@ -5,10 +5,12 @@
  * For path lengths 3, 5 and 8 (maxdepth = length, no Russian roulette) it
  * collects primary sample vectors whose path reaches that length with a
  * non-zero contribution, then times path_eval_pt over them without and
- * with the gradient (one thread). Printed: microseconds per evaluation,
- * their ratio (target: at most 4 at length 5), and gradient evaluations
- * per second per core. Then the same for bidirectional strategies (s, t)
- * of path_eval_bdpt at lengths 3, 5 and 8 (a quarter as many paths).
+ * with the gradient, and with gradient and Hessian (PATH_WANT_HESS; one
+ * thread). Printed: microseconds per evaluation, the gradient's and the
+ * Hessian's ratio to f alone (gradient target: at most 4 at length 5), and
+ * gradient evaluations per second per core. Then the same for
+ * bidirectional strategies (s, t) of path_eval_bdpt at lengths 3, 5 and 8
+ * (a quarter as many paths).
  *
  * Usage: bench_grad [paths per length (default 4000)] [repetitions (default 3)]
  */
@@ -35,7 +37,8 @@ typedef struct bench_vec {
 static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps) {
   printf("\nbidirectional strategies (path_eval_bdpt), %d paths per strategy, best of %d\n",
          n_paths, reps);
-  printf("length  (s,t)   f [us]  f+grad [us]  ratio  n_diff  grad evals/s/core\n");
+  printf("length  (s,t)   f [us]  f+grad [us]  ratio  f+grad+Hess [us]  ratio  n_diff  grad "
+         "evals/s/core\n");
   const int lengths[3] = {3, 5, 8};
   bench_vec *vecs = calloc((size_t)n_paths, sizeof *vecs);
   for (int li = 0; li < 3; li++) {
@@ -61,11 +64,11 @@ static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps)
           if (vs.n[k] > 0) memcpy(bv->u[k], vs.u[k], (size_t)vs.n[k] * sizeof(double));
         }
       }
-      double best[2] = {1e30, 1e30};
+      double best[3] = {1e30, 1e30, 1e30};
       int n_diff = 0;
       double checksum = 0.0;
       for (int r = 0; r < reps; r++) {
-        for (int mode = 0; mode < 2; mode++) {
+        for (int mode = 0; mode < 3; mode++) {
           double t0 = omp_get_wtime();
           for (int i = 0; i < got; i++) {
             /* Replay the stored streams (the buffers are large enough:
@@ -77,7 +80,7 @@ static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps)
               vs.n[k] = vecs[i].n[k];
             }
             path_eval ev;
-            path_eval_bdpt(sc, &rs, &vs.base, s, t, mode, ps, &ev, NULL);
+            path_eval_bdpt(sc, &rs, &vs.base, s, t, mode, ps, &ev, NULL); /* 0, grad, Hessian */
             checksum += ev.lum;
             if (mode) n_diff = ev.n_diff;
           }
@@ -86,8 +89,10 @@ static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps)
         }
       }
       double tf = got ? best[0] / got : 0.0, tg = got ? best[1] / got : 0.0;
-      printf("%6d  (%d,%d)  %7.2f  %11.2f  %5.2f  %6d  %17.0f", len, s, t, 1e6 * tf, 1e6 * tg,
-             tf > 0.0 ? tg / tf : 0.0, n_diff, tg > 0.0 ? 1.0 / tg : 0.0);
+      double th = got ? best[2] / got : 0.0;
+      printf("%6d  (%d,%d)  %7.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f", len, s, t, 1e6 * tf,
+             1e6 * tg, tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0, n_diff,
+             tg > 0.0 ? 1.0 / tg : 0.0);
       if (got < n_paths) printf("   (only %d paths found)", got);
       printf("\n");
       if (!(checksum >= 0.0)) printf("        (non-finite checksum)\n");
@@ -113,7 +118,7 @@ int main(int argc, char **argv) {
   path_scratch *ps;
   if (path_scratch_create(&ps, &err)) return 1;
   printf("ring-caustics, one thread, %d paths per length, best of %d\n", n_paths, reps);
-  printf("length  f [us]  f+grad [us]  ratio  n_diff  grad evals/s/core\n");
+  printf("length  f [us]  f+grad [us]  ratio  f+grad+Hess [us]  ratio  n_diff  grad evals/s/core\n");
   const int lengths[3] = {3, 5, 8};
   for (int li = 0; li < 3; li++) {
     int len = lengths[li];
@@ -137,11 +142,11 @@ int main(int argc, char **argv) {
     }
 
     /* Time both modes over the same vectors. */
-    double best[2] = {1e30, 1e30};
+    double best[3] = {1e30, 1e30, 1e30};
     int n_diff = 0;
     double checksum = 0.0;
     for (int r = 0; r < reps; r++) {
-      for (int mode = 0; mode < 2; mode++) {
+      for (int mode = 0; mode < 3; mode++) {
         double t0 = omp_get_wtime();
         for (int i = 0; i < got; i++) {
           path_vec_sampler_clear(&vs);
@@ -157,8 +162,10 @@ int main(int argc, char **argv) {
       }
     }
     double tf = got ? best[0] / got : 0.0, tg = got ? best[1] / got : 0.0;
-    printf("%6d  %6.2f  %11.2f  %5.2f  %6d  %17.0f\n", len, 1e6 * tf, 1e6 * tg,
-           tf > 0.0 ? tg / tf : 0.0, n_diff, tg > 0.0 ? 1.0 / tg : 0.0);
+    double th = got ? best[2] / got : 0.0;
+    printf("%6d  %6.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f\n", len, 1e6 * tf, 1e6 * tg,
+           tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0, n_diff,
+           tg > 0.0 ? 1.0 / tg : 0.0);
     if (got < n_paths) printf("        (only %d paths of length %d found)\n", got, len);
     if (!(checksum >= 0.0)) printf("        (non-finite checksum)\n");
     path_vec_sampler_free(&vs);

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "render/integrator.h"
+#include "ad/dual.h"
 #include "render/path.h"
 
 /* Which estimator: s < 0 is path_eval_pt, otherwise strategy (s, t). */
@@ -169,10 +170,10 @@ static void pg_fd_check(const scene *sc, path_scratch *ps, const render_settings
           best = lev;
       fd[q] = rich[best][q];
     }
-    double ad[6] = {coords[k].dlum, coords[k].drgb.r, coords[k].drgb.g,
+    double dad[6] = {coords[k].dlum, coords[k].drgb.r, coords[k].drgb.g,
                     coords[k].drgb.b, coords[k].drx,    coords[k].dry};
     for (int q = 0; q < nq; q++) {
-      double err = fabs(fd[q] - ad[q]);
+      double err = fabs(fd[q] - dad[q]);
       double scale = q < 4 ? f0 : rscale;
       int ok = err <= 1e-4 * fabs(fd[q]) || err <= 1e-6 * scale;
       fs->components++;
@@ -191,7 +192,115 @@ static void pg_fd_check(const scene *sc, path_scratch *ps, const render_settings
       if (!ok && fs->components - fs->passed < 10)
         print_message("(s,t) = (%d,%d) coord %d (stream %d pos %d) comp %d: ad %.10g fd %.10g "
                       "f %.6g\n",
-                      st.s, st.t, k, coords[k].stream, coords[k].pos, q, ad[q], fd[q], f0);
+                      st.s, st.t, k, coords[k].stream, coords[k].pos, q, dad[q], fd[q], f0);
+    }
+  }
+}
+
+/* Checks the Hessian of the luminance of the current path of vs (ev0,
+ * evaluated with PATH_WANT_HESS) against central differences of its
+ * gradient: coordinate k is moved by +-h, +-h/2 (Richardson, as
+ * pg_fd_check, the best converged of h = 1e-4 ... 1e-7), the gradient is
+ * evaluated there (PATH_WANT_GRAD, same topology), and its change along k
+ * is compared with row k of the Hessian, entry by entry: relative error
+ * under 1e-4 or absolute error under 1e-6 |f|, as for the gradient. Also
+ * checks that the second-order pass leaves the value and the gradient bit
+ * for bit as the first-order pass gives them (counted in fs->mismatched).
+ * Entries whose difference quotients converge at no h (two successive h
+ * within 1e-3) are counted in fs->unconverged and not compared. */
+typedef struct pg_hess_stats {
+  int paths, entries, passed, nontrivial, offdiag, skipped_topology, mismatched;
+  int unconverged; /* entries whose difference quotients did not converge (not compared) */
+} pg_hess_stats;
+
+static inline void pg_hess_check(const scene *sc, path_scratch *ps, const render_settings *rs,
+                          path_vec_sampler *vs, pg_strategy st, const path_eval *ev0,
+                          pg_hess_stats *fs) {
+  enum { NMAX = 512, VMAX = AD_H_CAPACITY };
+  int n = ev0->n_coords, nd = ev0->n_diff;
+  if (n > NMAX || !ev0->hess_ok || nd > VMAX) return;
+  static path_coord coords[NMAX];
+  static double H[VMAX * (VMAX + 1) / 2];
+  memcpy(coords, ev0->coords, (size_t)n * sizeof *coords);
+  memcpy(H, ev0->hlum, (size_t)nd * (size_t)(nd + 1) / 2 * sizeof(double));
+  uint64_t topo = ev0->topology;
+  double f0 = ev0->lum;
+  fs->paths++;
+
+  /* The first-order pass at the same point: the same value and gradient. */
+  {
+    path_eval ev;
+    path_vec_sampler_rewind(vs);
+    pg_eval(sc, rs, vs, st, PATH_WANT_GRAD, ps, &ev);
+    int same = ev.n_coords == n && memcmp(&ev.lum, &f0, sizeof f0) == 0;
+    for (int k = 0; same && k < n; k++)
+      same = memcmp(&ev.coords[k].dlum, &coords[k].dlum, sizeof(double)) == 0 &&
+             ev.coords[k].var == coords[k].var;
+    fs->mismatched += !same;
+  }
+
+  for (int k = 0; k < n; k++) {
+    int j = coords[k].var;
+    if (j < 0) continue;
+    double *slot = &vs->u[coords[k].stream][coords[k].pos];
+    double u = *slot;
+    static double rich[4][VMAX];
+    int same = 1;
+    double hk = 1e-4;
+    for (int lev = 0; lev < 4 && same; lev++, hk *= 0.1) {
+      const double steps[4] = {hk, -hk, 0.5 * hk, -0.5 * hk};
+      static double g[4][VMAX];
+      for (int e = 0; e < 4 && same; e++) {
+        path_eval ev;
+        *slot = u + steps[e];
+        if (*slot < 0.0 || *slot >= 1.0) {
+          same = 0;
+          break;
+        }
+        path_vec_sampler_rewind(vs);
+        pg_eval(sc, rs, vs, st, PATH_WANT_GRAD, ps, &ev);
+        same = ev.topology == topo && ev.grad_ok && ev.n_diff == nd;
+        for (int q = 0; same && q < ev.n_coords; q++)
+          if (ev.coords[q].var >= 0) g[e][ev.coords[q].var] = ev.coords[q].dlum;
+      }
+      if (!same) break;
+      for (int i = 0; i < nd; i++) {
+        double d1 = (g[0][i] - g[1][i]) / (2.0 * hk), d2 = (g[2][i] - g[3][i]) / hk;
+        rich[lev][i] = (4.0 * d2 - d1) / 3.0;
+      }
+    }
+    *slot = u;
+    if (!same) {
+      fs->skipped_topology++;
+      continue;
+    }
+    for (int i = 0; i < nd; i++) {
+      int best = 0;
+      for (int lev = 1; lev < 3; lev++)
+        if (fabs(rich[lev][i] - rich[lev + 1][i]) < fabs(rich[best][i] - rich[best + 1][i]))
+          best = lev;
+      double fd = rich[best][i];
+      /* A reference needs two successive h agreeing to 1e-3 (on very
+       * steep paths no h does: counted, not compared). */
+      int conv = 0;
+      for (int lev = 0; lev < 3; lev++)
+        conv = conv || fabs(rich[lev][i] - rich[lev + 1][i]) <= 1e-3 * fabs(rich[lev + 1][i]) ||
+               fabs(rich[lev][i] - rich[lev + 1][i]) <= 1e-7 * f0;
+      if (!conv) {
+        fs->unconverged++;
+        continue;
+      }
+      int a = i < j ? i : j, b = i < j ? j : i;
+      double ha = H[(size_t)a * (size_t)nd - (size_t)a * (size_t)(a - 1) / 2 + (size_t)(b - a)];
+      double err = fabs(fd - ha);
+      int ok = err <= 1e-4 * fabs(fd) || err <= 1e-6 * f0;
+      fs->entries++;
+      fs->passed += ok;
+      fs->nontrivial += fabs(fd) > 1e-3 * f0;
+      fs->offdiag += i != j && fabs(fd) > 1e-3 * f0;
+      if (!ok && fs->entries - fs->passed < 10)
+        print_message("(s,t) = (%d,%d) d2 f / du%d du%d (coord %d): ad %.10g fd %.10g f %.6g\n",
+                      st.s, st.t, j, i, k, ha, fd, f0);
     }
   }
 }

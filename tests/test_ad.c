@@ -28,6 +28,11 @@
  * derivative itself is below the rounding noise of the difference quotient
  * (cos at 0, a cross product component that does not depend on x_j). The
  * printed figure is the worst ratio of |d_ad - d_fd| to that tolerance.
+ *
+ * The same tables run a second time in a second-order arena: each Hessian
+ * entry against central differences of the dual gradient
+ * (check_hessian_at), and the arena's values and gradients bit for bit
+ * those of a first-order one.
  */
 #include <float.h>
 #include <math.h>
@@ -45,7 +50,8 @@
 #include "ad/dual_vec3.h"
 #include "render/frame.h"
 
-#define TOL 1e-7
+#define TOL 1e-7  /* first derivatives (see the header) */
+#define TOL2 1e-7 /* second derivatives (see check_hessian_at) */
 #define NPTS 4000 /* points per operation */
 #define MAXDIM 8
 #define MAXOUT 9
@@ -82,9 +88,109 @@ typedef struct tcase {
 
 static double g_arena_buf[1 << 16];
 
+/* The gradient of every output at x (first-order arena): g[k * MAXDIM + j]. */
+static void dual_grad(const tcase *c, const double *x, double *vals, double *g) {
+  ad_arena A;
+  assert_int_equal(ad_arena_init(&A, g_arena_buf, sizeof g_arena_buf / sizeof(double), c->dim), 0);
+  ad xv[MAXDIM], out[MAXOUT];
+  for (int j = 0; j < c->dim; j++) xv[j] = ad_var(&A, x[j], j);
+  c->dual(&A, xv, out);
+  assert_true(ad_arena_ok(&A));
+  for (int k = 0; k < c->nout; k++) {
+    if (vals) vals[k] = out[k].v;
+    for (int j = 0; j < c->dim; j++) g[k * MAXDIM + j] = ad_deriv(&A, out[k], j);
+  }
+}
+
+/* The second-order check at one point x (steps h): a second-order arena
+ * gives the same values and gradients as a first-order one, bit for bit,
+ * and each Hessian entry d^2 out_k / dx_i dx_j matches the same 6th-order
+ * central difference, taken of the first-order dual gradient d out_k / dx_i
+ * along x_j (so every entry is checked twice, once from each side of the
+ * diagonal). Tolerance: |H_ad - H_fd| <= TOL2 |H_ad| + 1e-9 Hmax_k +
+ * 16 eps gmax / h, with gmax the largest gradient magnitude (the rounding
+ * term, as |f| is for the gradient) and Hmax_k the largest second partial
+ * of output k: an entry that vanishes by symmetry (atan2's f_xy on the
+ * diagonal) still carries the difference formula's truncation error,
+ * ~36 (h/L)^6 (1e-12 here) relative to the Hessian's scale, not to the
+ * entry. The last term, twice the change of the difference quotient from
+ * step 2h to h, is its own error estimate: the reference is the dual
+ * gradient in double (the gradient check differences the plain formula in
+ * long double where it must), and next to the critical angle of refraction
+ * (cos_t^2 down to 1e-5) that gradient's rounding, magnified by the
+ * cancellation in cos_t^2 and by 1 / h, reaches 2e-6 of the entry; it
+ * changes with h where a wrong rule would not. Returns the entries
+ * checked. */
+static long check_hessian_at(const tcase *c, const double *x, const double *h, long *fails,
+                             double *maxerr) {
+  static double buf2[1 << 14];
+  ad_arena A;
+  assert_int_equal(ad_arena_init2(&A, buf2, sizeof buf2 / sizeof(double), c->dim), 0);
+  ad xv[MAXDIM], out[MAXOUT];
+  for (int j = 0; j < c->dim; j++) xv[j] = ad_var(&A, x[j], j);
+  c->dual(&A, xv, out);
+  assert_true(ad_arena_ok(&A));
+  double v1[MAXOUT], g1[MAXOUT * MAXDIM];
+  dual_grad(c, x, v1, g1);
+  double gscale = 0.0;
+  for (int k = 0; k < c->nout; k++) {
+    if (memcmp(&out[k].v, &v1[k], sizeof(double)) != 0) (*fails)++;
+    for (int i = 0; i < c->dim; i++) {
+      double g2 = ad_deriv(&A, out[k], i);
+      if (memcmp(&g2, &g1[k * MAXDIM + i], sizeof(double)) != 0) {
+        if (*fails < 20) print_error("%s: second-order arena changed d out%d / d x%d\n", c->name, k, i);
+        (*fails)++;
+      }
+      gscale = fmax(gscale, fabs(g2));
+    }
+  }
+  double hmax[MAXOUT] = {0.0};
+  for (int k = 0; k < c->nout; k++)
+    for (int i = 0; i < c->dim; i++)
+      for (int j = 0; j < c->dim; j++) hmax[k] = fmax(hmax[k], fabs(ad_hess(&A, out[k], i, j)));
+  long checked = 0;
+  for (int j = 0; j < c->dim; j++) {
+    /* gradients at x + m h, m = -6 .. 6 (the even m serve the step 2h) */
+    double gk[13][MAXOUT * MAXDIM], xs[MAXDIM];
+    memcpy(xs, x, sizeof xs);
+    for (int m = -6; m <= 6; m++) {
+      if (m == 0 || ((m > 3 || m < -3) && (m & 1))) continue;
+      xs[j] = x[j] + m * h[j];
+      dual_grad(c, xs, NULL, gk[m + 6]);
+    }
+    for (int k = 0; k < c->nout; k++)
+      for (int i = 0; i < c->dim; i++) {
+        int q = k * MAXDIM + i;
+        double fd = (-gk[3][q] + 9.0 * gk[4][q] - 45.0 * gk[5][q] + 45.0 * gk[7][q] -
+                     9.0 * gk[8][q] + gk[9][q]) /
+                    (60.0 * h[j]);
+        double fd2 = (-gk[0][q] + 9.0 * gk[2][q] - 45.0 * gk[4][q] + 45.0 * gk[8][q] -
+                      9.0 * gk[10][q] + gk[12][q]) /
+                     (120.0 * h[j]);
+        double ha = ad_hess(&A, out[k], i, j);
+        double noise = 16.0 * DBL_EPSILON * gscale / h[j] + 1e-9 * hmax[k] + 2.0 * fabs(fd - fd2);
+        double diff = fabs(ha - fd);
+        if (!(diff <= TOL2 * fabs(ha) + noise)) {
+          if (*fails < 20)
+            print_error("%s: d2 out%d / d x%d d x%d at x = (%.17g, %.17g, %.17g ...): ad %.17g fd "
+                        "%.17g (rel err %.3g)\n",
+                        c->name, k, i, j, x[0], c->dim > 1 ? x[1] : 0.0, c->dim > 2 ? x[2] : 0.0, ha,
+                        fd, diff / fabs(ha));
+          (*fails)++;
+        } else if (diff / (TOL2 * fabs(ha) + noise) > *maxerr) {
+          *maxerr = diff / (TOL2 * fabs(ha) + noise);
+        }
+        checked++;
+      }
+  }
+  return checked;
+}
+
 /* Checks one case at NPTS accepted points; returns the number of partials
- * checked and adds the failures to *fails. */
-static long check_case(const tcase *c, uint64_t seed, long *fails, double *maxerr) {
+ * checked and adds the failures to *fails. Order 1: each partial derivative
+ * against central differences of the plain formula; order 2: each second
+ * partial (check_hessian_at). */
+static long check_case(const tcase *c, uint64_t seed, int order, long *fails, double *maxerr) {
   trng r = {seed};
   long checked = 0;
   int accepted = 0, tries = 0;
@@ -104,6 +210,10 @@ static long check_case(const tcase *c, uint64_t seed, long *fails, double *maxer
     for (int k = 0; k < c->nout; k++) finite &= isfinite(f0[k]);
     if (!finite) continue;
     accepted++;
+    if (order == 2) {
+      checked += check_hessian_at(c, x, h, fails, maxerr);
+      continue;
+    }
 
     /* Dual evaluation with one variable per input. */
     ad_arena A;
@@ -157,18 +267,24 @@ static long check_case(const tcase *c, uint64_t seed, long *fails, double *maxer
   return checked;
 }
 
-static void run_cases(const tcase *cases, int count, uint64_t seed) {
+static void run_cases_order(const tcase *cases, int count, uint64_t seed, int order) {
   long fails = 0, total = 0, expected = 0;
   for (int i = 0; i < count; i++) {
     double maxerr;
-    long n = check_case(&cases[i], seed + (uint64_t)i * 7919u, &fails, &maxerr);
-    printf("  %-14s %6ld partials, worst |d_ad - d_fd| / tolerance %.2e\n", cases[i].name, n, maxerr);
+    long n = check_case(&cases[i], seed + (uint64_t)i * 7919u, order, &fails, &maxerr);
+    printf("  %-14s %7ld %s, worst |ad - fd| / tolerance %.2e\n", cases[i].name, n,
+           order == 2 ? "second partials" : "partials", maxerr);
     total += n;
-    expected += (long)NPTS * cases[i].dim * cases[i].nout;
+    expected += (long)NPTS * cases[i].dim * cases[i].nout * (order == 2 ? cases[i].dim : 1);
   }
   assert_int_equal(fails, 0);
   assert_int_equal(total, expected);
 }
+
+/* The order a case-table test checks: 1, or 2 when run with the prestate
+ * &k_order2 (the same tables, second partials). */
+static int k_order2 = 2;
+static int test_order(void **state) { return state && *state ? *(const int *)*state : 1; }
 
 /* ---- Unary operations. -----------------------------------------------------
  * UNARY(name, plain expression of a, dual expression of a) */
@@ -296,7 +412,6 @@ static int s_erf(trng *r, double *x, double *len) {
 #define CASE1(NAME, S) {#NAME, 1, 1, p_##NAME, d_##NAME, S}
 
 static void test_unary(void **state) {
-  (void)state;
   const tcase cases[] = {
       CASE1(neg, s_wide),          CASE1(sqr, s_wide),         CASE1(inv, s_nonzero),
       CASE1(add_s, s_wide),        CASE1(sub_s, s_wide),       CASE1(s_sub, s_wide),
@@ -311,7 +426,7 @@ static void test_unary(void **state) {
       CASE1(erf, s_erf),           CASE1(erfinv, s_pm1),
       CASE1(erfc, s_erf),
   };
-  run_cases(cases, (int)(sizeof cases / sizeof cases[0]), 1001);
+  run_cases_order(cases, (int)(sizeof cases / sizeof cases[0]), 1001, test_order(state));
 }
 
 /* ---- Binary and ternary operations. ---------------------------------------- */
@@ -387,7 +502,6 @@ static int s_minmax(trng *r, double *x, double *len) {
 }
 
 static void test_binary(void **state) {
-  (void)state;
   const tcase cases[] = {
       {"add", 2, 1, p_add, d_add, s_two},
       {"sub", 2, 1, p_sub, d_sub, s_two},
@@ -401,7 +515,7 @@ static void test_binary(void **state) {
       {"fma_s", 2, 1, p_fma_s, d_fma_s, s_two},
       {"fma", 3, 1, p_fma, d_fma, s_three},
   };
-  run_cases(cases, (int)(sizeof cases / sizeof cases[0]), 2002);
+  run_cases_order(cases, (int)(sizeof cases / sizeof cases[0]), 2002, test_order(state));
 }
 
 /* ---- Vectors. ---------------------------------------------------------------- */
@@ -491,6 +605,16 @@ static void d_frame(ad_arena *A, const ad *x, ad *o) {
   putd3(o + 6, f.n);
 }
 
+/* A world vector from local coordinates v in the frame of normalize(m). */
+static void p_to_world(const double *x, double *o) {
+  frame f = frame_from_z(v3_normalize(pv(x)));
+  put3(o, frame_to_world(&f, pv(x + 3)));
+}
+static void d_to_world(ad_arena *A, const ad *x, ad *o) {
+  ad_frame f = adv3_frame_from_z(A, adv3_normalize(A, dv(x)));
+  putd3(o, adv3_to_world(A, &f, dv(x + 3)));
+}
+
 static vec3 rnd_dir(trng *r) {
   double z = uni(r, -1.0, 1.0), phi = uni(r, 0.0, 2.0 * AD_PI);
   double s = sqrt(fmax(0.0, 1.0 - z * z));
@@ -566,8 +690,17 @@ static int s_frame(trng *r, double *x, double *len) {
   return n.z != 0.0;
 }
 
+/* m near the unit sphere (the frame's poles as in s_frame), v in a box. */
+static int s_to_world(trng *r, double *x, double *len) {
+  if (!s_frame(r, x, len)) return 0;
+  for (int j = 3; j < 6; j++) {
+    x[j] = uni(r, -2.0, 2.0);
+    len[j] = 1.0;
+  }
+  return 1;
+}
+
 static void test_vec3(void **state) {
-  (void)state;
   const tcase cases[] = {
       {"dot", 6, 1, p_dot, d_dot, s_vec6},
       {"cross", 6, 3, p_cross, d_cross, s_vec6},
@@ -579,18 +712,18 @@ static void test_vec3(void **state) {
       {"normalize", 3, 3, p_normalize, d_normalize, s_vec3_scaled},
       {"reflect", 6, 3, p_reflect, d_reflect, s_reflect},
       {"frame_from_z", 3, 9, p_frame, d_frame, s_frame},
+      {"to_world", 6, 3, p_to_world, d_to_world, s_to_world},
   };
-  run_cases(cases, (int)(sizeof cases / sizeof cases[0]), 3003);
+  run_cases_order(cases, (int)(sizeof cases / sizeof cases[0]), 3003, test_order(state));
 }
 
 static void test_refract(void **state) {
-  (void)state;
   const tcase c = {"refract", 6, 3, p_refract, d_refract, s_refract};
   const double etas[] = {1.5, 1.33, 2.4, 0.8};
   for (int i = 0; i < 4; i++) {
     g_eta = etas[i];
     printf(" eta %.2f\n", g_eta);
-    run_cases(&c, 1, 4004 + (uint64_t)i);
+    run_cases_order(&c, 1, 4004 + (uint64_t)i, test_order(state));
   }
 }
 
@@ -669,9 +802,8 @@ static int s_comp(trng *r, double *u, double *len) {
 }
 
 static void test_composite_n5(void **state) {
-  (void)state;
   const tcase c = {"ggx_n5", 5, 2, p_comp, d_comp, s_comp};
-  run_cases(&c, 1, 5005);
+  run_cases_order(&c, 1, 5005, test_order(state));
 }
 
 /* Frame round trip: to_world(to_local(v)) = v, with identity derivative in v
@@ -820,6 +952,13 @@ int main(void) {
       cmocka_unit_test(test_vec3),         cmocka_unit_test(test_refract),
       cmocka_unit_test(test_refract_tir),  cmocka_unit_test(test_composite_n5),
       cmocka_unit_test(test_frame_roundtrip),
+      /* The same tables at second order: Hessians against differences of
+       * the gradient. */
+      cmocka_unit_test_prestate(test_unary, &k_order2),
+      cmocka_unit_test_prestate(test_binary, &k_order2),
+      cmocka_unit_test_prestate(test_vec3, &k_order2),
+      cmocka_unit_test_prestate(test_refract, &k_order2),
+      cmocka_unit_test_prestate(test_composite_n5, &k_order2),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

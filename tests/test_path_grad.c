@@ -259,12 +259,91 @@ static void test_bdpt_gradient_matches_fd(void **state) {
   assert_true(st.passed >= 0.995 * st.components);
 }
 
+/* Prints and asserts what a Hessian check covered. */
+static void hess_report(const char *what, const pg_hess_stats *st, int paths) {
+  print_message("%s Hessian: %d paths, %d entries (%d non-trivial, %d of them off the diagonal), "
+                "%d passed, %d coordinates skipped (topology), %d unconverged, %d value/gradient "
+                "mismatches\n",
+                what, st->paths, st->entries, st->nontrivial, st->offdiag, st->passed,
+                st->skipped_topology, st->unconverged, st->mismatched);
+  assert_int_equal(st->paths, paths);
+  assert_int_equal(st->mismatched, 0);
+  assert_true(st->unconverged <= st->entries / 50);
+  assert_true(st->entries > 20 * paths);
+  assert_true(st->nontrivial > st->entries / 10);
+  assert_true(st->offdiag > st->nontrivial / 4);
+  /* As for the gradient: what fails are paths within h of a discontinuity
+   * the topology hash does not see. */
+  assert_true(st->passed >= 0.995 * st->entries);
+}
+
+/* Hessians of unidirectional paths (PATH_WANT_HESS) against central
+ * differences of their gradients. */
+static void test_pt_hessian_matches_fd(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.rrdepth = 3;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 31, NULL);
+  pg_hess_stats st = {0};
+  int tries = 0;
+  while (st.paths < 100 && tries < 20000) {
+    tries++;
+    path_vec_sampler_clear(&vs);
+    path_eval ev;
+    path_eval_pt(fx->sc, &rs, &vs.base, PATH_WANT_HESS, fx->ps, &ev, NULL);
+    if (!ev.grad_ok) continue;
+    assert_true(ev.hess_ok);
+    pg_hess_check(fx->sc, fx->ps, &rs, &vs, PG_PT, &ev, &st);
+  }
+  path_vec_sampler_free(&vs);
+  hess_report("pt", &st, 100);
+}
+
+/* The same for bidirectional strategies, 25 paths per group. */
+static void test_bdpt_hessian_matches_fd(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.rrdepth = 3;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 37, NULL);
+  rng r;
+  rng_seed(&r, 13, 5);
+  pg_hess_stats st = {0};
+  int paths[PG_GROUPS] = {0}, entries[PG_GROUPS] = {0};
+  int tries = 0;
+  while (st.paths < 100 && tries < 200000) {
+    tries++;
+    pg_strategy sg = pg_random_strategy(&r, rs.maxdepth);
+    if (paths[pg_group(sg)] >= 25) continue;
+    path_vec_sampler_clear(&vs);
+    path_eval ev;
+    path_eval_bdpt(fx->sc, &rs, &vs.base, sg.s, sg.t, PATH_WANT_HESS, fx->ps, &ev, NULL);
+    if (!ev.grad_ok) continue;
+    assert_true(ev.hess_ok);
+    int before = st.entries;
+    pg_hess_check(fx->sc, fx->ps, &rs, &vs, sg, &ev, &st);
+    paths[pg_group(sg)]++;
+    entries[pg_group(sg)] += st.entries - before;
+  }
+  path_vec_sampler_free(&vs);
+  for (int g = 0; g < PG_GROUPS; g++)
+    print_message("    %-22s %5d paths, %6d entries\n", pg_group_names[g], paths[g], entries[g]);
+  hess_report("bdpt", &st, 100);
+  for (int g = 0; g < PG_GROUPS; g++) {
+    assert_int_equal(paths[g], 25);
+    assert_true(entries[g] >= 200);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_pt_value_matches_pt_li),
       cmocka_unit_test(test_pt_gradient_matches_fd),
       cmocka_unit_test(test_bdpt_value_matches_bdpt_connect),
       cmocka_unit_test(test_bdpt_gradient_matches_fd),
+      cmocka_unit_test(test_pt_hessian_matches_fd),
+      cmocka_unit_test(test_bdpt_hessian_matches_fd),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -19,6 +19,10 @@
  * bdpt_connect, and its gradients), counted per group of strategies
  * (s = 0, s = 1, t = 1 with its raster derivatives, s, t >= 2) and per
  * class (check_bdpt).
+ *
+ * Last, Hessians of the luminance (PATH_WANT_HESS) against central
+ * differences of the gradient, unidirectional and per group of strategies
+ * (check_hessian).
  */
 #include <float.h>
 #include <setjmp.h>
@@ -187,6 +191,57 @@ static void check_bdpt(const char *file, const scene *sc, path_scratch *ps,
   path_vec_sampler_free(&vs);
 }
 
+/* Hessians (PATH_WANT_HESS) on one scene against central differences of
+ * the gradient (pg_hess_check): HS_PT unidirectional paths, then HS_BD
+ * paths per group of bidirectional strategies; the rules of test_path_grad
+ * (99.5% of the entries within 1e-4 relative or 1e-6 |f| absolute, at
+ * most 2% without converged differences, the
+ * second-order pass's value and gradient bit for bit the first-order
+ * pass's), and the counts asserted per group. Subnormal f are skipped as
+ * for the gradient. */
+enum { HS_PT = 60, HS_BD = 20, HS_TRIES = 150000 };
+
+static void check_hessian(const char *file, const scene *sc, path_scratch *ps,
+                          const render_settings *rs) {
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 71, NULL);
+  rng r;
+  rng_seed(&r, 17, 1);
+  int maxdepth = rs->maxdepth < 0 ? 8 : rs->maxdepth;
+  pg_hess_stats st[PG_GROUPS + 1] = {{0}};
+  int tries[PG_GROUPS + 1] = {0};
+  for (int g = 0; g <= PG_GROUPS; g++) {
+    int want = g == PG_GROUPS ? HS_PT : HS_BD;
+    while (st[g].paths < want && tries[g] < HS_TRIES) {
+      tries[g]++;
+      pg_strategy sg = PG_PT;
+      if (g < PG_GROUPS) {
+        sg = pg_random_strategy(&r, maxdepth);
+        if (pg_group(sg) != g) continue;
+      }
+      path_vec_sampler_clear(&vs);
+      path_eval ev;
+      pg_eval(sc, rs, &vs, sg, PATH_WANT_HESS, ps, &ev);
+      if (!ev.grad_ok || ev.lum < DBL_MIN) continue;
+      assert_true(ev.hess_ok);
+      pg_hess_check(sc, ps, rs, &vs, sg, &ev, &st[g]);
+    }
+    print_message("%s: Hessian, %-22s %3d paths, %6d entries (%d non-trivial, %d off the "
+                  "diagonal), %d passed (%.3f%%), %d skipped (topology), %d unconverged\n",
+                  file, g == PG_GROUPS ? "unidirectional" : pg_group_names[g], st[g].paths,
+                  st[g].entries, st[g].nontrivial, st[g].offdiag, st[g].passed,
+                  st[g].entries ? 100.0 * st[g].passed / st[g].entries : 0.0,
+                  st[g].skipped_topology, st[g].unconverged);
+    assert_int_equal(st[g].paths, want);
+    assert_true(st[g].unconverged <= st[g].entries / 50);
+    assert_int_equal(st[g].mismatched, 0);
+    assert_true(st[g].entries >= 5 * want);
+    assert_true(st[g].nontrivial >= st[g].entries / 20);
+    assert_true(st[g].passed >= 0.995 * st[g].entries);
+  }
+  path_vec_sampler_free(&vs);
+}
+
 /* Runs both checks on one scene; `need` lists the classes that must occur. */
 static void check_scene(const char *file, int n_value, int n_grad, unsigned need) {
   scene *sc;
@@ -261,6 +316,7 @@ static void check_scene(const char *file, int n_value, int n_grad, unsigned need
       assert_true(cc.comps_by_type[t] >= 100);
     }
   check_bdpt(file, sc, ps, &rs, need);
+  check_hessian(file, sc, ps, &rs);
   path_vec_sampler_free(&vs);
   path_scratch_destroy(ps);
   scene_destroy(sc);

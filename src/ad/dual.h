@@ -43,6 +43,23 @@
  * with room to spare. The cost of an evaluation scales with the n actually
  * used, never with the capacity.
  *
+ * Second order. An arena made with ad_arena_init2 gives every dual the
+ * Hessian H = d^2 v / du^2 as well, stored after the gradient in the same
+ * tangent block: the upper triangle, row by row (entry (i, j), i <= j, at
+ * i n - i (i - 1) / 2 + j - i), padded to AD_LANES. The chain rule for
+ * f(x, y) is
+ *   H_f = f_x H_x + f_y H_y                                   (linear part)
+ *       + f_xx g_x g_x^T + f_xy (g_x g_y^T + g_y g_x^T) + f_yy g_y g_y^T
+ * with g the gradients. The linear part is the first-order rule applied to
+ * the whole block, so the kernels below serve both orders; every operation
+ * adds its second-order terms after the linear kernel through ad__h_sq and
+ * ad__h_sym, which do nothing in a first-order arena (AD__H2 is false), so
+ * the first-order cost and results do not change. One implementation of
+ * each path formula thus gives value, gradient and, on request, Hessian
+ * (Griewank and Walther, chapter 13, "Taylor and tensor coefficients":
+ * the second-order forward mode with dense Hessians). Its cost grows as n^2
+ * per nonlinear operation, so AD_H_CAPACITY = 96 bounds n there.
+ *
  * Model: Ceres' Jet (value plus tangent, derivative rule per operation,
  * comparisons on the value); see also Griewank and Walther, "Evaluating
  * Derivatives", 2nd ed., 2008, chapter 3 (the forward mode).
@@ -53,7 +70,8 @@
 #include <stddef.h>
 #include <string.h>
 
-#define AD_CAPACITY 128 /* largest tangent length n */
+#define AD_CAPACITY 128  /* largest tangent length n */
+#define AD_H_CAPACITY 96 /* largest n of a second-order (Hessian) arena */
 #define AD_LANES 4      /* tangents are padded to a multiple of this (AVX width) */
 
 /* A dual number: value and a borrowed view of its tangent in an arena. */
@@ -68,27 +86,36 @@ typedef struct ad_arena {
   size_t cap;   /* capacity of buf in doubles */
   size_t top;   /* doubles in use */
   size_t base;  /* buf[0, base) is the zero tangent shared by constants */
-  size_t lanes; /* doubles per tangent: n rounded up to AD_LANES; 0 after overflow */
-  int n;        /* tangent length given to ad_arena_init */
-  int overflow; /* set when an allocation did not fit */
+  size_t lanes; /* doubles per tangent block (gradient, then Hessian); 0 after overflow */
+  size_t glanes; /* doubles of the gradient: n rounded up to AD_LANES */
+  int n;         /* tangent length given to ad_arena_init */
+  int order;     /* 1: gradients; 2: gradients and Hessians */
+  int overflow;  /* set when an allocation did not fit */
 } ad_arena;
+
+/* n rounded up to a multiple of AD_LANES. */
+static inline size_t ad__pad(size_t n) { return (n + AD_LANES - 1) & ~(size_t)(AD_LANES - 1); }
+
+/* Doubles of one tangent block of an arena of tangent length n and order. */
+static inline size_t ad__block(int n, int order) {
+  size_t m = (size_t)(n < 0 ? 0 : n);
+  return ad__pad(m) + (order == 2 ? ad__pad(m * (m + 1) / 2) : 0);
+}
 
 /* Doubles of arena storage needed for `count` duals of tangent length n
  * (plus the shared zero tangent). */
-static inline size_t ad_arena_size(int n, size_t count) {
-  size_t lanes = ((size_t)(n < 0 ? 0 : n) + AD_LANES - 1) & ~(size_t)(AD_LANES - 1);
-  return lanes * (count + 1);
-}
+static inline size_t ad_arena_size(int n, size_t count) { return ad__block(n, 1) * (count + 1); }
 
-/* Set up A over buf (cap doubles, borrowed, non-NULL) for tangents of length
- * n, 0 <= n <= AD_CAPACITY. Returns 0, or -1 when the arguments are invalid
- * or buf cannot hold the zero tangent. */
-static inline int ad_arena_init(ad_arena *A, double *buf, size_t cap, int n) {
-  if (!A || !buf || n < 0 || n > AD_CAPACITY) return -1;
+/* The same for a second-order arena (gradients and Hessians). */
+static inline size_t ad_arena_size2(int n, size_t count) { return ad__block(n, 2) * (count + 1); }
+
+static inline int ad__arena_init(ad_arena *A, double *buf, size_t cap, int n, int order) {
   A->buf = buf;
   A->cap = cap;
   A->n = n;
-  A->lanes = ((size_t)n + AD_LANES - 1) & ~(size_t)(AD_LANES - 1);
+  A->order = order;
+  A->glanes = ad__pad((size_t)n);
+  A->lanes = ad__block(n, order);
   if (cap < A->lanes) return -1;
   memset(buf, 0, A->lanes * sizeof(double));
   A->base = A->lanes;
@@ -97,11 +124,26 @@ static inline int ad_arena_init(ad_arena *A, double *buf, size_t cap, int n) {
   return 0;
 }
 
+/* Set up A over buf (cap doubles, borrowed, non-NULL) for tangents of length
+ * n, 0 <= n <= AD_CAPACITY. Returns 0, or -1 when the arguments are invalid
+ * or buf cannot hold the zero tangent. */
+static inline int ad_arena_init(ad_arena *A, double *buf, size_t cap, int n) {
+  if (!A || !buf || n < 0 || n > AD_CAPACITY) return -1;
+  return ad__arena_init(A, buf, cap, n, 1);
+}
+
+/* The same for a second-order arena, 0 <= n <= AD_H_CAPACITY: every dual
+ * made from it carries its Hessian (ad_hess). */
+static inline int ad_arena_init2(ad_arena *A, double *buf, size_t cap, int n) {
+  if (!A || !buf || n < 0 || n > AD_H_CAPACITY) return -1;
+  return ad__arena_init(A, buf, cap, n, 2);
+}
+
 /* Forget every dual made from A (start of a new evaluation). */
 static inline void ad_arena_reset(ad_arena *A) {
   A->top = A->base;
   A->overflow = 0;
-  A->lanes = ((size_t)A->n + AD_LANES - 1) & ~(size_t)(AD_LANES - 1);
+  A->lanes = ad__block(A->n, A->order);
 }
 
 /* 1 while every tangent made since the last reset is valid. */
@@ -241,6 +283,53 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
   return (ad){v, r};
 }
 
+/* ---- Second-order terms ---------------------------------------------------
+ * Added to a freshly made result r after its linear kernel; r's block is
+ * the caller's own (just allocated), so writing through it is safe. */
+
+/* True when A carries Hessians (second order, no overflow). */
+#define AD__H2(A) ((A)->order == 2 && (A)->lanes != 0)
+
+/* Offset of row i of the packed upper triangle (entry (i, j) is at
+ * ad__hrow(n, i) + j - i). */
+static inline size_t ad__hrow(size_t n, size_t i) { return i * n - i * (i - 1) / 2; }
+
+/* H_r += c g_x g_x^T (a second derivative f_xx = c). */
+static inline void ad__h_sq(const ad_arena *A, ad r, double c, ad x) {
+  if (!AD__H2(A) || c == 0.0) return;
+  size_t n = (size_t)A->n;
+  double *restrict H = (double *)r.d + A->glanes;
+  const double *restrict g = x.d;
+  for (size_t i = 0; i < n; i++) {
+    double ci = c * g[i];
+    if (ci == 0.0) continue;
+    double *restrict row = H + ad__hrow(n, i) - i;
+    for (size_t j = i; j < n; j++) row[j] += ci * g[j];
+  }
+}
+
+/* H_r += c (g_x g_y^T + g_y g_x^T) (a mixed second derivative f_xy = c). */
+static inline void ad__h_sym(const ad_arena *A, ad r, double c, ad x, ad y) {
+  if (!AD__H2(A) || c == 0.0) return;
+  size_t n = (size_t)A->n;
+  double *restrict H = (double *)r.d + A->glanes;
+  const double *restrict gx = x.d, *restrict gy = y.d;
+  for (size_t i = 0; i < n; i++) {
+    double a = c * gx[i], b = c * gy[i];
+    if (a == 0.0 && b == 0.0) continue;
+    double *restrict row = H + ad__hrow(n, i) - i;
+    for (size_t j = i; j < n; j++) row[j] += a * gy[j] + b * gx[j];
+  }
+}
+
+/* A unary operation's result with f' = c and f'' = h: (v, c d_a), plus
+ * h g_a g_a^T in a second-order arena. */
+static inline ad ad__op1(ad_arena *A, double v, double c, double h, ad a) {
+  ad r = ad__lin1(A, v, c, a);
+  ad__h_sq(A, r, h, a);
+  return r;
+}
+
 /* ---- Constants and variables --------------------------------------------- */
 
 /* Constant: tangent 0 (shares the arena's zero tangent, allocates nothing). */
@@ -256,8 +345,8 @@ static inline ad ad_var(ad_arena *A, double v, int index) {
   return (ad){v, r};
 }
 
-/* Dual with a given value and tangent (n doubles, copied), for derivatives
- * computed elsewhere by the chain rule. */
+/* Dual with a given value and gradient (n doubles, copied; Hessian 0), for
+ * derivatives computed elsewhere by the chain rule. */
 static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
   double *r = ad__alloc(A);
   size_t m = A->lanes;
@@ -265,6 +354,33 @@ static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
   for (size_t k = 0; k < m; k++) r[k] = 0.0;
   if (n) memcpy(r, tangent, n * sizeof(double));
   return (ad){v, r};
+}
+
+/* Dual with value v and the whole tangent block (gradient and, in a
+ * second-order arena, Hessian: A->lanes doubles) copied from block, which
+ * may lie in A above the top or outside it. For duals saved across a
+ * rewind; ad_make would drop their Hessians. */
+static inline ad ad_from_block(ad_arena *A, double v, const double *block) {
+  double *r = ad__alloc(A);
+  if (A->lanes) memmove(r, block, A->lanes * sizeof(double));
+  return (ad){v, r};
+}
+
+/* Copy of x (value and whole tangent block, Hessian included) in fresh
+ * storage at the top of A; x must come from A. */
+static inline ad ad_copy(ad_arena *A, ad x) { return ad_from_block(A, x.v, x.d); }
+
+/* Second derivative d^2 x / du_i du_j of a dual from a second-order arena
+ * (0 outside [0, n) or in a first-order arena). */
+static inline double ad_hess(const ad_arena *A, ad x, int i, int j) {
+  int n = ad_arena_n(A);
+  if (A->order != 2 || i < 0 || j < 0 || i >= n || j >= n) return 0.0;
+  if (i > j) {
+    int t = i;
+    i = j;
+    j = t;
+  }
+  return x.d[A->glanes + ad__hrow((size_t)n, (size_t)i) + (size_t)(j - i)];
 }
 
 /* Derivative of x with respect to variable i (0 outside [0, n)). */
@@ -290,30 +406,41 @@ static inline ad ad_add(ad_arena *A, ad a, ad b) { return ad__lin2(A, a.v + b.v,
 static inline ad ad_sub(ad_arena *A, ad a, ad b) { return ad__lin2(A, a.v - b.v, 1.0, a, -1.0, b); }
 
 /* a * b: d = b d_a + a d_b */
-static inline ad ad_mul(ad_arena *A, ad a, ad b) { return ad__lin2(A, a.v * b.v, b.v, a, a.v, b); }
+static inline ad ad_mul(ad_arena *A, ad a, ad b) {
+  ad r = ad__lin2(A, a.v * b.v, b.v, a, a.v, b);
+  ad__h_sym(A, r, 1.0, a, b); /* f_ab = 1 */
+  return r;
+}
 
-/* a / b = q: d = d_a / b - q d_b / b */
+/* a / b = q: d = d_a / b - q d_b / b; f_ab = -1 / b^2, f_bb = 2 q / b^2 */
 static inline ad ad_div(ad_arena *A, ad a, ad b) {
   double inv = 1.0 / b.v;
   double q = a.v * inv;
-  return ad__lin2(A, q, inv, a, -q * inv, b);
+  ad r = ad__lin2(A, q, inv, a, -q * inv, b);
+  if (AD__H2(A)) {
+    ad__h_sym(A, r, -inv * inv, a, b);
+    ad__h_sq(A, r, 2.0 * q * inv * inv, b);
+  }
+  return r;
 }
 
 /* -a: d = -d_a */
 static inline ad ad_neg(ad_arena *A, ad a) { return ad__lin1(A, -a.v, -1.0, a); }
 
-/* a^2: d = 2 a d_a */
-static inline ad ad_sqr(ad_arena *A, ad a) { return ad__lin1(A, a.v * a.v, 2.0 * a.v, a); }
+/* a^2: d = 2 a d_a; f'' = 2 */
+static inline ad ad_sqr(ad_arena *A, ad a) { return ad__op1(A, a.v * a.v, 2.0 * a.v, 2.0, a); }
 
-/* 1 / a: d = -d_a / a^2 */
+/* 1 / a: d = -d_a / a^2; f'' = 2 / a^3 */
 static inline ad ad_inv(ad_arena *A, ad a) {
   double r = 1.0 / a.v;
-  return ad__lin1(A, r, -r * r, a);
+  return ad__op1(A, r, -r * r, 2.0 * r * r * r, a);
 }
 
 /* a * b + c: d = b d_a + a d_b + d_c */
 static inline ad ad_fma(ad_arena *A, ad a, ad b, ad c) {
-  return ad__lin3(A, a.v * b.v + c.v, b.v, a, a.v, b, 1.0, c);
+  ad r = ad__lin3(A, a.v * b.v + c.v, b.v, a, a.v, b, 1.0, c);
+  ad__h_sym(A, r, 1.0, a, b); /* f_ab = 1 */
+  return r;
 }
 
 /* a + s: d = d_a (the tangent is shared, nothing is allocated) */
@@ -340,16 +467,18 @@ static inline ad ad_div_s(ad_arena *A, ad a, double s) {
   return ad__lin1(A, a.v * inv, inv, a);
 }
 
-/* s / a = q: d = -q d_a / a */
+/* s / a = q: d = -q d_a / a; f'' = 2 q / a^2 */
 static inline ad ad_s_div(ad_arena *A, double s, ad a) {
   double inv = 1.0 / a.v;
   double q = s * inv;
-  return ad__lin1(A, q, -q * inv, a);
+  return ad__op1(A, q, -q * inv, 2.0 * q * inv * inv, a);
 }
 
 /* a * b + s (common in polynomial steps): d = b d_a + a d_b */
 static inline ad ad_fma_s(ad_arena *A, ad a, ad b, double s) {
-  return ad__lin2(A, a.v * b.v + s, b.v, a, a.v, b);
+  ad r = ad__lin2(A, a.v * b.v + s, b.v, a, a.v, b);
+  ad__h_sym(A, r, 1.0, a, b); /* f_ab = 1 */
+  return r;
 }
 
 /* ca a + cb b, a linear combination with scalar weights: d = ca d_a + cb d_b */

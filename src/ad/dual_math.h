@@ -10,6 +10,10 @@
  * clamp, floor) branch on the value and return the derivative of the piece
  * in use; at a kink they take the piece documented below.
  *
+ * In a second-order arena each function also adds f''(v) g_a g_a^T (binary:
+ * f_aa, f_ab, f_bb) to the Hessian; the second derivative is given next to
+ * the code. Where it is infinite it is inf or NaN like the first.
+ *
  * erfinv has no C library counterpart, so ad_erfinv_scalar implements it:
  * an initial guess (a series for small |y|, Winitzki's 2008 closed-form
  * approximation of erf's inverse elsewhere), then three Halley steps on
@@ -31,41 +35,51 @@
 /* sqrt(a): d = d_a / (2 sqrt(a)) (inf at a = 0) */
 static inline ad ad_sqrt(ad_arena *A, ad a) {
   double r = sqrt(a.v);
-  return ad__lin1(A, r, 0.5 / r, a);
+  return ad__op1(A, r, 0.5 / r, -0.25 / (r * r * r), a); /* f'' = -1 / (4 a^(3/2)) */
 }
 
 /* sqrt(max(a, 0)): d = d_a / (2 sqrt(a)) for a > 0, and 0 for a <= 0 (the
  * one-sided choice that keeps gradients finite at the edge of a domain). */
 static inline ad ad_safe_sqrt(ad_arena *A, ad a) {
   double r = a.v > 0.0 ? sqrt(a.v) : 0.0;
-  return ad__lin1(A, r, r > 0.0 ? 0.5 / r : 0.0, a);
+  return ad__op1(A, r, r > 0.0 ? 0.5 / r : 0.0, r > 0.0 ? -0.25 / (r * r * r) : 0.0, a);
 }
 
 /* cbrt(a): d = d_a / (3 cbrt(a)^2) (inf at a = 0) */
 static inline ad ad_cbrt(ad_arena *A, ad a) {
   double r = cbrt(a.v);
-  return ad__lin1(A, r, 1.0 / (3.0 * r * r), a);
+  return ad__op1(A, r, 1.0 / (3.0 * r * r), -2.0 / (9.0 * r * r * r * r * r), a); /* f'' = -2 / (9 a^(5/3)) */
 }
 
 /* exp(a): d = exp(a) d_a */
 static inline ad ad_exp(ad_arena *A, ad a) {
   double r = exp(a.v);
-  return ad__lin1(A, r, r, a);
+  return ad__op1(A, r, r, r, a);
 }
 
 /* log(a): d = d_a / a */
-static inline ad ad_log(ad_arena *A, ad a) { return ad__lin1(A, log(a.v), 1.0 / a.v, a); }
+static inline ad ad_log(ad_arena *A, ad a) {
+  double i = 1.0 / a.v;
+  return ad__op1(A, log(a.v), i, -i * i, a); /* f'' = -1 / a^2 */
+}
 
 /* log(1 + a): d = d_a / (1 + a) */
-static inline ad ad_log1p(ad_arena *A, ad a) { return ad__lin1(A, log1p(a.v), 1.0 / (1.0 + a.v), a); }
+static inline ad ad_log1p(ad_arena *A, ad a) {
+  double i = 1.0 / (1.0 + a.v);
+  return ad__op1(A, log1p(a.v), i, -i * i, a); /* f'' = -1 / (1 + a)^2 */
+}
 
 /* exp(a) - 1: d = exp(a) d_a */
-static inline ad ad_expm1(ad_arena *A, ad a) { return ad__lin1(A, expm1(a.v), exp(a.v), a); }
+static inline ad ad_expm1(ad_arena *A, ad a) {
+  double e = exp(a.v);
+  return ad__op1(A, expm1(a.v), e, e, a);
+}
 
 /* a^p for a scalar exponent p: d = p a^(p-1) d_a (0 when p = 0). */
 static inline ad ad_pow_s(ad_arena *A, ad a, double p) {
   double c = p == 0.0 ? 0.0 : p * pow(a.v, p - 1.0);
-  return ad__lin1(A, pow(a.v, p), c, a);
+  double h = (p == 0.0 || p == 1.0 || !AD__H2(A)) ? 0.0 : p * (p - 1.0) * pow(a.v, p - 2.0);
+  return ad__op1(A, pow(a.v, p), c, h, a); /* f'' = p (p - 1) a^(p-2) */
 }
 
 /* a^b for a dual exponent: d = b a^(b-1) d_a + a^b log(a) d_b.
@@ -75,44 +89,75 @@ static inline ad ad_pow(ad_arena *A, ad a, ad b) {
   double r = pow(a.v, b.v);
   double ca = b.v == 0.0 ? 0.0 : b.v * pow(a.v, b.v - 1.0);
   double cb = a.v > 0.0 ? r * log(a.v) : 0.0;
-  return ad__lin2(A, r, ca, a, cb, b);
+  ad o = ad__lin2(A, r, ca, a, cb, b);
+  if (AD__H2(A)) {
+    /* f_aa = b (b - 1) a^(b-2), f_ab = a^(b-1) (1 + b log a), f_bb = a^b log(a)^2 */
+    double la = a.v > 0.0 ? log(a.v) : 0.0;
+    double haa = (b.v == 0.0 || b.v == 1.0) ? 0.0 : b.v * (b.v - 1.0) * pow(a.v, b.v - 2.0);
+    ad__h_sq(A, o, haa, a);
+    if (a.v > 0.0) {
+      ad__h_sym(A, o, pow(a.v, b.v - 1.0) * (1.0 + b.v * la), a, b);
+      ad__h_sq(A, o, r * la * la, b);
+    }
+  }
+  return o;
 }
 
 /* s^a for a scalar base s > 0: d = s^a log(s) d_a */
 static inline ad ad_s_pow(ad_arena *A, double s, ad a) {
   double r = pow(s, a.v);
-  return ad__lin1(A, r, s > 0.0 ? r * log(s) : 0.0, a);
+  double ls = s > 0.0 ? log(s) : 0.0;
+  return ad__op1(A, r, r * ls, r * ls * ls, a); /* f'' = s^a log(s)^2 */
 }
 
 /* sin(a): d = cos(a) d_a */
-static inline ad ad_sin(ad_arena *A, ad a) { return ad__lin1(A, sin(a.v), cos(a.v), a); }
+static inline ad ad_sin(ad_arena *A, ad a) {
+  double s = sin(a.v);
+  return ad__op1(A, s, cos(a.v), -s, a); /* f'' = -sin(a) */
+}
 
 /* cos(a): d = -sin(a) d_a */
-static inline ad ad_cos(ad_arena *A, ad a) { return ad__lin1(A, cos(a.v), -sin(a.v), a); }
+static inline ad ad_cos(ad_arena *A, ad a) {
+  double c = cos(a.v);
+  return ad__op1(A, c, -sin(a.v), -c, a); /* f'' = -cos(a) */
+}
 
 /* tan(a): d = (1 + tan(a)^2) d_a */
 static inline ad ad_tan(ad_arena *A, ad a) {
   double r = tan(a.v);
-  return ad__lin1(A, r, 1.0 + r * r, a);
+  return ad__op1(A, r, 1.0 + r * r, 2.0 * r * (1.0 + r * r), a); /* f'' = 2 tan (1 + tan^2) */
 }
 
 /* asin(a): d = d_a / sqrt(1 - a^2) (inf at |a| = 1) */
 static inline ad ad_asin(ad_arena *A, ad a) {
-  return ad__lin1(A, asin(a.v), 1.0 / sqrt((1.0 - a.v) * (1.0 + a.v)), a);
+  double w = 1.0 / ((1.0 - a.v) * (1.0 + a.v)), c = sqrt(w);
+  return ad__op1(A, asin(a.v), c, a.v * w * c, a); /* f'' = a / (1 - a^2)^(3/2) */
 }
 
 /* acos(a): d = -d_a / sqrt(1 - a^2) (inf at |a| = 1) */
 static inline ad ad_acos(ad_arena *A, ad a) {
-  return ad__lin1(A, acos(a.v), -1.0 / sqrt((1.0 - a.v) * (1.0 + a.v)), a);
+  double w = 1.0 / ((1.0 - a.v) * (1.0 + a.v)), c = sqrt(w);
+  return ad__op1(A, acos(a.v), -c, -a.v * w * c, a); /* f'' = -a / (1 - a^2)^(3/2) */
 }
 
 /* atan(a): d = d_a / (1 + a^2) */
-static inline ad ad_atan(ad_arena *A, ad a) { return ad__lin1(A, atan(a.v), 1.0 / (1.0 + a.v * a.v), a); }
+static inline ad ad_atan(ad_arena *A, ad a) {
+  double c = 1.0 / (1.0 + a.v * a.v);
+  return ad__op1(A, atan(a.v), c, -2.0 * a.v * c * c, a); /* f'' = -2 a / (1 + a^2)^2 */
+}
 
 /* atan2(y, x): d = (x d_y - y d_x) / (x^2 + y^2) (NaN at the origin) */
 static inline ad ad_atan2(ad_arena *A, ad y, ad x) {
   double inv_r2 = 1.0 / (x.v * x.v + y.v * y.v);
-  return ad__lin2(A, atan2(y.v, x.v), x.v * inv_r2, y, -y.v * inv_r2, x);
+  ad r = ad__lin2(A, atan2(y.v, x.v), x.v * inv_r2, y, -y.v * inv_r2, x);
+  if (AD__H2(A)) {
+    /* f_yy = -2 x y / r^4, f_xx = 2 x y / r^4, f_xy = (y^2 - x^2) / r^4 */
+    double i4 = inv_r2 * inv_r2;
+    ad__h_sq(A, r, -2.0 * x.v * y.v * i4, y);
+    ad__h_sq(A, r, 2.0 * x.v * y.v * i4, x);
+    ad__h_sym(A, r, (y.v * y.v - x.v * x.v) * i4, y, x);
+  }
+  return r;
 }
 
 /* |a|: d = sign(a) d_a, with 0 at a = 0 */
@@ -149,13 +194,15 @@ static inline ad ad_floor(const ad_arena *A, ad a) { return ad_const(A, floor(a.
 
 /* erf(a): d = 2/sqrt(pi) exp(-a^2) d_a */
 static inline ad ad_erf(ad_arena *A, ad a) {
-  return ad__lin1(A, erf(a.v), AD_2_SQRTPI * exp(-a.v * a.v), a);
+  double c = AD_2_SQRTPI * exp(-a.v * a.v);
+  return ad__op1(A, erf(a.v), c, -2.0 * a.v * c, a); /* f'' = -2 a f' */
 }
 
 /* erfc(a) = 1 - erf(a), without the cancellation for large a:
  * d = -2/sqrt(pi) exp(-a^2) d_a */
 static inline ad ad_erfc(ad_arena *A, ad a) {
-  return ad__lin1(A, erfc(a.v), -AD_2_SQRTPI * exp(-a.v * a.v), a);
+  double c = -AD_2_SQRTPI * exp(-a.v * a.v);
+  return ad__op1(A, erfc(a.v), c, -2.0 * a.v * c, a); /* f'' = -2 a f' */
 }
 
 /* Inverse error function of a double: erf(x) = y for y in [-1, 1]
@@ -196,7 +243,8 @@ static inline double ad_erfinv_scalar(double y) {
 /* erfinv(a): d = sqrt(pi)/2 exp(erfinv(a)^2) d_a */
 static inline ad ad_erfinv(ad_arena *A, ad a) {
   double x = ad_erfinv_scalar(a.v);
-  return ad__lin1(A, x, AD_SQRTPI_2 * exp(x * x), a);
+  double c = AD_SQRTPI_2 * exp(x * x);
+  return ad__op1(A, x, c, 2.0 * x * c * c, a); /* f'' = 2 x f'^2 */
 }
 
 #endif

@@ -40,7 +40,7 @@ static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
   int n_moved = 0;
   for (int i = 0; i < count && n_moved < 16; i++)
     if (xs[i]->d >= lo) {
-      *xs[i] = ad_make(A, xs[i]->v, xs[i]->d);
+      *xs[i] = ad_copy(A, *xs[i]);
       moved[n_moved++] = i;
     }
   if (n_moved == 0 || !ad_arena_ok(A)) {
@@ -48,7 +48,7 @@ static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
     return;
   }
   ad_arena_rewind(A, mark);
-  for (int j = 0; j < n_moved; j++) *xs[moved[j]] = ad_make(A, xs[moved[j]]->v, xs[moved[j]]->d);
+  for (int j = 0; j < n_moved; j++) *xs[moved[j]] = ad_copy(A, *xs[moved[j]]);
 }
 
 /* ---- Small shared pieces --------------------------------------------------- */

@@ -74,6 +74,8 @@ lmc_status path_scratch_create(path_scratch **OUT_scratch, lmc_error *err) {
 void path_scratch_destroy(path_scratch *ps) {
   if (!ps) return;
   free(ps->arena_buf);
+  free(ps->arena2_buf);
+  free(ps->keep2_buf);
   free(ps);
 }
 
@@ -123,6 +125,27 @@ ad path__draw(path__ctx *c, int diff) {
   return ad_const(c->A, u);
 }
 
+/* Makes the second-order arena and keep buffer of ps large enough for
+ * tangent length n; 1 on success, 0 when memory is short (the caller then
+ * evaluates the gradient only). */
+static int path__arena2(path_scratch *ps, int n) {
+  size_t cap = ad_arena_size2(n, PATH__ARENA2_DUALS);
+  size_t kcap = ad_arena_size2(n, 0) * PATH__KEEP;
+  if (ps->arena2_cap < cap) {
+    double *b = realloc(ps->arena2_buf, cap * sizeof(double));
+    if (!b) return 0;
+    ps->arena2_buf = b;
+    ps->arena2_cap = cap;
+  }
+  if (ps->keep2_cap < kcap) {
+    double *b = realloc(ps->keep2_buf, kcap * sizeof(double));
+    if (!b) return 0;
+    ps->keep2_buf = b;
+    ps->keep2_cap = kcap;
+  }
+  return 1;
+}
+
 /* Carries duals over an arena rewind to `mark`: their tangents are copied
  * out, the arena rewinds, and they are remade at the bottom. */
 void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
@@ -132,10 +155,10 @@ void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
     if (lanes == 0) ad_arena_rewind(A, mark);
     return;
   }
-  double *tmp = c->ps->keep_tmp;
+  double *tmp = A->order == 2 ? c->ps->keep2_buf : c->ps->keep_tmp;
   for (int i = 0; i < n; i++) memcpy(tmp + (size_t)i * lanes, v[i]->d, lanes * sizeof(double));
   ad_arena_rewind(A, mark);
-  for (int i = 0; i < n; i++) *v[i] = ad_make(A, v[i]->v, tmp + (size_t)i * lanes);
+  for (int i = 0; i < n; i++) *v[i] = ad_from_block(A, v[i]->v, tmp + (size_t)i * lanes);
 }
 
 
@@ -716,9 +739,12 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
   ev->topology = c.topo;
   ev->n_coords = ps->n_draw;
   ev->coords = ps->coords;
+  ev->hlum = NULL;
+  ev->hess_ok = 0;
   for (int k = 0; k < ps->n_draw; k++) {
     path_coord *pc = &ps->coords[k];
     memset(pc, 0, sizeof *pc);
+    pc->var = -1;
     pc->stream = ps->dstream[k];
     pc->pos = ps->dpos[k];
     pc->u = ps->du[k];
@@ -726,11 +752,16 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
   }
   if (!want_grad || c.lost || !(ev->lum > 0.0) || !isfinite(ev->lum)) return;
 
-  /* Pass 2: the same function on the record, with tangents. */
+  /* Pass 2: the same function on the record, with tangents (and with
+   * Hessians in a second-order arena when they are asked for). */
   int n_var = c.n_var;
+  int order2 = want_grad >= PATH_WANT_HESS && n_var <= AD_H_CAPACITY && path__arena2(ps, n_var);
   path__ctx_init(&c, sc, rs, ps, NULL, 1);
   c.arg = arg;
-  ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
+  if (order2)
+    ad_arena_init2(&ps->A, ps->arena2_buf, ps->arena2_cap, n_var);
+  else
+    ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
   est(&c, &L, &rx, &ry);
   ev->n_diff = n_var;
   if (!ad_arena_ok(&ps->A)) return;
@@ -739,12 +770,18 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
     int j = ps->dvar[k];
     if (j < 0) continue;
     path_coord *pc = &ps->coords[k];
+    pc->var = j;
     pc->dlum = lum.d[j];
     pc->drgb = rgb_make(L.r.d[j], L.g.d[j], L.b.d[j]);
     pc->drx = rx.d[j];
     pc->dry = ry.d[j];
   }
   ev->grad_ok = ad_arena_ok(&ps->A);
+  if (order2 && ev->grad_ok) {
+    memcpy(ps->hlum, lum.d + ps->A.glanes, (size_t)n_var * (size_t)(n_var + 1) / 2 * sizeof(double));
+    ev->hlum = ps->hlum;
+    ev->hess_ok = 1;
+  }
 }
 
 lmc_status path_eval_pt(const scene *sc, const render_settings *rs, lmc_sampler *smp,

@@ -80,6 +80,7 @@ typedef struct path_coord {
   int pos;          /* position within its stream: coordinate = offset(stream) + pos */
   double u;         /* its value */
   int diff;         /* 1 when it got a tangent slot (continuous use) */
+  int var;          /* that slot, in [0, n_diff) (-1: none); indexes path_eval.hlum */
   double dlum;      /* d luminance / du */
   rgb drgb;         /* d value / du */
   double drx, dry;  /* d raster position / du */
@@ -96,6 +97,10 @@ typedef struct path_eval {
   unsigned flags;   /* PATH_* of the vertices and emitters used */
   int length;       /* segments of the longest contributing path (0: none) */
   int n_diff;       /* tangent length of pass 2 */
+  int hess_ok;      /* hlum present: asked for (PATH_WANT_HESS), grad_ok, n_diff <= AD_H_CAPACITY */
+  const double *hlum; /* d^2 luminance / du_i du_j over the tangent slots i <= j, the upper
+                         triangle row by row (ad_hess's layout: (i, j) at
+                         i n - i (i - 1) / 2 + j - i, n = n_diff); borrowed like coords */
   double jac;       /* path_eval_bdpt_abs: the Jacobian of the absolute directions that
                        value includes (value / jac is path_eval_bdpt's); 1 otherwise */
   uint64_t topology; /* hash of the discrete choices: triangles hit, shadow rays,
@@ -104,6 +109,12 @@ typedef struct path_eval {
 } path_eval;
 
 typedef struct path_scratch path_scratch;
+
+/* want_grad of the evaluators: 0 value only, PATH_WANT_GRAD the gradient
+ * (path_coord's derivatives), PATH_WANT_HESS also the Hessian of the
+ * luminance (path_eval.hlum, a second-order pass: its cost grows as n_diff^2
+ * per operation, see bench_grad). */
+enum { PATH_WANT_GRAD = 1, PATH_WANT_HESS = 2 };
 
 /* A per-thread scratch (arena and record). */
 lmc_status path_scratch_create(path_scratch **OUT_scratch, lmc_error *err);

@@ -58,10 +58,17 @@ typedef struct path__bdv {
 #define PATH__MAX_VIS 1024
 #define PATH__ARENA_DUALS 16384 /* duals of length AD_CAPACITY one bounce may hold */
 #define PATH__KEEP 48           /* duals carried from one bounce to the next */
+#define PATH__ARENA2_DUALS 2048 /* duals of a second-order arena (a bounce holds ~700 at most) */
 
 struct path_scratch {
   double *arena_buf; /* owned */
   size_t arena_cap;
+  /* Second-order pass (PATH_WANT_HESS), allocated on first use and grown
+   * with the tangent length: its arena and the keep buffer of its blocks. */
+  double *arena2_buf; /* owned */
+  size_t arena2_cap;
+  double *keep2_buf; /* owned: PATH__KEEP blocks */
+  size_t keep2_cap;
   ad_arena A;
   /* The record of pass 1. */
   int n_draw;
@@ -76,6 +83,7 @@ struct path_scratch {
   unsigned char vis[PATH__MAX_VIS];
   /* Output and temporaries. */
   path_coord coords[PATH_MAX_DRAWS];
+  double hlum[AD_H_CAPACITY * (AD_H_CAPACITY + 1) / 2]; /* path_eval.hlum */
   double keep_tmp[PATH__KEEP * AD_CAPACITY];
   /* The dual subpaths of path_eval_bdpt. */
   path__bdv bd_cam[BDPT_MAX_VERTICES], bd_light[BDPT_MAX_VERTICES];
