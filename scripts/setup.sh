@@ -19,7 +19,7 @@ cd "$(dirname "$0")/.."
 mode=${1:-demo}
 jobs=${LMC_JOBS:-$(nproc)}
 packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-dev
-          libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev
+          libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev liblapack-dev
           clang libclang-rt-dev libomp-dev   # libFuzzer (-fsanitize=fuzzer) and OpenMP for clang
           gnuplot-nox)                       # plots of bench/equal_time.sh
 

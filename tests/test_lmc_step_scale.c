@@ -166,7 +166,7 @@ static void test_adam_rescaled(void **state) {
   assert_int_equal(lmc_mala_init(&k, 2, &p, &err), LMC_OK);
   mc_kernel kn = lmc_mala_kernel(&k);
   double u[2] = {0.3, 0.4}, grad[2] = {2.0, 200.0}; /* f = 2: grad log f = (1, 100) */
-  mc_state x = {2, u, {2.0, {2.0, 2.0, 2.0}, 0.0, 0.0, 2.0}, grad, 1, 1, 0, 0};
+  mc_state x = {2, u, {2.0, {2.0, 2.0, 2.0}, 0.0, 0.0, 2.0}, grad, 1, 1, 0, 0, 0, 0, NULL, NULL};
   for (int i = 0; i < 10; i++) kn.on_step(kn.self, &x, 1);
   double m1[2], m2[2];
   adam_moments(&k.adam, 0, &m1[0], &m2[0]);

@@ -53,6 +53,7 @@
 
 #include "chi2.h"
 #include "lmc/chain.h"
+#include "lmc/h2mc.h"
 #include "lmc/lmc_kernel.h"
 #include "lmc/mala.h"
 #include "test_util.h"
@@ -60,7 +61,7 @@
 #define MAXD 6
 #define NB 16        /* histogram bins per axis */
 #define R_CHAINS 32  /* independent chains per run */
-#define CHI2_TESTS 12 /* 3 targets x 4 unbiased runs */
+#define CHI2_TESTS 15 /* 3 targets x (4 unbiased LMC runs + H2MC) */
 #define Z999 3.2905  /* two-sided 99.9% normal quantile */
 #define BIAS_STEP 1e-2 /* the bias test's Langevin step */
 #define BIAS_L 50000   /* and its steps per chain */
@@ -179,6 +180,49 @@ static int toy_eval(const mc_target *tg, void *scratch, lmc_sampler *smp, mc_val
     for (int i = 0; i < t->dim; i++) OUT_grad[i] = g[i];
     *OUT_grad_ok = f > 0.0;
   }
+  return 0;
+}
+
+/* eval_hess for the toys: the analytic gradient and a Hessian by central
+ * differences of it (h = 1e-6; the toys are periodic, so u +- h is
+ * defined). H2MC's exactness does not depend on how good the Hessian is,
+ * only on its being a function of the state, which this is. */
+static int toy_eval_hess(const mc_target *tg, void *scratch, lmc_sampler *smp, int label,
+                         mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
+                         int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
+  (void)scratch;
+  (void)label;
+  const toy *t = tg->ctx;
+  int n = t->dim;
+  double u[MAXD] = {0}, g[MAXD] = {0};
+  sampler_use_stream(smp, 0);
+  for (int i = 0; i < n; i++) u[i] = sampler_next(smp);
+  double f = toy_f(t, u, g);
+  OUT_value->f = f;
+  OUT_value->value = (rgb){f, f, f};
+  OUT_value->rx = u[0];
+  OUT_value->ry = u[1];
+  for (int i = 0; i < n; i++) OUT_grad[i] = g[i];
+  *OUT_grad_ok = f > 0.0;
+  const double h = 1e-6;
+  double H[MAXD][MAXD];
+  for (int j = 0; j < n; j++) {
+    double up[MAXD], um[MAXD], gp[MAXD], gm[MAXD];
+    memcpy(up, u, sizeof up);
+    memcpy(um, u, sizeof um);
+    up[j] += h;
+    um[j] -= h;
+    toy_f(t, up, gp);
+    toy_f(t, um, gm);
+    for (int i = 0; i < n; i++) H[i][j] = (gp[i] - gm[i]) / (2.0 * h);
+  }
+  *OUT_hn = n;
+  int q = 0;
+  for (int a = 0; a < n; a++) {
+    OUT_hidx[a] = a;
+    for (int b = a; b < n; b++) OUT_hess[q++] = 0.5 * (H[a][b] + H[b][a]);
+  }
+  *OUT_hess_ok = f > 0.0;
   return 0;
 }
 
@@ -404,6 +448,81 @@ static void test_plateau(void **state) {
   assert_int_equal(check_target(TOY_PLATEAU, 6, 1e-4, 20000, 23), 4);
 }
 
+/* H2MC (h2mc.h) in the same mixture (large step 0.02, Kelemen 0.1, H2MC
+ * the rest) on the three chi-square targets: R chains of burn + L steps,
+ * the histogram against the density as above. Also asserts that the
+ * Hessian's model made the proposals where the target is curved enough
+ * and that proposals leaving the cube were rejected unevaluated (h2mc
+ * does not wrap). */
+static int check_h2mc(toy_kind kind, int dim, int64_t L, uint64_t seed, int curved) {
+  toy t = {kind, dim};
+  static double pe[NB * NB];
+  toy_expected(&t, pe);
+  mc_target tg;
+  memset(&tg, 0, sizeof tg);
+  tg.dim = dim;
+  tg.stream_dim[0] = dim;
+  tg.ctx = &t;
+  tg.eval = toy_eval;
+  tg.eval_hess = toy_eval_hess;
+  h2mc_params hp = h2mc_params_default();
+  static h2mc_kernel kh[R_CHAINS];
+  static mc_chain *ch[R_CHAINS];
+  static hist hs[R_CHAINS];
+  lmc_error err;
+  int64_t model = 0, proposed = 0, outside = 0;
+  for (int r = 0; r < R_CHAINS; r++) {
+    assert_int_equal(h2mc_kernel_init(&kh[r], &tg, &hp, &err), LMC_OK);
+    mc_kernel ks[3] = {mc_kernel_large(), mc_kernel_small(1.0 / 1024, 1.0 / 64),
+                       h2mc_kernel_make(&kh[r])};
+    double pr[3] = {0.02, 0.1, 0.88};
+    assert_int_equal(mc_chain_create(&ch[r], &tg, ks, pr, 3, &err), LMC_OK);
+    mc_chain_start(ch[r], seed, 1000 + r, 2000 + r);
+    memset(&hs[r], 0, sizeof hs[r]);
+    for (int64_t i = 0; i < 2000; i++) mc_chain_step(ch[r], NULL, NULL);
+    for (int64_t i = 0; i < L; i++) mc_chain_step(ch[r], hist_splat, &hs[r]);
+  }
+  static run_result rr;
+  memset(&rr, 0, sizeof rr);
+  for (int c = 0; c < NB * NB; c++) {
+    double sm = 0.0, s2 = 0.0;
+    for (int r = 0; r < R_CHAINS; r++) {
+      double f = hs[r].h[c] / (double)L;
+      sm += f, s2 += f * f;
+    }
+    rr.p[c] = sm / R_CHAINS;
+    rr.var[c] = (s2 - sm * sm / R_CHAINS) / (R_CHAINS - 1);
+  }
+  for (int r = 0; r < R_CHAINS; r++) {
+    model += kh[r].st.model;
+    proposed += kh[r].st.proposed;
+    outside += kh[r].st.outside;
+    mc_chain_destroy(ch[r]);
+    h2mc_kernel_free(&kh[r]);
+  }
+  double tau, pv = chi2_ess(&rr, pe, L, &tau);
+  double alpha = chi2_sidak(1e-3, CHI2_TESTS);
+  printf("  target %d (%d-D) h2mc: p = %.3g, tau = %.1f, proposed %lld, from the model %lld, "
+         "outside %lld\n",
+         (int)kind, dim, pv, tau, (long long)proposed, (long long)model, (long long)outside);
+  assert_true(pv >= alpha);
+  /* The plateau's curvature (1 / 0.03^2) is below the prior's 0.5 / 0.01^2:
+   * it runs on the prior alone; the others on the model. */
+  if (curved)
+    assert_true(model > proposed / 2);
+  else
+    assert_true(model == 0);
+  assert_true(outside > 0);
+  return 1;
+}
+
+static void test_h2mc(void **state) {
+  (void)state;
+  int checked = check_h2mc(TOY_RIDGE, 2, 20000, 41, 1) + check_h2mc(TOY_SCALES, 4, 20000, 42, 1) +
+                check_h2mc(TOY_PLATEAU, 6, 20000, 43, 0);
+  assert_int_equal(checked, 3);
+}
+
 /* Adam's bias against the unbiased modes on `ripple`. */
 static void test_adam_bias(void **state) {
   (void)state;
@@ -436,6 +555,7 @@ int main(void) {
       cmocka_unit_test(test_scales),
       cmocka_unit_test(test_plateau),
       cmocka_unit_test(test_adam_bias),
+      cmocka_unit_test(test_h2mc),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -474,7 +474,7 @@ static void test_cached_walk_density(void **state) {
   assert_int_equal(lmc_cwalk_init(&cw, &t, cache, &cp, &err), LMC_OK);
   mc_kernel kn = lmc_cwalk_kernel(&cw);
   double xu[2] = {0.21, 0.37}, yu[2], grad[2] = {0.0, 0.0};
-  mc_state x = {2, xu, {1.0, {1.0, 1.0, 1.0}, 0.0, 0.0, 1.0}, grad, 0, 0, 1, 0};
+  mc_state x = {2, xu, {1.0, {1.0, 1.0, 1.0}, 0.0, 0.0, 1.0}, grad, 0, 0, 1, 0, 0, 0, NULL, NULL};
   enum { NB = 40, N = 200000 };
   double hist[NB] = {0}, dens[NB] = {0};
   rng r;

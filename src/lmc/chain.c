@@ -275,6 +275,14 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   if (!p->val || !p->bak || !p->mod || !p->mod_bak || !p->touched || !c->x.u || !c->y.u ||
       !c->x.grad || !c->y.grad || !c->sub)
     goto oom;
+  if (target->eval_hess) {
+    size_t hsz = (size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2;
+    c->x.hidx = calloc(MC_HESS_MAX, sizeof(int));
+    c->y.hidx = calloc(MC_HESS_MAX, sizeof(int));
+    c->x.hess = calloc(hsz, sizeof(double));
+    c->y.hess = calloc(hsz, sizeof(double));
+    if (!c->x.hidx || !c->y.hidx || !c->x.hess || !c->y.hess) goto oom;
+  }
   if (target->n_labels > 0) {
     if (!target->eval_label || !target->eval_all) {
       mc_chain_destroy(c);
@@ -347,6 +355,10 @@ void mc_chain_destroy(mc_chain *c) {
   free(c->sub);
   free(c->x.grad);
   free(c->y.grad);
+  free(c->x.hidx);
+  free(c->y.hidx);
+  free(c->x.hess);
+  free(c->y.hess);
   free(c->cy);
   free(c->cx);
   free(c->drawn);
@@ -356,22 +368,32 @@ void mc_chain_destroy(mc_chain *c) {
 }
 
 /* Evaluates the state the lazy vector holds into st (f = 0 on failure),
- * with its gradient when want_grad. */
+ * with its gradient when want_grad >= 1 and its Hessian when 2 (targets
+ * with eval_hess). */
 static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
   pss__rewind(c->pss);
   st->grad_ok = 0;
-  st->grad_eval = want_grad != 0;
+  st->hess_ok = 0;
+  st->grad_eval = want_grad;
   const mc_target *T = c->target;
-  int rc = T->n_labels > 0 ? T->eval_label(T, c->scratch, &c->pss->base, st->label, &st->v,
-                                           want_grad ? st->grad : NULL, &st->grad_ok)
-                           : T->eval(T, c->scratch, &c->pss->base, &st->v,
-                                     want_grad ? st->grad : NULL, &st->grad_ok);
+  int rc;
+  if (want_grad >= 2 && T->eval_hess)
+    rc = T->eval_hess(T, c->scratch, &c->pss->base, st->label, &st->v, st->grad, &st->grad_ok,
+                      &st->hn, st->hidx, st->hess, &st->hess_ok);
+  else if (T->n_labels > 0)
+    rc = T->eval_label(T, c->scratch, &c->pss->base, st->label, &st->v,
+                       want_grad ? st->grad : NULL, &st->grad_ok);
+  else
+    rc = T->eval(T, c->scratch, &c->pss->base, &st->v, want_grad ? st->grad : NULL,
+                 &st->grad_ok);
   if (T->n_labels == 0 || !T->relabel) st->v.f_large = st->v.f;
   if (rc != 0 || !(st->v.f >= 0.0) || !isfinite(st->v.f)) {
     if (rc != 0) c->eval_failures++;
     st->v.f = st->v.f_large = 0.0;
     st->grad_ok = 0;
+    st->hess_ok = 0;
   }
+  if (!st->grad_ok) st->hess_ok = 0;
 }
 
 /* The gradient of the current state, evaluated lazily: after
@@ -381,21 +403,21 @@ static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
  * chain.h), x gets no gradient. A difference of rounding (a target whose
  * evaluation with the gradient is other code, lmc_bdpt_target.c, agreeing
  * to 1e-9) is not one. */
-static void chain__regrad_state(mc_chain *c, mc_state *st) {
+static void chain__regrad_state(mc_chain *c, mc_state *st, int order) {
   mc_value v = st->v;
   if (!(v.f > 0.0)) {
-    st->grad_ok = 0;
-    st->grad_eval = 1;
+    st->grad_ok = st->hess_ok = 0;
+    st->grad_eval = order;
     return;
   }
-  chain__eval(c, st, 1);
-  if (!(fabs(st->v.f - v.f) <= 1e-9 * v.f)) st->grad_ok = 0;
+  chain__eval(c, st, order);
+  if (!(fabs(st->v.f - v.f) <= 1e-9 * v.f)) st->grad_ok = st->hess_ok = 0;
   st->v = v;
 }
 
-static void chain__regrad(mc_chain *c) {
+static void chain__regrad(mc_chain *c, int order) {
   c->regrad++;
-  chain__regrad_state(c, &c->x);
+  chain__regrad_state(c, &c->x, order);
 }
 
 /* Sums the labels' f (labelled targets), dropping non-finite or negative
@@ -678,6 +700,18 @@ static void chain__large_labelled(mc_chain *c, int ki, mc_splat_fn splat, void *
     if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, accepted);
 }
 
+/* The end of a step whose full kernel proposed outside [0,1)^dim (its
+ * propose returned -INFINITY): acceptance 0, the current state splatted
+ * with weight 1, as mc_chain_step does for a proposal with f(y) = 0. */
+static void chain__reject_outside(mc_chain *c, int ki, mc_splat_fn splat, void *ctx) {
+  if (splat && c->x.v.f > 0.0) splat(ctx, &c->x.v, 1.0 / c->x.v.f);
+  c->stats[ki].proposed++;
+  pss__reject(c->pss);
+  c->steps++;
+  for (int i = 0; i < c->n_kernels; i++)
+    if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, 0);
+}
+
 int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   mc_pss *p = c->pss;
 
@@ -707,9 +741,15 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     } else {
       pss__materialise(p, c->x.u);
     }
-    if (k->needs_grad && !c->x.grad_eval) chain__regrad(c);
+    if (c->x.grad_eval < k->needs_grad) chain__regrad(c, k->needs_grad);
     pss__begin(p, 0);
     double log_fwd = k->propose(k->self, &c->r, &c->x, c->y.u);
+    if (log_fwd == -INFINITY) {
+      /* y lies outside [0,1)^dim, where the target is zero: rejected as
+       * such a proposal would be, with nothing evaluated. */
+      chain__reject_outside(c, ki, splat, ctx);
+      return ki;
+    }
     if (n_sub >= 0) {
       for (int q = 0; q < n_sub; q++) pss__set(p, c->sub[q], c->y.u[c->sub[q]]);
     } else {
@@ -725,7 +765,7 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
         screen = -INFINITY;
       } else {
         c->screen_passed++;
-        if (k->needs_grad) chain__regrad_state(c, &c->y);
+        if (k->needs_grad) chain__regrad_state(c, &c->y, k->needs_grad);
         double s2 = k->log_screen(k->self, &c->y, c->x.u, c->x.v.f);
         screen = (s2 < 0.0 ? s2 : 0.0) - la1;
       }

@@ -85,9 +85,14 @@ typedef struct mc_state {
   mc_value v;   /* f, value, raster position */
   double *grad; /* df/du (owned by the chain; valid when grad_ok) */
   int grad_ok;  /* 1 when grad holds the gradient of f at u */
-  int grad_eval; /* 1 when the state was evaluated with its gradient (grad_ok meaningful) */
+  int grad_eval; /* the derivative order the state was evaluated with: 0 f alone, 1 with
+                    its gradient (grad_ok meaningful), 2 also with its Hessian (hess_ok) */
   int label;    /* labelled targets: the state's label */
   int from_large; /* the state came from an accepted large step (no other move since) */
+  int hess_ok;  /* 1 when hn, hidx, hess hold the target's Hessian of f (eval_hess) */
+  int hn;       /* coordinates the Hessian spans */
+  int *hidx;    /* their indices (owned by the chain, MC_HESS_MAX) */
+  double *hess; /* d^2 f / du_i du_j over them, packed (target.h's eval_hess) */
 } mc_state;
 
 typedef enum mc_kernel_kind {
@@ -100,7 +105,10 @@ typedef enum mc_kernel_kind {
 /* A proposal. For MC_KERNEL_FULL:
  *  propose(self, r, x, OUT_y): draws y ~ q(. | x) with the chain's rng r,
  *    writes all x->dim coordinates (each in [0,1)) to OUT_y and returns
- *    log q(y | x). x->grad is valid when x->grad_ok (needs_grad kernels
+ *    log q(y | x), or -INFINITY when y falls where the target is zero
+ *    outside [0,1)^dim (a kernel that does not wrap its proposal): the
+ *    chain then rejects without evaluating anything, the exact outcome
+ *    of a proposal with f(y) = 0. x->grad is valid when x->grad_ok (needs_grad kernels
  *    get states evaluated with their gradient: the proposal y of such a
  *    kernel is evaluated with it, and a current state reached by another
  *    kernel, evaluated with f alone, is re-evaluated with its gradient
@@ -132,7 +140,8 @@ typedef enum mc_kernel_kind {
 typedef struct mc_kernel {
   const char *name; /* for the statistics lines */
   mc_kernel_kind kind;
-  int needs_grad;   /* states must be evaluated with their gradient */
+  int needs_grad;   /* states must be evaluated with their gradient (1) or with gradient
+                       and Hessian (2: the target's eval_hess; as 1 without one) */
   double s1, s2;    /* MC_KERNEL_SMALL: offsets log-uniform in (s1, s2], s2 < 1/2, or for
                        s1 = 0 Gaussian offsets of standard deviation s2; all small
                        steps of one chain share them (default 1/1024, 1/64) */

@@ -114,7 +114,21 @@ struct mc_target {
    * count. LMC's cache keys its entries by label and these coordinates
    * (gcache.h). */
   int (*label_coords)(const mc_target *t, int label, int *OUT_idx);
+  /* Optional (NULL: no Hessians; kernels with needs_grad 2 then see none):
+   * eval or eval_label (label ignored without labels) with, besides the
+   * gradient, the Hessian of f over the coordinates f varies with
+   * smoothly: their indices to OUT_hidx (*OUT_hn of them, at most
+   * MC_HESS_MAX) and d^2 f / du_i du_j for i <= j over them to OUT_hess,
+   * the upper triangle row by row (entry (a, b), a <= b, at
+   * a hn - a (a - 1) / 2 + b - a). *OUT_hess_ok is 1 when they are valid
+   * (f > 0, a gradient, no overflow), else 0. */
+  int (*eval_hess)(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
+                   mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
+                   int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok);
 };
+
+/* The most coordinates a target's Hessian spans (AD_H_CAPACITY of src/ad). */
+#define MC_HESS_MAX 96
 
 /* First coordinate of stream k. */
 static inline int mc_target_stream_offset(const mc_target *t, int k) {

@@ -1,0 +1,276 @@
+/*
+ * h2mc.c: the H2MC proposal (h2mc.h).
+ */
+#include "lmc/h2mc.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lmc/mala.h"
+
+/* LAPACK's symmetric eigensolver (Fortran calling convention). */
+extern void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda,
+                   double *w, double *work, const int *lwork, int *info);
+
+#define H2MC_TINY 1e-10 /* |eigenvalue| below this: no curvature */
+
+h2mc_params h2mc_params_default(void) {
+  h2mc_params p = {0.01, 1.57079632679489661923};
+  return p;
+}
+
+int h2mc_lwork(int n) { return n < 1 ? 1 : 3 * n; }
+
+static void h2mc__isotropic(int n, double sigma, h2mc_gauss *G) {
+  G->n = n;
+  G->isotropic = 1;
+  G->log_norm = -n * (log(sigma) + MALA_LOG_SQRT_TWO_PI);
+}
+
+int h2mc_gauss_build(const h2mc_params *p, int n, const double *g, double *H, double *work,
+                     int lwork, h2mc_gauss *G) {
+  double frob2 = 0.0;
+  for (int i = 0; i < n * n; i++) frob2 += H[i] * H[i];
+  double prior_prec = 1.0 / (p->sigma * p->sigma);
+  if (n == 0 || !(sqrt(frob2) >= 0.5 * prior_prec)) {
+    h2mc__isotropic(n, p->sigma, G);
+    return 0;
+  }
+  /* H = V diag(l) V^T; dsyev leaves V in H (column i: eigenvector i). */
+  int info = 0;
+  dsyev_("V", "U", &n, H, &n, G->P, work, &lwork, &info);
+  if (info != 0) {
+    h2mc__isotropic(n, p->sigma, G);
+    return -1;
+  }
+  memcpy(G->V, H, (size_t)n * (size_t)n * sizeof(double));
+  double L = p->L;
+  double sn2 = sin(L) * sin(L), cn = 1.0 - cos(L);
+  double sh2 = sinh(L) * sinh(L), ch = cosh(L) - 1.0;
+  double log_norm = -n * MALA_LOG_SQRT_TWO_PI;
+  for (int i = 0; i < n; i++) {
+    const double *v = G->V + (size_t)i * n;
+    double b = 0.0;
+    for (int j = 0; j < n; j++) b += v[j] * g[j];
+    double l = G->P[i], o, s;
+    if (l < -H2MC_TINY) {
+      o = cn * b / -l;
+      s = sn2 / -l;
+    } else if (l > H2MC_TINY) {
+      o = ch * b / l;
+      s = sh2 / l;
+    } else {
+      o = 0.5 * b * L * L;
+      s = L * L;
+    }
+    double P = 1.0 / s + prior_prec;
+    G->P[i] = P;
+    G->m[i] = o / (s * P);
+    log_norm += 0.5 * log(P);
+  }
+  G->n = n;
+  G->isotropic = 0;
+  G->log_norm = log_norm;
+  return 0;
+}
+
+double h2mc_gauss_log_density(const h2mc_gauss *G, const double *d, double sigma) {
+  int n = G->n;
+  double q = 0.0;
+  if (G->isotropic) {
+    for (int j = 0; j < n; j++) q += d[j] * d[j];
+    return G->log_norm - 0.5 * q / (sigma * sigma);
+  }
+  for (int i = 0; i < n; i++) {
+    const double *v = G->V + (size_t)i * n;
+    double e = -G->m[i];
+    for (int j = 0; j < n; j++) e += v[j] * d[j];
+    q += G->P[i] * e * e;
+  }
+  return G->log_norm - 0.5 * q;
+}
+
+void h2mc_gauss_sample(const h2mc_gauss *G, const double *z, double sigma, double *OUT_d) {
+  int n = G->n;
+  if (G->isotropic) {
+    for (int j = 0; j < n; j++) OUT_d[j] = sigma * z[j];
+    return;
+  }
+  for (int j = 0; j < n; j++) OUT_d[j] = 0.0;
+  for (int i = 0; i < n; i++) {
+    const double *v = G->V + (size_t)i * n;
+    double a = G->m[i] + z[i] / sqrt(G->P[i]);
+    for (int j = 0; j < n; j++) OUT_d[j] += a * v[j];
+  }
+}
+
+/* ---- The kernel ------------------------------------------------------------ */
+
+static lmc_status h2mc__alloc_gauss(h2mc_gauss *G, int n) {
+  G->V = malloc((size_t)n * (size_t)n * sizeof(double));
+  G->P = malloc((size_t)n * sizeof(double));
+  G->m = malloc((size_t)n * sizeof(double));
+  return G->V && G->P && G->m ? LMC_OK : LMC_ENOMEM;
+}
+
+lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_params *p,
+                            lmc_error *err) {
+  memset(k, 0, sizeof *k);
+  k->p = *p;
+  k->target = target;
+  k->dim = target->dim;
+  if (!(p->sigma > 0.0) || !(p->L > 0.0))
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "h2mc: sigma and L must be positive");
+  int n = MC_HESS_MAX > target->dim ? target->dim : MC_HESS_MAX;
+  if (n < 1) n = 1;
+  k->lwork = h2mc_lwork(n);
+  k->idx = malloc((size_t)target->dim * sizeof(int));
+  k->g = malloc((size_t)n * sizeof(double));
+  k->H = malloc((size_t)n * (size_t)n * sizeof(double));
+  k->work = malloc((size_t)k->lwork * sizeof(double));
+  k->z = malloc((size_t)n * sizeof(double));
+  k->d = malloc((size_t)n * sizeof(double));
+  if (!k->idx || !k->g || !k->H || !k->work || !k->z || !k->d ||
+      h2mc__alloc_gauss(&k->gx, n) != LMC_OK || h2mc__alloc_gauss(&k->gy, n) != LMC_OK) {
+    h2mc_kernel_free(k);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the h2mc kernel");
+  }
+  return LMC_OK;
+}
+
+void h2mc_kernel_free(h2mc_kernel *k) {
+  if (!k) return;
+  free(k->idx);
+  free(k->g);
+  free(k->H);
+  free(k->work);
+  free(k->z);
+  free(k->d);
+  free(k->gx.V), free(k->gx.P), free(k->gx.m);
+  free(k->gy.V), free(k->gy.P), free(k->gy.m);
+  memset(k, 0, sizeof *k);
+}
+
+/* The coordinates the kernel moves at a state: its label's (labelled
+ * targets with label_coords), else all, without those of step scale 0
+ * (left to large steps), at most MC_HESS_MAX. A function of the label
+ * alone, so both directions of a step move the same ones. */
+static int h2mc__coords(const h2mc_kernel *k, int label, int *OUT_idx) {
+  const mc_target *T = k->target;
+  int n;
+  if (T->n_labels > 0 && T->label_coords) {
+    n = T->label_coords(T, label, OUT_idx);
+  } else {
+    n = T->dim;
+    for (int i = 0; i < n; i++) OUT_idx[i] = i;
+  }
+  int m = 0;
+  for (int a = 0; a < n && m < MC_HESS_MAX; a++)
+    if (!T->step_scale || T->step_scale[OUT_idx[a]] > 0.0) OUT_idx[m++] = OUT_idx[a];
+  return m;
+}
+
+static int h2mc__coords_cb(void *self, const mc_state *x, int *OUT_idx) {
+  return h2mc__coords(self, x->label, OUT_idx);
+}
+
+/* The Gaussian at state s over the n coordinates idx, in the step-scaled
+ * coordinates z = u / c: g and H of log f from the state's derivatives of f. */
+static void h2mc__gauss_at(h2mc_kernel *k, const mc_state *s, const int *idx, int n,
+                           h2mc_gauss *G) {
+  const double *c = k->target->step_scale;
+  if (!(s->v.f > 0.0) || !s->grad_ok || !s->hess_ok) {
+    h2mc__isotropic(n, k->p.sigma, G);
+    return;
+  }
+  double f = s->v.f, inv = 1.0 / f;
+  for (int a = 0; a < n; a++) k->g[a] = s->grad[idx[a]] * inv * (c ? c[idx[a]] : 1.0);
+  /* Positions of the Hessian's coordinates among idx (-1: not moved). */
+  memset(k->H, 0, (size_t)n * (size_t)n * sizeof(double));
+  int hn = s->hn;
+  int pos[MC_HESS_MAX];
+  for (int a = 0; a < hn; a++) {
+    pos[a] = -1;
+    for (int b = 0; b < n; b++)
+      if (idx[b] == s->hidx[a]) {
+        pos[a] = b;
+        break;
+      }
+  }
+  /* hess log f = hess f / f - g g^T with g = grad log f. */
+  for (int a = 0; a < hn; a++) {
+    if (pos[a] < 0) continue;
+    const double *row = s->hess + (size_t)a * hn - (size_t)a * (size_t)(a - 1) / 2 - (size_t)a;
+    for (int b = a; b < hn; b++) {
+      if (pos[b] < 0) continue;
+      double ca = c ? c[s->hidx[a]] : 1.0, cb = c ? c[s->hidx[b]] : 1.0;
+      double h = row[b] * inv * ca * cb;
+      k->H[pos[a] * n + pos[b]] = h;
+      k->H[pos[b] * n + pos[a]] = h;
+    }
+  }
+  for (int a = 0; a < n; a++)
+    for (int b = 0; b < n; b++) k->H[a * n + b] -= k->g[a] * k->g[b];
+  if (h2mc_gauss_build(&k->p, n, k->g, k->H, k->work, k->lwork, G) != 0) k->st.eig_fail++;
+}
+
+static double h2mc__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  h2mc_kernel *k = self;
+  const double *c = k->target->step_scale;
+  int n = h2mc__coords(k, x->label, k->idx);
+  h2mc__gauss_at(k, x, k->idx, n, &k->gx);
+  k->st.proposed++;
+  k->st.model += !k->gx.isotropic;
+  for (int a = 0; a < n; a += 2) {
+    double z0, z1;
+    mala_std_normal_pair(r, &z0, &z1);
+    k->z[a] = z0;
+    if (a + 1 < n) k->z[a + 1] = z1;
+  }
+  h2mc_gauss_sample(&k->gx, k->z, k->p.sigma, k->d);
+  /* Coordinates not moved keep x's values (the chain reads all of OUT_y
+   * from a kernel without a coordinate subset). */
+  memcpy(OUT_y, x->u, (size_t)k->dim * sizeof(double));
+  double log_c = 0.0;
+  for (int a = 0; a < n; a++) {
+    int i = k->idx[a];
+    double ci = c ? c[i] : 1.0;
+    double y = x->u[i] + ci * k->d[a];
+    if (!(y >= 0.0 && y < 1.0)) {
+      k->st.outside++;
+      return -INFINITY;
+    }
+    OUT_y[i] = y;
+    log_c += log(ci);
+  }
+  return h2mc_gauss_log_density(&k->gx, k->d, k->p.sigma) - log_c;
+}
+
+static double h2mc__log_density(void *self, const mc_state *from, const double *to_u) {
+  h2mc_kernel *k = self;
+  const double *c = k->target->step_scale;
+  int n = h2mc__coords(k, from->label, k->idx);
+  h2mc__gauss_at(k, from, k->idx, n, &k->gy);
+  double log_c = 0.0;
+  for (int a = 0; a < n; a++) {
+    int i = k->idx[a];
+    double ci = c ? c[i] : 1.0;
+    k->d[a] = (to_u[i] - from->u[i]) / ci;
+    log_c += log(ci);
+  }
+  return h2mc_gauss_log_density(&k->gy, k->d, k->p.sigma) - log_c;
+}
+
+mc_kernel h2mc_kernel_make(h2mc_kernel *k) {
+  mc_kernel kn;
+  memset(&kn, 0, sizeof kn);
+  kn.name = "h2mc";
+  kn.kind = MC_KERNEL_FULL;
+  kn.needs_grad = 2;
+  kn.self = k;
+  kn.propose = h2mc__propose;
+  kn.log_density = h2mc__log_density;
+  kn.coords = (k->target->n_labels > 0 && k->target->label_coords) ? h2mc__coords_cb : NULL;
+  return kn;
+}
