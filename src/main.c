@@ -55,7 +55,7 @@ static const char *lmc_render_usage =
     "\n"
     "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
     "                           (default: the scene's name in the current folder)\n"
-    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc\n"
+    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc\n"
     "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
     "  --spp N                  samples per pixel (default: the scene's, else 16)\n"
     "  --time SECONDS           stop after this long (with --spp: whichever comes first)\n"
@@ -115,6 +115,10 @@ static const char *lmc_render_usage_mcmc =
     "  --cache-drift on|off     drift from the cached first moment (default on)\n"
     "  --delayed on|off         Langevin proposals first tested without their gradient\n"
     "                           (delayed acceptance, exact; default off)\n"
+    "\n"
+    "H2MC (--integrator h2mc, bdpt states; --largestep and --iso-prob as for lmc):\n"
+    "  --h2mc-sigma S           the prior's standard deviation on the proposal's offset\n"
+    "                           (default 0.01)\n"
     "  -q, --quiet              no progress bar\n"
     "  -h, --help               this text\n";
 
@@ -520,6 +524,10 @@ static int lmc_cmd_render(int argc, char **argv) {
       int64_t n;
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--cache-k", v, 1, 32, &n)) goto bad;
       cli.cache_k = (int)n;
+    } else if (lmc_flag_is(&a, "--h2mc-sigma")) {
+      if (!(v = lmc_flag_value(&a)) ||
+          !lmc_parse_double("--h2mc-sigma", v, 1e-6, 0.5, &cli.h2mc_sigma))
+        goto bad;
     } else if (lmc_flag_is(&a, "--iso-prob")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
         goto bad;
@@ -617,6 +625,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   rs.grad_bound = cli.grad_bound;
   rs.cache_fraction = cli.cache_fraction;
   rs.iso_prob = cli.iso_prob;
+  rs.h2mc_sigma = cli.h2mc_sigma;
   rs.cache_gradient = cli.cache_gradient;
   rs.cache_step = cli.cache_step;
   rs.cache_prior = cli.cache_prior;

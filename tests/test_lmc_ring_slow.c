@@ -1,5 +1,6 @@
 /*
- * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc) with
+ * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc), and H2MC
+ * (--integrator h2mc), with
  * --adapt diminish and --adapt cache (on its default multiplexed states,
  * and cache on --lmc-states pt) agrees with bdpt on the ring-caustics
  * scenes (scenes/ring-caustics, scenes/ring-caustics-glass) at 24x18: in
@@ -14,7 +15,8 @@
  * estimated standard error is roughly Student t with about 10 degrees of
  * freedom (Welch), P(|t| > 6) ~ 1.3e-4 per check; over 2 scenes x 2 modes
  * x 17 statistics = 68 checks a false alarm has a chance of about 1%
- * (1.3% with the third mode's 34 more).
+ * (1.3% with the third mode's 34 more, 1.8% with H2MC's, --integrator h2mc
+ * on the bdpt states, 34 more).
  * Equal effort: --spp 128 for each (lmc: mutations per pixel, stage 1 of
  * cache included); lmc's bootstrap is fixed at 131072 paths (it would
  * otherwise dominate the time at this resolution). lmc runs with the
@@ -36,7 +38,7 @@
 #include "test_util.h"
 
 #define RUNS 6
-#define MODES 3 /* diminish and cache on mmlt states (the default), cache on pt states */
+#define MODES 4 /* diminish and cache on mmlt states, cache on pt states, h2mc (bdpt states) */
 #define GRID 4
 #define N_STATS (GRID * GRID + 1)
 
@@ -76,12 +78,15 @@ static void check_scene(const char *folder) {
 
   double ref[N_STATS], ref_se[N_STATS];
   run_stats(s, "bdpt", LMC_ADAPT_NONE, LMC_STATES_MMLT, ref, ref_se);
-  const lmc_adapt modes[MODES] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE};
-  const lmc_states states[MODES] = {LMC_STATES_MMLT, LMC_STATES_MMLT, LMC_STATES_PT};
-  const char *names[MODES] = {"diminish", "cache", "cache, pt states"};
+  const lmc_adapt modes[MODES] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,
+                                  LMC_ADAPT_NONE};
+  const lmc_states states[MODES] = {LMC_STATES_MMLT, LMC_STATES_MMLT, LMC_STATES_PT,
+                                    LMC_STATES_BDPT};
+  const char *names[MODES] = {"diminish", "cache", "cache, pt states", "h2mc"};
+  const char *integ[MODES] = {"lmc", "lmc", "lmc", "h2mc"};
   for (int i = 0; i < MODES; i++) {
     double m[N_STATS], se[N_STATS];
-    run_stats(s, "lmc", modes[i], states[i], m, se);
+    run_stats(s, integ[i], modes[i], states[i], m, se);
     double worst = 0.0;
     for (int k = 0; k < N_STATS; k++) {
       double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);

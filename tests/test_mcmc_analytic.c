@@ -188,6 +188,16 @@ static void test_furnace_mmlt(void **state) {
   g_even = 0;
 }
 
+/* H2MC (--integrator h2mc, on the bdpt states) on both analytic scenes:
+ * the furnace's every path and the sphere's two groups. */
+static void test_h2mc(void **state) {
+  (void)state;
+  rgb one = rgb_gray(1.0);
+  rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
+  check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);
+  check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
+}
+
 static void test_diffuse_sphere(void **state) {
   (void)state;
   rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
@@ -321,9 +331,10 @@ static void test_determinism(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, then separate: furnace
-   * 2, sphere 3 x 2 groups; 3 channels each; and the refined b. */
-  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
+  /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, h2mc furnace and
+   * sphere 2 groups, then separate: furnace 2, sphere 3 x 2 groups; 3
+   * channels each; and the refined b. */
+  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
 }
 
 static int reset_direct(void **state) {
@@ -339,6 +350,7 @@ int main(void) {
       cmocka_unit_test(test_furnace_pssmlt),
       cmocka_unit_test(test_furnace_mmlt),
       cmocka_unit_test(test_diffuse_sphere),
+      cmocka_unit_test(test_h2mc),
       cmocka_unit_test_teardown(test_direct_separate, reset_direct),
       cmocka_unit_test(test_refined_b),
       cmocka_unit_test_teardown(test_determinism, reset_direct),

@@ -27,7 +27,7 @@ typedef struct bs__scratch {
   render_counters cnt;
   bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
   path_scratch *ps; /* for gradients, made on first use */
-  int64_t rays_grad, grad_evals;
+  int64_t rays_grad, grad_evals, hess_evals;
 } bs__scratch;
 
 static void *bs__scratch_create(const mc_target *t) {
@@ -49,6 +49,10 @@ static int64_t bs__scratch_rays(const void *scratch) {
 
 int64_t mc_bdpt_states_grad_evals(const void *scratch) {
   return scratch ? ((const bs__scratch *)scratch)->grad_evals : 0;
+}
+
+int64_t mc_bdpt_states_hess_evals(const void *scratch) {
+  return scratch ? ((const bs__scratch *)scratch)->hess_evals : 0;
 }
 
 int64_t mc_bdpt_states_nan_samples(const void *scratch) {
@@ -123,8 +127,13 @@ static void bs__adapter_use_stream(lmc_sampler *self, int stream) {
   sampler_use_stream(a->inner, stream);
 }
 
+/* With OUT_hess (eval_hess), also the Hessian of f over the label's
+ * differentiated coordinates, from path_eval's Hessian of the luminance:
+ * d^2 f / du_a du_b = scale m_a m_b d^2 lum / du'_a du'_b, with m the
+ * adapter's chain-rule factor of each coordinate (the film's two, else 1). */
 static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, int ss, int tt,
-                         mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
+                         mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
+                         int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
   const mc_bdpt_states *st = t->ctx;
   if (!sc->ps) {
     lmc_error err;
@@ -139,10 +148,13 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
   a.W = st->s->cam.width;
   a.H = st->s->cam.height;
   path_eval pe;
-  if (path_eval_bdpt_abs(st->s, &st->rs, &a.base, ss, tt, st->rough_min, 1, sc->ps, &pe,
+  if (OUT_hess_ok) *OUT_hess_ok = 0;
+  if (path_eval_bdpt_abs(st->s, &st->rs, &a.base, ss, tt, st->rough_min,
+                         OUT_hess ? PATH_WANT_HESS : PATH_WANT_GRAD, sc->ps, &pe,
                          &sc->rays_grad) != LMC_OK)
     return -1;
   sc->grad_evals++;
+  sc->hess_evals += OUT_hess != NULL;
   double scale = tt == 1 ? 1.0 : st->area;
   bs__value(OUT_value, rgb_scale(pe.value, scale), pe.rx, pe.ry, &sc->cnt);
   OUT_value->f_large = pe.jac > 0.0 ? OUT_value->f / pe.jac : 0.0;
@@ -163,6 +175,35 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
     ok = 1;
   }
   *OUT_grad_ok = ok;
+  if (!OUT_hess || !ok || !pe.hess_ok || pe.n_diff > MC_HESS_MAX) return 0;
+
+  /* The Hessian: each tangent slot's coordinate and factor, then the
+   * slots kept (inside their stream's block) in slot order. */
+  int coord[MC_HESS_MAX], keep[MC_HESS_MAX], nd = pe.n_diff, hn = 0;
+  double m[MC_HESS_MAX];
+  for (int j = 0; j < nd; j++) coord[j] = -1;
+  for (int i = 0; i < pe.n_coords; i++) {
+    const path_coord *pc = &pe.coords[i];
+    if (pc->var < 0 || pc->var >= nd || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
+    if (pc->pos >= t->stream_dim[pc->stream]) continue;
+    coord[pc->var] = mc_target_stream_offset(t, pc->stream) + pc->pos;
+    m[pc->var] = 1.0;
+    if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
+      m[pc->var] = pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
+  }
+  for (int j = 0; j < nd; j++)
+    if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
+  int q = 0;
+  for (int x = 0; x < hn; x++)
+    for (int y = x; y < hn; y++) {
+      int ja = keep[x], jb = keep[y];
+      double h = pe.hlum[(size_t)ja * nd - (size_t)ja * (size_t)(ja - 1) / 2 + (size_t)(jb - ja)];
+      h *= scale * m[ja] * m[jb];
+      if (!isfinite(h)) return 0;
+      OUT_hess[q++] = h;
+    }
+  *OUT_hn = hn;
+  if (OUT_hess_ok) *OUT_hess_ok = 1;
   return 0;
 }
 
@@ -176,7 +217,9 @@ static int bs__eval_label(const mc_target *t, void *scratch, lmc_sampler *smp, i
   memset(OUT_value, 0, sizeof *OUT_value);
   if (label < 0 || label >= st->n_labels) return -1;
   int ss = st->strat[label].s, tt = st->strat[label].t;
-  if (OUT_grad) return bs__eval_grad(t, sc, smp, ss, tt, OUT_value, OUT_grad, OUT_grad_ok);
+  if (OUT_grad)
+    return bs__eval_grad(t, sc, smp, ss, tt, OUT_value, OUT_grad, OUT_grad_ok, NULL, NULL, NULL,
+                         NULL);
   const scene *s = st->s;
 
   /* The light sample of s = 1: the connect triple of camera vertex t. */
@@ -287,6 +330,19 @@ static double bs__relabel(const mc_target *t, void *scratch, int label, double *
   return jac;
 }
 
+/* eval_hess (target.h): bs__eval_grad with the Hessian. */
+static int bs__eval_hess(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
+                         mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
+                         int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
+  const mc_bdpt_states *st = t->ctx;
+  *OUT_grad_ok = *OUT_hess_ok = 0;
+  *OUT_hn = 0;
+  memset(OUT_value, 0, sizeof *OUT_value);
+  if (label < 0 || label >= st->n_labels) return -1;
+  return bs__eval_grad(t, scratch, smp, st->strat[label].s, st->strat[label].t, OUT_value,
+                       OUT_grad, OUT_grad_ok, OUT_hn, OUT_hidx, OUT_hess, OUT_hess_ok);
+}
+
 /* The continuous numbers of strategy (s, t), in this order: the film
  * position (t >= 2); the direction of each scattering camera vertex z_1
  * .. z_{t-2}; the emission's position and direction (s >= 2) and the
@@ -368,6 +424,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   T->eval_all = bs__eval_all;
   if (ctx->rough_min < 1.0) T->relabel = bs__relabel;
   T->label_coords = bs__label_coords;
+  T->eval_hess = bs__eval_hess;
 
   /* The light-position numbers u1 of the emission and of every connect
    * triple pick an area light's triangle (mcmc_light_u1_scale). */

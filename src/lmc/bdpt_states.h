@@ -80,6 +80,8 @@ int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label);
 /* Counters of a scratch of the target: gradient evaluations, non-finite
  * contributions dropped. */
 int64_t mc_bdpt_states_grad_evals(const void *scratch);
+/* ... of which with the Hessian (eval_hess, for H2MC). */
+int64_t mc_bdpt_states_hess_evals(const void *scratch);
 int64_t mc_bdpt_states_nan_samples(const void *scratch);
 
 #endif

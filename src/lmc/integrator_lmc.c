@@ -18,6 +18,7 @@
 
 #include "lmc/bdpt_states.h"
 #include "lmc/gcache.h"
+#include "lmc/h2mc.h"
 #include "lmc/lmc_kernel.h"
 #include "lmc/mcmc.h"
 
@@ -49,6 +50,8 @@ struct lmc_run {
   int *chain_fam;        /* per chain: its family */
   lmc_mala *mala;        /* per chain */
   lmc_cwalk *cwalk;      /* per chain: stage 2 of --adapt cache on labelled states */
+  int h2mc;              /* --integrator h2mc: H2MC's proposal in MALA's slot (h2mc.h) */
+  h2mc_kernel *h2;       /* per chain (h2mc) */
   int cwalk_on;          /* stage 2 runs the cached walk (no gradients) */
   gcache **rec;          /* per chain, stage 1 */
   int stage1;            /* cache mode, stage 1 running */
@@ -71,7 +74,14 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
   }
   run->rs = *rs;
   run->n_fam = n_fam;
-  run->stage1 = rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
+  run->h2mc = !strcmp(rs->integrator, "h2mc");
+  if (run->h2mc && !bdpt) {
+    lmc_run_destroy(run);
+    return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
+                         "h2mc runs on the bdpt states (--states bdpt, the default) only");
+  }
+  /* H2MC adapts nothing: no cache stages. */
+  run->stage1 = !run->h2mc && rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
   double u1_scale = mcmc_light_u1_scale(s);
   for (int g = 0; g < n_fam; g++) {
     lmc__family *F = &run->fam[g];
@@ -119,10 +129,12 @@ void lmc_run_destroy(lmc_run *run) {
   for (int i = 0; i < run->n; i++) {
     lmc_mala_free(&run->mala[i]);
     if (run->cwalk) lmc_cwalk_free(&run->cwalk[i]);
+    if (run->h2) h2mc_kernel_free(&run->h2[i]);
     if (run->rec) gcache_destroy(run->rec[i]);
   }
   free(run->mala);
   free(run->cwalk);
+  free(run->h2);
   free(run->rec);
   free(run->chain_fam);
   for (int g = 0; g < run->n_fam; g++) {
@@ -194,7 +206,8 @@ lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error 
   run->cwalk = calloc((size_t)n, sizeof *run->cwalk);
   run->rec = calloc((size_t)n, sizeof *run->rec);
   run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
-  if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam)
+  if (run->h2mc) run->h2 = calloc((size_t)n, sizeof *run->h2);
+  if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam || (run->h2mc && !run->h2))
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
   run->chains_start = omp_get_wtime();
@@ -210,6 +223,13 @@ lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error 
     run->chain_fam[i] = g;
     lmc_status st = lmc_mala_init(&run->mala[i], F->target.dim, &F->kp, err);
     if (st) return st;
+    if (run->h2mc) {
+      h2mc_params hp = h2mc_params_default();
+      if (run->rs.h2mc_sigma > 0.0) hp.sigma = run->rs.h2mc_sigma;
+      st = h2mc_kernel_init(&run->h2[i], &F->target, &hp, err);
+      if (st) return st;
+      continue;
+    }
     if (F->target.label_coords) lmc_mala_set_target(&run->mala[i], &F->target);
     if (run->stage1) {
       st = lmc__record_create(F, LMC_CACHE_DOUBLES / n, &run->rec[i], err);
@@ -244,7 +264,9 @@ int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) 
   if (F->length >= 1 && F->length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
   /* Stage 2 of --adapt cache on labelled states: the cached walk in
    * MALA's slot (no gradients), unless --cache-gradient on. */
-  if (run->cwalk_on && run->cwalk[i].cache)
+  if (run->h2mc)
+    OUT_k[n] = h2mc_kernel_make(&run->h2[i]);
+  else if (run->cwalk_on && run->cwalk[i].cache)
     OUT_k[n] = lmc_cwalk_kernel(&run->cwalk[i]);
   else
     OUT_k[n] = lmc_mala_kernel(&run->mala[i]);
@@ -350,18 +372,25 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
   int multiplexed = run->rs.lmc_states == LMC_STATES_MMLT;
   int bdpt = run->rs.lmc_states == LMC_STATES_BDPT;
   const lmc__family *F0 = &run->fam[0];
-  fprintf(stderr,
-          "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
-          "iso %g, light-triangle step scale %g\n",
-          mode[adapt],
-          multiplexed ? "multiplexed bidirectional (mmlt)"
-          : bdpt      ? "bidirectional over every length (bdpt)"
-                      : "unidirectional (pt)",
-          F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi, F0->kp.grad_bound, run->rs.iso_prob,
-          multiplexed || bdpt ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
-          : F0->target.dim > PT_DIMS_CAMERA + 1 ? F0->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
+  if (run->h2mc) {
+    fprintf(stderr, "h2mc: bidirectional over every length (bdpt) states, prior sigma %g, L %g, "
+            "iso %g, light-triangle step scale %g\n",
+            run->n > 0 ? run->h2[0].p.sigma : 0.0, run->n > 0 ? run->h2[0].p.L : 0.0, run->rs.iso_prob,
+            F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]);
+  } else {
+    fprintf(stderr,
+            "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
+            "iso %g, light-triangle step scale %g\n",
+            mode[adapt],
+            multiplexed ? "multiplexed bidirectional (mmlt)"
+            : bdpt      ? "bidirectional over every length (bdpt)"
+                        : "unidirectional (pt)",
+            F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi, F0->kp.grad_bound, run->rs.iso_prob,
+            multiplexed || bdpt ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
+            : F0->target.dim > PT_DIMS_CAMERA + 1 ? F0->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
+  }
   /* The caches. */
-  if (run->rs.adapt == LMC_ADAPT_CACHE) {
+  if (run->rs.adapt == LMC_ADAPT_CACHE && !run->h2mc) {
     int trees = 0;
     int64_t entries = 0;
     double bytes = 0.0;
@@ -427,6 +456,21 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
     regrad += chains[i]->regrad;
     screened += chains[i]->screened;
     passed += chains[i]->screen_passed;
+  }
+  if (run->h2mc) {
+    int64_t hp = 0, hm = 0, ho = 0, he = 0, hf = 0;
+    for (int i = 0; i < run->n; i++) {
+      hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
+      ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail;
+    }
+    for (int i = 0; i < n; i++) he += mc_bdpt_states_hess_evals(chains[i]->scratch);
+    fprintf(stderr,
+            "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
+            "%.1f%% outside the unit cube (rejected unevaluated), %lld failed eigendecompositions; "
+            "%lld Hessian evaluations (%.4g/s)\n",
+            (long long)hp, 100.0 * (double)hm / fmax(1.0, (double)hp),
+            100.0 * (double)ho / fmax(1.0, (double)hp), (long long)hf, (long long)he,
+            (double)he / fmax(chain_seconds, 1e-9));
   }
   if (screened)
     fprintf(stderr, "lmc: delayed acceptance: %lld first tests, %.1f%% passed (evaluated with the gradient)\n",

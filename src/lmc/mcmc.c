@@ -143,7 +143,8 @@
 #define MCMC_UNBOUNDED_LMC 16  /* lmc's bounces kept in the state when maxdepth is -1 */
 
 int mcmc_is_integrator(const char *name) {
-  return !strcmp(name, "pssmlt") || !strcmp(name, "mmlt") || !strcmp(name, "lmc");
+  return !strcmp(name, "pssmlt") || !strcmp(name, "mmlt") || !strcmp(name, "lmc") ||
+         !strcmp(name, "h2mc");
 }
 
 /* --- scene targets ----------------------------------------------------------- */
@@ -711,7 +712,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                            render_stats *st, lmc_error *err) {
   memset(st, 0, sizeof *st);
   int is_mmlt = !strcmp(rs->integrator, "mmlt");
-  int is_lmc = !strcmp(rs->integrator, "lmc"); /* integrator_lmc.h */
+  /* lmc and h2mc (H2MC's proposal in MALA's slot): integrator_lmc.h */
+  int is_lmc = !strcmp(rs->integrator, "lmc") || !strcmp(rs->integrator, "h2mc");
   lmc_run *lrun = NULL;
   if (!is_mmlt && !is_lmc && strcmp(rs->integrator, "pssmlt"))
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,

@@ -96,6 +96,7 @@ typedef struct render_settings {
   double grad_bound;     /* |g| is truncated to this norm */
   double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
   double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
+  double h2mc_sigma;     /* h2mc: the prior's standard deviation (0: 0.01, h2mc.h) */
   int cache_gradient;    /* --cache-gradient on: stage 2 of the cache evaluates gradients (MALA
                             with the cached M) instead of the cached walk (lmc_kernel.h) */
   double cache_step, cache_prior, cache_radius; /* the cached walk's (0: its defaults) */

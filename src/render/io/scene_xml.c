@@ -1292,8 +1292,7 @@ static lmc_status xml__dpt(builder *B, pset *o) {
     if (mala) {
       xml__set_integrator(r, "lmc");
     } else if (h2mc) {
-      lmc_warn(o->file, o->line, "H2MC is not implemented yet: using lmc");
-      xml__set_integrator(r, "lmc");
+      xml__set_integrator(r, "h2mc");
     } else {
       xml__set_integrator(r, "pssmlt");
     }
