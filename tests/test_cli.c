@@ -110,6 +110,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       {"render " SCENE " --chains 0", "--chains"},
       {"render " SCENE " --roughness-threshold=-1", "--roughness-threshold"},
       {"render " SCENE " --largestep-scale x2", "--largestep-scale"},
+      {"render " SCENE " --h2mc-sigma 0", "--h2mc-sigma"},
   };
   int n = 0;
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -119,7 +120,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       fail_msg("lmc %s: stderr does not name '%s': %s", cases[i].args, cases[i].needle, err_text);
     n++;
   }
-  assert_int_equal(n, 17);
+  assert_int_equal(n, 18);
 }
 
 /* Reads an EXR written by the CLI; fails the test when it cannot. */

@@ -541,7 +541,7 @@ static void check_torus(const char *name, int h2mc) {
   assert_int_equal(s->cam.width, 1024);
   assert_int_equal(s->cam.height, 768);
   assert_int_equal(s->filter.type, FILTER_BOX);
-  assert_string_equal(s->settings.integrator, "lmc");
+  assert_string_equal(s->settings.integrator, h2mc ? "h2mc" : "lmc");
   assert_int_equal(s->settings.maxdepth, 8);
   assert_int_equal(s->settings.mindepth, -1);
   assert_int_equal((int)s->settings.spp, h2mc ? 67 : 245);
