@@ -28,6 +28,7 @@
 
 #include "lmc/integrator_lmc.h"
 #include "lmc/mcmc.h"
+#include "lmc/states.h"
 #include "render/io/io.h"
 #include "render/path.h"
 #include "test_util.h"
@@ -201,8 +202,121 @@ static void test_values_and_gradients(void **state) {
   path_vec_sampler_free(&vs);
 }
 
-/* mcmc_mmlt_expected is, state by state, the mean over the strategies of
- * mcmc_mmlt_contribution with the technique coordinate set to each
+/* The gradient of the state in vs with coordinate i set to u (to OUT). */
+static int grad_at(const mc_target *T, void *scratch, path_vec_sampler *vs, int i, double u,
+                   double *OUT) {
+  int k = 0, off = 0;
+  while (i >= off + T->stream_dim[k]) off += T->stream_dim[k++];
+  double old = vs->u[k][i - off];
+  vs->u[k][i - off] = u;
+  path_vec_sampler_rewind(vs);
+  mc_value v;
+  int ok = 0;
+  T->eval(T, scratch, &vs->base, &v, OUT, &ok);
+  vs->u[k][i - off] = old;
+  path_vec_sampler_rewind(vs);
+  return ok;
+}
+
+/* eval_hess: the same f and gradient as eval, the Hessian against central
+ * differences of the gradient (Richardson-extrapolated, entries whose
+ * differences have not converged skipped and counted), and local_coords
+ * (H2MC's moved set) holding every coordinate the gradient and Hessian
+ * touch and never the technique coordinate. */
+static void test_hessian(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.maxdepth = KMAX;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 11, NULL);
+  int total_compared = 0, total_passed = 0;
+  for (int len = 2; len <= KMAX; len++) {
+    lmc_bdpt_target ctx;
+    mc_target T;
+    lmc_bdpt_target_init(&T, &ctx, fx->sc, &rs, len);
+    assert_non_null(T.eval_hess);
+    assert_non_null(T.local_coords);
+    void *scratch = T.scratch_create(&T);
+    size_t hsz = (size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2;
+    double *grad = malloc((size_t)T.dim * sizeof(double)), *g1 = malloc((size_t)T.dim * sizeof(double));
+    double *gp = malloc((size_t)T.dim * sizeof(double)), *gm = malloc((size_t)T.dim * sizeof(double));
+    double *hess = malloc(hsz * sizeof(double));
+    int *hidx = malloc(MC_HESS_MAX * sizeof(int)), *loc = malloc((size_t)T.dim * sizeof(int));
+    int off_conn = mc_target_stream_offset(&T, LMC_STREAM_CONNECT);
+    int with_hess = 0, compared = 0, passed = 0, unconverged = 0, outside = 0;
+    for (int n = 0; n < 20000 && with_hess < 40; n++) {
+      fill_state(&vs, &T);
+      mc_value a, b;
+      int ok_a = 0, ok_b = 0, hn = 0, hok = 0;
+      T.eval(&T, scratch, &vs.base, &a, g1, &ok_a);
+      path_vec_sampler_rewind(&vs);
+      T.eval_hess(&T, scratch, &vs.base, 0, &b, grad, &ok_b, &hn, hidx, hess, &hok);
+      path_vec_sampler_rewind(&vs);
+      if (!(a.f > 0.0)) continue;
+      assert_true(rel_equal(a.f, b.f, 1e-12));
+      assert_int_equal(ok_a, ok_b);
+      for (int i = 0; i < T.dim; i++) assert_true(rel_equal(g1[i], grad[i], 1e-12));
+      if (!hok) continue;
+      with_hess++;
+      /* The moved set. */
+      double uvec[512];
+      assert_true(T.dim <= 512);
+      for (int k = 0, q = 0; k < LMC_STREAM_COUNT; k++)
+        for (int j = 0; j < T.stream_dim[k]; j++) uvec[q++] = vs.u[k][j];
+      int nl = T.local_coords(&T, uvec, 0, loc);
+      char in[512] = {0};
+      for (int q = 0; q < nl; q++) in[loc[q]] = 1;
+      assert_false(in[off_conn]);
+      for (int i = 0; i < T.dim; i++) outside += grad[i] != 0.0 && !in[i];
+      for (int q = 0; q < hn; q++) outside += !in[hidx[q]];
+      /* Column b of the Hessian from differences of the gradient along hidx[b]. */
+      for (int cb = 0; cb < hn; cb++) {
+        int j = hidx[cb];
+        int k = 0, off = 0;
+        while (j >= off + T.stream_dim[k]) off += T.stream_dim[k++];
+        double u = vs.u[k][j - off];
+        double h = 1e-6;
+        if (u - h < 0.0 || u + h >= 1.0) continue;
+        if (!grad_at(&T, scratch, &vs, j, u + h, gp) || !grad_at(&T, scratch, &vs, j, u - h, gm))
+          continue;
+        double gp2[512], gm2[512];
+        if (!grad_at(&T, scratch, &vs, j, u + h / 2, gp2) || !grad_at(&T, scratch, &vs, j, u - h / 2, gm2))
+          continue;
+        for (int ca = 0; ca <= cb; ca++) {
+          int i = hidx[ca];
+          double d1 = (gp[i] - gm[i]) / (2 * h), d2 = (gp2[i] - gm2[i]) / h;
+          double hv = hess[(size_t)ca * hn - (size_t)ca * (size_t)(ca - 1) / 2 + (size_t)(cb - ca)];
+          double scale = fmax(fmax(fabs(d2), fabs(hv)), 1e-4 * a.f);
+          if (fabs(d1 - d2) > 1e-3 * scale) {
+            unconverged++;
+            continue;
+          }
+          compared++;
+          if (fabs(hv - d2) <= 1e-3 * scale + 2.0 * fabs(d1 - d2))
+            passed++;
+          else
+            print_message("length %d: H[%d][%d] %.10g, differences %.10g (f %g)\n", len, i, j, hv,
+                          d2, a.f);
+        }
+      }
+    }
+    print_message("length %d: %d states with a Hessian, %d of %d entries agree (%d unconverged), "
+                  "%d derivatives outside the moved set\n",
+                  len, with_hess, passed, compared, unconverged, outside);
+    assert_true(with_hess >= 20);
+    assert_int_equal(outside, 0);
+    assert_true(compared >= 50 * len);
+    assert_true(passed >= 0.99 * compared);
+    total_compared += compared, total_passed += passed;
+    free(grad), free(g1), free(gp), free(gm), free(hess), free(hidx), free(loc);
+    T.scratch_destroy(scratch);
+  }
+  assert_true(total_compared > 0 && total_passed >= 0.99 * total_compared);
+  path_vec_sampler_free(&vs);
+}
+
+/* mc_mmlt_expected is, state by state, the mean over the strategies of
+ * mc_mmlt_contribution with the technique coordinate set to each
  * strategy in turn (so its expectation is b_k exactly). */
 static void test_expected_is_mean_over_techniques(void **state) {
   fixture *fx = *state;
@@ -220,13 +334,13 @@ static void test_expected_is_mean_over_techniques(void **state) {
     int n = k == 1 ? 1 : k + 1;
     for (int j = 0; j < 3000; j++) {
       path_vec_sampler_clear(&vs);
-      double e = mcmc_mmlt_expected(fx->sc, &rs, k, r, area, &vs.base, cam, lp, &cnt);
+      double e = mc_mmlt_expected(fx->sc, &rs, k, r, area, &vs.base, cam, lp, &cnt);
       double mean = 0.0;
       for (int i = 0; i < n; i++) {
         path_vec_sampler_rewind(&vs);
         vs.u[LMC_STREAM_CONNECT][0] = (i + 0.5) / n;
         double rx, ry;
-        rgb c = mcmc_mmlt_contribution(fx->sc, &rs, k, n, r, area, &vs.base, cam, lp, &cnt, &rx, &ry);
+        rgb c = mc_mmlt_contribution(fx->sc, &rs, k, n, r, area, &vs.base, cam, lp, &cnt, &rx, &ry);
         double f = rgb_luminance(c);
         mean += (f > 0.0 && isfinite(f) ? f : 0.0) / n;
       }
@@ -247,6 +361,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_values_and_gradients),
       cmocka_unit_test(test_expected_is_mean_over_techniques),
+      cmocka_unit_test(test_hessian),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -1,8 +1,8 @@
 /*
- * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc), and H2MC
- * (--integrator h2mc), with
- * --adapt diminish and --adapt cache (on its default multiplexed states,
- * and cache on --lmc-states pt) agrees with bdpt on the ring-caustics
+ * test_lmc_ring_slow.c: Langevin Monte Carlo (--integrator lmc) with
+ * --adapt diminish and --adapt cache on mmlt's multiplexed states, cache
+ * on the pt states (--states pt), and H2MC (--integrator h2mc) on the bdpt
+ * states (its default) and on mmlt's, agree with bdpt on the ring-caustics
  * scenes (scenes/ring-caustics, scenes/ring-caustics-glass) at 24x18: in
  * the image mean and in the means of a 4 x 4 grid of regions. These are
  * the unbiased modes; a bias from the adaptation, the cache's stage
@@ -13,10 +13,8 @@
  * a mean and a standard error SE = sd / sqrt(R); lmc's mean must lie within
  * 6 sqrt(SE_lmc^2 + SE_bdpt^2) of bdpt's. The difference over its
  * estimated standard error is roughly Student t with about 10 degrees of
- * freedom (Welch), P(|t| > 6) ~ 1.3e-4 per check; over 2 scenes x 2 modes
- * x 17 statistics = 68 checks a false alarm has a chance of about 1%
- * (1.3% with the third mode's 34 more, 1.8% with H2MC's, --integrator h2mc
- * on the bdpt states, 34 more).
+ * freedom (Welch), P(|t| > 6) ~ 1.3e-4 per check; over 2 scenes x 5 modes
+ * x 17 statistics = 170 checks a false alarm has a chance of about 2%.
  * Equal effort: --spp 128 for each (lmc: mutations per pixel, stage 1 of
  * cache included); lmc's bootstrap is fixed at 131072 paths (it would
  * otherwise dominate the time at this resolution). lmc runs with the
@@ -38,21 +36,21 @@
 #include "test_util.h"
 
 #define RUNS 6
-#define MODES 4 /* diminish and cache on mmlt states, cache on pt states, h2mc (bdpt states) */
+#define MODES 5 /* lmc diminish and cache on mmlt states, cache on pt states, h2mc on bdpt and mmlt states */
 #define GRID 4
 #define N_STATS (GRID * GRID + 1)
 
 static int g_checks;
 
 /* Mean and SE over RUNS of the region means (index GRID*GRID: the image). */
-static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt, lmc_states states,
+static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt, int states,
                       double mean[N_STATS], double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
     rs.adapt = adapt;
-    rs.lmc_states = states;
+    rs.mcmc_states = states; /* (the driver's --states) */
     rs.spp = 128;
     rs.set |= SET_SPP;
     rs.bootstrap = 131072; /* b to a few percent: its error is part of each run's, so of the SE */
@@ -77,13 +75,14 @@ static void check_scene(const char *folder) {
   camera_set_resolution(&s->cam, 24, 18);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", LMC_ADAPT_NONE, LMC_STATES_MMLT, ref, ref_se);
+  run_stats(s, "bdpt", LMC_ADAPT_NONE, MCMC_STATES_DEFAULT, ref, ref_se);
   const lmc_adapt modes[MODES] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,
-                                  LMC_ADAPT_NONE};
-  const lmc_states states[MODES] = {LMC_STATES_MMLT, LMC_STATES_MMLT, LMC_STATES_PT,
-                                    LMC_STATES_BDPT};
-  const char *names[MODES] = {"diminish", "cache", "cache, pt states", "h2mc"};
-  const char *integ[MODES] = {"lmc", "lmc", "lmc", "h2mc"};
+                                  LMC_ADAPT_NONE, LMC_ADAPT_NONE};
+  const int states[MODES] = {MCMC_STATES_MMLT, MCMC_STATES_MMLT, MCMC_STATES_PT,
+                             MCMC_STATES_BDPT, MCMC_STATES_MMLT};
+  const char *names[MODES] = {"diminish", "cache", "cache, pt states", "bdpt states",
+                              "mmlt states"};
+  const char *integ[MODES] = {"lmc", "lmc", "lmc", "h2mc", "h2mc"};
   for (int i = 0; i < MODES; i++) {
     double m[N_STATS], se[N_STATS];
     run_stats(s, integ[i], modes[i], states[i], m, se);
@@ -93,14 +92,14 @@ static void check_scene(const char *folder) {
       double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
       if (z > worst) worst = z;
       if (k == GRID * GRID)
-        fprintf(stderr, "  %s lmc %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder,
-                names[i], m[k], se[k], ref[k], ref_se[k]);
+        fprintf(stderr, "  %s %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder,
+                integ[i], names[i], m[k], se[k], ref[k], ref_se[k]);
       assert_true(se[k] > 0.0 || m[k] == ref[k]); /* independent runs differ */
       assert_near(m[k], ref[k], 6.0 * sd);
       g_checks++;
     }
-    fprintf(stderr, "  %s lmc %s: largest |difference| / SE over the regions %.2f\n", folder,
-            names[i], worst);
+    fprintf(stderr, "  %s %s %s: largest |difference| / SE over the regions %.2f\n", folder,
+            integ[i], names[i], worst);
   }
   scene_destroy(s);
 }

@@ -62,6 +62,7 @@ static int g_checks;
 static int g_even; /* --allocate even for the renders of check_scene */
 static int g_direct; /* --direct separate for the renders (the CLI's default; 0: mcmc) */
 static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
+static int g_states;     /* --states for the renders (MCMC_STATES_DEFAULT: the integrator's) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -88,6 +89,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   rs.quiet = 1;
   rs.mcmc_even = g_even;
   rs.direct_separate = g_direct;
+  rs.mcmc_states = g_states;
   return rs;
 }
 
@@ -188,14 +190,19 @@ static void test_furnace_mmlt(void **state) {
   g_even = 0;
 }
 
-/* H2MC (--integrator h2mc, on the bdpt states) on both analytic scenes:
- * the furnace's every path and the sphere's two groups. */
+/* H2MC (--integrator h2mc) on both analytic scenes, on the bdpt states
+ * and on mmlt's per-length states: the furnace's every path and the
+ * sphere's two groups. */
 static void test_h2mc(void **state) {
   (void)state;
   rgb one = rgb_gray(1.0);
   rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
+  g_states = MCMC_STATES_MMLT;
+  check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.003);
+  check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
+  g_states = MCMC_STATES_DEFAULT;
 }
 
 static void test_diffuse_sphere(void **state) {
@@ -332,9 +339,10 @@ static void test_determinism(void **state) {
 static void test_count(void **state) {
   (void)state;
   /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, h2mc furnace and
-   * sphere 2 groups, then separate: furnace 2, sphere 3 x 2 groups; 3
-   * channels each; and the refined b. */
-  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
+   * sphere 2 groups on two state spaces, then separate: furnace 2, sphere
+   * 3 x 2 groups; 3 channels each; and the refined b. */
+  assert_int_equal(g_checks,
+                   3 + 3 + 3 + 2 * 2 * 3 + 2 * (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
 }
 
 static int reset_direct(void **state) {

@@ -19,7 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mcmc.h"
+#include "lmc/states.h"
 #include "render/integrator.h"
 #include "render/path.h"
 
@@ -427,13 +427,13 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   T->eval_hess = bs__eval_hess;
 
   /* The light-position numbers u1 of the emission and of every connect
-   * triple pick an area light's triangle (mcmc_light_u1_scale). */
+   * triple pick an area light's triangle (mc_light_u1_scale). */
   ctx->step_scale = malloc((size_t)T->dim * sizeof(double));
   if (!ctx->step_scale) {
     mc_bdpt_states_free(ctx);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the strategies");
   }
-  double u1_scale = mcmc_light_u1_scale(s);
+  double u1_scale = mc_light_u1_scale(s);
   for (int i = 0; i < T->dim; i++) ctx->step_scale[i] = 1.0;
   ctx->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
   int c0 = mc_target_stream_offset(T, LMC_STREAM_CONNECT);

@@ -152,14 +152,18 @@ void h2mc_kernel_free(h2mc_kernel *k) {
   memset(k, 0, sizeof *k);
 }
 
-/* The coordinates the kernel moves at a state: its label's (labelled
- * targets with label_coords), else all, without those of step scale 0
- * (left to large steps), at most MC_HESS_MAX. A function of the label
- * alone, so both directions of a step move the same ones. */
-static int h2mc__coords(const h2mc_kernel *k, int label, int *OUT_idx) {
+/* The coordinates the kernel moves at a state: the target's local_coords,
+ * else its label's (labelled targets with label_coords), else all, without
+ * those of step scale 0 (left to large steps), at most MC_HESS_MAX. A
+ * function of what the kernel does not move, so both directions of a step
+ * move the same ones. */
+static int h2mc__coords(const h2mc_kernel *k, const mc_state *x, int *OUT_idx) {
   const mc_target *T = k->target;
+  int label = x->label;
   int n;
-  if (T->n_labels > 0 && T->label_coords) {
+  if (T->local_coords) {
+    n = T->local_coords(T, x->u, label, OUT_idx);
+  } else if (T->n_labels > 0 && T->label_coords) {
     n = T->label_coords(T, label, OUT_idx);
   } else {
     n = T->dim;
@@ -172,7 +176,7 @@ static int h2mc__coords(const h2mc_kernel *k, int label, int *OUT_idx) {
 }
 
 static int h2mc__coords_cb(void *self, const mc_state *x, int *OUT_idx) {
-  return h2mc__coords(self, x->label, OUT_idx);
+  return h2mc__coords(self, x, OUT_idx);
 }
 
 /* The Gaussian at state s over the n coordinates idx, in the step-scaled
@@ -218,7 +222,7 @@ static void h2mc__gauss_at(h2mc_kernel *k, const mc_state *s, const int *idx, in
 static double h2mc__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   h2mc_kernel *k = self;
   const double *c = k->target->step_scale;
-  int n = h2mc__coords(k, x->label, k->idx);
+  int n = h2mc__coords(k, x, k->idx);
   h2mc__gauss_at(k, x, k->idx, n, &k->gx);
   k->st.proposed++;
   k->st.model += !k->gx.isotropic;
@@ -250,7 +254,7 @@ static double h2mc__propose(void *self, rng *r, const mc_state *x, double *OUT_y
 static double h2mc__log_density(void *self, const mc_state *from, const double *to_u) {
   h2mc_kernel *k = self;
   const double *c = k->target->step_scale;
-  int n = h2mc__coords(k, from->label, k->idx);
+  int n = h2mc__coords(k, from, k->idx);
   h2mc__gauss_at(k, from, k->idx, n, &k->gy);
   double log_c = 0.0;
   for (int a = 0; a < n; a++) {
@@ -271,6 +275,12 @@ mc_kernel h2mc_kernel_make(h2mc_kernel *k) {
   kn.self = k;
   kn.propose = h2mc__propose;
   kn.log_density = h2mc__log_density;
-  kn.coords = (k->target->n_labels > 0 && k->target->label_coords) ? h2mc__coords_cb : NULL;
+  /* Labelled targets: the chain keeps only the label's coordinates up to
+   * date (the others take the lazy small step). local_coords depend on
+   * coordinates, which a lazy step would move: there the kernel writes all
+   * of y, the coordinates outside the set unchanged. */
+  kn.coords = !k->target->local_coords && k->target->n_labels > 0 && k->target->label_coords
+                  ? h2mc__coords_cb
+                  : NULL;
   return kn;
 }

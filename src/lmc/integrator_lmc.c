@@ -20,7 +20,8 @@
 #include "lmc/gcache.h"
 #include "lmc/h2mc.h"
 #include "lmc/lmc_kernel.h"
-#include "lmc/mcmc.h"
+#include "lmc/method.h"
+#include "lmc/states.h"
 
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */
@@ -40,6 +41,8 @@ typedef struct lmc__family {
   gcache *cache;         /* merged and frozen (cache mode, stage 2) */
   lmc_indep indep;       /* read-only in stage 2 */
 } lmc__family;
+
+typedef struct lmc_run lmc_run;
 
 struct lmc_run {
   lmc_scene_target tctx; /* pt states: the target's context */
@@ -61,8 +64,13 @@ struct lmc_run {
   double chains_start;   /* omp_get_wtime() when the chains were set up */
 };
 
-lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
-                          int unbounded, int kmin, int kmax, lmc_error *err) {
+static void lmc_run_destroy(lmc_run *run);
+
+/* pt states (rs->lmc_states): one family, `unbounded` bounces kept in the
+ * state when maxdepth is -1. mmlt states: one family per length
+ * kmin .. kmax. bdpt states: one family over kmin .. kmax. */
+static lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
+                                 int unbounded, int kmin, int kmax, lmc_error *err) {
   *OUT_run = NULL;
   lmc_run *run = calloc(1, sizeof *run);
   int multiplexed = rs->lmc_states == LMC_STATES_MMLT, bdpt = rs->lmc_states == LMC_STATES_BDPT;
@@ -75,14 +83,15 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
   run->rs = *rs;
   run->n_fam = n_fam;
   run->h2mc = !strcmp(rs->integrator, "h2mc");
-  if (run->h2mc && !bdpt) {
+  if (run->h2mc && !bdpt && !multiplexed) {
     lmc_run_destroy(run);
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
-                         "h2mc runs on the bdpt states (--states bdpt, the default) only");
+                         "h2mc runs on the bdpt states (--states bdpt, the default) or mmlt's "
+                         "(--states mmlt) only: the pt states have no Hessian");
   }
   /* H2MC adapts nothing: no cache stages. */
   run->stage1 = !run->h2mc && rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
-  double u1_scale = mcmc_light_u1_scale(s);
+  double u1_scale = mc_light_u1_scale(s);
   for (int g = 0; g < n_fam; g++) {
     lmc__family *F = &run->fam[g];
     mc_target *T = &F->target;
@@ -114,7 +123,7 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
       F->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
       F->step_scale[mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 2] = u1_scale;
     } else {
-      mcmc_pt_step_scale(s, T->dim, F->step_scale);
+      mc_pt_step_scale(s, T->dim, F->step_scale);
     }
     T->step_scale = F->step_scale;
     F->kp.scale = F->step_scale;
@@ -124,7 +133,7 @@ lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settin
   return LMC_OK;
 }
 
-void lmc_run_destroy(lmc_run *run) {
+static void lmc_run_destroy(lmc_run *run) {
   if (!run) return;
   for (int i = 0; i < run->n; i++) {
     lmc_mala_free(&run->mala[i]);
@@ -146,13 +155,8 @@ void lmc_run_destroy(lmc_run *run) {
   free(run);
 }
 
-int lmc_run_n_families(const lmc_run *run) { return run->n_fam; }
-const mc_target *lmc_run_family_target(const lmc_run *run, int g) { return &run->fam[g].target; }
-int lmc_run_family_length(const lmc_run *run, int g) { return run->fam[g].length; }
-int lmc_run_in_stage1(const lmc_run *run) { return run->stage1; }
-int64_t lmc_run_stage1_mutations(const lmc_run *run) { return run->stage1_mutations; }
-
-int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch) {
+/* Non-finite contributions dropped in a chain's scratch. */
+static int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch) {
   switch (run->rs.lmc_states) {
   case LMC_STATES_MMLT: return lmc_bdpt_scratch_nan_samples(scratch);
   case LMC_STATES_BDPT: return mc_bdpt_states_nan_samples(scratch);
@@ -201,7 +205,8 @@ static gcache *lmc__empty_cache(const lmc__family *F) {
   return c;
 }
 
-lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err) {
+/* Allocates per-chain state for n chains; chain i belongs to family[i]. */
+static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err) {
   run->mala = calloc((size_t)n, sizeof *run->mala);
   run->cwalk = calloc((size_t)n, sizeof *run->cwalk);
   run->rec = calloc((size_t)n, sizeof *run->rec);
@@ -248,7 +253,8 @@ lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error 
   return LMC_OK;
 }
 
-int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
+/* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
+static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
   lmc__family *F = &run->fam[run->chain_fam[i]];
   double large = run->rs.largestep, iso = run->rs.iso_prob;
   double indep = run->rs.adapt == LMC_ADAPT_CACHE ? LMC_INDEP_PROB : 0.0;
@@ -333,13 +339,17 @@ static int64_t lmc__stage1_budget(const lmc_run *run, int64_t budget) {
   return (int64_t)ceil(run->rs.cache_fraction * (double)budget);
 }
 
-int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t budget) {
+/* The most mutations per chain the next round may make: stage 1 ends on
+ * its share of an --spp budget exactly (INT64_MAX: no limit). */
+static int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t budget) {
   if (!run->stage1 || budget == INT64_MAX) return INT64_MAX;
   int64_t left = lmc__stage1_budget(run, budget) - done;
   return left > 1 ? left : 1;
 }
 
-int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed) {
+/* After a round: 1 when stage 1 ended now (the driver then restarts the
+ * chains from their starting states; splats and counts carry on). */
+static int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed) {
   if (!run->stage1) return 0;
   int end;
   /* Under --time, stage 1 gets its share of the time the chains have
@@ -355,7 +365,9 @@ int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elaps
   return 1;
 }
 
-void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c) {
+/* Adds the gradient evaluations chain c made in stage 1 to stage 1's
+ * count, so that the report can give stage 2's own. */
+static void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c) {
   run->stage1_grad_evals += lmc__grad_evals(run, c->scratch);
 }
 
@@ -366,15 +378,17 @@ static double lmc__steps(mc_chain *const *chains, int n) {
   return s;
 }
 
-void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
+/* The LMC statistics (stderr). */
+static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
   int multiplexed = run->rs.lmc_states == LMC_STATES_MMLT;
   int bdpt = run->rs.lmc_states == LMC_STATES_BDPT;
   const lmc__family *F0 = &run->fam[0];
   if (run->h2mc) {
-    fprintf(stderr, "h2mc: bidirectional over every length (bdpt) states, prior sigma %g, L %g, "
+    fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, "
             "iso %g, light-triangle step scale %g\n",
+            multiplexed ? "multiplexed per-length (mmlt)" : "bidirectional over every length (bdpt)",
             run->n > 0 ? run->h2[0].p.sigma : 0.0, run->n > 0 ? run->h2[0].p.L : 0.0, run->rs.iso_prob,
             F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]);
   } else {
@@ -463,7 +477,9 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
       hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
       ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail;
     }
-    for (int i = 0; i < n; i++) he += mc_bdpt_states_hess_evals(chains[i]->scratch);
+    for (int i = 0; i < n; i++)
+      he += run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_hess_evals(chains[i]->scratch)
+                                                  : mc_bdpt_states_hess_evals(chains[i]->scratch);
     fprintf(stderr,
             "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
             "%.1f%% outside the unit cube (rejected unevaluated), %lld failed eigendecompositions; "
@@ -489,3 +505,76 @@ void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double c
           (long long)grad_evals, (double)grad_evals / fmax(chain_seconds, 1e-9), (long long)regrad,
           (long long)stalled, run->n, LMC_STALL_STEPS);
 }
+
+/* ---- The method tables (method.h) ------------------------------------- */
+
+static lmc_status lmc__m_create(void **OUT_run, const mc_method_setup *setup, lmc_error *err) {
+  lmc_run *run = NULL;
+  lmc_status st = lmc_run_create(&run, setup->s, setup->rs, LMC_UNBOUNDED_PT, setup->kmin,
+                                 setup->kmax, err);
+  if (st) return st;
+  if (run->n_fam != setup->n_families) {
+    int n = run->n_fam;
+    lmc_run_destroy(run);
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s: %d families, expected %d",
+                         setup->rs->integrator, n, setup->n_families);
+  }
+  *OUT_run = run;
+  return LMC_OK;
+}
+static void lmc__m_destroy(void *run) { lmc_run_destroy(run); }
+static const mc_target *lmc__m_family_target(void *run, int g) {
+  return &((lmc_run *)run)->fam[g].target;
+}
+static lmc_status lmc__m_set_chains(void *run, int n, const int *family, lmc_error *err) {
+  return lmc_run_set_chains(run, n, family, err);
+}
+static int lmc__m_chain_kernels(void *run, int i, mc_kernel *k, double *p, int nk) {
+  (void)nk; /* lmc's mix replaces the driver's (lmc_run_chain_kernels) */
+  return lmc_run_chain_kernels(run, i, k, p);
+}
+static int64_t lmc__m_round_limit(void *run, int64_t done, int64_t budget) {
+  return lmc_run_round_limit(run, done, budget);
+}
+static int lmc__m_after_round(void *run, int64_t done, int64_t budget, double elapsed) {
+  return lmc_run_after_round(run, done, budget, elapsed);
+}
+static void lmc__m_note_restart(void *run, const mc_chain *c) { lmc_run_note_stage1_chain(run, c); }
+static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chain_seconds) {
+  lmc_run_report(run, chains, n, chain_seconds);
+}
+static int64_t lmc__m_nan_samples(void *run, const mc_chain *c) {
+  return lmc_run_scratch_nan_samples(run, c->scratch);
+}
+
+/* lmc and h2mc share the run: h2mc is H2MC's proposal in MALA's slot
+ * (lmc_run_create reads the integrator's name). */
+const mc_method mc_method_lmc = {
+    .name = "lmc",
+    .default_states = MCMC_STATES_BDPT,
+    .create = lmc__m_create,
+    .destroy = lmc__m_destroy,
+    .family_target = lmc__m_family_target,
+    .set_chains = lmc__m_set_chains,
+    .chain_kernels = lmc__m_chain_kernels,
+    .round_limit = lmc__m_round_limit,
+    .after_round = lmc__m_after_round,
+    .note_restart_chain = lmc__m_note_restart,
+    .report = lmc__m_report,
+    .nan_samples = lmc__m_nan_samples,
+};
+
+const mc_method mc_method_h2mc = {
+    .name = "h2mc",
+    .default_states = MCMC_STATES_BDPT,
+    .create = lmc__m_create,
+    .destroy = lmc__m_destroy,
+    .family_target = lmc__m_family_target,
+    .set_chains = lmc__m_set_chains,
+    .chain_kernels = lmc__m_chain_kernels,
+    .round_limit = lmc__m_round_limit,
+    .after_round = lmc__m_after_round,
+    .note_restart_chain = lmc__m_note_restart,
+    .report = lmc__m_report,
+    .nan_samples = lmc__m_nan_samples,
+};

@@ -3,22 +3,24 @@
  * (Luan, Zhao, Bala and Gkioulekas 2020), as a client of the MCMC driver
  * (mcmc.c) and the chain framework (chain.h).
  *
- * The states (--lmc-states). `mmlt` (the default): the chains live in the
- * multiplexed bidirectional states of mmlt (mcmc.c), one family of chains
- * per path length k, a state being the strategy (s, t) and its camera,
- * light and connect streams; the target (lmc_bdpt_target.c) is
- * path_eval_bdpt with the gradient of its MIS-weighted contribution. This
- * is the state space of the LMC paper's own implementation. `pt`: the
- * unidirectional path of path_eval_pt (pt_li's estimator with next-event
- * estimation) over the camera stream (lmc_target.c), pssmlt's states, with
+ * The states (--states, the driver's, mcmc.c). `bdpt` (the default): one
+ * family over every length, a state being a BDPT sample's numbers and the
+ * strategy that carries it (bdpt_states.h, with gradients and Hessians).
+ * `mmlt`: the multiplexed bidirectional states of mmlt, one family of
+ * chains per path length k, a state being the strategy (s, t) and its
+ * camera, light and connect streams; the target (lmc_bdpt_target.c) is
+ * path_eval_bdpt with the gradient (and Hessian) of its MIS-weighted
+ * contribution, the state space of the LMC paper's own implementation.
+ * `pt`: the unidirectional path of path_eval_pt (pt_li's estimator with
+ * next-event estimation) over the camera stream (lmc_target.c), with
  * f = W H lum(L).
  *
  * Each chain mixes the large step (--largestep), Kelemen's isotropic
  * small step (--iso-prob), for mmlt states the technique mutation
  * (LMC_TECHNIQUE_PROB, as mmlt), and LMC's preconditioned MALA step
  * (lmc_kernel.h; the rest). Both small steps are scaled down on the
- * coordinates that pick a light triangle (mcmc_light_u1_scale and
- * mcmc_pt_step_scale, as mmlt and pssmlt); for MALA that is a constant
+ * coordinates that pick a light triangle (mc_light_u1_scale and
+ * mc_pt_step_scale, as mmlt and pssmlt); for MALA that is a constant
  * factor c^2 of the preconditioner, with the gradient, its truncation and
  * Adam taken in the rescaled coordinates. With --adapt cache and
  * LMC_INDEP_PROB > 0 the cache's independence proposal joins them (in
@@ -39,25 +41,25 @@
  * preconditioner, a fixed kernel given the cache. The image is the sum
  * over both stages.
  *
- * The driver calls, in order: lmc_run_create (the targets: one, or one per
- * length for mmlt states; lmc_run_n_families, lmc_run_family_target), lmc_run_set_chains,
- * lmc_run_chain_kernels per chain, lmc_run_round_limit before and
- * lmc_run_after_round after every round
- * (a return of 1 means stage 1 just ended: restart the chains from their
- * starting states; splats and mutation counts carry on), lmc_run_report,
- * lmc_run_destroy.
+ * The driver runs lmc and h2mc through their tables mc_method_lmc and
+ * mc_method_h2mc (method.h): targets per family (one, or one per length
+ * on mmlt's states), kernels per chain, stage 1's end as the hook after a
+ * round (its return 1 restarts the chains from their starting states;
+ * splats and mutation counts carry on), and their statistics lines.
  */
 #ifndef LMC_MCMC_INTEGRATOR_LMC_H
 #define LMC_MCMC_INTEGRATOR_LMC_H
 
 #include <stdint.h>
 
+#include "lmc/states.h"
 #include "lmc/chain.h"
 #include "render/scene.h"
 #include "render/settings.h"
 
 #define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see above) */
 #define LMC_TECHNIQUE_PROB 0.1 /* mmlt states: share of the technique mutation */
+#define LMC_UNBOUNDED_PT 16    /* pt states: bounces kept in the state when maxdepth is -1 */
 #define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
 
 /* ---- The scene target (lmc_target.c) ------------------------------------- */
@@ -97,44 +99,7 @@ void lmc_bdpt_target_init(mc_target *OUT_target, lmc_bdpt_target *ctx, const sce
 /* Gradient evaluations and non-finite contributions in a scratch of it. */
 int64_t lmc_bdpt_scratch_grad_evals(const void *scratch);
 int64_t lmc_bdpt_scratch_nan_samples(const void *scratch);
-
-/* ---- The run ------------------------------------------------------------- */
-
-typedef struct lmc_run lmc_run;
-
-/* pt states (rs->lmc_states): one family, `unbounded` bounces kept in the
- * state when maxdepth is -1. mmlt states: one family per length
- * kmin .. kmax. */
-lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
-                          int unbounded, int kmin, int kmax, lmc_error *err);
-void lmc_run_destroy(lmc_run *run);
-/* The families' targets (owned by run). */
-int lmc_run_n_families(const lmc_run *run);
-const mc_target *lmc_run_family_target(const lmc_run *run, int g);
-/* Path length of family g (0 for pt states: all lengths). */
-int lmc_run_family_length(const lmc_run *run, int g);
-/* Allocates per-chain state for n chains; chain i belongs to family[i]. */
-lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc_error *err);
-/* Non-finite contributions dropped in a chain's scratch. */
-int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch);
-/* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
-int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p);
-/* After a round: done / budget mutations per chain (budget INT64_MAX under
- * --time), seconds since the render began. Returns 1 when stage 1 ended
- * now (see above), 0 otherwise. */
-int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed);
-/* Adds the gradient evaluations chain c has made so far to stage 1's
- * count (call for every chain when stage 1 has ended, before stage 2's
- * first round), so that the report can give stage 2's own. */
-void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c);
-/* The most mutations per chain the next round may make (stage 1 ends on
- * its share of an --spp budget exactly; INT64_MAX: no limit). */
-int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t budget);
-/* 1 while stage 1 (cache building) runs. */
-int lmc_run_in_stage1(const lmc_run *run);
-/* Mutations per chain spent in stage 1. */
-int64_t lmc_run_stage1_mutations(const lmc_run *run);
-/* Prints the LMC statistics (stderr) for the chains. */
-void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds);
+/* Hessian evaluations (eval_hess) in a scratch of it. */
+int64_t lmc_bdpt_scratch_hess_evals(const void *scratch);
 
 #endif

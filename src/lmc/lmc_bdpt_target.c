@@ -29,7 +29,7 @@
 #include <string.h>
 
 #include "lmc/integrator_lmc.h"
-#include "lmc/mcmc.h"
+#include "lmc/states.h"
 #include "render/path.h"
 
 typedef struct lmc_bdpt_scratch {
@@ -37,7 +37,7 @@ typedef struct lmc_bdpt_scratch {
   render_counters cnt; /* the plain evaluation's rays */
   bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
   int64_t rays;
-  int64_t grad_evals;
+  int64_t grad_evals, hess_evals;
   int64_t nan_samples;
 } lmc_bdpt_scratch;
 
@@ -67,6 +67,10 @@ static int64_t lmc__bdpt_scratch_rays(const void *scratch) {
 
 int64_t lmc_bdpt_scratch_grad_evals(const void *scratch) {
   return scratch ? ((const lmc_bdpt_scratch *)scratch)->grad_evals : 0;
+}
+
+int64_t lmc_bdpt_scratch_hess_evals(const void *scratch) {
+  return scratch ? ((const lmc_bdpt_scratch *)scratch)->hess_evals : 0;
 }
 
 int64_t lmc_bdpt_scratch_nan_samples(const void *scratch) {
@@ -117,28 +121,31 @@ static double lmc__set_value(lmc_bdpt_scratch *sc, mc_value *v, rgb c, double rx
   return f;
 }
 
-static int lmc__bdpt_eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
-                          double *OUT_grad, int *OUT_grad_ok) {
-  const lmc_bdpt_target *st = t->ctx;
-  lmc_bdpt_scratch *sc = scratch;
-  int k = st->length, n = st->n_strategies;
-  if (OUT_grad_ok) *OUT_grad_ok = 0;
+/* The state's strategy (s, t) from its technique coordinate (connect 0). */
+static void lmc__strategy(const lmc_bdpt_target *st, double u_tech, int *OUT_s, int *OUT_t) {
+  int n = st->n_strategies, k = st->length;
+  int idx = (int)(u_tech * n);
+  if (idx >= n) idx = n - 1;
+  *OUT_t = k == 1 ? 2 : idx + 1;
+  *OUT_s = k + 1 - *OUT_t;
+}
 
-  if (!OUT_grad) {
-    /* f alone: mmlt's plain-double evaluation (the same number as
-     * path_eval_bdpt's up to rounding, and about twice as fast). */
-    double rx, ry;
-    rgb c = mcmc_mmlt_contribution(st->s, &st->rs, k, n, st->margin, st->area, smp, sc->cam,
-                                   sc->lp, &sc->cnt, &rx, &ry);
-    lmc__set_value(sc, OUT_value, c, rx, ry);
-    return 0;
-  }
+/* f with its gradient (want PATH_WANT_GRAD) or also its Hessian
+ * (PATH_WANT_HESS) over the state's coordinates: d f / du = scale m dlum,
+ * d^2 f / du_a du_b = scale m_a m_b d^2 lum, with m the adapter's chain-rule
+ * factor of a coordinate (the film's two, else 1). */
+static int lmc__bdpt_eval_d(const mc_target *t, lmc_bdpt_scratch *sc, lmc_sampler *smp, int want,
+                            mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
+                            int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
+  const lmc_bdpt_target *st = t->ctx;
+  int n = st->n_strategies;
+  *OUT_grad_ok = 0;
+  if (OUT_hess_ok) *OUT_hess_ok = 0;
 
   /* The strategy. */
   sampler_use_stream(smp, LMC_STREAM_CONNECT);
-  int idx = (int)(sampler_next(smp) * n);
-  if (idx >= n) idx = n - 1;
-  int tt = k == 1 ? 2 : idx + 1, ss = k + 1 - tt;
+  int ss, tt;
+  lmc__strategy(st, sampler_next(smp), &ss, &tt);
 
   /* The path, through the adapter. */
   lmc__adapter a;
@@ -153,23 +160,28 @@ static int lmc__bdpt_eval(const mc_target *t, void *scratch, lmc_sampler *smp, m
   a.W = st->s->cam.width;
   a.H = st->s->cam.height;
   path_eval pe;
-  if (path_eval_bdpt(st->s, &st->rs, &a.base, ss, tt, OUT_grad != NULL, sc->ps, &pe, &sc->rays) !=
-      LMC_OK)
+  if (path_eval_bdpt(st->s, &st->rs, &a.base, ss, tt, want, sc->ps, &pe, &sc->rays) != LMC_OK)
     return -1;
+  sc->grad_evals++;
+  sc->hess_evals += want == PATH_WANT_HESS;
 
   double scale = tt == 1 ? (double)n : st->area * n;
   double f = lmc__set_value(sc, OUT_value, rgb_scale(pe.value, scale), pe.rx, pe.ry);
 
-  /* The gradient of f per coordinate of the state. */
-  sc->grad_evals++;
+  /* Each differentiated coordinate's index in the state (-1: none) and
+   * chain-rule factor. */
   memset(OUT_grad, 0, (size_t)t->dim * sizeof(double));
   if (!(f > 0.0) || !pe.grad_ok) return 0;
-  int ok = 0;
   int off_conn = mc_target_stream_offset(t, LMC_STREAM_CONNECT);
+  int ok = 0;
+  int coord[MC_HESS_MAX];
+  double m[MC_HESS_MAX];
+  int nd = pe.n_diff <= MC_HESS_MAX ? pe.n_diff : 0;
+  for (int j = 0; j < nd; j++) coord[j] = -1;
   for (int i = 0; i < pe.n_coords; i++) {
     const path_coord *pc = &pe.coords[i];
     if (!pc->diff || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
-    double d = pc->dlum * scale;
+    double mi = 1.0;
     int idx_u;
     if (pc->stream == LMC_STREAM_CONNECT) {
       if (pc->pos < a.skip) continue;
@@ -179,20 +191,95 @@ static int lmc__bdpt_eval(const mc_target *t, void *scratch, lmc_sampler *smp, m
       if (pc->pos >= t->stream_dim[pc->stream]) continue;
       idx_u = mc_target_stream_offset(t, pc->stream) + pc->pos;
       if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
-        d *= pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
+        mi = pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
     }
+    double d = pc->dlum * scale * mi;
     if (!isfinite(d)) return 0; /* no usable gradient at this state */
     OUT_grad[idx_u] += d;
     ok = 1;
+    if (pc->var >= 0 && pc->var < nd) coord[pc->var] = idx_u, m[pc->var] = mi;
   }
-  if (OUT_grad_ok) *OUT_grad_ok = ok;
+  *OUT_grad_ok = ok;
+  if (want != PATH_WANT_HESS || !ok || !pe.hess_ok || pe.n_diff > MC_HESS_MAX) return 0;
+
+  /* The Hessian over the slots kept, in slot order. */
+  int keep[MC_HESS_MAX], hn = 0;
+  for (int j = 0; j < nd; j++)
+    if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
+  int q = 0;
+  for (int x = 0; x < hn; x++)
+    for (int y = x; y < hn; y++) {
+      int ja = keep[x], jb = keep[y];
+      double h = pe.hlum[(size_t)ja * nd - (size_t)ja * (size_t)(ja - 1) / 2 + (size_t)(jb - ja)];
+      h *= scale * m[ja] * m[jb];
+      if (!isfinite(h)) return 0;
+      OUT_hess[q++] = h;
+    }
+  *OUT_hn = hn;
+  *OUT_hess_ok = 1;
   return 0;
+}
+
+static int lmc__bdpt_eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
+                          double *OUT_grad, int *OUT_grad_ok) {
+  const lmc_bdpt_target *st = t->ctx;
+  lmc_bdpt_scratch *sc = scratch;
+  if (OUT_grad_ok) *OUT_grad_ok = 0;
+  if (!OUT_grad) {
+    /* f alone: mmlt's plain-double evaluation (the same number as
+     * path_eval_bdpt's up to rounding, and about twice as fast). */
+    double rx, ry;
+    rgb c = mc_mmlt_contribution(st->s, &st->rs, st->length, st->n_strategies, st->margin,
+                                   st->area, smp, sc->cam, sc->lp, &sc->cnt, &rx, &ry);
+    lmc__set_value(sc, OUT_value, c, rx, ry);
+    return 0;
+  }
+  int ok;
+  int rc = lmc__bdpt_eval_d(t, sc, smp, PATH_WANT_GRAD, OUT_value, OUT_grad, &ok, NULL, NULL,
+                            NULL, NULL);
+  if (OUT_grad_ok) *OUT_grad_ok = ok;
+  return rc;
+}
+
+/* eval_hess (target.h); the label is ignored (the target has none). */
+static int lmc__bdpt_eval_hess(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
+                               mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok,
+                               int *OUT_hn, int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
+  (void)label;
+  return lmc__bdpt_eval_d(t, scratch, smp, PATH_WANT_HESS, OUT_value, OUT_grad, OUT_grad_ok,
+                          OUT_hn, OUT_hidx, OUT_hess, OUT_hess_ok);
+}
+
+/* local_coords (target.h): the coordinates strategy (s, t) reads, the
+ * technique coordinate excluded: the film position and the numbers of the
+ * t - 1 camera-subpath surface vertices, the emitter's and those of the
+ * s - 1 light-subpath surface vertices, and for s = 1 the light sample
+ * (integrator.h's layout); a function of the technique coordinate alone. */
+static int lmc__bdpt_local_coords(const mc_target *t, const double *u, int label, int *OUT_idx) {
+  (void)label;
+  const lmc_bdpt_target *st = t->ctx;
+  int off_conn = mc_target_stream_offset(t, LMC_STREAM_CONNECT);
+  int ss, tt;
+  lmc__strategy(st, u[off_conn], &ss, &tt);
+  int n = 0;
+  int nc = 2 + BDPT_DIMS_PER_VERTEX * (tt - 1);
+  if (nc > t->stream_dim[LMC_STREAM_CAMERA]) nc = t->stream_dim[LMC_STREAM_CAMERA];
+  for (int i = 0; i < nc; i++) OUT_idx[n++] = i;
+  if (ss > 0) {
+    int off_l = mc_target_stream_offset(t, LMC_STREAM_LIGHT);
+    int nl = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (ss - 1);
+    if (nl > t->stream_dim[LMC_STREAM_LIGHT]) nl = t->stream_dim[LMC_STREAM_LIGHT];
+    for (int i = 0; i < nl; i++) OUT_idx[n++] = off_l + i;
+  }
+  if (ss == 1)
+    for (int i = 1; i < t->stream_dim[LMC_STREAM_CONNECT]; i++) OUT_idx[n++] = off_conn + i;
+  return n;
 }
 
 static double lmc__bdpt_expect(const mc_target *t, void *scratch, lmc_sampler *smp) {
   const lmc_bdpt_target *st = t->ctx;
   lmc_bdpt_scratch *sc = scratch;
-  return mcmc_mmlt_expected(st->s, &st->rs, st->length, st->margin, st->area, smp, sc->cam, sc->lp,
+  return mc_mmlt_expected(st->s, &st->rs, st->length, st->margin, st->area, smp, sc->cam, sc->lp,
                             &sc->cnt);
 }
 
@@ -214,6 +301,8 @@ void lmc_bdpt_target_init(mc_target *OUT_target, lmc_bdpt_target *ctx, const sce
   OUT_target->ctx = ctx;
   OUT_target->eval = lmc__bdpt_eval;
   OUT_target->eval_expect = lmc__bdpt_expect;
+  OUT_target->eval_hess = lmc__bdpt_eval_hess;
+  OUT_target->local_coords = lmc__bdpt_local_coords;
   OUT_target->scratch_create = lmc__bdpt_scratch_create;
   OUT_target->scratch_destroy = lmc__bdpt_scratch_destroy;
   OUT_target->scratch_rays = lmc__bdpt_scratch_rays;

@@ -21,15 +21,20 @@
  * is the BDPT estimate of length k. Kernels: large step, Kelemen's small
  * step and the technique mutation (chain.h). The small step of the two
  * light-position coordinates (emission and the s = 1 light sample) is
- * scaled down by the area lights' triangle count (mcmc_light_u1_scale):
+ * scaled down by the area lights' triangle count (mc_light_u1_scale):
  * without it, light-tracing states on a tessellated light almost never
  * accepted a small step. pssmlt (and lmc, integrator_lmc.h) scale the
  * same way the light-position number of next-event estimation at every
- * bounce (mcmc_pt_step_scale).
+ * bounce (mc_pt_step_scale).
  *
- * lmc (integrator_lmc.h) runs on either layout: by default on mmlt's
- * families with its own gradient-capable targets (lmc_bdpt_target.c),
- * with --lmc-states pt on pssmlt's.
+ * The driver and the integrators (method.h). This file is the driver: the
+ * state spaces (--states: pssmlt's pt states, mmlt's per-length states,
+ * the bdpt states of bdpt_states.h) with their targets and step scales,
+ * the direct pass, bootstrap, chains, rounds, splats and statistics. The
+ * integrators are tables found by name (methods.c): pssmlt and mmlt take
+ * the driver's targets and kernels (integrator_pssmlt.c), lmc and h2mc
+ * bring targets with gradients and Hessians in the same layouts and their
+ * own kernels (integrator_lmc.c).
  *
  * Normalisation. For a family g with target f_g, b_g = E[f_g(u)] over
  * uniform u is estimated by the bootstrap (for mmlt's families from
@@ -122,7 +127,8 @@
 #include "lmc/bdpt_states.h"
 #include "lmc/bootstrap.h"
 #include "lmc/chain.h"
-#include "lmc/integrator_lmc.h"
+#include "lmc/method.h"
+#include "lmc/states.h"
 
 #define MCMC_CHAINS 256
 #define MCMC_MIN_CHAINS 16 /* per mmlt family: one stuck chain must not carry a whole length */
@@ -140,11 +146,9 @@
 #define MCMC_UNBOUNDED_PT 128  /* pt bounces kept in the state when maxdepth is -1 */
 #define MCMC_UNBOUNDED_MMLT 24 /* mmlt's longest path when maxdepth is -1 */
 #define MCMC_UNBOUNDED_BDPT (BDPT_MAX_VERTICES - 2) /* the bdpt states' (subpaths of 63 vertices) */
-#define MCMC_UNBOUNDED_LMC 16  /* lmc's bounces kept in the state when maxdepth is -1 */
 
 int mcmc_is_integrator(const char *name) {
-  return !strcmp(name, "pssmlt") || !strcmp(name, "mmlt") || !strcmp(name, "lmc") ||
-         !strcmp(name, "h2mc");
+  return mc_method_find(name) != NULL;
 }
 
 /* --- scene targets ----------------------------------------------------------- */
@@ -212,77 +216,10 @@ static int mcmc__pssmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp
   return 0;
 }
 
-rgb mcmc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n, double margin,
-                           double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
-                           render_counters *cnt, double *OUT_rx, double *OUT_ry) {
-  /* The strategy (s, t) from the technique coordinate, and the light sample
-   * of s = 1. */
-  sampler_use_stream(smp, LMC_STREAM_CONNECT);
-  int idx = (int)(sampler_next(smp) * n);
-  if (idx >= n) idx = n - 1;
-  int tt = k == 1 ? 2 : idx + 1, ss = k + 1 - tt;
-  double uc[BDPT_DIMS_CONNECT];
-  for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
-
-  /* The two subpaths, just long enough for (s, t). */
-  sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  double u0 = sampler_next(smp), u1 = sampler_next(smp);
-  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
-  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
-  *OUT_rx = rx, *OUT_ry = ry;
-  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, tt, cam, cnt);
-  if (nc < tt) return rgb_zero();
-  if (ss > 0) {
-    sampler_use_stream(smp, LMC_STREAM_LIGHT);
-    int nl = bdpt_light_subpath(s, rs, smp, ss, lp, cnt);
-    if (nl < ss) return rgb_zero();
-  }
-
-  /* The strategy's MIS-weighted contribution, times n_k. */
-  double prx = rx, pry = ry;
-  rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
-  if (tt != 1) return rgb_scale(c, area * n);
-  *OUT_rx = prx, *OUT_ry = pry;
-  return rgb_scale(c, (double)n);
-}
-
-double mcmc_mmlt_expected(const scene *s, const render_settings *rs, int k, double margin,
-                          double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
-                          render_counters *cnt) {
-  sampler_use_stream(smp, LMC_STREAM_CONNECT);
-  (void)sampler_next(smp); /* the technique */
-  double uc[BDPT_DIMS_CONNECT];
-  for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
-  /* Subpaths long enough for every strategy (their prefixes are those of
-   * the shorter ones: the streams' layout is per vertex). */
-  sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  double u0 = sampler_next(smp), u1 = sampler_next(smp);
-  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
-  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
-  int t_max = k + 1, s_max = k == 1 ? 0 : k;
-  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, t_max, cam, cnt);
-  int nl = 0;
-  if (s_max > 0) {
-    sampler_use_stream(smp, LMC_STREAM_LIGHT);
-    nl = bdpt_light_subpath(s, rs, smp, s_max, lp, cnt);
-  }
-  double sum = 0.0;
-  for (int tt = k == 1 ? 2 : 1; tt <= t_max; tt++) {
-    int ss = k + 1 - tt;
-    if (nc < tt || nl < ss) continue;
-    double prx = rx, pry = ry;
-    rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
-    if (tt != 1) c = rgb_scale(c, area);
-    double f = rgb_luminance(c);
-    if (rgb_isfinite(c) && f > 0.0 && isfinite(f)) sum += f;
-  }
-  return sum;
-}
-
 static double mcmc__mmlt_expect(const mc_target *t, void *scratch, lmc_sampler *smp) {
   const mcmc_scene_target *st = t->ctx;
   mcmc_scratch *sc = scratch;
-  return mcmc_mmlt_expected(st->s, &st->rs, st->length, st->margin, st->area, smp, sc->cam, sc->lp,
+  return mc_mmlt_expected(st->s, &st->rs, st->length, st->margin, st->area, smp, sc->cam, sc->lp,
                             &sc->cnt);
 }
 
@@ -293,7 +230,7 @@ static int mcmc__mmlt_eval(const mc_target *t, void *scratch, lmc_sampler *smp,
   (void)OUT_grad;
   if (OUT_grad_ok) *OUT_grad_ok = 0;
   double rx, ry;
-  rgb c = mcmc_mmlt_contribution(st->s, &st->rs, st->length, st->n_strategies, st->margin,
+  rgb c = mc_mmlt_contribution(st->s, &st->rs, st->length, st->n_strategies, st->margin,
                                  st->area, smp, sc->cam, sc->lp, &sc->cnt, &rx, &ry);
   mcmc__value(OUT_value, c, rx, ry, &sc->cnt);
   return 0;
@@ -373,35 +310,10 @@ typedef struct mcmc_family {
   double *step_scale; /* mmlt, pssmlt: the target's per-coordinate small-step factors (owned) */
   mc_bdpt_states bst; /* --states bdpt: the labelled target's context (bdpt_states.h) */
   int no_pool;        /* b is not refined with the large steps (mmlt's states, see mcmc__refine_b) */
+  mc_kernel kdef[MC_MAX_KERNELS]; /* the driver's default kernel mix (method.h) */
+  double pdef[MC_MAX_KERNELS];
+  int nkdef;
 } mcmc_family;
-
-/* The small-step factor for the coordinate that picks an area light's
- * triangle (mmlt, pssmlt and lmc). light_sample_le and light_sample_li choose the triangle
- * with their first position number u1 and reuse u1 inside its cell, so
- * d(point)/d(u1) grows with the triangle count: on the 16384-triangle
- * sphere light of ring-caustics a step of 1/1024 moves the point about 60
- * degrees round the sphere and, through the new normal's frame, the
- * emitted direction anywhere (of light-tracing proposals that touch only
- * u1 by 0.003, 99.5% of the f-weight came back black). Scaling that
- * coordinate's steps by 1 / (largest triangle count of an area light)
- * keeps them within about a cell; larger moves of the point are left to
- * large steps. 1 when no area light has more than one triangle. */
-double mcmc_light_u1_scale(const scene *s) {
-  int64_t n_max = 1;
-  for (int i = 0; i < s->n_lights; i++) {
-    const light *l = &s->lights[i];
-    if (l->type != LIGHT_AREA || l->mesh < 0) continue;
-    int64_t n = s->meshes[l->mesh].n_triangles;
-    if (n > n_max) n_max = n;
-  }
-  return 1.0 / (double)n_max;
-}
-
-void mcmc_pt_step_scale(const scene *s, int dim, double *OUT_scale) {
-  double u1_scale = mcmc_light_u1_scale(s);
-  for (int i = 0; i < dim; i++) OUT_scale[i] = 1.0;
-  for (int i = PT_DIMS_CAMERA + 1; i < dim; i += PT_DIMS_PER_BOUNCE) OUT_scale[i] = u1_scale;
-}
 
 static uint64_t mcmc__boot_seq(int g, int64_t j) {
   return rng_hash64(((uint64_t)(g + 1) << 44) ^ (uint64_t)j);
@@ -711,22 +623,19 @@ static void mcmc__free_slots(mcmc_chain_slot *slots, int n) {
 lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                            render_stats *st, lmc_error *err) {
   memset(st, 0, sizeof *st);
-  int is_mmlt = !strcmp(rs->integrator, "mmlt");
-  /* lmc and h2mc (H2MC's proposal in MALA's slot): integrator_lmc.h */
-  int is_lmc = !strcmp(rs->integrator, "lmc") || !strcmp(rs->integrator, "h2mc");
-  lmc_run *lrun = NULL;
-  if (!is_mmlt && !is_lmc && strcmp(rs->integrator, "pssmlt"))
+  /* The integrator (method.h): its table, and its run once created. */
+  const mc_method *M = mc_method_find(rs->integrator);
+  void *mrun = NULL;
+  if (!M)
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
                          "integrator %s is not built on this framework yet", rs->integrator);
-  /* The state space (--states): mmlt's own are its per-length families,
-   * pssmlt's and lmc's the bdpt states. */
-  int states = rs->mcmc_states != MCMC_STATES_DEFAULT ? rs->mcmc_states
-               : is_mmlt                            ? MCMC_STATES_MMLT
-                                                    : MCMC_STATES_BDPT;
+  /* The state space (--states, else the integrator's). */
+  int states = rs->mcmc_states != MCMC_STATES_DEFAULT ? rs->mcmc_states : M->default_states;
   int bdpt_states = states == MCMC_STATES_BDPT;
-  /* Families per path length: mmlt's states (for mmlt, or lmc on them). */
+  /* Families per path length: mmlt's states. */
   int multiplexed = states == MCMC_STATES_MMLT;
-  is_mmlt = multiplexed && !is_lmc; /* mmlt's own kernels (the technique mutation) */
+  /* The integrator's own targets replace the driver's (with their own step scales). */
+  int own_targets = M->family_target != NULL;
   render_settings lrs_states = *rs;
   lrs_states.lmc_states = states == MCMC_STATES_PT     ? LMC_STATES_PT
                           : states == MCMC_STATES_MMLT ? LMC_STATES_MMLT
@@ -741,7 +650,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
 
   /* Kelemen's s2: --sigma, else 1/64 (pssmlt, lmc) or MCMC_MMLT_SIGMA (mmlt:
    * on ring-caustics at 20 s, once the light-position steps were scaled
-   * (mcmc_light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
+   * (mc_light_u1_scale), 0.05 gave relative MSE 0.10 against 0.17 - 0.28
    * for 1/64, 0.03, 0.1 and 0.2, one run each). */
   const double sigma = (rs->set & SET_SIGMA)  ? rs->sigma
                        : rs->small_gauss      ? MCMC_GAUSS_SIGMA
@@ -842,20 +751,15 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   render_counters *cnt = calloc((size_t)nthreads, sizeof *cnt);
   mcmc_chain_slot *slots = NULL;
   int n_slots = 0;
-  if (is_lmc) {
-    /* The LMC targets (path_eval_pt or path_eval_bdpt, with gradients)
-     * replace pssmlt's or mmlt's, family for family. */
-    render_settings lrs = mrs;
-    lrs.sigma = sigma;
-    status = lmc_run_create(&lrun, s, &lrs, MCMC_UNBOUNDED_LMC, kmin, kmax, err);
+  render_settings lrs = mrs;
+  lrs.sigma = sigma;
+  if (M->create) {
+    mc_method_setup setup = {s, &lrs, states, kmin, kmax, n_fam};
+    status = M->create(&mrun, &setup, err);
     if (status) goto done;
-    if (lmc_run_n_families(lrun) != n_fam) {
-      status = lmc_error_set(err, LMC_EINVAL, NULL, 0, "lmc: %d families, expected %d",
-                             lmc_run_n_families(lrun), n_fam);
-      goto done;
-    }
-    for (int g = 0; g < n_fam; g++) fam[g].target = *lmc_run_family_target(lrun, g);
   }
+  if (own_targets) /* (e.g. lmc's: the same layouts, with gradients) */
+    for (int g = 0; g < n_fam; g++) fam[g].target = *M->family_target(mrun, g);
   /* The bootstrap keeps eval_expect's samples apart where the target has it. */
   int cap = 1; /* 0: out of memory */
   /* (mmlt's states estimate b from whole BDPT samples instead, below: their
@@ -864,23 +768,23 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   int64_t shared_paths = 0;
   if (bdpt_states) {
     /* (bdpt_states.c sets its own step scale) */
-  } else if (!is_mmlt && !is_lmc) {
-    /* pssmlt: next-event estimation's light-position number u1 of every
-     * bounce (lmc's run sets the same on its own target). */
+  } else if (!own_targets && !multiplexed) {
+    /* The pt states: next-event estimation's light-position number u1 of
+     * every bounce (lmc's run sets the same on its own target). */
     mc_target *T = &fam[0].target;
     fam[0].step_scale = malloc((size_t)T->dim * sizeof(double));
     if (fam[0].step_scale) {
-      mcmc_pt_step_scale(s, T->dim, fam[0].step_scale);
+      mc_pt_step_scale(s, T->dim, fam[0].step_scale);
       T->step_scale = fam[0].step_scale;
     } else {
       cap = 0;
     }
   }
-  if (is_mmlt) {
-    /* The light-position coordinates u1 of the light stream (emission) and
+  if (!own_targets && multiplexed) {
+    /* mmlt's states: the light-position coordinates u1 of the light stream (emission) and
      * of the connect stream (the light sample of s = 1): see
-     * mcmc_light_u1_scale. */
-    double u1_scale = mcmc_light_u1_scale(s);
+     * mc_light_u1_scale. */
+    double u1_scale = mc_light_u1_scale(s);
     for (int g = 0; g < n_fam; g++) {
       mc_target *T = &fam[g].target;
       fam[g].step_scale = malloc((size_t)T->dim * sizeof(double));
@@ -1013,7 +917,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the chains");
     goto done;
   }
-  if (lrun) {
+  if (M->set_chains) {
     int *family = malloc((size_t)n_slots * sizeof *family);
     if (!family) {
       status = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the chains");
@@ -1021,7 +925,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
     for (int g = 0; g < n_fam; g++)
       for (int i = 0; i < fam[g].n_chains; i++) family[fam[g].first_chain + i] = g;
-    status = lmc_run_set_chains(lrun, n_slots, family, err);
+    status = M->set_chains(mrun, n_slots, family, err);
     free(family);
     if (status) goto done;
   }
@@ -1035,13 +939,15 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     double large = rs->largestep;
     double p[MC_MAX_KERNELS] = {large, 1.0 - large, 0.0};
     int nk = 2;
-    if (is_mmlt && F->st.n_strategies > 1) {
+    if (multiplexed && F->st.n_strategies > 1) {
       /* The technique coordinate is the first of the connect stream. */
       k[2] = mc_kernel_technique(mc_target_stream_offset(&F->target, LMC_STREAM_CONNECT));
       p[1] = 0.9 * (1.0 - large);
       p[2] = 0.1 * (1.0 - large);
       nk = 3;
     }
+    memcpy(F->kdef, k, sizeof k), memcpy(F->pdef, p, sizeof p);
+    F->nkdef = nk;
     if (!(sigma > (rs->small_gauss ? 0.0 : 1.0 / 1024.0) && sigma < 0.5)) {
       status = lmc_error_set(err, LMC_EINVAL, NULL, 0,
                              rs->small_gauss ? "--sigma must lie in (0, 1/2)"
@@ -1060,8 +966,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       mcmc_chain_slot *sl = &slots[F->first_chain + i];
       sl->family = g;
       sl->scale = (norm == MCMC_NORM_BOOT ? F->bt.b : 1.0) / F->n_chains;
-      if (lrun) nk = lmc_run_chain_kernels(lrun, F->first_chain + i, k, p);
-      status = mc_chain_create(&sl->chain, &F->target, k, p, nk, err);
+      mc_kernel ki[MC_MAX_KERNELS];
+      double pi[MC_MAX_KERNELS];
+      memcpy(ki, k, sizeof ki), memcpy(pi, p, sizeof pi);
+      int nki = M->chain_kernels ? M->chain_kernels(mrun, F->first_chain + i, ki, pi, nk) : nk;
+      status = mc_chain_create(&sl->chain, &F->target, ki, pi, nki, err);
       if (status) goto done;
       sl->cap_rec = 2 * MCMC_ROUND;
       sl->rec = malloc((size_t)sl->cap_rec * sizeof(mcmc_splat));
@@ -1100,8 +1009,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     int ls_pending = rs->largestep_scale != 1.0;
     while (done_per_chain < per_chain && !stop) {
       int64_t m = per_chain - done_per_chain < MCMC_ROUND ? per_chain - done_per_chain : MCMC_ROUND;
-      if (lrun) {
-        int64_t lim = lmc_run_round_limit(lrun, done_per_chain, per_chain);
+      if (M->round_limit) {
+        int64_t lim = M->round_limit(mrun, done_per_chain, per_chain);
         if (m > lim) m = lim;
       }
       volatile int abandon = 0;
@@ -1147,16 +1056,18 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
         }
       }
       mcmc__publish(out, fam, n_fam, slots, norm, done_per_chain, 0);
-      if (lrun && lmc_run_after_round(lrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
-        /* Stage 1 of lmc --adapt cache ended. Its chains ran a fixed kernel
-         * (M = I; Adam's moments were only recorded), so its image stays;
-         * the chains restart from their bootstrap states with the frozen
-         * cache (the kernel of stage 2 is fixed given the cache). */
+      if (M->after_round && M->after_round(mrun, done_per_chain, per_chain, omp_get_wtime() - t0)) {
+        /* The integrator asks for a restart (stage 1 of lmc --adapt cache
+         * ended: its chains ran a fixed kernel, so its image stays; they
+         * restart from their bootstrap states with the frozen cache, a
+         * fixed kernel given the cache). */
         for (int i = 0; i < n_slots; i++) {
           mc_kernel k2[MC_MAX_KERNELS];
           double p2[MC_MAX_KERNELS];
-          lmc_run_note_stage1_chain(lrun, slots[i].chain);
-          int nk2 = lmc_run_chain_kernels(lrun, i, k2, p2);
+          const mcmc_family *F = &fam[slots[i].family];
+          if (M->note_restart_chain) M->note_restart_chain(mrun, slots[i].chain);
+          memcpy(k2, F->kdef, sizeof k2), memcpy(p2, F->pdef, sizeof p2);
+          int nk2 = M->chain_kernels ? M->chain_kernels(mrun, i, k2, p2, F->nkdef) : F->nkdef;
           if (mc_chain_set_kernels(slots[i].chain, k2, p2, nk2, err) != LMC_OK) {
             status = LMC_EINVAL;
             goto done;
@@ -1261,11 +1172,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       }
       if (overflow > 0)
         fprintf(stderr, "lmc: %lld coordinates drawn past the state's blocks\n", (long long)overflow);
-      if (lrun) {
+      if (M->report) {
         mc_chain **chains = malloc((size_t)n_slots * sizeof *chains);
         if (chains) {
           for (int i = 0; i < n_slots; i++) chains[i] = slots[i].chain;
-          lmc_run_report(lrun, chains, n_slots, chain_seconds);
+          M->report(mrun, chains, n_slots, chain_seconds);
           free(chains);
         }
       }
@@ -1279,13 +1190,13 @@ finish:
   }
   for (int i = 0; i < n_slots; i++)
     if (slots && slots[i].chain && slots[i].chain->scratch)
-      st->nan_samples += is_lmc        ? lmc_run_scratch_nan_samples(lrun, slots[i].chain->scratch)
-                         : bdpt_states ? mc_bdpt_states_nan_samples(slots[i].chain->scratch) +
+      st->nan_samples += M->nan_samples ? M->nan_samples(mrun, slots[i].chain)
+                         : bdpt_states       ? mc_bdpt_states_nan_samples(slots[i].chain->scratch) +
                                              mc_bdpt_states_nan_samples(slots[i].chain->scratch_alt)
                                        : ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
 done:
   mcmc__free_slots(slots, n_slots);
-  lmc_run_destroy(lrun);
+  if (M->destroy) M->destroy(mrun);
   for (int g = 0; g < n_fam; g++)
     mc_boot_free(&fam[g].bt), free(fam[g].step_scale), free(fam[g].splat),
         mc_bdpt_states_free(&fam[g].bst);

@@ -125,6 +125,14 @@ struct mc_target {
   int (*eval_hess)(const mc_target *t, void *scratch, lmc_sampler *smp, int label,
                    mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
                    int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok);
+  /* Optional (NULL: every coordinate, or label_coords for labelled
+   * targets): the coordinates a local kernel that moves a subset (H2MC's)
+   * moves at the state (u, label), written to OUT_idx (room for dim);
+   * returns their count. It must depend only on the label and on
+   * coordinates outside the set it returns, so that a step and its
+   * reverse move the same ones (mmlt's states: the numbers the state's
+   * strategy reads, a function of the technique coordinate). */
+  int (*local_coords)(const mc_target *t, const double *u, int label, int *OUT_idx);
 };
 
 /* The most coordinates a target's Hessian spans (AD_H_CAPACITY of src/ad). */

@@ -1,0 +1,104 @@
+/*
+ * states.c: helpers of the primary-sample state spaces that several MCMC
+ * integrators share (states.h).
+ */
+#include "lmc/states.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* The small-step factor for the coordinate that picks an area light's
+ * triangle (mmlt, pssmlt and lmc). light_sample_le and light_sample_li choose the triangle
+ * with their first position number u1 and reuse u1 inside its cell, so
+ * d(point)/d(u1) grows with the triangle count: on the 16384-triangle
+ * sphere light of ring-caustics a step of 1/1024 moves the point about 60
+ * degrees round the sphere and, through the new normal's frame, the
+ * emitted direction anywhere (of light-tracing proposals that touch only
+ * u1 by 0.003, 99.5% of the f-weight came back black). Scaling that
+ * coordinate's steps by 1 / (largest triangle count of an area light)
+ * keeps them within about a cell; larger moves of the point are left to
+ * large steps. 1 when no area light has more than one triangle. */
+double mc_light_u1_scale(const scene *s) {
+  int64_t n_max = 1;
+  for (int i = 0; i < s->n_lights; i++) {
+    const light *l = &s->lights[i];
+    if (l->type != LIGHT_AREA || l->mesh < 0) continue;
+    int64_t n = s->meshes[l->mesh].n_triangles;
+    if (n > n_max) n_max = n;
+  }
+  return 1.0 / (double)n_max;
+}
+
+void mc_pt_step_scale(const scene *s, int dim, double *OUT_scale) {
+  double u1_scale = mc_light_u1_scale(s);
+  for (int i = 0; i < dim; i++) OUT_scale[i] = 1.0;
+  for (int i = PT_DIMS_CAMERA + 1; i < dim; i += PT_DIMS_PER_BOUNCE) OUT_scale[i] = u1_scale;
+}
+
+rgb mc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n, double margin,
+                         double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
+                         render_counters *cnt, double *OUT_rx, double *OUT_ry) {
+  /* The strategy (s, t) from the technique coordinate, and the light sample
+   * of s = 1. */
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+  int idx = (int)(sampler_next(smp) * n);
+  if (idx >= n) idx = n - 1;
+  int tt = k == 1 ? 2 : idx + 1, ss = k + 1 - tt;
+  double uc[BDPT_DIMS_CONNECT];
+  for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
+
+  /* The two subpaths, just long enough for (s, t). */
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  double u0 = sampler_next(smp), u1 = sampler_next(smp);
+  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
+  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
+  *OUT_rx = rx, *OUT_ry = ry;
+  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, tt, cam, cnt);
+  if (nc < tt) return rgb_zero();
+  if (ss > 0) {
+    sampler_use_stream(smp, LMC_STREAM_LIGHT);
+    int nl = bdpt_light_subpath(s, rs, smp, ss, lp, cnt);
+    if (nl < ss) return rgb_zero();
+  }
+
+  /* The strategy's MIS-weighted contribution, times n_k. */
+  double prx = rx, pry = ry;
+  rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
+  if (tt != 1) return rgb_scale(c, area * n);
+  *OUT_rx = prx, *OUT_ry = pry;
+  return rgb_scale(c, (double)n);
+}
+
+double mc_mmlt_expected(const scene *s, const render_settings *rs, int k, double margin,
+                        double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
+                        render_counters *cnt) {
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+  (void)sampler_next(smp); /* the technique */
+  double uc[BDPT_DIMS_CONNECT];
+  for (int i = 0; i < BDPT_DIMS_CONNECT; i++) uc[i] = sampler_next(smp);
+  /* Subpaths long enough for every strategy (their prefixes are those of
+   * the shorter ones: the streams' layout is per vertex). */
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  double u0 = sampler_next(smp), u1 = sampler_next(smp);
+  double rx = -margin + u0 * (s->cam.width + 2.0 * margin);
+  double ry = -margin + u1 * (s->cam.height + 2.0 * margin);
+  int t_max = k + 1, s_max = k == 1 ? 0 : k;
+  int nc = bdpt_camera_subpath(s, rs, smp, rx, ry, t_max, cam, cnt);
+  int nl = 0;
+  if (s_max > 0) {
+    sampler_use_stream(smp, LMC_STREAM_LIGHT);
+    nl = bdpt_light_subpath(s, rs, smp, s_max, lp, cnt);
+  }
+  double sum = 0.0;
+  for (int tt = k == 1 ? 2 : 1; tt <= t_max; tt++) {
+    int ss = k + 1 - tt;
+    if (nc < tt || nl < ss) continue;
+    double prx = rx, pry = ry;
+    rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
+    if (tt != 1) c = rgb_scale(c, area);
+    double f = rgb_luminance(c);
+    if (rgb_isfinite(c) && f > 0.0 && isfinite(f)) sum += f;
+  }
+  return sum;
+}
+
