@@ -43,7 +43,7 @@ static const char *lmc_usage =
     "  compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
     "                                  print mse, relmse and mean_ratio\n"
     "  merge [--weight W] A.exr ... -o OUT.exr  average independent renders of one scene\n"
-    "  convert IN.exr OUT.png [--exposure S]  sRGB preview (default: the render's)\n"
+    "  convert IN.exr OUT.png [--exposure STOPS|auto]  sRGB PNG preview of an EXR\n"
     "  --help, -h                      this text (lmc render --help: the render flags)\n"
     "  --version                       the version\n"
     "\n"
@@ -69,6 +69,9 @@ static const char *lmc_render_usage =
     "                           else independent)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
     "  --snapshot S             also write OUT-<seconds>s.exr every S seconds\n"
+    "  --exposure STOPS|auto    the PNG preview: radiance times 2^STOPS, clamped, sRGB\n"
+    "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
+    "                           99th percentile of luminance maps to white\n"
     "\n";
 /* (in two parts: C caps a string literal's guaranteed length) */
 static const char *lmc_render_usage_mcmc =
@@ -214,6 +217,33 @@ static int lmc_parse_double(const char *flag, const char *s, double lo, double h
   return 1;
 }
 
+/* The PNG preview's exposure: --exposure STOPS (linear radiance times
+ * 2^STOPS, clamped, sRGB: how Mitsuba, pbrt and tev show an EXR; default 0)
+ * or --exposure auto (the 99th percentile of luminance maps to white). */
+typedef struct lmc_exposure {
+  int is_auto;
+  double stops;
+} lmc_exposure;
+
+static int lmc_parse_exposure(const char *s, lmc_exposure *out) {
+  if (strcmp(s, "auto") == 0) {
+    out->is_auto = 1;
+    out->stops = 0.0;
+    return 1;
+  }
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (errno || end == s || *end != '\0' || !isfinite(v) || v < -64.0 || v > 64.0) {
+    fprintf(stderr, "lmc: flag --exposure: '%s' is neither a number of stops in [-64, 64] nor 'auto'\n",
+            s);
+    return 0;
+  }
+  out->is_auto = 0;
+  out->stops = v;
+  return 1;
+}
+
 /* --- lmc render --------------------------------------------------------------- */
 
 static void lmc_on_signal(int sig) { render_request_stop(sig); }
@@ -289,7 +319,13 @@ static double lmc_preview_scale(const lmc_image *img) {
   return scale;
 }
 
-static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size) {
+/* The factor the preview multiplies radiance by. */
+static double lmc_exposure_scale(const lmc_exposure *e, const lmc_image *img) {
+  return e->is_auto ? lmc_preview_scale(img) : exp2(e->stops);
+}
+
+static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size,
+                             const lmc_exposure *exposure) {
   lmc_error err;
   lmc_error_clear(&err);
   lmc_image img = {0};
@@ -304,7 +340,7 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
   size_t len = strlen(png_path);
   if (len > 4 && strcmp(png_path + len - 4, ".exr") == 0) png_path[len - 4] = '\0';
   strncat(png_path, ".png", png_size - strlen(png_path) - 1);
-  if (image_write_png(png_path, &img, lmc_preview_scale(&img), &err)) {
+  if (image_write_png(png_path, &img, lmc_exposure_scale(exposure, &img), &err)) {
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
     image_free(&img);
@@ -345,6 +381,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   render_settings cli = render_settings_default();
   cli.set = 0;
   int res_w = 0, res_h = 0;
+  lmc_exposure exposure = {0, 0.0};
   lmc_args a = {argc, 2, argv, NULL};
   if (!defines) return EXIT_FAIL;
 
@@ -364,7 +401,7 @@ static int lmc_cmd_render(int argc, char **argv) {
       if (!lmc_integrator_known(v)) {
         fprintf(stderr,
                 "lmc: flag --integrator: unknown integrator '%s' "
-                "(valid: pt, bdpt, pssmlt, mmlt, lmc)\n",
+                "(valid: pt, bdpt, pssmlt, mmlt, lmc, h2mc)\n",
                 v);
         goto bad;
       }
@@ -410,6 +447,8 @@ static int lmc_cmd_render(int argc, char **argv) {
     } else if (lmc_flag_is(&a, "--snapshot")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--snapshot", v, 1e-3, 1e9, &cli.snapshot))
         goto bad;
+    } else if (lmc_flag_is(&a, "--exposure")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) goto bad;
     } else if (lmc_flag_is(&a, "--largestep")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--largestep", v, 0, 1, &cli.largestep))
         goto bad;
@@ -670,7 +709,7 @@ static int lmc_cmd_render(int argc, char **argv) {
     scene_destroy(s);
     return EXIT_FAIL;
   }
-  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png);
+  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, &exposure);
   fprintf(stderr,
           "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
           "%.3g Mrays/s%s%s\n",
@@ -921,20 +960,20 @@ static int lmc_cmd_merge(int argc, char **argv) {
 static int lmc_cmd_convert(int argc, char **argv) {
   const char *paths[2] = {NULL, NULL};
   int n = 0;
-  double exposure = 0.0;
+  lmc_exposure exposure = {0, 0.0};
   lmc_args a = {argc, 2, argv, NULL};
   for (a.i = 2; a.i < argc; a.i++) {
     const char *v;
     if (lmc_flag_is(&a, "--exposure")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--exposure", v, 1e-30, 1e30, &exposure))
-        return EXIT_BADINPUT;
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) return EXIT_BADINPUT;
     } else if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
-      printf("usage: lmc convert IN.exr OUT.png [--exposure S]\n"
-             "writes an sRGB PNG preview of a linear image, scaled by S (default:\n"
-             "the exposure lmc render chooses, from the image's own brightness)\n");
+      printf("usage: lmc convert IN.exr OUT.png [--exposure STOPS|auto]\n"
+             "writes an sRGB PNG preview of a linear image: radiance times 2^STOPS\n"
+             "(default 0), clamped, with the sRGB curve; 'auto' maps the 99th\n"
+             "percentile of luminance to white\n");
       return EXIT_OK;
     } else if (argv[a.i][0] == '-') {
-      fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc convert IN.exr OUT.png [--exposure S])\n",
+      fprintf(stderr, "lmc: unknown flag '%s' (usage: lmc convert IN.exr OUT.png [--exposure STOPS|auto])\n",
               argv[a.i]);
       return EXIT_BADINPUT;
     } else if (n < 2) {
@@ -945,7 +984,7 @@ static int lmc_cmd_convert(int argc, char **argv) {
     }
   }
   if (n != 2) {
-    fprintf(stderr, "usage: lmc convert IN.exr OUT.png [--exposure S]\n");
+    fprintf(stderr, "usage: lmc convert IN.exr OUT.png [--exposure STOPS|auto]\n");
     return EXIT_BADINPUT;
   }
   lmc_image img = {0};
@@ -955,8 +994,7 @@ static int lmc_cmd_convert(int argc, char **argv) {
   int status = EXIT_OK;
   if (image_read(paths[0], 0, &img, &err) || image_to_rgb(&img, &err)) {
     status = EXIT_BADINPUT;
-  } else if (image_write_png(paths[1], &img, exposure > 0.0 ? exposure : lmc_preview_scale(&img),
-                             &err)) {
+  } else if (image_write_png(paths[1], &img, lmc_exposure_scale(&exposure, &img), &err)) {
     status = EXIT_FAIL;
   }
   if (status != EXIT_OK) {

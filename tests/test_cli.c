@@ -344,6 +344,101 @@ static void test_merge_and_convert(void **state) {
   image_free(&P);
 }
 
+/* The sRGB byte of a linear value times 2^stops, computed here from the
+ * sRGB standard's curve (IEC 61966-2-1), independently of image.c. */
+static int expected_byte(float v, double stops) {
+  double x = (double)v * exp2(stops);
+  if (!(x > 0.0)) x = 0.0;
+  if (x > 1.0) x = 1.0;
+  double s = x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+  return (int)floor(255.0 * s + 0.5);
+}
+
+/* Bytes of a PNG (read without decoding) against expected_byte of img
+ * times factor: returns the number of channel values checked. */
+static int check_png_bytes(const char *png, const lmc_image *img, double stops) {
+  lmc_image P = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (image_read(png, 0, &P, &err)) fail_msg("cannot read %s: %s", png, err.msg);
+  assert_int_equal(P.width, img->width);
+  assert_int_equal(P.height, img->height);
+  int n = 0;
+  for (int i = 0; i < img->width * img->height * 3; i++, n++) {
+    int got = (int)floor(P.data[i] * 255.0f + 0.5f), want = expected_byte(img->data[i], stops);
+    if (got != want)
+      fail_msg("%s: value %d (linear %g, %g stops): byte %d, expected %d", png, i, img->data[i],
+               stops, got, want);
+  }
+  image_free(&P);
+  return n;
+}
+
+/* --exposure STOPS: radiance times 2^STOPS, clamped, with the sRGB curve
+ * (lmc convert and lmc render); auto: the 99th percentile of luminance
+ * maps to white; bad values exit 2 naming the flag. */
+static void test_exposure(void **state) {
+  (void)state;
+  /* 10 x 10 grey pixels 0.01, 0.02, ..., 1.00 times a ramp per channel. */
+  lmc_image G;
+  lmc_error err;
+  assert_int_equal(image_init(&G, 10, 10, 3, &err), LMC_OK);
+  for (int i = 0; i < 100; i++)
+    for (int c = 0; c < 3; c++) G.data[3 * i + c] = (float)((i + 1) * 0.01);
+  G.data[0] = 0.0f;                 /* black */
+  G.data[1] = 0.002f;               /* the curve's linear segment */
+  G.data[2] = 3.0f;                 /* clamped at every exposure >= -1 */
+  G.data[4] = -1.0f;                /* negative: 0 */
+  assert_int_equal(image_write_exr(TMP "/x.exr", &G, &err), LMC_OK);
+  static const char *stops[] = {"0", "1", "-1", "2.5", "-3.25"};
+  int checked = 0;
+  for (size_t k = 0; k < sizeof stops / sizeof stops[0]; k++) {
+    char args[256];
+    snprintf(args, sizeof args, "convert " TMP "/x.exr " TMP "/x.png --exposure %s", stops[k]);
+    assert_int_equal(run_lmc(args), 0);
+    checked += check_png_bytes(TMP "/x.png", &G, atof(stops[k]));
+  }
+  /* The default is 0 stops, and --exposure=VALUE is the same flag. */
+  assert_int_equal(run_lmc("convert " TMP "/x.exr " TMP "/x.png"), 0);
+  checked += check_png_bytes(TMP "/x.png", &G, 0.0);
+  assert_int_equal(run_lmc("convert " TMP "/x.exr " TMP "/x.png --exposure=1"), 0);
+  checked += check_png_bytes(TMP "/x.png", &G, 1.0);
+  assert_int_equal(checked, 7 * 300);
+
+  /* auto: pure grey 0.01 .. 1.00 (pixel i: (i + 1) / 100): the 99th
+   * percentile of the 100 luminances (the 99th smallest, 0.99) maps to 1. */
+  lmc_image A;
+  assert_int_equal(image_init(&A, 10, 10, 3, &err), LMC_OK);
+  for (int i = 0; i < 300; i++) A.data[i] = (float)((i / 3 + 1) * 0.01);
+  assert_int_equal(image_write_exr(TMP "/auto.exr", &A, &err), LMC_OK);
+  assert_int_equal(run_lmc("convert " TMP "/auto.exr " TMP "/auto.png --exposure auto"), 0);
+  checked = check_png_bytes(TMP "/auto.png", &A, -log2(0.99f));
+  assert_int_equal(checked, 300);
+
+  /* lmc render writes its PNG with the same mapping of its own EXR. */
+  assert_int_equal(run_lmc("render " SCENE " --spp 2 -q --exposure -1.5 -o " TMP "/xr.exr"), 0);
+  lmc_image R = read_exr(TMP "/xr.exr");
+  assert_int_equal(check_png_bytes(TMP "/xr.png", &R, -1.5), 40 * 30 * 3);
+  image_free(&R);
+
+  /* Bad values: exit 2, naming the flag. */
+  static const char *bad[] = {"convert " TMP "/x.exr " TMP "/y.png --exposure bright",
+                              "convert " TMP "/x.exr " TMP "/y.png --exposure 65",
+                              "convert " TMP "/x.exr " TMP "/y.png --exposure",
+                              "render " SCENE " -q --exposure nan",
+                              "render " SCENE " -q --exposure=Auto"};
+  int refused = 0;
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    int rc = run_lmc(bad[k]);
+    if (rc != 2) fail_msg("lmc %s: exit %d, expected 2 (stderr: %s)", bad[k], rc, err_text);
+    if (!strstr(err_text, "--exposure")) fail_msg("lmc %s: stderr: %s", bad[k], err_text);
+    refused++;
+  }
+  assert_int_equal(refused, 5);
+  image_free(&G);
+  image_free(&A);
+}
+
 /* SIGINT during a long render: exit 130 within seconds, and the image of
  * what was rendered is written and valid. */
 static void test_interrupt_writes_image(void **state) {
@@ -413,6 +508,7 @@ int main(void) {
       cmocka_unit_test(test_resolution_override),
       cmocka_unit_test(test_compare_metrics),
       cmocka_unit_test(test_merge_and_convert),
+      cmocka_unit_test(test_exposure),
       cmocka_unit_test(test_torus_renders_unmodified),
       cmocka_unit_test(test_interrupt_writes_image),
       cmocka_unit_test(test_time_limit),

@@ -657,9 +657,14 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                        : !multiplexed         ? rs->sigma
                                               : MCMC_MMLT_SIGMA;
 
+  /* One progress line over the phases: direct light, bootstrap, chains. */
+  progress bar;
+  progress_init(&bar, rs->integrator, rs->quiet);
+
   /* Direct lighting by pt first, when asked (--direct separate). */
   render_settings mrs = *rs;
   if (rs->direct_separate) {
+    progress_phase(&bar, "direct light", 0.0);
     render_settings prs = *rs;
     snprintf(prs.integrator, sizeof prs.integrator, "pt");
     prs.maxdepth = rs->maxdepth >= 0 && rs->maxdepth < 2 ? rs->maxdepth : 2;
@@ -673,10 +678,14 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     prs.quiet = 1;
     render_stats pst;
     status = render_run(s, &prs, out, &pst, err);
-    if (status) return status;
+    if (status) {
+      progress_end(&bar);
+      return status;
+    }
     st->rays += pst.rays;
     st->nan_samples += pst.nan_samples;
     if (pst.interrupted) {
+      progress_end(&bar);
       st->interrupted = 1;
       st->seconds = omp_get_wtime() - t0;
       return LMC_OK;
@@ -687,6 +696,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     if (status) return status;
   }
   if (rs->direct_separate && rs->maxdepth >= 0 && rs->maxdepth < 3) {
+    progress_end(&bar);
     st->seconds = omp_get_wtime() - t0;
     return LMC_OK;
   }
@@ -719,6 +729,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     F->st = (mcmc_scene_target){s, mrs, 0, 1, margin, area};
     status = mc_bdpt_states_init(&F->target, &F->bst, s, &mrs, kmin, kmax, err);
     if (status) {
+      progress_end(&bar);
       film_free(out);
       return status;
     }
@@ -808,6 +819,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
    * --direct separate's pt pass), at most MCMC_BOOT_CAP samples in all. */
   {
     const double t_boot = omp_get_wtime();
+    progress_phase(&bar, "bootstrap", timed ? (t_boot - t0) / rs->time_limit : 0.0);
     mc_boot_params bp = {
         /* mmlt's states: a pilot per family for the starting states alone */
         .fixed = multiplexed ? MCMC_BOOT_BATCH : rs->bootstrap > 0 ? rs->bootstrap : 0,
@@ -999,9 +1011,12 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       for (int g = 0; g < n_fam; g++) weight += (int64_t)fam[g].n_chains * fam[g].m_round;
       per_chain = (total * MCMC_ROUND + weight - 1) / weight;
     }
-    progress bar;
-    progress_init(&bar, rs->integrator, rs->quiet);
     double t_chain0 = omp_get_wtime(), next_snapshot = rs->snapshot;
+    /* Under --spp the ETA is the chains' own (the bar's clock restarts). */
+    if (!timed) bar.start = t_chain0;
+    progress_phase(&bar, "chains", timed ? (t_chain0 - t0) / rs->time_limit : 0.0);
+    int64_t mut0 = 0;
+    for (int g = 0; g < n_fam; g++) mut0 += fam[g].done * fam[g].n_chains;
     int64_t done_per_chain = 0;
     volatile int stop = 0;
     /* --largestep-scale: from MCMC_LARGESTEP_SCALE_AFTER of the chains'
@@ -1088,7 +1103,9 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       }
       double frac = by_spp ? (double)done_per_chain / (double)per_chain : 0.0;
       if (timed) frac = fmax(frac, (now - t0) / rs->time_limit);
-      progress_update(&bar, frac);
+      int64_t mut = -mut0;
+      for (int g = 0; g < n_fam; g++) mut += fam[g].done * fam[g].n_chains;
+      progress_update_rate(&bar, frac, (double)mut / fmax(now - t_chain0, 1e-9), "mutations/s");
     }
     progress_finish(&bar);
     /* The final image with the refined b (also after an interruption: the
@@ -1195,6 +1212,7 @@ finish:
                                              mc_bdpt_states_nan_samples(slots[i].chain->scratch_alt)
                                        : ((mcmc_scratch *)slots[i].chain->scratch)->cnt.nan_samples;
 done:
+  progress_end(&bar);
   mcmc__free_slots(slots, n_slots);
   if (M->destroy) M->destroy(mrun);
   for (int g = 0; g < n_fam; g++)

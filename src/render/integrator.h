@@ -99,11 +99,21 @@ typedef struct progress {
   int enabled;
   double start, last_print;
   char label[32];
+  char phase[24];   /* "" or the render's phase (MCMC: direct light, bootstrap, chains) */
+  double rate;      /* > 0: shown with rate_unit after the ETA */
+  char rate_unit[24];
+  int open;         /* a line is on the terminal, not yet ended */
 } progress;
 void progress_init(progress *p, const char *label, int quiet);
 /* fraction in [0, 1]; prints at most a few times a second. */
 void progress_update(progress *p, double fraction);
+/* Names the phase and prints the line at once with fraction. */
+void progress_phase(progress *p, const char *phase, double fraction);
+/* progress_update with a rate (e.g. mutations per second) on the line. */
+void progress_update_rate(progress *p, double fraction, double rate, const char *unit);
 void progress_finish(progress *p);
+/* Ends the line where it stands (an error or an interruption), once. */
+void progress_end(progress *p);
 
 /* The power heuristic (beta = 2) for two strategies with densities a and b. */
 static inline double mis_power(double a, double b) {

@@ -79,16 +79,40 @@ void progress_update(progress *p, double fraction) {
   for (int i = 0; i < WIDTH; i++) bar[i] = i < full ? '=' : (i == full ? '>' : ' ');
   bar[WIDTH] = '\0';
   double elapsed = now - p->start;
-  double eta = fraction > 1e-6 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-  fprintf(stderr, "\r%s [%s] %5.1f%%  %.1fs  ETA %.1fs   ", p->label, bar, 100.0 * fraction,
-          elapsed, eta);
+  char eta[32] = "ETA -";
+  if (fraction > 1e-6) snprintf(eta, sizeof eta, "ETA %.1fs", elapsed * (1.0 - fraction) / fraction);
+  char rate[48] = "";
+  if (p->rate > 0.0) snprintf(rate, sizeof rate, "  %.3g %s", p->rate, p->rate_unit);
+  /* \033[K clears what a longer earlier line left. */
+  fprintf(stderr, "\r%s%s%s [%s] %5.1f%%  %.1fs  %s%s\033[K", p->label, p->phase[0] ? " " : "",
+          p->phase, bar, 100.0 * fraction, elapsed, eta, rate);
   fflush(stderr);
+  p->open = 1;
+}
+
+void progress_phase(progress *p, const char *phase, double fraction) {
+  snprintf(p->phase, sizeof p->phase, "%s", phase);
+  p->rate = 0.0;
+  p->last_print = -1.0;
+  progress_update(p, fraction);
+}
+
+void progress_update_rate(progress *p, double fraction, double rate, const char *unit) {
+  p->rate = rate;
+  snprintf(p->rate_unit, sizeof p->rate_unit, "%s", unit);
+  progress_update(p, fraction);
 }
 
 void progress_finish(progress *p) {
   if (!p->enabled) return;
   progress_update(p, 1.0);
+  progress_end(p);
+}
+
+void progress_end(progress *p) {
+  if (!p->enabled || !p->open) return;
   fprintf(stderr, "\n");
+  p->open = 0;
 }
 
 /* A thread's counters, alone on their cache line: the integrators bump
