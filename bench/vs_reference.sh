@@ -37,7 +37,7 @@
 #   LMC_CONVERGED      our converged image of the scene (EXR at that size;
 #                      default scenes/<scene>/reference.exr, see its README)
 #   LMC_REF_CONVERGED  the reference's own converged image
-#   LMC_GRID_EXPOSURE  the grid's exposure (default 1)
+#   LMC_GRID_EXPOSURE  the grid's exposure in stops (default 0, lmc convert --exposure)
 # Without a converged image the relmse column of that renderer reads "-".
 # Needs ImageMagick's montage for the grid (apt-get install imagemagick).
 set -euo pipefail
@@ -245,9 +245,9 @@ table=$out/table.md
 cat "$table"
 
 # The grid: the first seed's renders and the converged image, all at one
-# exposure (LMC_GRID_EXPOSURE, default 1), labelled.
+# exposure (LMC_GRID_EXPOSURE stops, default 0), labelled.
 if command -v montage >/dev/null; then
-  exposure=${LMC_GRID_EXPOSURE:-1}
+  exposure=${LMC_GRID_EXPOSURE:-0}
   if [ -n "${LMC_CONVERGED:-}" ] && [ -f "$LMC_CONVERGED" ]; then
     "$lmc" convert "$LMC_CONVERGED" "$out/converged.png" --exposure "$exposure" >/dev/null
   fi

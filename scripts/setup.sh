@@ -2,7 +2,9 @@
 # scripts/setup.sh: the README's two commands.
 #
 #   bash scripts/setup.sh demo   install what is missing, build (Release), render
-#                                scenes/ring-caustics and print where the images are
+#                                scenes/ring-caustics with Langevin Monte Carlo and with
+#                                path tracing at the same wall time (scripts/demo.sh),
+#                                and print where the images are
 #   bash scripts/setup.sh test   install what is missing, build, run the whole test
 #                                suite (ctest), then the unit tests again under
 #                                AddressSanitizer + UndefinedBehaviorSanitizer,
@@ -11,7 +13,8 @@
 #
 # Works on a fresh Debian 12 machine as root (or with sudo). Environment:
 #   LMC_JOBS      parallel build jobs (default: the number of cores)
-#   LMC_DEMO_SPP  samples per pixel of the demo render (default 256)
+#   LMC_DEMO_SPP  mutations per pixel of the demo's LMC render (default 340, about a
+#                 minute on 2 cores; the test suite's test_demo runs it with 8)
 #   LMC_FUZZ_SECONDS  seconds per fuzz target in `test` (default 15; 0 skips fuzzing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,7 +24,8 @@ jobs=${LMC_JOBS:-$(nproc)}
 packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-dev
           libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev liblapack-dev
           clang libclang-rt-dev libomp-dev   # libFuzzer (-fsanitize=fuzzer) and OpenMP for clang
-          gnuplot-nox)                       # plots of bench/equal_time.sh
+          gnuplot-nox                        # plots of bench/equal_time.sh
+          imagemagick fonts-dejavu-core)     # the demo's side-by-side picture, benchmark grids
 
 # Install the Debian packages that are missing.
 missing=()
@@ -47,9 +51,7 @@ build() { # dir, extra cmake args...
 case "$mode" in
   demo)
     build build
-    mkdir -p out
-    build/lmc render scenes/ring-caustics/scene.xml --spp "${LMC_DEMO_SPP:-256}" \
-      -o out/ring-caustics.exr
+    bash scripts/demo.sh build out
     ;;
   test)
     build build

@@ -75,7 +75,7 @@ static const char *lmc_render_usage =
     "\n";
 /* (in two parts: C caps a string literal's guaranteed length) */
 static const char *lmc_render_usage_mcmc =
-    "MCMC (pssmlt, mmlt, lmc; --spp counts mutations per pixel):\n"
+    "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel):\n"
     "  --states KIND            the chains' states: bdpt (a BDPT sample and one of its\n"
     "                           strategies, every length in one family; pssmlt's and lmc's\n"
     "                           default) | mmlt (one family per length; mmlt's default) |\n"

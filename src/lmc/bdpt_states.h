@@ -1,6 +1,6 @@
 /*
  * bdpt_states.h: the bdpt states (--states bdpt) as a labelled mc_target
- * (target.h), for pssmlt, mmlt and lmc.
+ * (target.h), for pssmlt, lmc and h2mc.
  *
  * A state is the numbers of one BDPT sample in bdpt_li's layout
  * (integrator.h: the film position and the camera subpath, the light

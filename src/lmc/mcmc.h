@@ -1,6 +1,6 @@
 /*
- * mcmc.h: the Markov chain Monte Carlo integrators (pssmlt, mmlt, lmc) as
- * the command line sees them.
+ * mcmc.h: the Markov chain Monte Carlo integrators (every table of methods.c:
+ * pssmlt, mmlt, lmc, h2mc) as the command line sees them.
  */
 #ifndef LMC_MCMC_MCMC_H
 #define LMC_MCMC_MCMC_H
@@ -10,7 +10,7 @@
 #include "render/scene.h"
 #include "render/settings.h"
 
-/* 1 when `name` is one of the MCMC integrators: pssmlt, mmlt, lmc. */
+/* 1 when `name` names an MCMC integrator (mc_method_find, method.h). */
 int mcmc_is_integrator(const char *name);
 
 /* Renders s with the MCMC integrator rs->integrator into `out` (created
