@@ -45,8 +45,16 @@
  *
  * Second order. An arena made with ad_arena_init2 gives every dual the
  * Hessian H = d^2 v / du^2 as well, stored after the gradient in the same
- * tangent block: the upper triangle, row by row (entry (i, j), i <= j, at
- * i n - i (i - 1) / 2 + j - i), padded to AD_LANES. The chain rule for
+ * tangent block: the lower triangle, row by row (entry (i, j), i <= j, at
+ * j (j + 1) / 2 + i), padded to AD_LANES, then a header lane group whose
+ * first double is the dual's width w: the number of leading variables its
+ * value may depend on (0 for constants, index + 1 for variable `index`, the
+ * largest width of the operands for a result). Only the first pad(w)
+ * gradient entries and pad(w (w + 1) / 2) Hessian entries of a block are
+ * written and read (zero beyond w); with this layout a width-w Hessian is
+ * the first entries of the block. Variables enter a path evaluation in
+ * the order it draws its numbers, so the dual of an early vertex has a
+ * small width, and an operation costs O(w^2), not O(n^2). The chain rule for
  * f(x, y) is
  *   H_f = f_x H_x + f_y H_y                                   (linear part)
  *       + f_xx g_x g_x^T + f_xy (g_x g_y^T + g_y g_x^T) + f_yy g_y g_y^T
@@ -88,6 +96,7 @@ typedef struct ad_arena {
   size_t base;  /* buf[0, base) is the zero tangent shared by constants */
   size_t lanes; /* doubles per tangent block (gradient, then Hessian); 0 after overflow */
   size_t glanes; /* doubles of the gradient: n rounded up to AD_LANES */
+  size_t woff;   /* second order: offset of the width in a block (after the Hessian) */
   int n;         /* tangent length given to ad_arena_init */
   int order;     /* 1: gradients; 2: gradients and Hessians */
   int overflow;  /* set when an allocation did not fit */
@@ -99,7 +108,7 @@ static inline size_t ad__pad(size_t n) { return (n + AD_LANES - 1) & ~(size_t)(A
 /* Doubles of one tangent block of an arena of tangent length n and order. */
 static inline size_t ad__block(int n, int order) {
   size_t m = (size_t)(n < 0 ? 0 : n);
-  return ad__pad(m) + (order == 2 ? ad__pad(m * (m + 1) / 2) : 0);
+  return ad__pad(m) + (order == 2 ? ad__pad(m * (m + 1) / 2) + AD_LANES : 0);
 }
 
 /* Doubles of arena storage needed for `count` duals of tangent length n
@@ -116,6 +125,7 @@ static inline int ad__arena_init(ad_arena *A, double *buf, size_t cap, int n, in
   A->order = order;
   A->glanes = ad__pad((size_t)n);
   A->lanes = ad__block(n, order);
+  A->woff = order == 2 ? A->lanes - AD_LANES : 0;
   if (cap < A->lanes) return -1;
   memset(buf, 0, A->lanes * sizeof(double));
   A->base = A->lanes;
@@ -246,17 +256,75 @@ static inline void ad__k6(size_t nb, double *restrict r, const double c[6],
                          c5 * g[k_]);
 }
 
+/* True when A carries Hessians (second order, no overflow). */
+#define AD__H2(A) ((A)->order == 2 && (A)->lanes != 0)
+
+/* w (w + 1) / 2: Hessian entries of width w. */
+static inline size_t ad__tri(size_t w) { return w * (w + 1) / 2; }
+
+/* Width of a tangent of a second-order arena (AD__H2). */
+static inline size_t ad__w(const ad_arena *A, const double *d) { return (size_t)d[A->woff]; }
+
+/* Second order: r = sum_i c_i d_i over m <= 6 tangents, gradient and
+ * Hessian, each over its operands' widths: the part every operand covers
+ * in one pass, the rest operand by operand. */
+static inline void ad__lin_w(const ad_arena *A, double *restrict r, int m, const double *c,
+                             const double *const *d) {
+  size_t w[6], lo = (size_t)-1, hi = 0;
+  for (int i = 0; i < m; i++) {
+    w[i] = ad__w(A, d[i]);
+    if (w[i] < lo) lo = w[i];
+    if (w[i] > hi) hi = w[i];
+  }
+  for (int part = 0; part < 2; part++) {
+    size_t off = part ? A->glanes : 0;
+    size_t a = part ? ad__pad(ad__tri(lo)) : ad__pad(lo);
+    size_t b = part ? ad__pad(ad__tri(hi)) : ad__pad(hi);
+    double *restrict rr = r + off;
+    size_t nb = a / AD_LANES;
+    switch (m) {
+    case 1: ad__k1(nb, rr, c[0], d[0] + off); break;
+    case 2: ad__k2(nb, rr, c[0], d[0] + off, c[1], d[1] + off); break;
+    case 3: ad__k3(nb, rr, c[0], d[0] + off, c[1], d[1] + off, c[2], d[2] + off); break;
+    case 4: ad__k4(nb, rr, c, d[0] + off, d[1] + off, d[2] + off, d[3] + off); break;
+    default: ad__k6(nb, rr, c, d[0] + off, d[1] + off, d[2] + off, d[3] + off, d[4] + off, d[5] + off);
+    }
+    if (b > a) {
+      /* Summed in the operands' order, as the fused kernels do (the same
+       * value up to the sign of a zero). */
+      for (size_t k = a; k < b; k += AD_LANES) AD__BLOCK(k, rr[k_] = 0.0);
+      for (int i = 0; i < m; i++) {
+        size_t e = part ? ad__pad(ad__tri(w[i])) : ad__pad(w[i]);
+        const double *restrict di = d[i] + off;
+        double ci = c[i];
+        for (size_t k = a; k < e; k += AD_LANES) AD__BLOCK(k, rr[k_] += ci * di[k_]);
+      }
+    }
+  }
+  r[A->woff] = (double)hi;
+}
+
 /* (v, ca d_a) */
 static inline ad ad__lin1(ad_arena *A, double v, double ca, ad a) {
   double *r = ad__alloc(A);
-  ad__k1(ad__nb(A), r, ca, a.d);
+  if (AD__H2(A)) {
+    const double *d[1] = {a.d};
+    ad__lin_w(A, r, 1, &ca, d);
+  } else {
+    ad__k1(ad__nb(A), r, ca, a.d);
+  }
   return (ad){v, r};
 }
 
 /* (v, ca d_a + cb d_b) */
 static inline ad ad__lin2(ad_arena *A, double v, double ca, ad a, double cb, ad b) {
   double *r = ad__alloc(A);
-  ad__k2(ad__nb(A), r, ca, a.d, cb, b.d);
+  if (AD__H2(A)) {
+    const double c[2] = {ca, cb}, *d[2] = {a.d, b.d};
+    ad__lin_w(A, r, 2, c, d);
+  } else {
+    ad__k2(ad__nb(A), r, ca, a.d, cb, b.d);
+  }
   return (ad){v, r};
 }
 
@@ -264,14 +332,24 @@ static inline ad ad__lin2(ad_arena *A, double v, double ca, ad a, double cb, ad 
 static inline ad ad__lin3(ad_arena *A, double v, double ca, ad a, double cb, ad b, double cc,
                           ad c) {
   double *r = ad__alloc(A);
-  ad__k3(ad__nb(A), r, ca, a.d, cb, b.d, cc, c.d);
+  if (AD__H2(A)) {
+    const double cs[3] = {ca, cb, cc}, *d[3] = {a.d, b.d, c.d};
+    ad__lin_w(A, r, 3, cs, d);
+  } else {
+    ad__k3(ad__nb(A), r, ca, a.d, cb, b.d, cc, c.d);
+  }
   return (ad){v, r};
 }
 
 /* (v, sum_i c_i d_i) over four duals (cross products). */
 static inline ad ad__lin4(ad_arena *A, double v, const double c[4], ad a, ad b, ad e, ad f) {
   double *r = ad__alloc(A);
-  ad__k4(ad__nb(A), r, c, a.d, b.d, e.d, f.d);
+  if (AD__H2(A)) {
+    const double *d[4] = {a.d, b.d, e.d, f.d};
+    ad__lin_w(A, r, 4, c, d);
+  } else {
+    ad__k4(ad__nb(A), r, c, a.d, b.d, e.d, f.d);
+  }
   return (ad){v, r};
 }
 
@@ -279,7 +357,12 @@ static inline ad ad__lin4(ad_arena *A, double v, const double c[4], ad a, ad b, 
 static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, ad cc, ad e,
                           ad f, ad g) {
   double *r = ad__alloc(A);
-  ad__k6(ad__nb(A), r, c, a.d, b.d, cc.d, e.d, f.d, g.d);
+  if (AD__H2(A)) {
+    const double *d[6] = {a.d, b.d, cc.d, e.d, f.d, g.d};
+    ad__lin_w(A, r, 6, c, d);
+  } else {
+    ad__k6(ad__nb(A), r, c, a.d, b.d, cc.d, e.d, f.d, g.d);
+  }
   return (ad){v, r};
 }
 
@@ -287,38 +370,62 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
  * Added to a freshly made result r after its linear kernel; r's block is
  * the caller's own (just allocated), so writing through it is safe. */
 
-/* True when A carries Hessians (second order, no overflow). */
-#define AD__H2(A) ((A)->order == 2 && (A)->lanes != 0)
+/* A loop the compiler should vectorise (OpenMP's simd, where it is on). */
+#ifdef _OPENMP
+#define AD__SIMD _Pragma("omp simd")
+#else
+#define AD__SIMD
+#endif
 
-/* Offset of row i of the packed upper triangle (entry (i, j) is at
- * ad__hrow(n, i) + j - i). */
-static inline size_t ad__hrow(size_t n, size_t i) { return i * n - i * (i - 1) / 2; }
+/* Widens r (fresh, the caller's own) to width w: zero gradient and
+ * Hessian entries up to w's padded lengths. */
+static inline void ad__widen(const ad_arena *A, double *r, size_t w) {
+  size_t wr = ad__w(A, r);
+  if (wr >= w) return;
+  for (size_t k = ad__pad(wr); k < ad__pad(w); k++) r[k] = 0.0;
+  double *H = r + A->glanes;
+  for (size_t k = ad__pad(ad__tri(wr)); k < ad__pad(ad__tri(w)); k++) H[k] = 0.0;
+  r[A->woff] = (double)w;
+}
 
 /* H_r += c g_x g_x^T (a second derivative f_xx = c). */
 static inline void ad__h_sq(const ad_arena *A, ad r, double c, ad x) {
   if (!AD__H2(A) || c == 0.0) return;
-  size_t n = (size_t)A->n;
+  size_t w = ad__w(A, x.d);
+  ad__widen(A, (double *)r.d, w);
   double *restrict H = (double *)r.d + A->glanes;
   const double *restrict g = x.d;
-  for (size_t i = 0; i < n; i++) {
-    double ci = c * g[i];
-    if (ci == 0.0) continue;
-    double *restrict row = H + ad__hrow(n, i) - i;
-    for (size_t j = i; j < n; j++) row[j] += ci * g[j];
+  for (size_t j = 0; j < w; j++) {
+    double cj = c * g[j];
+    if (cj == 0.0) continue;
+    double *restrict row = H + ad__tri(j);
+    AD__SIMD
+    for (size_t i = 0; i <= j; i++) row[i] += cj * g[i];
   }
 }
 
 /* H_r += c (g_x g_y^T + g_y g_x^T) (a mixed second derivative f_xy = c). */
 static inline void ad__h_sym(const ad_arena *A, ad r, double c, ad x, ad y) {
   if (!AD__H2(A) || c == 0.0) return;
-  size_t n = (size_t)A->n;
+  size_t wx = ad__w(A, x.d), wy = ad__w(A, y.d), w = wx > wy ? wx : wy;
+  ad__widen(A, (double *)r.d, w);
   double *restrict H = (double *)r.d + A->glanes;
-  const double *restrict gx = x.d, *restrict gy = y.d;
-  for (size_t i = 0; i < n; i++) {
-    double a = c * gx[i], b = c * gy[i];
+  /* The narrower gradient, zero up to w (its block holds junk past its width). */
+  double pad[AD_H_CAPACITY];
+  const double *gx = x.d, *gy = y.d;
+  if (wx < w) {
+    for (size_t k = 0; k < w; k++) pad[k] = k < wx ? gx[k] : 0.0;
+    gx = pad;
+  } else if (wy < w) {
+    for (size_t k = 0; k < w; k++) pad[k] = k < wy ? gy[k] : 0.0;
+    gy = pad;
+  }
+  for (size_t j = 0; j < w; j++) {
+    double a = c * gx[j], b = c * gy[j];
     if (a == 0.0 && b == 0.0) continue;
-    double *restrict row = H + ad__hrow(n, i) - i;
-    for (size_t j = i; j < n; j++) row[j] += a * gy[j] + b * gx[j];
+    double *restrict row = H + ad__tri(j);
+    AD__SIMD
+    for (size_t i = 0; i <= j; i++) row[i] += a * gy[i] + b * gx[i];
   }
 }
 
@@ -339,6 +446,14 @@ static inline ad ad_const(const ad_arena *A, double v) { return (ad){v, A->buf};
  * [0, n) gives a constant-like zero tangent. */
 static inline ad ad_var(ad_arena *A, double v, int index) {
   double *r = ad__alloc(A);
+  if (AD__H2(A)) {
+    size_t w = index >= 0 && index < A->n ? (size_t)index + 1 : 0;
+    for (size_t k = 0; k < ad__pad(w); k++) r[k] = 0.0;
+    for (size_t k = 0; k < ad__pad(ad__tri(w)); k++) r[A->glanes + k] = 0.0;
+    if (w) r[index] = 1.0;
+    r[A->woff] = (double)w;
+    return (ad){v, r};
+  }
   size_t m = A->lanes;
   for (size_t k = 0; k < m; k++) r[k] = 0.0;
   if (index >= 0 && (size_t)index < m && index < A->n) r[index] = 1.0;
@@ -349,6 +464,14 @@ static inline ad ad_var(ad_arena *A, double v, int index) {
  * derivatives computed elsewhere by the chain rule. */
 static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
   double *r = ad__alloc(A);
+  if (AD__H2(A)) {
+    size_t w = (size_t)A->n;
+    while (w > 0 && tangent[w - 1] == 0.0) w--;
+    for (size_t k = 0; k < ad__pad(w); k++) r[k] = k < w ? tangent[k] : 0.0;
+    for (size_t k = 0; k < ad__pad(ad__tri(w)); k++) r[A->glanes + k] = 0.0;
+    r[A->woff] = (double)w;
+    return (ad){v, r};
+  }
   size_t m = A->lanes;
   size_t n = (size_t)A->n < m ? (size_t)A->n : m;
   for (size_t k = 0; k < m; k++) r[k] = 0.0;
@@ -380,12 +503,16 @@ static inline double ad_hess(const ad_arena *A, ad x, int i, int j) {
     i = j;
     j = t;
   }
-  return x.d[A->glanes + ad__hrow((size_t)n, (size_t)i) + (size_t)(j - i)];
+  if ((size_t)j >= ad__w(A, x.d)) return 0.0;
+  return x.d[A->glanes + ad__tri((size_t)j) + (size_t)i];
 }
 
-/* Derivative of x with respect to variable i (0 outside [0, n)). */
+/* Derivative of x with respect to variable i (0 outside [0, n), and in a
+ * second-order arena past x's width). */
 static inline double ad_deriv(const ad_arena *A, ad x, int i) {
-  return (i >= 0 && i < ad_arena_n(A)) ? x.d[i] : 0.0;
+  if (!(i >= 0 && i < ad_arena_n(A))) return 0.0;
+  if (AD__H2(A) && (size_t)i >= ad__w(A, x.d)) return 0.0;
+  return x.d[i];
 }
 
 /* Identity (the dual branch of AD_LIFT). */

@@ -770,15 +770,19 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
     int j = ps->dvar[k];
     if (j < 0) continue;
     path_coord *pc = &ps->coords[k];
+    const ad_arena *A = &ps->A;
     pc->var = j;
-    pc->dlum = lum.d[j];
-    pc->drgb = rgb_make(L.r.d[j], L.g.d[j], L.b.d[j]);
-    pc->drx = rx.d[j];
-    pc->dry = ry.d[j];
+    pc->dlum = ad_deriv(A, lum, j);
+    pc->drgb = rgb_make(ad_deriv(A, L.r, j), ad_deriv(A, L.g, j), ad_deriv(A, L.b, j));
+    pc->drx = ad_deriv(A, rx, j);
+    pc->dry = ad_deriv(A, ry, j);
   }
   ev->grad_ok = ad_arena_ok(&ps->A);
   if (order2 && ev->grad_ok) {
-    memcpy(ps->hlum, lum.d + ps->A.glanes, (size_t)n_var * (size_t)(n_var + 1) / 2 * sizeof(double));
+    /* path_eval.hlum's layout: the upper triangle row by row. */
+    size_t q = 0;
+    for (int i = 0; i < n_var; i++)
+      for (int j = i; j < n_var; j++) ps->hlum[q++] = ad_hess(&ps->A, lum, i, j);
     ev->hlum = ps->hlum;
     ev->hess_ok = 1;
   }
