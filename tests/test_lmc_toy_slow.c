@@ -164,9 +164,15 @@ static double toy_f(const toy *t, const double *u, double *OUT_g) {
   return 0.0;
 }
 
+/* Evaluations with a gradient and without a Hessian, and with a Hessian
+ * (check_h2mc: every state an H2MC proposal reaches needs its Hessian for
+ * the reverse density, so the first must stay 0 there). */
+static int64_t n_eval_grad, n_eval_hess;
+
 static int toy_eval(const mc_target *tg, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
                     double *OUT_grad, int *OUT_grad_ok) {
   (void)scratch;
+  n_eval_grad += OUT_grad != NULL;
   const toy *t = tg->ctx;
   double u[MAXD] = {0}, g[MAXD] = {0};
   sampler_use_stream(smp, 0);
@@ -192,6 +198,7 @@ static int toy_eval_hess(const mc_target *tg, void *scratch, lmc_sampler *smp, i
                          int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
   (void)scratch;
   (void)label;
+  n_eval_hess++;
   const toy *t = tg->ctx;
   int n = t->dim;
   double u[MAXD] = {0}, g[MAXD] = {0};
@@ -471,6 +478,7 @@ static int check_h2mc(toy_kind kind, int dim, int64_t L, uint64_t seed, int curv
   static hist hs[R_CHAINS];
   lmc_error err;
   int64_t model = 0, proposed = 0, outside = 0;
+  n_eval_grad = n_eval_hess = 0;
   for (int r = 0; r < R_CHAINS; r++) {
     assert_int_equal(h2mc_kernel_init(&kh[r], &tg, &hp, &err), LMC_OK);
     mc_kernel ks[3] = {mc_kernel_large(), mc_kernel_small(1.0 / 1024, 1.0 / 64),
@@ -513,6 +521,12 @@ static int check_h2mc(toy_kind kind, int dim, int64_t L, uint64_t seed, int curv
   else
     assert_true(model == 0);
   assert_true(outside > 0);
+  /* Every proposal evaluated (those inside the cube) came with its
+   * Hessian, none with a gradient alone. */
+  printf("  evaluations with a Hessian %lld, with a gradient alone %lld\n", (long long)n_eval_hess,
+         (long long)n_eval_grad);
+  assert_int_equal(n_eval_grad, 0);
+  assert_true(n_eval_hess >= proposed - outside);
   return 1;
 }
 

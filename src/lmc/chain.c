@@ -756,7 +756,10 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
       for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
     }
     int delayed = k->log_screen && c->x.v.f > 0.0;
-    chain__eval(c, &c->y, k->needs_grad && !delayed);
+    /* The proposal with what the kernel needs at a state (gradient, or
+     * Hessian: the reverse density is built from it); none before a first
+     * test of delayed acceptance. */
+    chain__eval(c, &c->y, delayed ? 0 : k->needs_grad);
     if (delayed && c->y.v.f > 0.0) {
       c->screened++;
       double s1 = k->log_screen(k->self, &c->x, c->y.u, c->y.v.f);
