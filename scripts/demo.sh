@@ -55,7 +55,7 @@ montage "${font[@]}" -pointsize 14 -background white -geometry +4+4 \
   -label "Langevin MC (lmc), ${t_lmc} s, relmse $(printf '%.3g' "$r_lmc")" "$out/ring-caustics-lmc.png" \
   -tile 2x1 "$out/ring-caustics-side-by-side.png"
 
-printf 'demo: ring-caustics, equal time, relative MSE against %s:\n' "$scene/reference.exr"
+printf 'demo: ring-caustics, equal time, relative MSE against %s (previews at exposure 0):\n' "$scene/reference.exr"
 printf '  pt   %6.2f s  relmse %s\n  lmc  %6.2f s  relmse %s\n' "$t_pt" "$r_pt" "$t_lmc" "$r_lmc"
 echo "demo: wrote $out/ring-caustics-lmc.exr and .png (the LMC render)"
 echo "demo: wrote $out/ring-caustics-pt.exr and .png (path tracing, same wall time)"
