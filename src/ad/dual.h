@@ -370,8 +370,9 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
  * Added to a freshly made result r after its linear kernel; r's block is
  * the caller's own (just allocated), so writing through it is safe. */
 
-/* A loop the compiler should vectorise (OpenMP's simd, where it is on). */
-#ifdef _OPENMP
+/* A loop GCC should vectorise (OpenMP's simd; clang, which reports the
+ * loops it cannot vectorise as warnings, goes without). */
+#if defined(_OPENMP) && !defined(__clang__)
 #define AD__SIMD _Pragma("omp simd")
 #else
 #define AD__SIMD
