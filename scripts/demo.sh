@@ -49,7 +49,8 @@ r_lmc=$(relmse "$out/ring-caustics-lmc.exr")
 r_pt=$(relmse "$out/ring-caustics-pt.exr")
 
 font=()
-for f in /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf; do [ -f "$f" ] && font=(-font "$f"); done
+dejavu=/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf
+[ -f "$dejavu" ] && font=(-font "$dejavu")
 montage "${font[@]}" -pointsize 14 -background white -geometry +4+4 \
   -label "path tracing (pt), ${t_pt} s, relmse $(printf '%.3g' "$r_pt")" "$out/ring-caustics-pt.png" \
   -label "Langevin MC (lmc), ${t_lmc} s, relmse $(printf '%.3g' "$r_lmc")" "$out/ring-caustics-lmc.png" \

@@ -205,16 +205,20 @@ static int lmc_parse_choice(const char *flag, const char *s, const char *first,
   return 1;
 }
 
-static int lmc_parse_double(const char *flag, const char *s, double lo, double hi, double *out) {
+/* s as a whole finite number in [lo, hi]: 1 and *out, else 0 (silent). */
+static int lmc_number_in(const char *s, double lo, double hi, double *out) {
   char *end;
   errno = 0;
   double v = strtod(s, &end);
-  if (errno || end == s || *end != '\0' || !isfinite(v) || v < lo || v > hi) {
-    fprintf(stderr, "lmc: flag %s: '%s' is not a number in [%g, %g]\n", flag, s, lo, hi);
-    return 0;
-  }
+  if (errno || end == s || *end != '\0' || !isfinite(v) || v < lo || v > hi) return 0;
   *out = v;
   return 1;
+}
+
+static int lmc_parse_double(const char *flag, const char *s, double lo, double hi, double *out) {
+  if (lmc_number_in(s, lo, hi, out)) return 1;
+  fprintf(stderr, "lmc: flag %s: '%s' is not a number in [%g, %g]\n", flag, s, lo, hi);
+  return 0;
 }
 
 /* The PNG preview's exposure: --exposure STOPS (linear radiance times
@@ -231,16 +235,12 @@ static int lmc_parse_exposure(const char *s, lmc_exposure *out) {
     out->stops = 0.0;
     return 1;
   }
-  char *end;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (errno || end == s || *end != '\0' || !isfinite(v) || v < -64.0 || v > 64.0) {
+  if (!lmc_number_in(s, -64.0, 64.0, &out->stops)) {
     fprintf(stderr, "lmc: flag --exposure: '%s' is neither a number of stops in [-64, 64] nor 'auto'\n",
             s);
     return 0;
   }
   out->is_auto = 0;
-  out->stops = v;
   return 1;
 }
 

@@ -354,8 +354,8 @@ static int expected_byte(float v, double stops) {
   return (int)floor(255.0 * s + 0.5);
 }
 
-/* Bytes of a PNG (read without decoding) against expected_byte of img
- * times factor: returns the number of channel values checked. */
+/* Bytes of a PNG (read without decoding) against expected_byte of img's
+ * values at `stops`: returns the number of channel values checked. */
 static int check_png_bytes(const char *png, const lmc_image *img, double stops) {
   lmc_image P = {0};
   lmc_error err;

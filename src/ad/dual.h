@@ -265,6 +265,15 @@ static inline size_t ad__tri(size_t w) { return w * (w + 1) / 2; }
 /* Width of a tangent of a second-order arena (AD__H2). */
 static inline size_t ad__w(const ad_arena *A, const double *d) { return (size_t)d[A->woff]; }
 
+/* Second order: zeroes r's gradient and Hessian entries from width `from`
+ * up to width `to` (padded lengths) and gives r width `to`. */
+static inline void ad__zero_w(const ad_arena *A, double *r, size_t from, size_t to) {
+  for (size_t k = ad__pad(from); k < ad__pad(to); k++) r[k] = 0.0;
+  double *H = r + A->glanes;
+  for (size_t k = ad__pad(ad__tri(from)); k < ad__pad(ad__tri(to)); k++) H[k] = 0.0;
+  r[A->woff] = (double)to;
+}
+
 /* Second order: r = sum_i c_i d_i over m <= 6 tangents, gradient and
  * Hessian, each over its operands' widths: the part every operand covers
  * in one pass, the rest operand by operand. */
@@ -383,10 +392,7 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
 static inline void ad__widen(const ad_arena *A, double *r, size_t w) {
   size_t wr = ad__w(A, r);
   if (wr >= w) return;
-  for (size_t k = ad__pad(wr); k < ad__pad(w); k++) r[k] = 0.0;
-  double *H = r + A->glanes;
-  for (size_t k = ad__pad(ad__tri(wr)); k < ad__pad(ad__tri(w)); k++) H[k] = 0.0;
-  r[A->woff] = (double)w;
+  ad__zero_w(A, r, wr, w);
 }
 
 /* H_r += c g_x g_x^T (a second derivative f_xx = c). */
@@ -449,10 +455,8 @@ static inline ad ad_var(ad_arena *A, double v, int index) {
   double *r = ad__alloc(A);
   if (AD__H2(A)) {
     size_t w = index >= 0 && index < A->n ? (size_t)index + 1 : 0;
-    for (size_t k = 0; k < ad__pad(w); k++) r[k] = 0.0;
-    for (size_t k = 0; k < ad__pad(ad__tri(w)); k++) r[A->glanes + k] = 0.0;
+    ad__zero_w(A, r, 0, w);
     if (w) r[index] = 1.0;
-    r[A->woff] = (double)w;
     return (ad){v, r};
   }
   size_t m = A->lanes;
@@ -468,9 +472,8 @@ static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
   if (AD__H2(A)) {
     size_t w = (size_t)A->n;
     while (w > 0 && tangent[w - 1] == 0.0) w--;
-    for (size_t k = 0; k < ad__pad(w); k++) r[k] = k < w ? tangent[k] : 0.0;
-    for (size_t k = 0; k < ad__pad(ad__tri(w)); k++) r[A->glanes + k] = 0.0;
-    r[A->woff] = (double)w;
+    ad__zero_w(A, r, 0, w);
+    if (w) memcpy(r, tangent, w * sizeof(double));
     return (ad){v, r};
   }
   size_t m = A->lanes;

@@ -599,6 +599,13 @@ static int64_t mcmc__family_steps(const mcmc_family *F, int64_t m) {
   return k < 1 ? 1 : k;
 }
 
+/* Mutations the chains of every family have made so far. */
+static int64_t mcmc__mutations(const mcmc_family *fam, int n_fam) {
+  int64_t n = 0;
+  for (int g = 0; g < n_fam; g++) n += fam[g].done * fam[g].n_chains;
+  return n;
+}
+
 /* Scales the probability of c's large step (kernel 0) by `scale`, at most
  * to 1, and the other kernels' together by what is left. */
 static void mcmc__scale_large(mc_chain *c, double scale) {
@@ -1015,8 +1022,6 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     /* Under --spp the ETA is the chains' own (the bar's clock restarts). */
     if (!timed) bar.start = t_chain0;
     progress_phase(&bar, "chains", timed ? (t_chain0 - t0) / rs->time_limit : 0.0);
-    int64_t mut0 = 0;
-    for (int g = 0; g < n_fam; g++) mut0 += fam[g].done * fam[g].n_chains;
     int64_t done_per_chain = 0;
     volatile int stop = 0;
     /* --largestep-scale: from MCMC_LARGESTEP_SCALE_AFTER of the chains'
@@ -1103,9 +1108,8 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       }
       double frac = by_spp ? (double)done_per_chain / (double)per_chain : 0.0;
       if (timed) frac = fmax(frac, (now - t0) / rs->time_limit);
-      int64_t mut = -mut0;
-      for (int g = 0; g < n_fam; g++) mut += fam[g].done * fam[g].n_chains;
-      progress_update_rate(&bar, frac, (double)mut / fmax(now - t_chain0, 1e-9), "mutations/s");
+      progress_update_rate(&bar, frac, (double)mcmc__mutations(fam, n_fam) / fmax(now - t_chain0, 1e-9),
+                           "mutations/s");
     }
     progress_finish(&bar);
     /* The final image with the refined b (also after an interruption: the
@@ -1119,8 +1123,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     }
     if (render_stop_signal()) st->interrupted = 1;
     else if (timed && done_per_chain < per_chain) st->timed_out = 1;
-    st->samples = 0;
-    for (int g = 0; g < n_fam; g++) st->samples += fam[g].done * fam[g].n_chains;
+    st->samples = mcmc__mutations(fam, n_fam);
     st->passes = st->samples / ((int64_t)W * H);
     double chain_seconds = omp_get_wtime() - t_chain0;
 
