@@ -63,6 +63,7 @@ static int g_even; /* --allocate even for the renders of check_scene */
 static int g_direct; /* --direct separate for the renders (the CLI's default; 0: mcmc) */
 static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
 static int g_states;     /* --states for the renders (MCMC_STATES_DEFAULT: the integrator's) */
+static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -277,6 +278,7 @@ static int64_t render_film(const scene *s, const char *integrator, lmc_adapt ada
                            int threads, int adaptive, film *OUT_f) {
   render_settings rs = settings(s, integrator, 4, seed, threads);
   rs.adapt = adapt;
+  rs.cache_gradient = g_cache_gradient;
   if (adaptive) {
     rs.bootstrap = 0;
     rs.bootstrap_error = 0.003;
@@ -302,15 +304,17 @@ static void test_determinism(void **state) {
   scene *s = load("furnace.xml"), *sphere = load("diffuse_sphere.xml");
   /* lmc with each unbiased adaptation: its Adam statistics, stage-1 records
    * and frozen cache must be as deterministic as the chains. */
-  /* The last two: --direct separate (the default), pt's pass and the
-   * chains' in one film. */
-  const char *names[8] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc", "mmlt", "lmc"};
-  const lmc_adapt adapts[8] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE,
+  /* Then --direct separate (the default), pt's pass and the chains' in
+   * one film; the last: lmc --cache-gradient on (stage 2 of the cache with
+   * Langevin proposals, whose preconditioner is looked up per label). */
+  const char *names[9] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc", "mmlt", "lmc", "lmc"};
+  const lmc_adapt adapts[9] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE,
                                LMC_ADAPT_NONE,  LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE,
-                               LMC_ADAPT_CACHE, LMC_ADAPT_CACHE};
+                               LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE};
   int checked = 0;
-  for (int i = 0; i < 8; i++) {
-    g_direct = i >= 6;
+  for (int i = 0; i < 9; i++) {
+    g_direct = i >= 6 && i < 8;
+    g_cache_gradient = i == 8;
     /* The third: mmlt's adaptive bootstrap, several batches shared out by
      * the lengths' costs and variances. */
     const scene *sc = i == 2 ? sphere : s;
@@ -331,7 +335,8 @@ static void test_determinism(void **state) {
     film_free(&d);
   }
   g_direct = 0;
-  assert_int_equal(checked, 8);
+  g_cache_gradient = 0;
+  assert_int_equal(checked, 9);
   scene_destroy(s);
   scene_destroy(sphere);
 }

@@ -16,9 +16,11 @@
 #include "lmc/bdpt_states.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/space.h"
 #include "lmc/states.h"
 #include "render/integrator.h"
 #include "render/path.h"
@@ -47,16 +49,11 @@ static int64_t bs__scratch_rays(const void *scratch) {
   return sc->cnt.rays + sc->rays_grad;
 }
 
-int64_t mc_bdpt_states_grad_evals(const void *scratch) {
-  return scratch ? ((const bs__scratch *)scratch)->grad_evals : 0;
-}
-
-int64_t mc_bdpt_states_hess_evals(const void *scratch) {
-  return scratch ? ((const bs__scratch *)scratch)->hess_evals : 0;
-}
-
-int64_t mc_bdpt_states_nan_samples(const void *scratch) {
-  return scratch ? ((const bs__scratch *)scratch)->cnt.nan_samples : 0;
+static void bs__scratch_counts(const void *scratch, mc_counts *OUT) {
+  const bs__scratch *sc = scratch;
+  OUT->grad_evals += sc->grad_evals;
+  OUT->hess_evals += sc->hess_evals;
+  OUT->nan_samples += sc->cnt.nan_samples;
 }
 
 int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label) {
@@ -419,6 +416,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   T->scratch_create = bs__scratch_create;
   T->scratch_destroy = bs__scratch_destroy;
   T->scratch_rays = bs__scratch_rays;
+  T->scratch_counts = bs__scratch_counts;
   T->n_labels = n;
   T->eval_label = bs__eval_label;
   T->eval_all = bs__eval_all;
@@ -451,4 +449,51 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx) {
   ctx->strat = NULL;
   ctx->label_of = NULL;
   ctx->step_scale = NULL;
+}
+
+/* ---------------------------------------------------------------------------
+ * The space: one family over the lengths kmin .. kmax.
+ */
+
+typedef struct bs__space {
+  mc_bdpt_states ctx;
+  mc_space_family fam;
+} bs__space;
+
+static int bs__length_of(const mc_space_family *F, int label, int last) {
+  (void)last;
+  const mc_bdpt_states *ctx = F->target.ctx;
+  return label >= 0 && label < ctx->n_labels ? mc_bdpt_states_length(ctx, label) : -1;
+}
+
+static void bs__space_destroy(mc_space *sp) {
+  bs__space *B = sp->ctx;
+  if (B) mc_bdpt_states_free(&B->ctx);
+  free(B);
+}
+
+lmc_status mc_space_bdpt_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                                lmc_error *err) {
+  int kmax = rs->maxdepth >= 0 ? rs->maxdepth : MC_BDPT_UNBOUNDED;
+  if (kmax > MC_BDPT_UNBOUNDED) kmax = MC_BDPT_UNBOUNDED;
+  int kmin = rs->mindepth > 1 ? rs->mindepth : 1;
+  if (rs->maxdepth < 0 && !rs->quiet)
+    fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
+            rs->integrator, kmax);
+  bs__space *B = calloc(1, sizeof *B);
+  if (!B) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bdpt states");
+  OUT->ctx = B;
+  OUT->destroy = bs__space_destroy;
+  lmc_status st = mc_bdpt_states_init(&B->fam.target, &B->ctx, s, rs, kmin, kmax, err);
+  if (st) return st; /* (the caller frees the space) */
+  B->fam.length = 0;
+  B->fam.technique = -1;
+  B->fam.length_of = bs__length_of;
+  OUT->name = "bdpt";
+  OUT->n_fam = 1;
+  OUT->fam = &B->fam;
+  OUT->kmin = kmin;
+  OUT->kmax = kmax;
+  OUT->pool_large = 1;
+  return LMC_OK;
 }

@@ -48,8 +48,12 @@
 
 #include "lmc/target.h"
 #include "render/error.h"
+#include "render/integrator.h"
 #include "render/scene.h"
 #include "render/settings.h"
+
+#define MC_BDPT_UNBOUNDED (BDPT_MAX_VERTICES - 2) /* the longest path (segments) when maxdepth is
+                                                    -1: subpaths of BDPT_MAX_VERTICES vertices */
 
 typedef struct mc_strategy {
   int s, t;
@@ -77,11 +81,5 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx);
 /* Path length (segments) of a label. */
 int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label);
 
-/* Counters of a scratch of the target: gradient evaluations, non-finite
- * contributions dropped. */
-int64_t mc_bdpt_states_grad_evals(const void *scratch);
-/* ... of which with the Hessian (eval_hess, for H2MC). */
-int64_t mc_bdpt_states_hess_evals(const void *scratch);
-int64_t mc_bdpt_states_nan_samples(const void *scratch);
 
 #endif

@@ -401,7 +401,7 @@ static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
  * replays x exactly (f is a function of u). The stored f is kept: when a
  * coordinate past a stream's block made the new f differ (pseudo-marginal,
  * chain.h), x gets no gradient. A difference of rounding (a target whose
- * evaluation with the gradient is other code, lmc_bdpt_target.c, agreeing
+ * evaluation with the gradient is other code, as the spaces' are, agreeing
  * to 1e-9) is not one. */
 static void chain__regrad_state(mc_chain *c, mc_state *st, int order) {
   mc_value v = st->v;

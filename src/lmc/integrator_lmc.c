@@ -16,9 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/bdpt_states.h"
 #include "lmc/gcache.h"
-#include "lmc/h2mc.h"
 #include "lmc/lmc_kernel.h"
 #include "lmc/method.h"
 #include "lmc/states.h"
@@ -30,31 +28,26 @@
 #define LMC_INDEP_SIGMA 0.01                 /* its Gaussian width per coordinate */
 #define LMC_STALL_STEPS 10000                /* a chain this long without acceptance is stalled */
 
-/* One family of chains: a target and what adapts to it. */
+/* One family of chains: the space's family and what adapts to it. */
 typedef struct lmc__family {
-  mc_target target;
-  lmc_bdpt_target bctx;  /* mmlt states: the target's context */
-  mc_bdpt_states bst;    /* bdpt states: the target's context */
-  int length;            /* mmlt states: k; pt states: 0 */
-  double *step_scale;    /* the target's and the kernels' step scale (owned) */
+  const mc_space_family *sf; /* borrowed from the space */
+  const mc_target *target;   /* &sf->target */
   lmc_kernel_params kp;
-  gcache *cache;         /* merged and frozen (cache mode, stage 2) */
-  lmc_indep indep;       /* read-only in stage 2 */
+  gcache *cache;             /* merged and frozen (cache mode, stage 2) */
+  lmc_indep indep;           /* read-only in stage 2 */
 } lmc__family;
 
 typedef struct lmc_run lmc_run;
 
 struct lmc_run {
-  lmc_scene_target tctx; /* pt states: the target's context */
   render_settings rs;
+  const mc_space *space; /* borrowed */
   int n_fam;
   lmc__family *fam;
   int n;                 /* chains */
   int *chain_fam;        /* per chain: its family */
   lmc_mala *mala;        /* per chain */
   lmc_cwalk *cwalk;      /* per chain: stage 2 of --adapt cache on labelled states */
-  int h2mc;              /* --integrator h2mc: H2MC's proposal in MALA's slot (h2mc.h) */
-  h2mc_kernel *h2;       /* per chain (h2mc) */
   int cwalk_on;          /* stage 2 runs the cached walk (no gradients) */
   gcache **rec;          /* per chain, stage 1 */
   int stage1;            /* cache mode, stage 1 running */
@@ -66,67 +59,29 @@ struct lmc_run {
 
 static void lmc_run_destroy(lmc_run *run);
 
-/* pt states (rs->lmc_states): one family, `unbounded` bounces kept in the
- * state when maxdepth is -1. mmlt states: one family per length
- * kmin .. kmax. bdpt states: one family over kmin .. kmax. */
-static lmc_status lmc_run_create(lmc_run **OUT_run, const scene *s, const render_settings *rs,
-                                 int unbounded, int kmin, int kmax, lmc_error *err) {
+/* One lmc family per family of the space. */
+static lmc_status lmc_run_create(lmc_run **OUT_run, const mc_method_setup *setup, lmc_error *err) {
   *OUT_run = NULL;
+  const mc_space *sp = setup->space;
   lmc_run *run = calloc(1, sizeof *run);
-  int multiplexed = rs->lmc_states == LMC_STATES_MMLT, bdpt = rs->lmc_states == LMC_STATES_BDPT;
-  int n_fam = multiplexed ? (kmax >= kmin ? kmax - kmin + 1 : 0) : 1;
-  if (run) run->fam = calloc((size_t)(n_fam > 0 ? n_fam : 1), sizeof *run->fam);
+  if (run) run->fam = calloc((size_t)(sp->n_fam > 0 ? sp->n_fam : 1), sizeof *run->fam);
   if (!run || !run->fam) {
     free(run);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
-  run->rs = *rs;
-  run->n_fam = n_fam;
-  run->h2mc = !strcmp(rs->integrator, "h2mc");
-  if (run->h2mc && !bdpt && !multiplexed) {
-    lmc_run_destroy(run);
-    return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
-                         "h2mc runs on the bdpt states (--states bdpt, the default) or mmlt's "
-                         "(--states mmlt) only: the pt states have no Hessian");
-  }
-  /* H2MC adapts nothing: no cache stages. */
-  run->stage1 = !run->h2mc && rs->adapt == LMC_ADAPT_CACHE && rs->cache_fraction > 0.0;
-  double u1_scale = mc_light_u1_scale(s);
-  for (int g = 0; g < n_fam; g++) {
+  run->rs = *setup->rs;
+  run->space = sp;
+  run->n_fam = sp->n_fam;
+  run->stage1 = run->rs.adapt == LMC_ADAPT_CACHE && run->rs.cache_fraction > 0.0;
+  for (int g = 0; g < sp->n_fam; g++) {
     lmc__family *F = &run->fam[g];
-    mc_target *T = &F->target;
-    if (multiplexed) {
-      F->length = kmin + g;
-      lmc_bdpt_target_init(T, &F->bctx, s, rs, F->length);
-    } else if (bdpt) {
-      lmc_status st = mc_bdpt_states_init(T, &F->bst, s, rs, kmin, kmax, err);
-      if (st) {
-        lmc_run_destroy(run);
-        return st;
-      }
-    } else {
-      lmc_target_init(T, &run->tctx, s, rs, unbounded);
-    }
-    F->kp = lmc_kernel_params_from_settings(rs);
-    F->step_scale = malloc((size_t)T->dim * sizeof(double));
-    if (!F->step_scale) {
-      lmc_run_destroy(run);
-      return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
-    }
-    /* The coordinates that pick a light triangle, as mmlt and pssmlt: a
-     * smaller step for the chain's Kelemen step and a factor c^2 on MALA's
-     * preconditioner (lmc_kernel.h). */
-    if (bdpt) {
-      memcpy(F->step_scale, T->step_scale, (size_t)T->dim * sizeof(double));
-    } else if (multiplexed) {
-      for (int i = 0; i < T->dim; i++) F->step_scale[i] = 1.0;
-      F->step_scale[mc_target_stream_offset(T, LMC_STREAM_LIGHT) + 1] = u1_scale;
-      F->step_scale[mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 2] = u1_scale;
-    } else {
-      mc_pt_step_scale(s, T->dim, F->step_scale);
-    }
-    T->step_scale = F->step_scale;
-    F->kp.scale = F->step_scale;
+    F->sf = &sp->fam[g];
+    F->target = &F->sf->target;
+    F->kp = lmc_kernel_params_from_settings(&run->rs);
+    /* The coordinates that pick a light triangle: a smaller step for the
+     * chain's Kelemen step and a factor c^2 on MALA's preconditioner
+     * (lmc_kernel.h). */
+    F->kp.scale = F->target->step_scale;
     F->indep = (lmc_indep){NULL, LMC_INDEP_SIGMA, F->kp.s1, F->kp.s2};
   }
   *OUT_run = run;
@@ -138,38 +93,24 @@ static void lmc_run_destroy(lmc_run *run) {
   for (int i = 0; i < run->n; i++) {
     lmc_mala_free(&run->mala[i]);
     if (run->cwalk) lmc_cwalk_free(&run->cwalk[i]);
-    if (run->h2) h2mc_kernel_free(&run->h2[i]);
     if (run->rec) gcache_destroy(run->rec[i]);
   }
   free(run->mala);
   free(run->cwalk);
-  free(run->h2);
   free(run->rec);
   free(run->chain_fam);
   for (int g = 0; g < run->n_fam; g++) {
     gcache_destroy(run->fam[g].cache);
-    free(run->fam[g].step_scale);
-    mc_bdpt_states_free(&run->fam[g].bst);
   }
   free(run->fam);
   free(run);
 }
 
-/* Non-finite contributions dropped in a chain's scratch. */
-static int64_t lmc_run_scratch_nan_samples(const lmc_run *run, const void *scratch) {
-  switch (run->rs.lmc_states) {
-  case LMC_STATES_MMLT: return lmc_bdpt_scratch_nan_samples(scratch);
-  case LMC_STATES_BDPT: return mc_bdpt_states_nan_samples(scratch);
-  default: return 0;
-  }
-}
-
-static int64_t lmc__grad_evals(const lmc_run *run, const void *scratch) {
-  switch (run->rs.lmc_states) {
-  case LMC_STATES_MMLT: return lmc_bdpt_scratch_grad_evals(scratch);
-  case LMC_STATES_BDPT: return mc_bdpt_states_grad_evals(scratch);
-  default: return lmc_target_scratch_grad_evals(scratch);
-  }
+/* Gradient evaluations made in a chain's scratch. */
+static int64_t lmc__grad_evals(const lmc_run *run, const mc_chain *c) {
+  mc_counts n = {0};
+  mc_space_counts(run->fam[0].sf, c->scratch, &n);
+  return n.grad_evals;
 }
 
 /* A cache (stage-1 record or merged) of `capacity` doubles for family F:
@@ -177,7 +118,7 @@ static int64_t lmc__grad_evals(const lmc_run *run, const void *scratch) {
  * dimension. */
 static lmc_status lmc__record_create(const lmc__family *F, int64_t capacity, gcache **OUT_c,
                                      lmc_error *err) {
-  const mc_target *T = &F->target;
+  const mc_target *T = F->target;
   if (!T->label_coords) return gcache_create(OUT_c, T->dim, capacity, err);
   int *len = malloc((size_t)T->n_labels * sizeof(int)), *idx = malloc((size_t)T->dim * sizeof(int));
   if (!len || !idx) {
@@ -211,8 +152,7 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
   run->cwalk = calloc((size_t)n, sizeof *run->cwalk);
   run->rec = calloc((size_t)n, sizeof *run->rec);
   run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
-  if (run->h2mc) run->h2 = calloc((size_t)n, sizeof *run->h2);
-  if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam || (run->h2mc && !run->h2))
+  if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam)
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
   run->chains_start = omp_get_wtime();
@@ -226,25 +166,18 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
     int g = family[i] >= 0 && family[i] < run->n_fam ? family[i] : 0;
     lmc__family *F = &run->fam[g];
     run->chain_fam[i] = g;
-    lmc_status st = lmc_mala_init(&run->mala[i], F->target.dim, &F->kp, err);
+    lmc_status st = lmc_mala_init(&run->mala[i], F->target->dim, &F->kp, err);
     if (st) return st;
-    if (run->h2mc) {
-      h2mc_params hp = h2mc_params_default();
-      if (run->rs.h2mc_sigma > 0.0) hp.sigma = run->rs.h2mc_sigma;
-      st = h2mc_kernel_init(&run->h2[i], &F->target, &hp, err);
-      if (st) return st;
-      continue;
-    }
-    if (F->target.label_coords) lmc_mala_set_target(&run->mala[i], &F->target);
+    if (F->target->label_coords) lmc_mala_set_target(&run->mala[i], F->target);
     if (run->stage1) {
       st = lmc__record_create(F, LMC_CACHE_DOUBLES / n, &run->rec[i], err);
       if (st) return st;
       lmc_mala_set_record(&run->mala[i], run->rec[i]);
     } else if (run->rs.adapt == LMC_ADAPT_CACHE) {
       lmc_mala_begin_stage2(&run->mala[i], F->cache);
-      if (!run->rs.cache_gradient && F->target.label_coords) {
+      if (!run->rs.cache_gradient && F->target->label_coords) {
         lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
-        st = lmc_cwalk_init(&run->cwalk[i], &F->target, F->cache, &cp, err);
+        st = lmc_cwalk_init(&run->cwalk[i], F->target, F->cache, &cp, err);
         if (st) return st;
         run->cwalk_on = 1;
       }
@@ -258,7 +191,8 @@ static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *
   lmc__family *F = &run->fam[run->chain_fam[i]];
   double large = run->rs.largestep, iso = run->rs.iso_prob;
   double indep = run->rs.adapt == LMC_ADAPT_CACHE ? LMC_INDEP_PROB : 0.0;
-  double tech = F->length >= 2 ? LMC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
+  int length = F->sf->length;
+  double tech = F->sf->technique >= 0 ? LMC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
   OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
@@ -267,19 +201,16 @@ static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *
   /* Paths of one or two segments (emitters seen directly, direct light on
    * a surface) get Kelemen's step instead of MALA: f is smooth there, and a
    * gradient costs more than the few more mutations it saves. */
-  if (F->length >= 1 && F->length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
+  if (length >= 1 && length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
   /* Stage 2 of --adapt cache on labelled states: the cached walk in
    * MALA's slot (no gradients), unless --cache-gradient on. */
-  if (run->h2mc)
-    OUT_k[n] = h2mc_kernel_make(&run->h2[i]);
-  else if (run->cwalk_on && run->cwalk[i].cache)
+  if (run->cwalk_on && run->cwalk[i].cache)
     OUT_k[n] = lmc_cwalk_kernel(&run->cwalk[i]);
   else
     OUT_k[n] = lmc_mala_kernel(&run->mala[i]);
   OUT_p[n++] = fmax(0.0, 1.0 - large - iso - indep - tech);
   if (tech > 0.0) {
-    /* The technique coordinate is the first of the connect stream. */
-    OUT_k[n] = mc_kernel_technique(mc_target_stream_offset(&F->target, LMC_STREAM_CONNECT));
+    OUT_k[n] = mc_kernel_technique(F->sf->technique);
     OUT_k[n].s1 = F->kp.s1, OUT_k[n].s2 = F->kp.s2;
     OUT_p[n++] = tech;
   }
@@ -297,7 +228,7 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
   run->stage1_seconds = omp_get_wtime() - run->chains_start;
   for (int g = 0; g < run->n_fam; g++) {
     lmc__family *F = &run->fam[g];
-    int dim = F->target.dim;
+    int dim = F->target->dim;
     int64_t total = 0;
     int max_len = dim;
     for (int i = 0; i < run->n; i++)
@@ -305,7 +236,7 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
     if (lmc__record_create(F, total, &F->cache, &err) == LMC_OK) {
       for (int i = 0; i < run->n; i++)
         if (run->chain_fam[i] == g) gcache_merge(F->cache, run->rec[i]);
-      int64_t per_key = F->target.label_coords ? LMC_CACHE_PER_LABEL : LMC_CACHE_PER_DIM;
+      int64_t per_key = F->target->label_coords ? LMC_CACHE_PER_LABEL : LMC_CACHE_PER_DIM;
       if (gcache_freeze(F->cache, LMC_ANCHORS, per_key, &err) != LMC_OK) {
         gcache_destroy(F->cache);
         F->cache = NULL;
@@ -320,9 +251,9 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
     gcache_destroy(run->rec[i]);
     run->rec[i] = NULL;
     const lmc__family *F = &run->fam[run->chain_fam[i]];
-    if (run->cwalk_on && F->target.label_coords) {
+    if (run->cwalk_on && F->target->label_coords) {
       lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
-      if (lmc_cwalk_init(&run->cwalk[i], &F->target, F->cache, &cp, &err) != LMC_OK)
+      if (lmc_cwalk_init(&run->cwalk[i], F->target, F->cache, &cp, &err) != LMC_OK)
         run->cwalk_on = 0; /* out of memory: the gradient-evaluating stage 2 */
     }
     lmc_mala_begin_stage2(&run->mala[i], run->fam[run->chain_fam[i]].cache);
@@ -368,7 +299,7 @@ static int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, doubl
 /* Adds the gradient evaluations chain c made in stage 1 to stage 1's
  * count, so that the report can give stage 2's own. */
 static void lmc_run_note_stage1_chain(lmc_run *run, const mc_chain *c) {
-  run->stage1_grad_evals += lmc__grad_evals(run, c->scratch);
+  run->stage1_grad_evals += lmc__grad_evals(run, c);
 }
 
 /* Steps of the chains since they were last started (stage 2 of the cache). */
@@ -379,32 +310,33 @@ static double lmc__steps(mc_chain *const *chains, int n) {
 }
 
 /* The LMC statistics (stderr). */
+/* The path length a statistics key of lmc_kernel.h stands for (label + 1
+ * on labelled targets, else 1 + the deepest differentiated coordinate;
+ * 0 the fallback), MAXL - 1 for the last key and what the space cannot say. */
+enum { MAXL = 32 };
+static int lmc__key_length(const lmc_run *run, const mc_space_family *SF, int fallback, int key) {
+  (void)run;
+  if (SF->length > 0) return SF->length < MAXL ? SF->length : MAXL - 1;
+  if (fallback) return 0;
+  int len = -1;
+  if (key > 0 && key < LMC_STAT_KEYS - 1 && SF->length_of)
+    len = SF->target.n_labels > 0 ? SF->length_of(SF, key - 1, -1) : SF->length_of(SF, -1, key - 1);
+  else if (key == 0 && SF->target.n_labels == 0 && SF->length_of)
+    len = 1;
+  return len >= 0 && len < MAXL ? len : MAXL - 1;
+}
+
 static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
-  int multiplexed = run->rs.lmc_states == LMC_STATES_MMLT;
-  int bdpt = run->rs.lmc_states == LMC_STATES_BDPT;
   const lmc__family *F0 = &run->fam[0];
-  if (run->h2mc) {
-    fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, "
-            "iso %g, light-triangle step scale %g\n",
-            multiplexed ? "multiplexed per-length (mmlt)" : "bidirectional over every length (bdpt)",
-            run->n > 0 ? run->h2[0].p.sigma : 0.0, run->n > 0 ? run->h2[0].p.L : 0.0, run->rs.iso_prob,
-            F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]);
-  } else {
-    fprintf(stderr,
-            "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
-            "iso %g, light-triangle step scale %g\n",
-            mode[adapt],
-            multiplexed ? "multiplexed bidirectional (mmlt)"
-            : bdpt      ? "bidirectional over every length (bdpt)"
-                        : "unidirectional (pt)",
-            F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi, F0->kp.grad_bound, run->rs.iso_prob,
-            multiplexed || bdpt ? F0->step_scale[mc_target_stream_offset(&F0->target, LMC_STREAM_LIGHT) + 1]
-            : F0->target.dim > PT_DIMS_CAMERA + 1 ? F0->step_scale[PT_DIMS_CAMERA + 1] : 1.0);
-  }
+  fprintf(stderr,
+          "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
+          "iso %g, light-triangle step scale %g\n",
+          mode[adapt], run->space->name, F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi,
+          F0->kp.grad_bound, run->rs.iso_prob, mc_step_scale_min(F0->target));
   /* The caches. */
-  if (run->rs.adapt == LMC_ADAPT_CACHE && !run->h2mc) {
+  if (run->rs.adapt == LMC_ADAPT_CACHE) {
     int trees = 0;
     int64_t entries = 0;
     double bytes = 0.0;
@@ -423,7 +355,7 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
       }
       s2_lookups += run->mala[i].st.lookups, s2_hits += run->mala[i].st.lookup_hits;
     }
-    for (int i = 0; i < n; i++) s2_grads += lmc__grad_evals(run, chains[i]->scratch);
+    for (int i = 0; i < n; i++) s2_grads += lmc__grad_evals(run, chains[i]);
     double s2_rate = lmc__steps(chains, n) /
                      fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds);
     char what[96];
@@ -444,21 +376,15 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
             run->n_fam, bytes / 1048576.0, run->build_seconds);
   }
   /* Per proposal type and path length (of the state proposed from). */
-  enum { MAXL = 32 };
   int64_t pr[2][MAXL] = {{0}}, ac[2][MAXL] = {{0}};
   int64_t stalled = 0, grad_evals = 0;
   for (int i = 0; i < run->n; i++) {
     const lmc_mala_stats *st = &run->mala[i].st;
-    int flen = run->fam[run->chain_fam[i]].length;
+    const mc_space_family *SF = run->fam[run->chain_fam[i]].sf;
     for (int t = 0; t < 2; t++)
       for (int k = 0; k < LMC_STAT_KEYS; k++) {
-        int len = flen > 0                ? flen
-                  : t != 0                ? 0
-                  : bdpt                  ? (k > 0 && k < LMC_STAT_KEYS - 1
-                                                 ? mc_bdpt_states_length(&run->fam[0].bst, k - 1)
-                                                 : MAXL - 1)
-                                          : lmc_target_length_of_key(k);
-        if (len >= MAXL) len = MAXL - 1;
+        if (!st->key_proposed[t][k]) continue;
+        int len = lmc__key_length(run, SF, t, k);
         pr[t][len] += st->key_proposed[t][k];
         ac[t][len] += st->key_accepted[t][k];
       }
@@ -466,27 +392,10 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
   }
   int64_t regrad = 0, screened = 0, passed = 0;
   for (int i = 0; i < n; i++) {
-    grad_evals += lmc__grad_evals(run, chains[i]->scratch);
+    grad_evals += lmc__grad_evals(run, chains[i]);
     regrad += chains[i]->regrad;
     screened += chains[i]->screened;
     passed += chains[i]->screen_passed;
-  }
-  if (run->h2mc) {
-    int64_t hp = 0, hm = 0, ho = 0, he = 0, hf = 0;
-    for (int i = 0; i < run->n; i++) {
-      hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
-      ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail;
-    }
-    for (int i = 0; i < n; i++)
-      he += run->rs.lmc_states == LMC_STATES_MMLT ? lmc_bdpt_scratch_hess_evals(chains[i]->scratch)
-                                                  : mc_bdpt_states_hess_evals(chains[i]->scratch);
-    fprintf(stderr,
-            "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
-            "%.1f%% outside the unit cube (rejected unevaluated), %lld failed eigendecompositions; "
-            "%lld Hessian evaluations (%.4g/s)\n",
-            (long long)hp, 100.0 * (double)hm / fmax(1.0, (double)hp),
-            100.0 * (double)ho / fmax(1.0, (double)hp), (long long)hf, (long long)he,
-            (double)he / fmax(chain_seconds, 1e-9));
   }
   if (screened)
     fprintf(stderr, "lmc: delayed acceptance: %lld first tests, %.1f%% passed (evaluated with the gradient)\n",
@@ -506,31 +415,21 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
           (long long)stalled, run->n, LMC_STALL_STEPS);
 }
 
-/* ---- The method tables (method.h) ------------------------------------- */
+/* ---- The method table (method.h) ------------------------------------- */
 
 static lmc_status lmc__m_create(void **OUT_run, const mc_method_setup *setup, lmc_error *err) {
   lmc_run *run = NULL;
-  lmc_status st = lmc_run_create(&run, setup->s, setup->rs, LMC_UNBOUNDED_PT, setup->kmin,
-                                 setup->kmax, err);
-  if (st) return st;
-  if (run->n_fam != setup->n_families) {
-    int n = run->n_fam;
-    lmc_run_destroy(run);
-    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s: %d families, expected %d",
-                         setup->rs->integrator, n, setup->n_families);
-  }
+  lmc_status st = lmc_run_create(&run, setup, err);
   *OUT_run = run;
-  return LMC_OK;
+  return st;
 }
 static void lmc__m_destroy(void *run) { lmc_run_destroy(run); }
-static const mc_target *lmc__m_family_target(void *run, int g) {
-  return &((lmc_run *)run)->fam[g].target;
-}
 static lmc_status lmc__m_set_chains(void *run, int n, const int *family, lmc_error *err) {
   return lmc_run_set_chains(run, n, family, err);
 }
-static int lmc__m_chain_kernels(void *run, int i, mc_kernel *k, double *p, int nk) {
-  (void)nk; /* lmc's mix replaces the driver's (lmc_run_chain_kernels) */
+static int lmc__m_chain_kernels(void *run, const mc_method_setup *setup, int i,
+                                const mc_space_family *F, mc_kernel *k, double *p) {
+  (void)setup, (void)F; /* (the run knows chain i's family) */
   return lmc_run_chain_kernels(run, i, k, p);
 }
 static int64_t lmc__m_round_limit(void *run, int64_t done, int64_t budget) {
@@ -543,38 +442,16 @@ static void lmc__m_note_restart(void *run, const mc_chain *c) { lmc_run_note_sta
 static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chain_seconds) {
   lmc_run_report(run, chains, n, chain_seconds);
 }
-static int64_t lmc__m_nan_samples(void *run, const mc_chain *c) {
-  return lmc_run_scratch_nan_samples(run, c->scratch);
-}
 
-/* lmc and h2mc share the run: h2mc is H2MC's proposal in MALA's slot
- * (lmc_run_create reads the integrator's name). */
 const mc_method mc_method_lmc = {
     .name = "lmc",
     .default_states = MCMC_STATES_BDPT,
     .create = lmc__m_create,
     .destroy = lmc__m_destroy,
-    .family_target = lmc__m_family_target,
     .set_chains = lmc__m_set_chains,
     .chain_kernels = lmc__m_chain_kernels,
     .round_limit = lmc__m_round_limit,
     .after_round = lmc__m_after_round,
     .note_restart_chain = lmc__m_note_restart,
     .report = lmc__m_report,
-    .nan_samples = lmc__m_nan_samples,
-};
-
-const mc_method mc_method_h2mc = {
-    .name = "h2mc",
-    .default_states = MCMC_STATES_BDPT,
-    .create = lmc__m_create,
-    .destroy = lmc__m_destroy,
-    .family_target = lmc__m_family_target,
-    .set_chains = lmc__m_set_chains,
-    .chain_kernels = lmc__m_chain_kernels,
-    .round_limit = lmc__m_round_limit,
-    .after_round = lmc__m_after_round,
-    .note_restart_chain = lmc__m_note_restart,
-    .report = lmc__m_report,
-    .nan_samples = lmc__m_nan_samples,
 };

@@ -3,17 +3,13 @@
  * (Luan, Zhao, Bala and Gkioulekas 2020), as a client of the MCMC driver
  * (mcmc.c) and the chain framework (chain.h).
  *
- * The states (--states, the driver's, mcmc.c). `bdpt` (the default): one
- * family over every length, a state being a BDPT sample's numbers and the
- * strategy that carries it (bdpt_states.h, with gradients and Hessians).
- * `mmlt`: the multiplexed bidirectional states of mmlt, one family of
- * chains per path length k, a state being the strategy (s, t) and its
- * camera, light and connect streams; the target (lmc_bdpt_target.c) is
- * path_eval_bdpt with the gradient (and Hessian) of its MIS-weighted
- * contribution, the state space of the LMC paper's own implementation.
- * `pt`: the unidirectional path of path_eval_pt (pt_li's estimator with
- * next-event estimation) over the camera stream (lmc_target.c), with
- * f = W H lum(L).
+ * The states (--states, space.h). `bdpt` (the default): one family over
+ * every length, a state being a BDPT sample's numbers and the strategy
+ * that carries it (bdpt_states.h). `mmlt`: the multiplexed bidirectional
+ * states of mmlt, one family of chains per path length, the state space of
+ * the LMC paper's own implementation (mmlt_states.h). `pt`: a path
+ * tracer's numbers (pt_states.c). Each space's target gives f with its
+ * gradient on request: the same states and values pssmlt and mmlt run on.
  *
  * Each chain mixes the large step (--largestep), Kelemen's isotropic
  * small step (--iso-prob), for mmlt states the technique mutation
@@ -41,65 +37,20 @@
  * preconditioner, a fixed kernel given the cache. The image is the sum
  * over both stages.
  *
- * The driver runs lmc and h2mc through their tables mc_method_lmc and
- * mc_method_h2mc (method.h): targets per family (one, or one per length
- * on mmlt's states), kernels per chain, stage 1's end as the hook after a
- * round (its return 1 restarts the chains from their starting states;
- * splats and mutation counts carry on), and their statistics lines.
+ * The driver runs lmc through its table mc_method_lmc (method.h):
+ * kernels per chain, stage 1's end as the hook after a round (its return 1
+ * restarts the chains from their starting states; splats and mutation
+ * counts carry on), and its statistics lines.
  */
 #ifndef LMC_MCMC_INTEGRATOR_LMC_H
 #define LMC_MCMC_INTEGRATOR_LMC_H
 
 #include <stdint.h>
 
-#include "lmc/states.h"
-#include "lmc/chain.h"
-#include "render/scene.h"
-#include "render/settings.h"
+#include "lmc/method.h"
 
 #define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see above) */
 #define LMC_TECHNIQUE_PROB 0.1 /* mmlt states: share of the technique mutation */
-#define LMC_UNBOUNDED_PT 16    /* pt states: bounces kept in the state when maxdepth is -1 */
 #define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
-
-/* ---- The scene target (lmc_target.c) ------------------------------------- */
-
-typedef struct lmc_scene_target {
-  const scene *s;     /* borrowed */
-  render_settings rs;
-  double area;        /* W H: 1 / density of the film position */
-} lmc_scene_target;
-
-/* Sets up *OUT_target over ctx (both owned by the caller, ctx must outlive
- * the target): camera stream of PT_DIMS_CAMERA + PT_DIMS_PER_BOUNCE
- * (bounces + 1) coordinates, bounces = maxdepth or `unbounded` when -1. */
-void lmc_target_init(mc_target *OUT_target, lmc_scene_target *ctx, const scene *s,
-                     const render_settings *rs, int unbounded);
-/* Gradient evaluations made in a scratch of this target. */
-int64_t lmc_target_scratch_grad_evals(const void *scratch);
-/* The path length (segments) a state's cache key stands for (pt layout):
- * the deepest differentiated coordinate's bounce + 2, or 1 for the film. */
-int lmc_target_length_of_key(int key);
-
-/* ---- The multiplexed bidirectional target (lmc_bdpt_target.c) ---------- */
-
-typedef struct lmc_bdpt_target {
-  const scene *s;     /* borrowed */
-  render_settings rs; /* mindepth -1: the family's length is what counts */
-  int length;         /* k, segments */
-  int n_strategies;   /* n_k: 1 for k = 1, else k + 1 */
-  double margin;      /* filter radius r */
-  double area;        /* (W + 2r)(H + 2r) */
-} lmc_bdpt_target;
-
-/* Sets up *OUT_target for paths of `length` segments over ctx (both owned
- * by the caller; ctx must outlive the target), with mmlt's layout. */
-void lmc_bdpt_target_init(mc_target *OUT_target, lmc_bdpt_target *ctx, const scene *s,
-                          const render_settings *rs, int length);
-/* Gradient evaluations and non-finite contributions in a scratch of it. */
-int64_t lmc_bdpt_scratch_grad_evals(const void *scratch);
-int64_t lmc_bdpt_scratch_nan_samples(const void *scratch);
-/* Hessian evaluations (eval_hess) in a scratch of it. */
-int64_t lmc_bdpt_scratch_hess_evals(const void *scratch);
 
 #endif

@@ -1,15 +1,24 @@
 /*
- * integrator_pssmlt.c: `--integrator pssmlt` (Kelemen, Szirmay-Kalos,
- * Antal and Csonka 2002) and `--integrator mmlt` (Hachisuka, Kaplanyan and
- * Dachsbacher 2014) on the MCMC driver (method.h). Both take the driver's
- * targets and its default kernels (the large step, Kelemen's small step
- * and, on mmlt's per-length states, the technique mutation); they differ
- * in the state space they run on without --states: pssmlt on the bdpt
- * states (one family over every length), mmlt on its per-length families.
- * The state spaces themselves are described in mcmc.c.
+ * integrator_pssmlt.c: `--integrator pssmlt`, primary-sample-space
+ * Metropolis light transport (Kelemen, Szirmay-Kalos, Antal and Csonka
+ * 2002), on the MCMC driver (method.h). Its chains mix the large step
+ * (--largestep) and Kelemen's small step (--sigma, --small-step), and the
+ * technique mutation on states with a strategy coordinate
+ * (mc_kernels_metropolis). It runs on the bdpt states by default (one
+ * family over every length, a BDPT sample and one of its strategies,
+ * bdpt_states.h), as the LMC paper's implementation runs it; --states pt
+ * gives Kelemen et al.'s original path-tracer states.
  */
 #include "lmc/method.h"
 
-const mc_method mc_method_pssmlt = {.name = "pssmlt", .default_states = MCMC_STATES_BDPT};
+static int pssmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
+                                 const mc_space_family *F, mc_kernel *k, double *p) {
+  (void)run, (void)i;
+  return mc_kernels_metropolis(setup->rs, F, k, p);
+}
 
-const mc_method mc_method_mmlt = {.name = "mmlt", .default_states = MCMC_STATES_MMLT};
+const mc_method mc_method_pssmlt = {
+    .name = "pssmlt",
+    .default_states = MCMC_STATES_BDPT,
+    .chain_kernels = pssmlt__chain_kernels,
+};

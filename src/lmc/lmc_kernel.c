@@ -56,9 +56,9 @@ lmc_status lmc_mala_init(lmc_mala *k, int dim, const lmc_kernel_params *p, lmc_e
   lmc_status st = adam_init(&k->adam, dim, err);
   if (st != LMC_OK) return st;
   size_t n = (size_t)dim;
-  k->M_chain = malloc(n * sizeof(double));
+  k->M_chain = calloc(n, sizeof(double));
   k->g = malloc(n * sizeof(double));
-  k->M = malloc(n * sizeof(double));
+  k->M = calloc(n, sizeof(double));
   k->m1 = malloc(n * sizeof(double));
   k->m2 = malloc(n * sizeof(double));
   k->cidx = malloc(n * sizeof(int));
@@ -164,19 +164,39 @@ static const double *lmc__precond(lmc_mala *k, const mc_state *x, int key) {
   if (k->p.adapt != LMC_ADAPT_CACHE) return lmc__precond_chain(k, x, key);
   /* Stage 2: a pure function of x (its first `key` coordinates); the same
    * state as one of the last two lookups gives the same M. */
+  int labelled = k->target && k->target->label_coords;
+  if (labelled) key = x->label + 1; /* the keyed cache's key (lmc_mala_set_target) */
   size_t bytes = (size_t)x->dim * sizeof(double);
   for (int j = 0; j < 2; j++)
     if (k->memo_key[j] == key && !memcmp(k->memo_u[j], x->u, bytes)) return k->memo_M[j];
   int slot = k->memo_next;
   k->memo_next ^= 1;
   double *M = k->memo_M[slot];
-  int kk = key <= gcache_max_dim(k->cache) ? key : 0;
-  int found = kk ? gcache_precond(k->cache, kk, x->u, &k->p.cache, M) : 0;
+  double one = 1.0 < k->p.lo ? k->p.lo : (1.0 > k->p.hi ? k->p.hi : 1.0);
+  int found = 0;
+  if (labelled) {
+    /* The label's entries, looked up at its coordinates and scattered
+     * back; every other coordinate gets 1. */
+    int n = k->target->label_coords(k->target, x->label, k->cidx);
+    for (int i = 0; i < x->dim; i++) M[i] = one;
+    if (n > 0 && key <= gcache_max_dim(k->cache) && gcache_len(k->cache, key) == n) {
+      for (int i = 0; i < n; i++) k->cu[i] = x->u[k->cidx[i]];
+      found = gcache_precond(k->cache, key, k->cu, &k->p.cache, k->m1);
+      for (int i = 0; i < n; i++) M[k->cidx[i]] = k->m1[i];
+    }
+    if (k->p.norm != LMC_NORM_OFF) {
+      for (int i = 0; i < n; i++) k->m1[i] = M[k->cidx[i]];
+      lmc__normalise(k->p.norm, k->m1, n);
+      for (int i = 0; i < n; i++) M[k->cidx[i]] = k->m1[i];
+    }
+  } else {
+    int kk = key <= gcache_max_dim(k->cache) ? key : 0;
+    found = kk ? gcache_precond(k->cache, kk, x->u, &k->p.cache, M) : 0;
+    for (int i = kk; i < x->dim; i++) M[i] = one;
+    lmc__normalise(k->p.norm, M, key);
+  }
   k->st.lookups++;
   if (found) k->st.lookup_hits++;
-  double one = 1.0 < k->p.lo ? k->p.lo : (1.0 > k->p.hi ? k->p.hi : 1.0);
-  for (int i = kk; i < x->dim; i++) M[i] = one;
-  lmc__normalise(k->p.norm, M, key);
   memcpy(k->memo_u[slot], x->u, bytes);
   k->memo_key[slot] = key;
   return M;

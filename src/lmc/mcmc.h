@@ -1,5 +1,5 @@
 /*
- * mcmc.h: the Markov chain Monte Carlo integrators (every table of methods.c:
+ * mcmc.h: the Markov chain Monte Carlo integrators (every table of registry.c:
  * pssmlt, mmlt, lmc, h2mc) as the command line sees them.
  */
 #ifndef LMC_MCMC_MCMC_H

@@ -1,36 +1,25 @@
 /*
- * method.h: the interface between the MCMC driver (mcmc.c) and the MCMC
- * integrators. The driver owns everything the integrators have in common:
- * the state spaces (--states: the pt, the bdpt and mmlt's per-length
- * states, their targets and step scales), the direct pass, the bootstrap
- * and b, the chains' starting states, rounds, budgets, splatting,
- * snapshots and the shared statistics lines. An integrator is a table of
- * functions, mc_method; the driver finds it by name (mc_method_find) and
- * names no integrator itself. Helpers that several integrators use (step
- * scales, mmlt's contribution) live below both, in states.h.
+ * method.h: an MCMC integrator as a plugin of the driver (mcmc.c).
  *
- * What an integrator supplies:
- *   - its default state space (default_states), and whether it runs on
- *     the one asked for (create may refuse with a message);
- *   - optionally its own targets, family by family, in place of the
- *     driver's (lmc and h2mc: targets with gradients and Hessians, in the
- *     same layouts); the driver's step scales are then the target's own;
- *   - its kernels per chain (chain_kernels), given the driver's default
- *     mix: the large step (--largestep), Kelemen's small step (--sigma,
- *     --small-step) and on mmlt's states of length > 1 the technique
- *     mutation (9:1 with the small step);
- *   - optional hooks per round (round_limit, after_round: a return of 1
- *     restarts every chain from its starting state with its kernels
- *     asked again, splats and counts kept, note_restart_chain first),
- *     its statistics lines (report) and its count of non-finite
- *     contributions per chain scratch (nan_samples).
- * pssmlt and mmlt take the driver's targets and default kernels and
- * differ in their default states only (integrator_pssmlt.c).
+ * The driver owns what every MCMC integrator shares: the direct pass, the
+ * state space (space.h: created from --states or the integrator's default,
+ * its families and their targets), the bootstrap and b, the chains'
+ * starting states, rounds, budgets, splatting, snapshots, the shared
+ * statistics lines and Ctrl-C. It names no integrator and no state space.
+ * An integrator is a table of functions, mc_method, found by name
+ * (registry.c); it is a leaf: it chooses its kernels and their
+ * probabilities for each chain, keeps what they adapt, and reports its own
+ * statistics. A chain's state and the kernels' insides stay the
+ * integrator's and the chain framework's (chain.h).
  *
- * The driver calls, in order: create, family_target per family,
- * set_chains, chain_kernels per chain, per round round_limit before and
- * after_round after, report, destroy. All function pointers but name may
- * be NULL (no run state, the driver's targets, default kernels, no hooks).
+ * The driver calls, in order: create (once the space exists), set_chains,
+ * chain_kernels per chain, per round round_limit before and after_round
+ * after, report, destroy. chain_kernels is called again when the
+ * --largestep-scale schedule begins and after a restart (after_round's
+ * return 1: every chain restarts from its starting state, splats and
+ * counts kept, note_restart_chain first); it must then give the same mix
+ * (the driver scales the large step's probability itself). Every function
+ * pointer but name and chain_kernels may be NULL.
  */
 #ifndef LMC_MCMC_METHOD_H
 #define LMC_MCMC_METHOD_H
@@ -38,6 +27,7 @@
 #include <stdint.h>
 
 #include "lmc/chain.h"
+#include "lmc/space.h"
 #include "render/error.h"
 #include "render/scene.h"
 #include "render/settings.h"
@@ -45,26 +35,22 @@
 /* What the driver tells an integrator at create. */
 typedef struct mc_method_setup {
   const scene *s;            /* borrowed */
-  const render_settings *rs; /* the chains' settings: rs->mcmc_states and lmc_states resolved,
-                                sigma the small step's, mindepth as the chains see it */
-  int states;                /* MCMC_STATES_PT, _MMLT or _BDPT */
-  int kmin, kmax;            /* path lengths of the state space (mmlt's: one family each) */
-  int n_families;            /* the driver's families (1, or kmax - kmin + 1 on mmlt's) */
+  const render_settings *rs; /* the chains' settings: sigma the small step's (--sigma or the
+                                space's default), mindepth as the chains see it */
+  const mc_space *space;     /* borrowed: the families and their targets */
 } mc_method_setup;
 
 typedef struct mc_method {
-  const char *name;   /* --integrator NAME */
-  int default_states; /* MCMC_STATES_BDPT, _MMLT or _PT: the states without --states */
+  const char *name;          /* --integrator NAME */
+  int default_states;        /* MCMC_STATES_*: the space without --states */
   lmc_status (*create)(void **OUT_run, const mc_method_setup *setup, lmc_error *err);
   void (*destroy)(void *run);
-  /* Family g's target (owned by run), or NULL: the driver's. */
-  const mc_target *(*family_target)(void *run, int g);
-  /* n chains; chain i belongs to family[i]. */
+  /* n chains; chain i belongs to family[i] of the space. */
   lmc_status (*set_chains)(void *run, int n, const int *family, lmc_error *err);
-  /* Chain i's kernels and probabilities: k[] and p[] (room for
-   * MC_MAX_KERNELS) hold the driver's default mix of nk kernels; returns
-   * the count written. */
-  int (*chain_kernels)(void *run, int i, mc_kernel *k, double *p, int nk);
+  /* Chain i's kernels and probabilities into k[] and p[] (room for
+   * MC_MAX_KERNELS); returns their count. run is NULL when create is. */
+  int (*chain_kernels)(void *run, const mc_method_setup *setup, int i, const mc_space_family *F,
+                       mc_kernel *k, double *p);
   /* The most mutations per chain the next round may make (INT64_MAX: no limit). */
   int64_t (*round_limit)(void *run, int64_t done, int64_t budget);
   /* After a round (done / budget mutations per chain, budget INT64_MAX
@@ -73,15 +59,27 @@ typedef struct mc_method {
   void (*note_restart_chain)(void *run, const mc_chain *c);
   /* Statistics lines (stderr) after the driver's. */
   void (*report)(void *run, mc_chain *const *chains, int n, double chain_seconds);
-  /* Non-finite contributions dropped in a chain's scratch (NULL: the
-   * driver's count for its targets). */
-  int64_t (*nan_samples)(void *run, const mc_chain *c);
 } mc_method;
 
 /* The integrators built on the driver, by --integrator name (NULL: none). */
 const mc_method *mc_method_find(const char *name);
 
-/* The tables (methods.c lists them). */
-extern const mc_method mc_method_pssmlt, mc_method_mmlt, mc_method_lmc, mc_method_h2mc;
+/* Adds an integrator defined outside src/lmc (borrowed: m must outlive
+ * its use), found by name from then on. Call it before rendering, from one
+ * thread; at most 8. Fails on a name already taken. */
+lmc_status mc_method_register(const mc_method *m, lmc_error *err);
+
+/* The default mix of Kelemen et al. 2002 and Hachisuka et al. 2014
+ * (kernel_mix.c): the large step with probability rs->largestep, the small
+ * step (Kelemen's with offsets in (1/1024, rs->sigma], or --small-step
+ * gauss) and, on a family with a technique coordinate, the technique
+ * mutation (9:1 with the small step). Returns the kernels' count. */
+int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, mc_kernel *OUT_k,
+                          double *OUT_p);
+
+/* --largestep-scale: the large step's probability (kernel 0, when it is
+ * the large step) times scale, at most 1, and the others' together scaled
+ * by what is left (kernel_mix.c). */
+void mc_kernels_scale_large(const mc_kernel *k, double *p, int n, double scale);
 
 #endif

@@ -1,9 +1,7 @@
 /*
- * states.h: helpers of the primary-sample state spaces that several MCMC
- * integrators share: the step scales of the light-triangle coordinates and
- * the contribution of mmlt's per-length states (the driver's targets,
- * mcmc.c, and lmc's gradient targets, lmc_bdpt_target.c, evaluate the same
- * states).
+ * states.h: helpers the primary-sample state spaces share (space.h): the
+ * step scales of the light-triangle coordinates and the plain-number
+ * contribution of the mmlt states (mmlt_states.c).
  */
 #ifndef LMC_MCMC_STATES_H
 #define LMC_MCMC_STATES_H

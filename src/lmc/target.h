@@ -45,6 +45,13 @@ typedef struct mc_value {
                      Jacobian of relabel, below); the chain keeps it, targets need not */
 } mc_value;
 
+/* What a scratch of a scene target has counted (scratch_counts). */
+typedef struct mc_counts {
+  int64_t grad_evals;  /* evaluations with the gradient */
+  int64_t hess_evals;  /* ... of which also with the Hessian (eval_hess) */
+  int64_t nan_samples; /* non-finite contributions dropped (set to 0) */
+} mc_counts;
+
 /* One label's part of an evaluation of every label at once (eval_all). */
 typedef struct mc_contrib {
   int label;
@@ -64,6 +71,9 @@ struct mc_target {
   void (*scratch_destroy)(void *scratch);
   /* Optional counter of rays traced in `scratch` since it was created (NULL: none). */
   int64_t (*scratch_rays)(const void *scratch);
+  /* Optional (NULL: none): the other counters of `scratch` since it was
+   * created, added to *OUT. */
+  void (*scratch_counts)(const void *scratch, mc_counts *OUT);
   /* Optional (NULL: all 1), borrowed: per-coordinate factor on the offsets of
    * Kelemen's small step, in [0, 1]. A target sets it below 1 for a
    * coordinate whose mapping has a huge derivative (e.g. the triangle
@@ -137,6 +147,14 @@ struct mc_target {
 
 /* The most coordinates a target's Hessian spans (AD_H_CAPACITY of src/ad). */
 #define MC_HESS_MAX 96
+
+/* The smallest of t's step scales (1 without them). */
+static inline double mc_step_scale_min(const mc_target *t) {
+  double m = 1.0;
+  for (int i = 0; t->step_scale && i < t->dim; i++)
+    if (t->step_scale[i] < m) m = t->step_scale[i];
+  return m;
+}
 
 /* First coordinate of stream k. */
 static inline int mc_target_stream_offset(const mc_target *t, int k) {

@@ -1,6 +1,6 @@
 /*
- * test_lmc_bdpt_target.c: lmc's multiplexed bidirectional target
- * (lmc_bdpt_target.c) on a small built-in scene with a tent filter (so the
+ * test_mmlt_states.c: the mmlt states' target with derivatives
+ * (mmlt_states.c) on a small built-in scene with a tent filter (so the
  * film grows by a margin of 1 pixel and the adapter's raster mapping is
  * exercised), for every path length 1 .. 5:
  *
@@ -26,7 +26,7 @@
 
 #include <cmocka.h>
 
-#include "lmc/integrator_lmc.h"
+#include "lmc/mmlt_states.h"
 #include "lmc/mcmc.h"
 #include "lmc/states.h"
 #include "render/io/io.h"
@@ -132,9 +132,10 @@ static void test_values_and_gradients(void **state) {
   path_vec_sampler_init(&vs, 5, NULL);
   int total_nonzero = 0;
   for (int len = 1; len <= KMAX; len++) {
-    lmc_bdpt_target ctx;
+    mc_mmlt_states ctx;
     mc_target T;
-    lmc_bdpt_target_init(&T, &ctx, fx->sc, &rs, len);
+    lmc_error err;
+    assert_int_equal(mc_mmlt_states_init(&T, &ctx, fx->sc, &rs, len, &err), LMC_OK);
     void *scratch = T.scratch_create(&T);
     assert_non_null(scratch);
     double *grad = malloc((size_t)T.dim * sizeof(double));
@@ -197,6 +198,7 @@ static void test_values_and_gradients(void **state) {
     total_nonzero += nonzero;
     free(grad);
     T.scratch_destroy(scratch);
+    mc_mmlt_states_free(&ctx);
   }
   assert_true(total_nonzero >= 150);
   path_vec_sampler_free(&vs);
@@ -231,9 +233,10 @@ static void test_hessian(void **state) {
   path_vec_sampler_init(&vs, 11, NULL);
   int total_compared = 0, total_passed = 0;
   for (int len = 2; len <= KMAX; len++) {
-    lmc_bdpt_target ctx;
+    mc_mmlt_states ctx;
     mc_target T;
-    lmc_bdpt_target_init(&T, &ctx, fx->sc, &rs, len);
+    lmc_error err;
+    assert_int_equal(mc_mmlt_states_init(&T, &ctx, fx->sc, &rs, len, &err), LMC_OK);
     assert_non_null(T.eval_hess);
     assert_non_null(T.local_coords);
     void *scratch = T.scratch_create(&T);
@@ -310,6 +313,7 @@ static void test_hessian(void **state) {
     total_compared += compared, total_passed += passed;
     free(grad), free(g1), free(gp), free(gm), free(hess), free(hidx), free(loc);
     T.scratch_destroy(scratch);
+    mc_mmlt_states_free(&ctx);
   }
   assert_true(total_compared > 0 && total_passed >= 0.99 * total_compared);
   path_vec_sampler_free(&vs);

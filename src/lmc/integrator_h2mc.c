@@ -1,0 +1,131 @@
+/*
+ * integrator_h2mc.c: `--integrator h2mc`, Hessian-Hamiltonian Monte Carlo
+ * rendering (Li, Lehtinen, Ramamoorthi, Jakob and Durand 2015), on the
+ * MCMC driver (method.h). Its chains mix the large step (--largestep),
+ * Kelemen's isotropic small step (--iso-prob), on per-length states the
+ * technique mutation (H2MC_TECHNIQUE_PROB of the rest) and H2MC's
+ * proposal (h2mc.h: a Gaussian from the second-order model of log f at the
+ * state, with the prior --h2mc-sigma) in what is left. Paths of one or two
+ * segments take Kelemen's step instead (f is smooth there; a Hessian costs
+ * more than it saves). It needs a state space with Hessians (eval_hess):
+ * the bdpt states (the default) or mmlt's. H2MC adapts nothing, so every
+ * kernel is fixed and the chains are exact.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "lmc/h2mc.h"
+#include "lmc/lmc_kernel.h"
+#include "lmc/method.h"
+
+#define H2MC_TECHNIQUE_PROB 0.1 /* per-length states: share of the technique mutation */
+#define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
+
+typedef struct h2mc_run {
+  render_settings rs;
+  const mc_space *space; /* borrowed */
+  lmc_kernel_params kp;  /* the small steps' s1, s2 (as lmc's) */
+  int n;
+  int *chain_fam;
+  h2mc_kernel *h2;       /* per chain */
+} h2mc_run;
+
+static void h2mc__destroy(void *r) {
+  h2mc_run *run = r;
+  if (!run) return;
+  for (int i = 0; i < run->n && run->h2; i++) h2mc_kernel_free(&run->h2[i]);
+  free(run->h2);
+  free(run->chain_fam);
+  free(run);
+}
+
+static lmc_status h2mc__create(void **OUT_run, const mc_method_setup *setup, lmc_error *err) {
+  *OUT_run = NULL;
+  for (int g = 0; g < setup->space->n_fam; g++)
+    if (!setup->space->fam[g].target.eval_hess)
+      return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
+                           "h2mc runs on states with a Hessian, the bdpt states (--states bdpt, "
+                           "the default) or mmlt's (--states mmlt): the %s states have none",
+                           setup->space->name);
+  h2mc_run *run = calloc(1, sizeof *run);
+  if (!run) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
+  run->rs = *setup->rs;
+  run->space = setup->space;
+  run->kp = lmc_kernel_params_from_settings(setup->rs);
+  *OUT_run = run;
+  return LMC_OK;
+}
+
+static lmc_status h2mc__set_chains(void *r, int n, const int *family, lmc_error *err) {
+  h2mc_run *run = r;
+  run->h2 = calloc((size_t)n, sizeof *run->h2);
+  run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
+  if (!run->h2 || !run->chain_fam) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
+  h2mc_params hp = h2mc_params_default();
+  if (run->rs.h2mc_sigma > 0.0) hp.sigma = run->rs.h2mc_sigma;
+  for (int i = 0; i < n; i++) {
+    run->chain_fam[i] = family[i];
+    lmc_status st = h2mc_kernel_init(&run->h2[i], &run->space->fam[family[i]].target, &hp, err);
+    run->n = i + 1;
+    if (st) return st;
+  }
+  return LMC_OK;
+}
+
+static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
+                               const mc_space_family *F, mc_kernel *OUT_k, double *OUT_p) {
+  (void)setup;
+  h2mc_run *run = r;
+  double large = run->rs.largestep, iso = run->rs.iso_prob;
+  double tech = F->technique >= 0 ? H2MC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
+  int n = 0;
+  OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
+  OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
+                                 : mc_kernel_small(run->kp.s1, run->kp.s2);
+  OUT_p[n++] = iso;
+  /* Short paths: H2MC's slot gets nothing, the mix is renormalised. */
+  if (F->length >= 1 && F->length < H2MC_MIN_LENGTH) iso = 1.0 - large - tech;
+  OUT_k[n] = h2mc_kernel_make(&run->h2[i]);
+  OUT_p[n++] = fmax(0.0, 1.0 - large - iso - tech);
+  if (tech > 0.0) {
+    OUT_k[n] = mc_kernel_technique(F->technique);
+    OUT_k[n].s1 = run->kp.s1, OUT_k[n].s2 = run->kp.s2;
+    OUT_p[n++] = tech;
+  }
+  return n;
+}
+
+static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_seconds) {
+  const h2mc_run *run = r;
+  fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, iso %g, light-triangle step scale %g\n",
+          run->space->name, run->n > 0 ? run->h2[0].p.sigma : 0.0,
+          run->n > 0 ? run->h2[0].p.L : 0.0, run->rs.iso_prob,
+          run->space->n_fam > 0 ? mc_step_scale_min(&run->space->fam[0].target) : 1.0);
+  int64_t hp = 0, hm = 0, ho = 0, hf = 0;
+  for (int i = 0; i < run->n; i++) {
+    hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
+    ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail;
+  }
+  mc_counts c = {0};
+  for (int i = 0; i < n && i < run->n; i++)
+    mc_space_counts(&run->space->fam[run->chain_fam[i]], chains[i]->scratch, &c);
+  fprintf(stderr,
+          "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
+          "%.1f%% outside the unit cube (rejected unevaluated), %lld failed eigendecompositions; "
+          "%lld Hessian evaluations (%.4g/s), %lld with the gradient alone\n",
+          (long long)hp, 100.0 * (double)hm / fmax(1.0, (double)hp),
+          100.0 * (double)ho / fmax(1.0, (double)hp), (long long)hf, (long long)c.hess_evals,
+          (double)c.hess_evals / fmax(chain_seconds, 1e-9),
+          (long long)(c.grad_evals - c.hess_evals));
+}
+
+const mc_method mc_method_h2mc = {
+    .name = "h2mc",
+    .default_states = MCMC_STATES_BDPT,
+    .create = h2mc__create,
+    .destroy = h2mc__destroy,
+    .set_chains = h2mc__set_chains,
+    .chain_kernels = h2mc__chain_kernels,
+    .report = h2mc__report,
+};

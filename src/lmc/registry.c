@@ -1,0 +1,59 @@
+/*
+ * registry.c: the MCMC integrators (method.h) and the state spaces
+ * (space.h) the driver runs, by name. Adding one is a line here.
+ */
+#include <stddef.h>
+#include <string.h>
+
+#include "lmc/method.h"
+#include "lmc/space.h"
+
+extern const mc_method mc_method_pssmlt, mc_method_mmlt, mc_method_lmc, mc_method_h2mc;
+
+static const mc_method *const mc__methods[] = {&mc_method_pssmlt, &mc_method_mmlt,
+                                               &mc_method_lmc, &mc_method_h2mc};
+
+static const mc_space_type mc__spaces[] = {
+    {"pt", MCMC_STATES_PT, mc_space_pt_create},
+    {"mmlt", MCMC_STATES_MMLT, mc_space_mmlt_create},
+    {"bdpt", MCMC_STATES_BDPT, mc_space_bdpt_create},
+};
+
+/* Integrators registered at run time (mc_method_register). */
+#define MC__MAX_EXTRA 8
+static const mc_method *mc__extra[MC__MAX_EXTRA];
+static int mc__n_extra;
+
+const mc_method *mc_method_find(const char *name) {
+  if (!name) return NULL;
+  for (size_t i = 0; i < sizeof mc__methods / sizeof mc__methods[0]; i++)
+    if (!strcmp(mc__methods[i]->name, name)) return mc__methods[i];
+  for (int i = 0; i < mc__n_extra; i++)
+    if (!strcmp(mc__extra[i]->name, name)) return mc__extra[i];
+  return NULL;
+}
+
+lmc_status mc_method_register(const mc_method *m, lmc_error *err) {
+  if (!m || !m->name || !m->chain_kernels)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "an integrator needs a name and chain_kernels");
+  if (mc_method_find(m->name))
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "integrator %s exists already", m->name);
+  if (mc__n_extra == MC__MAX_EXTRA)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "no room for integrator %s", m->name);
+  mc__extra[mc__n_extra++] = m;
+  return LMC_OK;
+}
+
+const mc_space_type *mc_space_find(int id) {
+  for (size_t i = 0; i < sizeof mc__spaces / sizeof mc__spaces[0]; i++)
+    if (mc__spaces[i].id == id) return &mc__spaces[i];
+  return NULL;
+}
+
+void mc_space_free(mc_space *sp) {
+  if (!sp) return;
+  if (sp->destroy && sp->ctx) sp->destroy(sp);
+  sp->ctx = NULL;
+  sp->fam = NULL;
+  sp->n_fam = 0;
+}

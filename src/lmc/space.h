@@ -1,0 +1,102 @@
+/*
+ * space.h: a state space of the MCMC driver as a plugin.
+ *
+ * A state space says what a chain's state is and what it is worth: it
+ * splits the chains into families (one, or one per path length), and
+ * gives each family a target (target.h) that evaluates f and, on request,
+ * its gradient and, where the space has one, its Hessian. pssmlt and mmlt
+ * evaluate it without derivatives, lmc with its gradient, h2mc with its
+ * Hessian: one implementation serves them all. A space also sets the
+ * small step's per-coordinate scales (mc_target.step_scale), says which
+ * coordinate picks a strategy (for the technique mutation) and may bring
+ * its own estimator of the normalisation b (mmlt's states: b of every
+ * length from whole BDPT samples).
+ *
+ * The spaces (registry.c): `pt` (pt_states.c: a path tracer's numbers),
+ * `mmlt` (mmlt_states.c: one family per path length, Hachisuka et al.
+ * 2014) and `bdpt` (bdpt_states.c: one family over every length, a BDPT
+ * sample and one of its strategies). The driver (mcmc.c) creates the one
+ * --states or the integrator names and never looks inside it.
+ */
+#ifndef LMC_MCMC_SPACE_H
+#define LMC_MCMC_SPACE_H
+
+#include <stdint.h>
+
+#include "lmc/bootstrap.h"
+#include "lmc/target.h"
+#include "render/error.h"
+#include "render/integrator.h"
+#include "render/scene.h"
+#include "render/settings.h"
+
+typedef struct mc_space_family mc_space_family;
+struct mc_space_family {
+  mc_target target; /* f, its gradient on request, its Hessian where eval_hess is set */
+  int length;       /* a per-length family: its paths' length in segments; 0: every length */
+  int technique;    /* the coordinate that picks the state's strategy, for the technique
+                       mutation (chain.h), or -1: none */
+  /* Optional (NULL: unknown): the path length in segments of a state with
+   * label `label` (labelled targets; else -1) whose deepest differentiated
+   * coordinate is `last` (-1: unknown); -1 when the space cannot say. */
+  int (*length_of)(const mc_space_family *F, int label, int last);
+};
+
+/* What estimate_b is asked for (see mc_space). */
+typedef struct mc_space_b_request {
+  int64_t fixed;    /* > 0: exactly this many samples */
+  double seconds;   /* under --time: draw for this long (INFINITY: plan by rel_err) */
+  double rel_err;   /* the standard error of sum_g b_g to aim for, relative */
+  int64_t cap;      /* the most samples */
+  uint64_t seed;
+  int nthreads;
+} mc_space_b_request;
+
+typedef struct mc_space mc_space;
+struct mc_space {
+  const char *name;      /* --states NAME */
+  int n_fam;
+  mc_space_family *fam;  /* owned by the space */
+  int kmin, kmax;        /* the path lengths its states cover (segments) */
+  double sigma;          /* the small step's scale without --sigma (0: the settings' default) */
+  int pool_large;        /* 1: b is refined with the chains' large-step samples (mcmc.c) */
+  const char *b_note;    /* how estimate_b draws its samples, for the statistics line */
+  /* Optional (NULL: the driver's bootstrap estimates b): b of every family,
+   * written to boot[g].b, b_var, s, s2 and n_est, from the space's own
+   * unbiased estimator; the bootstrap's samples then only pick the chains'
+   * starting states. cnt[thread] counts the rays. Returns the samples
+   * drawn, or -1 when out of memory. */
+  int64_t (*estimate_b)(const mc_space *sp, mc_boot *boot, const mc_space_b_request *rq,
+                        render_counters *cnt);
+  void (*destroy)(mc_space *sp); /* frees what create made (not sp itself) */
+  void *ctx;                     /* the space's own data */
+};
+
+/* A kind of state space, by --states name. create fills *OUT (zeroed by
+ * the caller) for the chains' settings rs (mindepth as the chains see it). */
+typedef struct mc_space_type {
+  const char *name;
+  int id; /* MCMC_STATES_* (render/settings.h) */
+  lmc_status (*create)(mc_space *OUT, const scene *s, const render_settings *rs, lmc_error *err);
+} mc_space_type;
+
+/* The state spaces (registry.c), by MCMC_STATES_* (NULL: none). */
+const mc_space_type *mc_space_find(int id);
+
+/* Frees what sp holds (accepts NULL and a space never created). */
+void mc_space_free(mc_space *sp);
+
+/* Sums the counters of a chain scratch of family F's target into *OUT. */
+static inline void mc_space_counts(const mc_space_family *F, const void *scratch, mc_counts *OUT) {
+  if (scratch && F->target.scratch_counts) F->target.scratch_counts(scratch, OUT);
+}
+
+/* The spaces' create functions (pt_states.c, mmlt_states.c, bdpt_states.c). */
+lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                              lmc_error *err);
+lmc_status mc_space_mmlt_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                                lmc_error *err);
+lmc_status mc_space_bdpt_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                                lmc_error *err);
+
+#endif
