@@ -25,36 +25,7 @@
 #include "render/integrator.h"
 #include "render/path.h"
 
-typedef struct bs__scratch {
-  render_counters cnt;
-  bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
-  path_scratch *ps; /* for gradients, made on first use */
-  int64_t rays_grad, grad_evals, hess_evals;
-} bs__scratch;
-
-static void *bs__scratch_create(const mc_target *t) {
-  (void)t;
-  return calloc(1, sizeof(bs__scratch));
-}
-
-static void bs__scratch_destroy(void *scratch) {
-  bs__scratch *sc = scratch;
-  if (!sc) return;
-  path_scratch_destroy(sc->ps);
-  free(sc);
-}
-
-static int64_t bs__scratch_rays(const void *scratch) {
-  const bs__scratch *sc = scratch;
-  return sc->cnt.rays + sc->rays_grad;
-}
-
-static void bs__scratch_counts(const void *scratch, mc_counts *OUT) {
-  const bs__scratch *sc = scratch;
-  OUT->grad_evals += sc->grad_evals;
-  OUT->hess_evals += sc->hess_evals;
-  OUT->nan_samples += sc->cnt.nan_samples;
-}
+typedef mc_states_scratch bs__scratch;
 
 int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label) {
   if (label < 0 || label >= ctx->n_labels) return 0;
@@ -64,19 +35,7 @@ int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label) {
 /* Value and f of a contribution c at (rx, ry); non-finite ones are
  * dropped (and counted). */
 static void bs__value(mc_value *v, rgb c, double rx, double ry, render_counters *cnt) {
-  v->rx = rx;
-  v->ry = ry;
-  if (!rgb_isfinite(c)) {
-    cnt->nan_samples++;
-    c = rgb_zero();
-  }
-  double f = rgb_luminance(c);
-  if (!(f > 0.0) || !isfinite(f)) {
-    f = 0.0;
-    c = rgb_zero();
-  }
-  v->value = c;
-  v->f = v->f_large = f;
+  mc_states_value(v, c, rx, ry, &cnt->nan_samples);
 }
 
 /* The raster point of the film numbers (u0, u1): uniform over the film
@@ -97,33 +56,6 @@ static double bs__jacobian(const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
 
 /* ---- The gradient (path_eval_bdpt_abs through a film adapter) ----------- */
 
-/* path_eval_bdpt_abs reads the raster position as u0 W, u1 H; the state's
- * film numbers cover the film grown by r. The adapter hands it
- * (-r + u (W + 2r)) / W (outside [0, 1) near the border, which the camera
- * accepts); the chain rule factor (W + 2r) / W goes on those two
- * derivatives. */
-typedef struct bs__adapter {
-  lmc_sampler base;
-  lmc_sampler *inner;
-  int stream, pos[LMC_STREAM_COUNT];
-  double r, W, H;
-} bs__adapter;
-
-static double bs__adapter_next(lmc_sampler *self) {
-  bs__adapter *a = (bs__adapter *)self;
-  int p = a->pos[a->stream]++;
-  double u = sampler_next(a->inner);
-  if (a->stream == LMC_STREAM_CAMERA && p < 2)
-    return p == 0 ? (-a->r + u * (a->W + 2.0 * a->r)) / a->W : (-a->r + u * (a->H + 2.0 * a->r)) / a->H;
-  return u;
-}
-
-static void bs__adapter_use_stream(lmc_sampler *self, int stream) {
-  bs__adapter *a = (bs__adapter *)self;
-  a->stream = stream;
-  sampler_use_stream(a->inner, stream);
-}
-
 /* With OUT_hess (eval_hess), also the Hessian of f over the label's
  * differentiated coordinates, from path_eval's Hessian of the luminance:
  * d^2 f / du_a du_b = scale m_a m_b d^2 lum / du'_a du'_b, with m the
@@ -132,26 +64,21 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
                          mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok, int *OUT_hn,
                          int *OUT_hidx, double *OUT_hess, int *OUT_hess_ok) {
   const mc_bdpt_states *st = t->ctx;
-  if (!sc->ps) {
-    lmc_error err;
-    if (path_scratch_create(&sc->ps, &err) != LMC_OK) return -1;
-  }
-  bs__adapter a;
-  memset(&a, 0, sizeof a);
-  a.base.next = bs__adapter_next;
-  a.base.use_stream = bs__adapter_use_stream;
-  a.inner = smp;
-  a.r = st->margin;
-  a.W = st->s->cam.width;
-  a.H = st->s->cam.height;
+  /* path_eval_bdpt_abs reads the raster position as u0 W, u1 H: the
+   * adapter maps the state's film numbers (states.h). */
+  path_scratch *ps = mc_states_scratch_path(sc);
+  if (!ps) return -1;
+  mc_film_adapter a;
+  mc_film_adapter_init(&a, smp, LMC_STREAM_CAMERA, 0, st->margin, st->s->cam.width,
+                       st->s->cam.height);
   path_eval pe;
   if (OUT_hess_ok) *OUT_hess_ok = 0;
   if (path_eval_bdpt_abs(st->s, &st->rs, &a.base, ss, tt, st->rough_min,
-                         OUT_hess ? PATH_WANT_HESS : PATH_WANT_GRAD, sc->ps, &pe,
-                         &sc->rays_grad) != LMC_OK)
+                         OUT_hess ? PATH_WANT_HESS : PATH_WANT_GRAD, ps, &pe,
+                         &sc->rays_d) != LMC_OK)
     return -1;
-  sc->grad_evals++;
-  sc->hess_evals += OUT_hess != NULL;
+  sc->counts.grad_evals++;
+  sc->counts.hess_evals += OUT_hess != NULL;
   double scale = tt == 1 ? 1.0 : st->area;
   bs__value(OUT_value, rgb_scale(pe.value, scale), pe.rx, pe.ry, &sc->cnt);
   OUT_value->f_large = pe.jac > 0.0 ? OUT_value->f / pe.jac : 0.0;
@@ -164,9 +91,7 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
     const path_coord *pc = &pe.coords[i];
     if (!pc->diff || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
     if (pc->pos >= t->stream_dim[pc->stream]) continue;
-    double d = pc->dlum * scale;
-    if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
-      d *= pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
+    double d = pc->dlum * scale * mc_film_adapter_factor(&a, pc->stream, pc->pos);
     if (!isfinite(d)) return 0; /* no usable gradient at this state */
     OUT_grad[mc_target_stream_offset(t, pc->stream) + pc->pos] += d;
     ok = 1;
@@ -184,9 +109,7 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
     if (pc->var < 0 || pc->var >= nd || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
     if (pc->pos >= t->stream_dim[pc->stream]) continue;
     coord[pc->var] = mc_target_stream_offset(t, pc->stream) + pc->pos;
-    m[pc->var] = 1.0;
-    if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
-      m[pc->var] = pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
+    m[pc->var] = mc_film_adapter_factor(&a, pc->stream, pc->pos);
   }
   for (int j = 0; j < nd; j++)
     if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
@@ -413,10 +336,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   T->stream_dim[LMC_STREAM_CONNECT] = BDPT_DIMS_CONNECT * (kmax + 1);
   T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
   T->ctx = ctx;
-  T->scratch_create = bs__scratch_create;
-  T->scratch_destroy = bs__scratch_destroy;
-  T->scratch_rays = bs__scratch_rays;
-  T->scratch_counts = bs__scratch_counts;
+  mc_states_use_scratch(T);
   T->n_labels = n;
   T->eval_label = bs__eval_label;
   T->eval_all = bs__eval_all;

@@ -62,80 +62,11 @@
 #include "lmc/states.h"
 #include "render/path.h"
 
-typedef struct mms__scratch {
-  path_scratch *ps;    /* for derivatives, made on first use */
-  render_counters cnt; /* the plain evaluation's rays */
-  bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
-  int64_t rays;        /* the evaluations with derivatives */
-  mc_counts counts;
-} mms__scratch;
-
-static void *mms__scratch_create(const mc_target *t) {
-  (void)t;
-  return calloc(1, sizeof(mms__scratch));
-}
-
-static void mms__scratch_destroy(void *scratch) {
-  mms__scratch *sc = scratch;
-  if (!sc) return;
-  path_scratch_destroy(sc->ps);
-  free(sc);
-}
-
-static int64_t mms__scratch_rays(const void *scratch) {
-  const mms__scratch *sc = scratch;
-  return sc->rays + sc->cnt.rays;
-}
-
-static void mms__scratch_counts(const void *scratch, mc_counts *OUT) {
-  const mms__scratch *sc = scratch;
-  OUT->grad_evals += sc->counts.grad_evals;
-  OUT->hess_evals += sc->counts.hess_evals;
-  OUT->nan_samples += sc->counts.nan_samples;
-}
-
-/* The adapter from BDPT's layout to the state's (see above). */
-typedef struct mms__adapter {
-  lmc_sampler base;
-  lmc_sampler *inner;
-  int stream;         /* current stream */
-  int pos[LMC_STREAM_COUNT];
-  int skip;           /* connect slots path_eval_bdpt draws before its own: 3 (t - 2) */
-  double fx, fy, r, W, H; /* film mapping */
-} mms__adapter;
-
-static double mms__adapter_next(lmc_sampler *self) {
-  mms__adapter *a = (mms__adapter *)self;
-  int p = a->pos[a->stream]++;
-  if (a->stream == LMC_STREAM_CONNECT && p < a->skip) return 0.5; /* drawn and unused */
-  double u = sampler_next(a->inner);
-  if (a->stream == LMC_STREAM_CAMERA && p < 2)
-    return p == 0 ? (-a->r + u * (a->W + 2.0 * a->r)) / a->W : (-a->r + u * (a->H + 2.0 * a->r)) / a->H;
-  return u;
-}
-
-static void mms__adapter_use_stream(lmc_sampler *self, int stream) {
-  mms__adapter *a = (mms__adapter *)self;
-  a->stream = stream;
-  sampler_use_stream(a->inner, stream);
-}
+typedef mc_states_scratch mms__scratch;
 
 /* Sets the value of a state from its contribution c; returns f. */
 static double mms__set_value(mms__scratch *sc, mc_value *v, rgb c, double rx, double ry) {
-  if (!rgb_isfinite(c)) {
-    sc->counts.nan_samples++;
-    c = rgb_zero();
-  }
-  double f = rgb_luminance(c);
-  if (!(f > 0.0) || !isfinite(f)) {
-    c = rgb_zero();
-    f = 0.0;
-  }
-  v->value = c;
-  v->f = f;
-  v->rx = rx;
-  v->ry = ry;
-  return f;
+  return mc_states_value(v, c, rx, ry, &sc->counts.nan_samples);
 }
 
 /* The state's strategy (s, t) from its technique coordinate (connect 0). */
@@ -165,23 +96,13 @@ static int mms__eval_d(const mc_target *t, mms__scratch *sc, lmc_sampler *smp, i
   mms__strategy(st, sampler_next(smp), &ss, &tt);
 
   /* The path, through the adapter. */
-  mms__adapter a;
-  memset(&a, 0, sizeof a);
-  a.base.next = mms__adapter_next;
-  a.base.use_stream = mms__adapter_use_stream;
-  a.inner = smp;
-  a.stream = LMC_STREAM_CONNECT;
-  a.pos[LMC_STREAM_CONNECT] = 0;
-  a.skip = ss == 1 ? BDPT_DIMS_CONNECT * (tt - 2) : 0;
-  a.r = st->margin;
-  a.W = st->s->cam.width;
-  a.H = st->s->cam.height;
-  if (!sc->ps) {
-    lmc_error err;
-    if (path_scratch_create(&sc->ps, &err) != LMC_OK) return -1;
-  }
+  mc_film_adapter a;
+  mc_film_adapter_init(&a, smp, LMC_STREAM_CONNECT, ss == 1 ? BDPT_DIMS_CONNECT * (tt - 2) : 0,
+                       st->margin, st->s->cam.width, st->s->cam.height);
+  path_scratch *ps = mc_states_scratch_path(sc);
+  if (!ps) return -1;
   path_eval pe;
-  if (path_eval_bdpt(st->s, &st->rs, &a.base, ss, tt, want, sc->ps, &pe, &sc->rays) != LMC_OK)
+  if (path_eval_bdpt(st->s, &st->rs, &a.base, ss, tt, want, ps, &pe, &sc->rays_d) != LMC_OK)
     return -1;
   sc->counts.grad_evals++;
   sc->counts.hess_evals += want == PATH_WANT_HESS;
@@ -202,7 +123,7 @@ static int mms__eval_d(const mc_target *t, mms__scratch *sc, lmc_sampler *smp, i
   for (int i = 0; i < pe.n_coords; i++) {
     const path_coord *pc = &pe.coords[i];
     if (!pc->diff || pc->stream < 0 || pc->stream >= LMC_STREAM_COUNT) continue;
-    double mi = 1.0;
+    double mi = mc_film_adapter_factor(&a, pc->stream, pc->pos);
     int idx_u;
     if (pc->stream == LMC_STREAM_CONNECT) {
       if (pc->pos < a.skip) continue;
@@ -211,8 +132,6 @@ static int mms__eval_d(const mc_target *t, mms__scratch *sc, lmc_sampler *smp, i
     } else {
       if (pc->pos >= t->stream_dim[pc->stream]) continue;
       idx_u = mc_target_stream_offset(t, pc->stream) + pc->pos;
-      if (pc->stream == LMC_STREAM_CAMERA && pc->pos < 2)
-        mi = pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : (a.H + 2.0 * a.r) / a.H;
     }
     double d = pc->dlum * scale * mi;
     if (!isfinite(d)) return 0; /* no usable gradient at this state */
@@ -326,10 +245,7 @@ lmc_status mc_mmlt_states_init(mc_target *OUT_target, mc_mmlt_states *ctx, const
   T->eval_expect = mms__expect;
   T->eval_hess = mms__eval_hess;
   T->local_coords = mms__local_coords;
-  T->scratch_create = mms__scratch_create;
-  T->scratch_destroy = mms__scratch_destroy;
-  T->scratch_rays = mms__scratch_rays;
-  T->scratch_counts = mms__scratch_counts;
+  mc_states_use_scratch(T);
   /* The light-position coordinates u1 of the light stream (emission) and
    * of the connect stream (the light sample of s = 1). */
   ctx->step_scale = malloc((size_t)T->dim * sizeof(double));

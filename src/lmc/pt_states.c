@@ -42,100 +42,29 @@ typedef struct pts__ctx {
   mc_space_family fam;
 } pts__ctx;
 
-typedef struct pts__scratch {
-  render_counters cnt; /* pt_li's rays and non-finite samples */
-  int64_t rays_grad;   /* path_eval_pt's rays */
-  mc_counts counts;
-  path_scratch *ps;    /* for gradients, made on first use */
-} pts__scratch;
-
-static void *pts__scratch_create(const mc_target *t) {
-  (void)t;
-  return calloc(1, sizeof(pts__scratch));
-}
-
-static void pts__scratch_destroy(void *scratch) {
-  pts__scratch *sc = scratch;
-  if (!sc) return;
-  path_scratch_destroy(sc->ps);
-  free(sc);
-}
-
-static int64_t pts__scratch_rays(const void *scratch) {
-  const pts__scratch *sc = scratch;
-  return sc->cnt.rays + sc->rays_grad;
-}
-
-static void pts__scratch_counts(const void *scratch, mc_counts *OUT) {
-  const pts__scratch *sc = scratch;
-  OUT->grad_evals += sc->counts.grad_evals;
-  OUT->nan_samples += sc->counts.nan_samples + sc->cnt.nan_samples;
-}
-
-/* Sets value, f and raster position from an RGB contribution: a non-finite
- * one counts and is dropped, as is one of luminance <= 0. Returns f. */
-static double pts__value(mc_value *v, rgb c, double rx, double ry, int64_t *nan_samples) {
-  v->rx = rx;
-  v->ry = ry;
-  if (!rgb_isfinite(c)) {
-    (*nan_samples)++;
-    c = rgb_zero();
-  }
-  double f = rgb_luminance(c);
-  if (!(f > 0.0)) {
-    f = 0.0;
-    c = rgb_zero();
-  }
-  v->value = c;
-  v->f = f;
-  return f;
-}
-
-/* The adapter from path_eval_pt's film numbers to the state's. */
-typedef struct pts__adapter {
-  lmc_sampler base;
-  lmc_sampler *inner;
-  int pos;
-  double r, W, H;
-} pts__adapter;
-
-static double pts__adapter_next(lmc_sampler *self) {
-  pts__adapter *a = (pts__adapter *)self;
-  int p = a->pos++;
-  double u = sampler_next(a->inner);
-  if (p == 0) return (-a->r + u * (a->W + 2.0 * a->r)) / a->W;
-  if (p == 1) return (-a->r + u * (a->H + 2.0 * a->r)) / a->H;
-  return u;
-}
-
-static void pts__adapter_use_stream(lmc_sampler *self, int stream) {
-  pts__adapter *a = (pts__adapter *)self;
-  sampler_use_stream(a->inner, stream);
-}
+typedef mc_states_scratch pts__scratch;
 
 /* f with its gradient over the state's coordinates. */
 static int pts__eval_grad(const mc_target *t, pts__scratch *sc, lmc_sampler *smp,
                           mc_value *OUT_value, double *OUT_grad, int *OUT_grad_ok) {
   const pts__ctx *st = t->ctx;
-  if (!sc->ps) {
-    lmc_error err;
-    if (path_scratch_create(&sc->ps, &err) != LMC_OK) return -1;
-  }
-  pts__adapter a = {{pts__adapter_next, pts__adapter_use_stream, NULL}, smp, 0, st->margin,
-                    st->s->cam.width, st->s->cam.height};
+  path_scratch *ps = mc_states_scratch_path(sc);
+  if (!ps) return -1;
+  mc_film_adapter a;
+  mc_film_adapter_init(&a, smp, LMC_STREAM_CAMERA, 0, st->margin, st->s->cam.width,
+                       st->s->cam.height);
   path_eval pe;
-  if (path_eval_pt(st->s, &st->rs, &a.base, 1, sc->ps, &pe, &sc->rays_grad) != LMC_OK) return -1;
+  if (path_eval_pt(st->s, &st->rs, &a.base, 1, ps, &pe, &sc->rays_d) != LMC_OK) return -1;
   sc->counts.grad_evals++;
-  double f = pts__value(OUT_value, rgb_scale(pe.value, st->area), pe.rx, pe.ry,
-                        &sc->counts.nan_samples);
+  double f = mc_states_value(OUT_value, rgb_scale(pe.value, st->area), pe.rx, pe.ry,
+                             &sc->counts.nan_samples);
   memset(OUT_grad, 0, (size_t)t->dim * sizeof(double));
   if (!(f > 0.0) || !pe.grad_ok) return 0;
   int ok = 0;
   for (int i = 0; i < pe.n_coords; i++) {
     const path_coord *pc = &pe.coords[i];
     if (!pc->diff || pc->stream != LMC_STREAM_CAMERA || pc->pos >= t->dim) continue;
-    double m = pc->pos == 0 ? (a.W + 2.0 * a.r) / a.W : pc->pos == 1 ? (a.H + 2.0 * a.r) / a.H : 1.0;
-    double d = pc->dlum * st->area * m;
+    double d = pc->dlum * st->area * mc_film_adapter_factor(&a, pc->stream, pc->pos);
     if (!isfinite(d)) return 0; /* no usable gradient at this state */
     OUT_grad[pc->pos] += d;
     ok = 1;
@@ -159,7 +88,7 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
   vec3 org, dir;
   camera_generate_ray(&st->s->cam, rx, ry, &org, &dir);
   rgb L = pt_li(st->s, &st->rs, smp, org, dir, &sc->cnt);
-  pts__value(OUT_value, rgb_scale(L, st->area), rx, ry, &sc->cnt.nan_samples);
+  mc_states_value(OUT_value, rgb_scale(L, st->area), rx, ry, &sc->cnt.nan_samples);
   return 0;
 }
 
@@ -192,10 +121,7 @@ lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settin
   T->dim = T->stream_dim[LMC_STREAM_CAMERA];
   T->ctx = c;
   T->eval = pts__eval;
-  T->scratch_create = pts__scratch_create;
-  T->scratch_destroy = pts__scratch_destroy;
-  T->scratch_rays = pts__scratch_rays;
-  T->scratch_counts = pts__scratch_counts;
+  mc_states_use_scratch(T);
   c->step_scale = malloc((size_t)T->dim * sizeof(double));
   if (!c->step_scale) {
     free(c);

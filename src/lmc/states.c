@@ -6,6 +6,8 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* The small-step factor for the coordinate that picks an area light's
  * triangle (mmlt, pssmlt and lmc). light_sample_le and light_sample_li choose the triangle
@@ -102,3 +104,95 @@ double mc_mmlt_expected(const scene *s, const render_settings *rs, int k, double
   return sum;
 }
 
+
+/* --- the chains' scratch ---------------------------------------------------- */
+
+static void *states__scratch_create(const mc_target *t) {
+  (void)t;
+  return calloc(1, sizeof(mc_states_scratch));
+}
+
+static void states__scratch_destroy(void *scratch) {
+  mc_states_scratch *sc = scratch;
+  if (!sc) return;
+  path_scratch_destroy(sc->ps);
+  free(sc);
+}
+
+static int64_t states__scratch_rays(const void *scratch) {
+  const mc_states_scratch *sc = scratch;
+  return sc->cnt.rays + sc->rays_d;
+}
+
+static void states__scratch_counts(const void *scratch, mc_counts *OUT) {
+  const mc_states_scratch *sc = scratch;
+  OUT->grad_evals += sc->counts.grad_evals;
+  OUT->hess_evals += sc->counts.hess_evals;
+  OUT->nan_samples += sc->counts.nan_samples + sc->cnt.nan_samples;
+}
+
+void mc_states_use_scratch(mc_target *T) {
+  T->scratch_create = states__scratch_create;
+  T->scratch_destroy = states__scratch_destroy;
+  T->scratch_rays = states__scratch_rays;
+  T->scratch_counts = states__scratch_counts;
+}
+
+path_scratch *mc_states_scratch_path(mc_states_scratch *sc) {
+  if (!sc->ps) {
+    lmc_error err;
+    if (path_scratch_create(&sc->ps, &err) != LMC_OK) return NULL;
+  }
+  return sc->ps;
+}
+
+double mc_states_value(mc_value *v, rgb c, double rx, double ry, int64_t *nan_samples) {
+  v->rx = rx;
+  v->ry = ry;
+  if (!rgb_isfinite(c)) {
+    (*nan_samples)++;
+    c = rgb_zero();
+  }
+  double f = rgb_luminance(c);
+  if (!(f > 0.0) || !isfinite(f)) {
+    f = 0.0;
+    c = rgb_zero();
+  }
+  v->value = c;
+  v->f = v->f_large = f;
+  return f;
+}
+
+/* --- the film adapter ----------------------------------------------------- */
+
+static double states__adapter_next(lmc_sampler *self) {
+  mc_film_adapter *a = (mc_film_adapter *)self;
+  int p = a->pos[a->stream]++;
+  if (a->stream == LMC_STREAM_CONNECT && p < a->skip) return 0.5; /* drawn and unused */
+  double u = sampler_next(a->inner);
+  if (a->stream == LMC_STREAM_CAMERA && p < 2)
+    return p == 0 ? (-a->r + u * (a->W + 2.0 * a->r)) / a->W : (-a->r + u * (a->H + 2.0 * a->r)) / a->H;
+  return u;
+}
+
+static void states__adapter_use_stream(lmc_sampler *self, int stream) {
+  mc_film_adapter *a = (mc_film_adapter *)self;
+  a->stream = stream;
+  sampler_use_stream(a->inner, stream);
+}
+
+void mc_film_adapter_init(mc_film_adapter *a, lmc_sampler *inner, int stream, int skip, double r,
+                          double W, double H) {
+  memset(a, 0, sizeof *a);
+  a->base.next = states__adapter_next;
+  a->base.use_stream = states__adapter_use_stream;
+  a->inner = inner;
+  a->stream = stream;
+  a->skip = skip;
+  a->r = r, a->W = W, a->H = H;
+}
+
+double mc_film_adapter_factor(const mc_film_adapter *a, int k, int pos) {
+  if (k != LMC_STREAM_CAMERA || pos >= 2) return 1.0;
+  return pos == 0 ? (a->W + 2.0 * a->r) / a->W : (a->H + 2.0 * a->r) / a->H;
+}

@@ -6,7 +6,9 @@
 #ifndef LMC_MCMC_STATES_H
 #define LMC_MCMC_STATES_H
 
+#include "lmc/target.h"
 #include "render/integrator.h"
+#include "render/path.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/settings.h"
@@ -41,5 +43,49 @@ rgb mc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n
 double mc_mmlt_expected(const scene *s, const render_settings *rs, int k, double margin,
                         double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
                         render_counters *cnt);
+
+/* A chain's scratch for a space's target (target.h's scratch functions,
+ * set by mc_states_use_scratch): the plain evaluations' counters and BDPT
+ * subpaths, and for derivatives a path scratch made on first use. */
+typedef struct mc_states_scratch {
+  render_counters cnt; /* plain evaluations: rays and non-finite contributions */
+  bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
+  path_scratch *ps;    /* NULL until mc_states_scratch_path */
+  int64_t rays_d;      /* rays of the evaluations with derivatives */
+  mc_counts counts;    /* evaluations with derivatives (and their non-finite contributions) */
+} mc_states_scratch;
+
+/* Sets T's scratch_create, _destroy, _rays and _counts to mc_states_scratch's. */
+void mc_states_use_scratch(mc_target *T);
+/* The scratch's path scratch for derivatives, made on first use (NULL: out of memory). */
+path_scratch *mc_states_scratch_path(mc_states_scratch *sc);
+
+/* Sets v from a state's contribution c at raster (rx, ry): a non-finite c
+ * is dropped (f = 0) and counted in *nan_samples, as is (uncounted) one of
+ * luminance <= 0; f and f_large are the luminance. Returns f. */
+double mc_states_value(mc_value *v, rgb c, double rx, double ry, int64_t *nan_samples);
+
+/* A sampler in front of a target's own that hands the path evaluators of
+ * render/path.h the film numbers they expect: they read the raster
+ * position as u W, the spaces' states as -r + u (W + 2r) over the film
+ * grown by the filter radius r, so the first two camera numbers become
+ * (-r + u (W + 2r)) / W (and H's). Optionally the first `skip` numbers of
+ * the connect stream are drawn by the evaluator but not the state's (a
+ * constant is returned). */
+typedef struct mc_film_adapter {
+  lmc_sampler base;
+  lmc_sampler *inner;
+  int stream;
+  int pos[LMC_STREAM_COUNT];
+  int skip;
+  double r, W, H;
+} mc_film_adapter;
+
+/* Starts a in stream `stream` of inner (the stream the evaluator reads first). */
+void mc_film_adapter_init(mc_film_adapter *a, lmc_sampler *inner, int stream, int skip, double r,
+                          double W, double H);
+/* The chain-rule factor d(evaluator's number) / d(state's number) of
+ * number pos of stream k: (W + 2r) / W and (H + 2r) / H for the film's, else 1. */
+double mc_film_adapter_factor(const mc_film_adapter *a, int k, int pos);
 
 #endif
