@@ -22,6 +22,7 @@
 #include "lmc/mcmc.h"
 #include "render/integrator.h"
 #include "render/io/io.h"
+#include "render/options.h"
 #include "render/scene.h"
 
 #define LMC_VERSION "0.1.0"
@@ -57,94 +58,45 @@ static const char *lmc_render_usage =
     "                           (default: the scene's name in the current folder)\n"
     "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc\n"
     "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
-    "  --spp N                  samples per pixel (default: the scene's, else 16)\n"
-    "  --time SECONDS           stop after this long (with --spp: whichever comes first)\n"
-    "  --threads N              worker threads (default: all cores)\n"
-    "  --seed S                 random seed (default 1); same seed and threads: same image\n"
-    "  --maxdepth N             longest path in segments, Mitsuba's maxDepth (-1: unbounded)\n"
-    "  --rrdepth N              Russian roulette from this length on (default 5)\n"
     "  --resolution WxH         film size (keeps the field of view)\n"
-    "  --sampler NAME           pt, bdpt, MCMC's direct pass: independent | sobol (Owen-scrambled,\n"
-    "                           stratified across a pixel's samples) (default: the scene's,\n"
-    "                           else independent)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
-    "  --snapshot S             also write OUT-<seconds>s.exr every S seconds\n"
     "  --exposure STOPS|auto    the PNG preview: radiance times 2^STOPS, clamped, sRGB\n"
     "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
     "                           99th percentile of luminance maps to white\n"
-    "\n";
-/* (in two parts: C caps a string literal's guaranteed length) */
-static const char *lmc_render_usage_mcmc =
-    "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel):\n"
-    "  --states KIND            the chains' states: bdpt (a BDPT sample and one of its\n"
-    "                           strategies, every length in one family; pssmlt's and lmc's\n"
-    "                           default) | mmlt (one family per length; mmlt's default) |\n"
-    "                           pt (a path tracer's samples)\n"
-    "  --roughness-threshold R  bdpt states: directions of BSDFs rougher than R are moved\n"
-    "                           as absolute world directions (default 0.3; 1: never)\n"
-    "  --largestep P            large-step probability (default 0.3)\n"
-    "  --largestep-scale X      the large-step probability times X after the first tenth of\n"
-    "                           the budget (the LMC paper's largestepscale; default 1)\n"
-    "  --small-step KIND        kelemen (offsets log-uniform in (1/1024, S]) | gauss (normal\n"
-    "                           offsets of standard deviation S) (default kelemen)\n"
-    "  --sigma S                small-step scale (default 1/64; mmlt 0.05; gauss 0.01)\n"
-    "  --chains N               Markov chains (default 256)\n"
-    "  --bootstrap N            independent paths used to estimate b (default: 10% of --time,\n"
-    "                           or under --spp enough for 1%)\n"
-    "  --bootstrap-error E      without --bootstrap, under --spp: b's target relative error (0.01)\n"
-    "  --direct separate|mcmc   separate: pt renders paths of <= 2 segments, MCMC the longer\n"
-    "                           ones (default); mcmc: MCMC renders every path\n"
-    "  --allocate b|even        mmlt, lmc: mutations per path length in proportion to its b\n"
-    "                           (default), or the same for every chain\n"
-    "\n"
-    "LMC (--integrator lmc):\n"
-    "  --adapt MODE             none | adam | diminish | cache (default cache; adam is biased)\n"
-    "  --step S                 Langevin step s: y ~ N(x + s/2 M g, s M) (default 1e-5)\n"
-    "  --step-range R           each Langevin step draws s log-uniformly from [S/R, S R] (default 1)\n"
-    "  --adam-eps E             M = clamp(1 / (E + sqrt(v)), LO, HI) (default 1e-8)\n"
-    "  --precond-clamp LO,HI    the clamp of M (default 1e-3,1e3)\n"
-    "  --grad-bound B           truncate |grad log f| to B (default 1e3)\n"
-    "  --cache-fraction F       --adapt cache: share of the budget for stage 1 (default 0.1)\n"
-    "  --iso-prob P             probability of Kelemen's isotropic small step (default 0.4)\n"
-    "  --lmc-states KIND        the same as --states\n"
-    "  --cache-gradient on|off  --adapt cache, bdpt states: stage 2 evaluates gradients (MALA\n"
-    "                           with the cached M) instead of the cached walk (default off)\n"
-    "  --cache-step S           the cached walk: cov = 1 / (1 / (S^2 (M + 1)) + 1 / P^2)\n"
-    "                           (default 0.005)\n"
-    "  --cache-prior P          its prior standard deviation, the width where no entry is\n"
-    "                           near (default 0.005)\n"
-    "  --cache-radius R         its neighbours lie within R sqrt(n) (default 0.01)\n"
-    "  --cache-k K              its neighbours (default 5)\n"
-    "  --cache-drift on|off     drift from the cached first moment (default on)\n"
-    "  --delayed on|off         Langevin proposals first tested without their gradient\n"
-    "                           (delayed acceptance, exact; default off)\n"
-    "\n"
-    "H2MC (--integrator h2mc, bdpt states; --largestep and --iso-prob as for lmc):\n"
-    "  --h2mc-sigma S           the prior's standard deviation on the proposal's offset\n"
-    "                           (default 0.01)\n"
     "  -q, --quiet              no progress bar\n"
-    "  -h, --help               this text\n";
+    "  -h, --help               this text\n"
+    "  --help-markdown          the flags below as Markdown tables (the README's)\n"
+    "\n";
+
+/* Every table of flags: the renderer's, then the MCMC driver's, its
+ * state spaces' and integrators' (mcmc.h). */
+#define LMC_MAX_TABLES 32
+static int lmc_option_tables(const lmc_opt_table **OUT) {
+  OUT[0] = &lmc_render_options;
+  return 1 + mcmc_option_tables(OUT + 1, LMC_MAX_TABLES - 1);
+}
+
+/* lmc render --help-markdown: the tables below as the README shows them. */
+static void lmc_render_markdown(FILE *f) {
+  const lmc_opt_table *t[LMC_MAX_TABLES];
+  int n = lmc_option_tables(t);
+  for (int i = 0; i < n; i++) {
+    fprintf(f, "%s%s:\n\n", i ? "\n" : "", t[i]->title);
+    lmc_opt_markdown(f, t[i]);
+  }
+}
+
+/* lmc render --help. */
+static void lmc_render_help(FILE *f) {
+  const lmc_opt_table *t[LMC_MAX_TABLES];
+  int n = lmc_option_tables(t);
+  fputs(lmc_render_usage, f);
+  for (int i = 0; i < n; i++) lmc_opt_help(f, t[i]);
+}
 
 /* Integrators `--integrator` accepts. */
 static int lmc_integrator_known(const char *name) {
   return !strcmp(name, "pt") || !strcmp(name, "bdpt") || mcmc_is_integrator(name);
-}
-
-/* --adapt values. */
-static int lmc_parse_adapt(const char *v, lmc_adapt *out) {
-  static const struct {
-    const char *name;
-    lmc_adapt mode;
-  } modes[] = {{"none", LMC_ADAPT_NONE},
-               {"adam", LMC_ADAPT_ADAM},
-               {"diminish", LMC_ADAPT_DIMINISH},
-               {"cache", LMC_ADAPT_CACHE}};
-  for (size_t i = 0; i < sizeof modes / sizeof modes[0]; i++)
-    if (!strcmp(v, modes[i].name)) {
-      *out = modes[i].mode;
-      return 1;
-    }
-  return 0;
 }
 
 /* --- flag parsing ------------------------------------------------------------ */
@@ -179,30 +131,6 @@ static const char *lmc_flag_value(lmc_args *a) {
     return NULL;
   }
   return a->argv[++a->i];
-}
-
-static int lmc_parse_int64(const char *flag, const char *s, int64_t lo, int64_t hi, int64_t *out) {
-  char *end;
-  errno = 0;
-  long long v = strtoll(s, &end, 10);
-  if (errno || end == s || *end != '\0' || v < lo || v > hi) {
-    fprintf(stderr, "lmc: flag %s: '%s' is not an integer in [%lld, %lld]\n", flag, s,
-            (long long)lo, (long long)hi);
-    return 0;
-  }
-  *out = v;
-  return 1;
-}
-
-/* A flag with two values: *out = 0 for `first`, 1 for `second`. */
-static int lmc_parse_choice(const char *flag, const char *s, const char *first,
-                            const char *second, int *out) {
-  if (strcmp(s, first) && strcmp(s, second)) {
-    fprintf(stderr, "lmc: flag %s: '%s' is not one of %s, %s\n", flag, s, first, second);
-    return 0;
-  }
-  *out = strcmp(s, second) == 0;
-  return 1;
 }
 
 /* s as a whole finite number in [lo, hi]: 1 and *out, else 0 (silent). */
@@ -385,50 +313,45 @@ static int lmc_cmd_render(int argc, char **argv) {
   lmc_args a = {argc, 2, argv, NULL};
   if (!defines) return EXIT_FAIL;
 
-  /* Parse the flags; the scene's own settings are merged below. */
+  /* Parse the flags; the scene's own settings are merged below. The flags
+   * of the tables are checked into cli now and applied to the scene's
+   * settings after loading (given[]). */
+  const lmc_opt_table *tables[LMC_MAX_TABLES];
+  int n_tables = lmc_option_tables(tables);
+  typedef struct lmc_given {
+    const lmc_opt *opt;
+    const char *value;
+  } lmc_given;
+  lmc_given *given = calloc((size_t)argc + 1, sizeof *given);
+  int n_given = 0;
+  if (!given) {
+    free(defines);
+    return EXIT_FAIL;
+  }
   for (a.i = 2; a.i < argc; a.i++) {
     const char *arg = argv[a.i], *v;
-    int64_t iv;
     if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
-      fputs(lmc_render_usage, stdout);
-      fputs(lmc_render_usage_mcmc, stdout);
-      free(defines);
+      lmc_render_help(stdout);
+      free(defines), free(given);
+      return EXIT_OK;
+    } else if (lmc_flag_is(&a, "--help-markdown")) {
+      lmc_render_markdown(stdout);
+      free(defines), free(given);
       return EXIT_OK;
     } else if (lmc_flag_is(&a, "-o") || lmc_flag_is(&a, "--output")) {
       if (!(output = lmc_flag_value(&a))) goto bad;
     } else if (lmc_flag_is(&a, "--integrator")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       if (!lmc_integrator_known(v)) {
-        fprintf(stderr,
-                "lmc: flag --integrator: unknown integrator '%s' "
-                "(valid: pt, bdpt, pssmlt, mmlt, lmc, h2mc)\n",
-                v);
+        const char *names[16];
+        int n = mcmc_integrator_names(names, 16);
+        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt", v);
+        for (int i = 0; i < n; i++) fprintf(stderr, ", %s", names[i]);
+        fprintf(stderr, ")\n");
         goto bad;
       }
       snprintf(cli.integrator, sizeof cli.integrator, "%s", v);
       cli.set |= SET_INTEGRATOR;
-    } else if (lmc_flag_is(&a, "--spp")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--spp", v, 1, INT64_MAX / 2, &cli.spp))
-        goto bad;
-      cli.set |= SET_SPP;
-    } else if (lmc_flag_is(&a, "--time")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--time", v, 1e-3, 1e9, &cli.time_limit))
-        goto bad;
-      cli.set |= SET_TIME;
-    } else if (lmc_flag_is(&a, "--threads")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--threads", v, 1, 1024, &iv)) goto bad;
-      cli.threads = (int)iv;
-    } else if (lmc_flag_is(&a, "--seed")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--seed", v, 0, INT64_MAX, &iv)) goto bad;
-      cli.seed = (uint64_t)iv;
-    } else if (lmc_flag_is(&a, "--maxdepth")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--maxdepth", v, -1, 1000, &iv)) goto bad;
-      cli.maxdepth = (int)iv;
-      cli.set |= SET_MAXDEPTH;
-    } else if (lmc_flag_is(&a, "--rrdepth")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--rrdepth", v, 1, 1000, &iv)) goto bad;
-      cli.rrdepth = (int)iv;
-      cli.set |= SET_RRDEPTH;
     } else if (lmc_flag_is(&a, "--resolution")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       char tail;
@@ -444,159 +367,28 @@ static int lmc_cmd_render(int argc, char **argv) {
         goto bad;
       }
       defines[n_defines++] = d;
-    } else if (lmc_flag_is(&a, "--snapshot")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--snapshot", v, 1e-3, 1e9, &cli.snapshot))
-        goto bad;
     } else if (lmc_flag_is(&a, "--exposure")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) goto bad;
-    } else if (lmc_flag_is(&a, "--largestep")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--largestep", v, 0, 1, &cli.largestep))
-        goto bad;
-      cli.set |= SET_LARGESTEP;
-    } else if (lmc_flag_is(&a, "--small-step")) {
-      int gauss;
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_choice("--small-step", v, "kelemen", "gauss", &gauss))
-        goto bad;
-      cli.small_gauss = gauss;
-      cli.set |= SET_SMALL_STEP;
-    } else if (lmc_flag_is(&a, "--chains")) {
-      int64_t n;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--chains", v, 1, 1 << 20, &n)) goto bad;
-      cli.chains = (int)n;
-      cli.set |= SET_CHAINS;
-    } else if (lmc_flag_is(&a, "--roughness-threshold")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--roughness-threshold", v, 0, 1e6, &cli.rough_min))
-        goto bad;
-      cli.set |= SET_ROUGH;
-    } else if (lmc_flag_is(&a, "--largestep-scale")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--largestep-scale", v, 0, 1e6, &cli.largestep_scale))
-        goto bad;
-      cli.set |= SET_LARGESTEP_SCALE;
-    } else if (lmc_flag_is(&a, "--sigma")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--sigma", v, 1e-9, 1, &cli.sigma))
-        goto bad;
-      cli.set |= SET_SIGMA;
-    } else if (lmc_flag_is(&a, "--bootstrap-error")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--bootstrap-error", v, 1e-4, 1, &cli.bootstrap_error))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--bootstrap")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_int64("--bootstrap", v, 1, INT64_MAX / 2, &cli.bootstrap))
-        goto bad;
-      cli.set |= SET_BOOTSTRAP;
-    } else if (lmc_flag_is(&a, "--sampler")) {
-      int sobol;
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_choice("--sampler", v, "independent", "sobol", &sobol))
-        goto bad;
-      cli.sampler = sobol ? LMC_SAMPLER_SOBOL : LMC_SAMPLER_INDEPENDENT;
-      cli.set |= SET_SAMPLER;
-    } else if (lmc_flag_is(&a, "--direct")) {
-      int mcmc;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--direct", v, "separate", "mcmc", &mcmc))
-        goto bad;
-      cli.direct_separate = !mcmc;
-      cli.set |= SET_DIRECT;
-    } else if (lmc_flag_is(&a, "--allocate")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_choice("--allocate", v, "b", "even", &cli.mcmc_even))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--adapt")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (!lmc_parse_adapt(v, &cli.adapt)) {
-        fprintf(stderr, "lmc: flag --adapt: '%s' is not one of none, adam, diminish, cache\n", v);
-        goto bad;
-      }
-      cli.set |= SET_ADAPT;
-    } else if (lmc_flag_is(&a, "--step")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--step", v, 1e-12, 1, &cli.lmc_step))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--step-range")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--step-range", v, 1, 1e6, &cli.step_range))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--adam-eps")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--adam-eps", v, 0, 1e6, &cli.adam_eps))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--precond-clamp")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      char tail;
-      if (sscanf(v, "%lf,%lf%c", &cli.precond_lo, &cli.precond_hi, &tail) != 2 ||
-          !(cli.precond_lo > 0) || !(cli.precond_hi >= cli.precond_lo) ||
-          !isfinite(cli.precond_hi)) {
-        fprintf(stderr, "lmc: flag --precond-clamp: '%s' is not LO,HI with 0 < LO <= HI\n", v);
-        goto bad;
-      }
-    } else if (lmc_flag_is(&a, "--grad-bound")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--grad-bound", v, 1e-9, 1e300, &cli.grad_bound))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--cache-fraction")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--cache-fraction", v, 0, 0.99, &cli.cache_fraction))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--cache-gradient")) {
-      int off;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--cache-gradient", v, "on", "off", &off))
-        goto bad;
-      cli.cache_gradient = !off;
-    } else if (lmc_flag_is(&a, "--cache-drift")) {
-      int off;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--cache-drift", v, "on", "off", &off))
-        goto bad;
-      cli.cache_no_drift = off;
-    } else if (lmc_flag_is(&a, "--cache-step")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--cache-step", v, 1e-9, 0.5, &cli.cache_step))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--cache-prior")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--cache-prior", v, 1e-9, 0.5, &cli.cache_prior))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--cache-radius")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--cache-radius", v, 1e-9, 1.0, &cli.cache_radius))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--cache-k")) {
-      int64_t n;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_int64("--cache-k", v, 1, 32, &n)) goto bad;
-      cli.cache_k = (int)n;
-    } else if (lmc_flag_is(&a, "--h2mc-sigma")) {
-      if (!(v = lmc_flag_value(&a)) ||
-          !lmc_parse_double("--h2mc-sigma", v, 1e-6, 0.5, &cli.h2mc_sigma))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--iso-prob")) {
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_double("--iso-prob", v, 0, 1, &cli.iso_prob))
-        goto bad;
-    } else if (lmc_flag_is(&a, "--delayed")) {
-      int off;
-      if (!(v = lmc_flag_value(&a)) || !lmc_parse_choice("--delayed", v, "on", "off", &off))
-        goto bad;
-      cli.delayed = !off;
-    } else if (lmc_flag_is(&a, "--states")) {
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (!strcmp(v, "pt")) cli.mcmc_states = MCMC_STATES_PT;
-      else if (!strcmp(v, "mmlt")) cli.mcmc_states = MCMC_STATES_MMLT;
-      else if (!strcmp(v, "bdpt")) cli.mcmc_states = MCMC_STATES_BDPT;
-      else {
-        fprintf(stderr, "lmc: flag --states: '%s' is not pt, mmlt or bdpt\n", v);
-        goto bad;
-      }
-      cli.set |= SET_STATES;
-    } else if (lmc_flag_is(&a, "--lmc-states")) { /* the name --states had for lmc alone */
-      if (!(v = lmc_flag_value(&a))) goto bad;
-      if (!strcmp(v, "mmlt")) cli.mcmc_states = MCMC_STATES_MMLT;
-      else if (!strcmp(v, "pt")) cli.mcmc_states = MCMC_STATES_PT;
-      else if (!strcmp(v, "bdpt")) cli.mcmc_states = MCMC_STATES_BDPT;
-      else {
-        fprintf(stderr, "lmc: flag --lmc-states: '%s' is not one of mmlt, pt, bdpt\n", v);
-        goto bad;
-      }
-      cli.set |= SET_STATES;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
+    } else if (!strncmp(arg, "--", 2)) {
+      /* A flag of the tables: --name value or --name=value. */
+      char name[64];
+      size_t len = strcspn(arg + 2, "=");
+      snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), arg + 2);
+      const lmc_opt *o = lmc_opt_find(tables, n_tables, name);
+      if (!o) {
+        fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
+        goto bad;
+      }
+      a.inline_value = arg[2 + len] == '=' ? arg + 3 + len : NULL;
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      char msg[512];
+      if (!lmc_opt_parse(o, v, &cli, msg, sizeof msg)) {
+        fprintf(stderr, "lmc: %s\n", msg);
+        goto bad;
+      }
+      given[n_given++] = (lmc_given){o, v};
     } else if (arg[0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
       goto bad;
@@ -608,7 +400,8 @@ static int lmc_cmd_render(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "lmc render: no scene given\n%s%s", lmc_render_usage, lmc_render_usage_mcmc);
+    fprintf(stderr, "lmc render: no scene given\n");
+    lmc_render_help(stderr);
     goto bad;
   }
 
@@ -621,7 +414,7 @@ static int lmc_cmd_render(int argc, char **argv) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
-    free(defines);
+    free(defines), free(given);
     return EXIT_BADINPUT;
   }
   free(defines);
@@ -634,47 +427,17 @@ static int lmc_cmd_render(int argc, char **argv) {
   render_settings rs = s->settings;
   if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
   if (cli.set & SET_INTEGRATOR) memcpy(rs.integrator, cli.integrator, sizeof rs.integrator);
-  if (cli.set & SET_SPP) rs.spp = cli.spp;
-  if (cli.set & SET_TIME) rs.time_limit = cli.time_limit;
-  if (cli.set & SET_MAXDEPTH) rs.maxdepth = cli.maxdepth;
-  if (cli.set & SET_RRDEPTH) rs.rrdepth = cli.rrdepth;
+  /* The flags as given, in order, over the scene's settings. */
+  for (int i = 0; i < n_given; i++) {
+    char msg[512];
+    lmc_opt_parse(given[i].opt, given[i].value, &rs, msg, sizeof msg); /* (checked above) */
+  }
+  free(given);
+  given = NULL;
   if ((cli.set & SET_TIME) && !(cli.set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
-  if (cli.set & SET_LARGESTEP) rs.largestep = cli.largestep;
-  if (cli.set & SET_SIGMA) rs.sigma = cli.sigma;
-  if (cli.set & SET_SMALL_STEP) rs.small_gauss = cli.small_gauss;
-  if (cli.set & SET_LARGESTEP_SCALE) rs.largestep_scale = cli.largestep_scale;
-  if (cli.set & SET_ROUGH) rs.rough_min = cli.rough_min;
-  if (cli.set & SET_CHAINS) rs.chains = cli.chains;
-  if (cli.set & SET_BOOTSTRAP) rs.bootstrap = cli.bootstrap;
-  rs.bootstrap_error = cli.bootstrap_error;
-  if (cli.set & SET_DIRECT) rs.direct_separate = cli.direct_separate;
-  if (cli.set & SET_SAMPLER) rs.sampler = cli.sampler;
   /* The scene's directSamples is a sample count for its own spp: --spp
    * given here sets both passes. */
   if (cli.set & SET_SPP) rs.direct_spp = 0;
-  rs.mcmc_even = cli.mcmc_even;
-  if (cli.set & SET_STATES) rs.mcmc_states = cli.mcmc_states;
-  if (cli.set & SET_ADAPT) rs.adapt = cli.adapt;
-  rs.snapshot = cli.snapshot;
-  rs.lmc_step = cli.lmc_step;
-  rs.step_range = cli.step_range;
-  rs.adam_eps = cli.adam_eps;
-  rs.precond_lo = cli.precond_lo;
-  rs.precond_hi = cli.precond_hi;
-  rs.grad_bound = cli.grad_bound;
-  rs.cache_fraction = cli.cache_fraction;
-  rs.iso_prob = cli.iso_prob;
-  rs.h2mc_sigma = cli.h2mc_sigma;
-  rs.cache_gradient = cli.cache_gradient;
-  rs.cache_step = cli.cache_step;
-  rs.cache_prior = cli.cache_prior;
-  rs.cache_radius = cli.cache_radius;
-  rs.cache_k = cli.cache_k;
-  rs.cache_no_drift = cli.cache_no_drift;
-  rs.delayed = cli.delayed;
-  rs.set |= cli.set;
-  rs.threads = cli.threads;
-  rs.seed = cli.seed;
   rs.quiet = cli.quiet;
   if (!lmc_integrator_known(rs.integrator)) {
     lmc_warn(scene_path, 0,
@@ -725,7 +488,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (st.interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
   return EXIT_OK;
 bad:
-  free(defines);
+  free(defines), free(given);
   return EXIT_BADINPUT;
 }
 

@@ -124,7 +124,7 @@ static void test_delayed_flag(void **state) {
   snprintf(args, sizeof args, "%s --delayed yes", base);
   assert_int_equal(run_lmc(args), 2);
   assert_non_null(strstr(err_text, "--delayed"));
-  assert_non_null(strstr(err_text, "on, off"));
+  assert_non_null(strstr(err_text, "off or on"));
   assert_int_equal(checked, 4);
 }
 

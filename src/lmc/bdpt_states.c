@@ -16,6 +16,7 @@
 #include "lmc/bdpt_states.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -372,8 +373,16 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx) {
 }
 
 /* ---------------------------------------------------------------------------
- * The space: one family over the lengths kmin .. kmax.
+ * The space: one family over the lengths kmin .. kmax, and its flag.
  */
+
+static const lmc_opt bs__opts[] = {
+    {"roughness-threshold", LMC_OPT_DOUBLE, offsetof(render_settings, rough_min), 0, 0, 1e6, NULL,
+     NULL, SET_ROUGH, "R", NULL,
+     "directions at BSDFs rougher than R are moved as absolute world directions (1: never)"},
+};
+
+const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1};
 
 typedef struct bs__space {
   mc_bdpt_states ctx;

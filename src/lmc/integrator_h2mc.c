@@ -12,6 +12,7 @@
  * kernel is fixed and the chains are exact.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -120,9 +121,18 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
           (long long)(c.grad_evals - c.hess_evals));
 }
 
+static const lmc_opt h2mc__opts[] = {
+    {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(render_settings, h2mc_sigma), 0, 1e-6, 0.5, NULL, NULL,
+     0, "S", "0.01", "the prior's standard deviation on the proposal's offset"},
+};
+
+static const lmc_opt_table h2mc__options = {
+    "H2MC (--integrator h2mc; --largestep and --iso-prob as for lmc)", h2mc__opts, 1};
+
 const mc_method mc_method_h2mc = {
     .name = "h2mc",
     .default_states = MCMC_STATES_BDPT,
+    .opts = &h2mc__options,
     .create = h2mc__create,
     .destroy = h2mc__destroy,
     .set_chains = h2mc__set_chains,

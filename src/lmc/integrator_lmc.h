@@ -19,9 +19,9 @@
  * mc_pt_step_scale, as mmlt and pssmlt); for MALA that is a constant
  * factor c^2 of the preconditioner, with the gradient, its truncation and
  * Adam taken in the rescaled coordinates. With --adapt cache and
- * LMC_INDEP_PROB > 0 the cache's independence proposal joins them (in
+ * --cache-indep P > 0 the cache's independence proposal joins them (in
  * stage 1, where there is no cache yet, its slot makes a Kelemen step). It
- * is off: on ring-caustics (pt states) it accepted 0 of 51291 proposals in
+ * is off by default: on ring-caustics (pt states) it accepted 0 of 51291 proposals in
  * a 60 s render (a Gaussian of 0.01 around a cached state in 20 to 65
  * coordinates, the rest uniform, almost never lands on a path of similar
  * contribution) and cost 7% of the time.
@@ -49,7 +49,6 @@
 
 #include "lmc/method.h"
 
-#define LMC_INDEP_PROB 0.0 /* --adapt cache: share of the independence proposal (off: see above) */
 #define LMC_TECHNIQUE_PROB 0.1 /* mmlt states: share of the technique mutation */
 #define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
 

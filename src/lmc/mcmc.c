@@ -91,6 +91,7 @@
 
 #include <math.h>
 #include <omp.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -115,6 +116,51 @@
 int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;
 }
+
+/* --- the driver's flags ------------------------------------------------------ */
+
+static const char *const mcmc__small_steps[] = {"kelemen", "gauss", NULL};
+static const char *const mcmc__direct_modes[] = {"separate", "mcmc", NULL};
+static const int mcmc__direct_values[] = {1, 0};
+static const char *const mcmc__allocations[] = {"b", "even", NULL};
+
+static const lmc_opt mcmc__opts[] = {
+    {"states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
+     mc_space_ids, SET_STATES, NULL, "the integrator's: mmlt for mmlt, else bdpt",
+     "the chains' states: bdpt (a BDPT sample and one of its strategies, every length in one "
+     "family), mmlt (one family per path length, a strategy coordinate) or pt (a path tracer's "
+     "numbers)"},
+    {"largestep", LMC_OPT_DOUBLE, offsetof(render_settings, largestep), 0, 0, 1, NULL, NULL,
+     SET_LARGESTEP, "P", NULL, "large-step probability"},
+    {"largestep-scale", LMC_OPT_DOUBLE, offsetof(render_settings, largestep_scale), 0, 0, 1e6, NULL,
+     NULL, SET_LARGESTEP_SCALE, "X", NULL,
+     "the large-step probability times X after the first tenth of the budget (the LMC paper's "
+     "largestepscale)"},
+    {"small-step", LMC_OPT_CHOICE, offsetof(render_settings, small_gauss), 0, 0, 0,
+     mcmc__small_steps, NULL, SET_SMALL_STEP, NULL, NULL,
+     "kelemen: offsets log-uniform in (1/1024, S]; gauss: normal offsets of standard deviation S"},
+    {"sigma", LMC_OPT_DOUBLE, offsetof(render_settings, sigma), 0, 1e-9, 1, NULL, NULL, SET_SIGMA,
+     "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S"},
+    {"chains", LMC_OPT_INT, offsetof(render_settings, chains), 0, 1, 1 << 20, NULL, NULL,
+     SET_CHAINS, "N", "256", "Markov chains"},
+    {"bootstrap", LMC_OPT_INT64, offsetof(render_settings, bootstrap), 0, 1, (double)(INT64_MAX / 2),
+     NULL, NULL, SET_BOOTSTRAP, "N", "a tenth of --time, or under --spp enough for --bootstrap-error",
+     "independent paths that estimate the normalisation b"},
+    {"bootstrap-error", LMC_OPT_DOUBLE, offsetof(render_settings, bootstrap_error), 0, 1e-4, 1, NULL,
+     NULL, 0, "E", NULL, "without --bootstrap, under --spp: b's target relative standard error"},
+    {"direct", LMC_OPT_CHOICE, offsetof(render_settings, direct_separate), 0, 0, 0,
+     mcmc__direct_modes, mcmc__direct_values, SET_DIRECT, NULL, NULL,
+     "separate: pt renders the paths of one and two segments, MCMC the longer ones; mcmc: MCMC "
+     "renders every path"},
+    {"allocate", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_even), 0, 0, 0, mcmc__allocations,
+     NULL, 0, NULL, NULL,
+     "per-length states: mutations per length in proportion to its b, or the same for every "
+     "chain"},
+};
+
+const lmc_opt_table mcmc_driver_options = {
+    "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)", mcmc__opts,
+    (int)(sizeof mcmc__opts / sizeof mcmc__opts[0])};
 
 /* --- splat records ----------------------------------------------------------- */
 

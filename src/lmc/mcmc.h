@@ -7,11 +7,20 @@
 
 #include "render/film.h"
 #include "render/integrator.h"
+#include "render/options.h"
 #include "render/scene.h"
 #include "render/settings.h"
 
 /* 1 when `name` names an MCMC integrator (mc_method_find, method.h). */
 int mcmc_is_integrator(const char *name);
+
+/* The flags of the MCMC integrators, for the command line: the driver's,
+ * then each state space's and each integrator's (render/options.h), up to
+ * max tables into OUT; returns their count. */
+int mcmc_option_tables(const lmc_opt_table **OUT, int max);
+
+/* The MCMC integrators' names, up to max into OUT; returns their count. */
+int mcmc_integrator_names(const char **OUT, int max);
 
 /* Renders s with the MCMC integrator rs->integrator into `out` (created
  * here), as render_run does for pt and bdpt: bootstrap, chains, splats,

@@ -29,6 +29,7 @@
 #include "lmc/chain.h"
 #include "lmc/space.h"
 #include "render/error.h"
+#include "render/options.h"
 #include "render/scene.h"
 #include "render/settings.h"
 
@@ -43,6 +44,7 @@ typedef struct mc_method_setup {
 typedef struct mc_method {
   const char *name;          /* --integrator NAME */
   int default_states;        /* MCMC_STATES_*: the space without --states */
+  const lmc_opt_table *opts; /* its own flags (NULL: none) */
   lmc_status (*create)(void **OUT_run, const mc_method_setup *setup, lmc_error *err);
   void (*destroy)(void *run);
   /* n chains; chain i belongs to family[i] of the space. */

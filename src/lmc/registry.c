@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "lmc/mcmc.h"
 #include "lmc/method.h"
 #include "lmc/space.h"
 
@@ -14,10 +15,13 @@ static const mc_method *const mc__methods[] = {&mc_method_pssmlt, &mc_method_mml
                                                &mc_method_lmc, &mc_method_h2mc};
 
 static const mc_space_type mc__spaces[] = {
-    {"pt", MCMC_STATES_PT, mc_space_pt_create},
-    {"mmlt", MCMC_STATES_MMLT, mc_space_mmlt_create},
-    {"bdpt", MCMC_STATES_BDPT, mc_space_bdpt_create},
+    {"bdpt", MCMC_STATES_BDPT, mc_space_bdpt_create, &mc_space_bdpt_options},
+    {"mmlt", MCMC_STATES_MMLT, mc_space_mmlt_create, NULL},
+    {"pt", MCMC_STATES_PT, mc_space_pt_create, NULL},
 };
+
+const char *const mc_space_names[] = {"bdpt", "mmlt", "pt", NULL};
+const int mc_space_ids[] = {MCMC_STATES_BDPT, MCMC_STATES_MMLT, MCMC_STATES_PT};
 
 /* Integrators registered at run time (mc_method_register). */
 #define MC__MAX_EXTRA 8
@@ -48,6 +52,29 @@ const mc_space_type *mc_space_find(int id) {
   for (size_t i = 0; i < sizeof mc__spaces / sizeof mc__spaces[0]; i++)
     if (mc__spaces[i].id == id) return &mc__spaces[i];
   return NULL;
+}
+
+/* The driver's flags (mcmc.c). */
+extern const lmc_opt_table mcmc_driver_options;
+
+int mcmc_option_tables(const lmc_opt_table **OUT, int max) {
+  int n = 0;
+  if (n < max) OUT[n++] = &mcmc_driver_options;
+  for (size_t i = 0; i < sizeof mc__spaces / sizeof mc__spaces[0]; i++)
+    if (mc__spaces[i].opts && n < max) OUT[n++] = mc__spaces[i].opts;
+  for (size_t i = 0; i < sizeof mc__methods / sizeof mc__methods[0]; i++)
+    if (mc__methods[i]->opts && n < max) OUT[n++] = mc__methods[i]->opts;
+  for (int i = 0; i < mc__n_extra; i++)
+    if (mc__extra[i]->opts && n < max) OUT[n++] = mc__extra[i]->opts;
+  return n;
+}
+
+int mcmc_integrator_names(const char **OUT, int max) {
+  int n = 0;
+  for (size_t i = 0; i < sizeof mc__methods / sizeof mc__methods[0] && n < max; i++)
+    OUT[n++] = mc__methods[i]->name;
+  for (int i = 0; i < mc__n_extra && n < max; i++) OUT[n++] = mc__extra[i]->name;
+  return n;
 }
 
 void mc_space_free(mc_space *sp) {

@@ -27,6 +27,7 @@
 #include "lmc/target.h"
 #include "render/error.h"
 #include "render/integrator.h"
+#include "render/options.h"
 #include "render/scene.h"
 #include "render/settings.h"
 
@@ -78,10 +79,18 @@ typedef struct mc_space_type {
   const char *name;
   int id; /* MCMC_STATES_* (render/settings.h) */
   lmc_status (*create)(mc_space *OUT, const scene *s, const render_settings *rs, lmc_error *err);
+  const lmc_opt_table *opts; /* its own flags (NULL: none) */
 } mc_space_type;
 
 /* The state spaces (registry.c), by MCMC_STATES_* (NULL: none). */
 const mc_space_type *mc_space_find(int id);
+
+/* --states's choices: the spaces' names (NULL-terminated) and their ids. */
+extern const char *const mc_space_names[];
+extern const int mc_space_ids[];
+
+/* The bdpt states' flags (bdpt_states.c). */
+extern const lmc_opt_table mc_space_bdpt_options;
 
 /* Frees what sp holds (accepts NULL and a space never created). */
 void mc_space_free(mc_space *sp);

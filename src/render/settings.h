@@ -38,15 +38,7 @@ typedef enum lmc_adapt {
   LMC_ADAPT_CACHE     /* Adam in stage 1, frozen k-d tree cache in stage 2 (default) */
 } lmc_adapt;
 
-/* The states LMC's chains live in (--lmc-states). */
-typedef enum lmc_states {
-  LMC_STATES_MMLT = 0, /* multiplexed bidirectional: length, strategy (s, t), primary samples */
-  LMC_STATES_PT,       /* pssmlt's: the unidirectional path tracer's primary samples */
-  LMC_STATES_BDPT      /* one family over every length: a BDPT sample and one strategy
-                          (src/lmc/bdpt_states.h) */
-} lmc_states;
-
-/* The state space of pssmlt's and mmlt's chains (--states). */
+/* The state space of the MCMC integrators' chains (--states; src/lmc/space.h). */
 typedef enum mcmc_states {
   MCMC_STATES_DEFAULT = 0, /* the integrator's own: pssmlt pt, mmlt per-length families */
   MCMC_STATES_PT,          /* the unidirectional path tracer's primary samples (pssmlt) */
@@ -101,8 +93,8 @@ typedef struct render_settings {
                             with the cached M) instead of the cached walk (lmc_kernel.h) */
   double cache_step, cache_prior, cache_radius; /* the cached walk's (0: its defaults) */
   int cache_k;           /* its neighbours (0: default) */
+  double cache_indep;    /* --adapt cache: probability of the cache's independence proposal */
   int cache_no_drift;    /* --cache-drift off: no drift from the cached first moment */
-  int lmc_states;        /* lmc's state space: LMC_STATES_MMLT (default) or _PT */
   int delayed;           /* --delayed on: Langevin proposals get a gradient-free first test (off) */
   int mala;              /* the <dpt> block asked for MALA */
   int h2mc;              /* the <dpt> block asked for H2MC */

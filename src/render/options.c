@@ -1,0 +1,231 @@
+/*
+ * options.c: parsing, formatting and help of option tables (options.h),
+ * and the renderer's own table.
+ */
+#include "render/options.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/sampler.h"
+
+#define OPT_FIELD(rs, off, type) ((type *)((char *)(rs) + (off)))
+
+static const char *const opt__samplers[] = {"independent", "sobol", NULL};
+static const int opt__sampler_values[] = {LMC_SAMPLER_INDEPENDENT, LMC_SAMPLER_SOBOL};
+
+static const lmc_opt opt__render[] = {
+    {"spp", LMC_OPT_INT64, offsetof(render_settings, spp), 0, 1, (double)(INT64_MAX / 2), NULL,
+     NULL, SET_SPP, "N", "the scene's, else 16",
+     "samples per pixel (MCMC: mutations per pixel)"},
+    {"time", LMC_OPT_DOUBLE, offsetof(render_settings, time_limit), 0, 1e-3, 1e9, NULL, NULL,
+     SET_TIME, "SECONDS", "none", "stop after this long (with --spp: whichever comes first)"},
+    {"threads", LMC_OPT_INT, offsetof(render_settings, threads), 0, 1, 1024, NULL, NULL, 0, "N",
+     "all cores", "worker threads"},
+    {"seed", LMC_OPT_INT64, offsetof(render_settings, seed), 0, 0, (double)INT64_MAX, NULL, NULL, 0,
+     "S", NULL, "random seed; the same seed and --spp give the same image for any --threads"},
+    {"maxdepth", LMC_OPT_INT, offsetof(render_settings, maxdepth), 0, -1, 1000, NULL, NULL,
+     SET_MAXDEPTH, "N", "the scene's, else -1",
+     "longest path in segments, Mitsuba's maxDepth (-1: unbounded)"},
+    {"rrdepth", LMC_OPT_INT, offsetof(render_settings, rrdepth), 0, 1, 1000, NULL, NULL,
+     SET_RRDEPTH, "N", NULL, "Russian roulette from this length on"},
+    {"sampler", LMC_OPT_CHOICE, offsetof(render_settings, sampler), 0, 0, 0, opt__samplers,
+     opt__sampler_values, SET_SAMPLER, NULL, "the scene's, else independent",
+     "pt, bdpt and MCMC's direct pass: independent numbers, or sobol (Owen-scrambled, "
+     "stratified across a pixel's samples)"},
+    {"snapshot", LMC_OPT_DOUBLE, offsetof(render_settings, snapshot), 0, 1e-3, 1e9, NULL, NULL, 0,
+     "S", "none", "also write OUT-<seconds>s.exr every S seconds"},
+};
+
+const lmc_opt_table lmc_render_options = {"Rendering", opt__render,
+                                          (int)(sizeof opt__render / sizeof opt__render[0])};
+
+const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name) {
+  for (int t = 0; t < n; t++)
+    for (int i = 0; tables[t] && i < tables[t]->n; i++)
+      if (!strcmp(tables[t]->opts[i].name, name)) return &tables[t]->opts[i];
+  return NULL;
+}
+
+/* s as a whole finite number in [lo, hi]. */
+static int opt__number(const char *s, double lo, double hi, double *out) {
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (errno || end == s || *end != '\0' || !isfinite(v) || v < lo || v > hi) return 0;
+  *out = v;
+  return 1;
+}
+
+/* s as a whole integer in [lo, hi]. */
+static int opt__integer(const char *s, double lo, double hi, int64_t *out) {
+  char *end;
+  errno = 0;
+  long long v = strtoll(s, &end, 10);
+  if (errno || end == s || *end != '\0' || (double)v < lo || (double)v > hi) return 0;
+  *out = v;
+  return 1;
+}
+
+/* The choices as "a, b or c". */
+static void opt__choices(const lmc_opt *o, char *out, size_t n) {
+  size_t k = 0;
+  out[0] = '\0';
+  int count = 0;
+  while (o->choices[count]) count++;
+  for (int i = 0; i < count && k < n; i++)
+    k += (size_t)snprintf(out + k, n - k, "%s%s", i == 0 ? "" : i == count - 1 ? " or " : ", ",
+                          o->choices[i]);
+}
+
+int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *msg, size_t n) {
+  int64_t iv;
+  double dv;
+  switch (o->kind) {
+  case LMC_OPT_INT:
+  case LMC_OPT_INT64:
+    if (!opt__integer(s, o->lo, o->hi, &iv)) {
+      snprintf(msg, n, "flag --%s: '%s' is not an integer in [%.0f, %.0f]", o->name, s, o->lo, o->hi);
+      return 0;
+    }
+    if (o->kind == LMC_OPT_INT) *OPT_FIELD(rs, o->offset, int) = (int)iv;
+    else *OPT_FIELD(rs, o->offset, int64_t) = iv;
+    break;
+  case LMC_OPT_DOUBLE:
+    if (!opt__number(s, o->lo, o->hi, &dv)) {
+      snprintf(msg, n, "flag --%s: '%s' is not a number in [%g, %g]", o->name, s, o->lo, o->hi);
+      return 0;
+    }
+    *OPT_FIELD(rs, o->offset, double) = dv;
+    break;
+  case LMC_OPT_CHOICE: {
+    int i = 0;
+    while (o->choices[i] && strcmp(o->choices[i], s)) i++;
+    if (!o->choices[i]) {
+      char list[256];
+      opt__choices(o, list, sizeof list);
+      snprintf(msg, n, "flag --%s: '%s' is not one of %s", o->name, s, list);
+      return 0;
+    }
+    *OPT_FIELD(rs, o->offset, int) = o->values ? o->values[i] : i;
+    break;
+  }
+  case LMC_OPT_PAIR: {
+    char a[64], b[64];
+    double x = 0.0, y = 0.0;
+    const char *comma = strchr(s, ',');
+    size_t la = comma ? (size_t)(comma - s) : 0;
+    int ok = comma && la < sizeof a && strlen(comma + 1) < sizeof b;
+    if (ok) {
+      memcpy(a, s, la), a[la] = '\0';
+      snprintf(b, sizeof b, "%s", comma + 1);
+      ok = opt__number(a, o->lo, o->hi, &x) && opt__number(b, o->lo, o->hi, &y) && x <= y;
+    }
+    if (!ok) {
+      snprintf(msg, n, "flag --%s: '%s' is not %s, two numbers in [%g, %g] with the first the smaller",
+               o->name, s, o->arg ? o->arg : "A,B", o->lo, o->hi);
+      return 0;
+    }
+    *OPT_FIELD(rs, o->offset, double) = x;
+    *OPT_FIELD(rs, o->offset2, double) = y;
+    break;
+  }
+  }
+  rs->set |= o->set_bit;
+  return 1;
+}
+
+void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n) {
+  if (o->def) {
+    snprintf(out, n, "%s", o->def);
+    return;
+  }
+  switch (o->kind) {
+  case LMC_OPT_INT: snprintf(out, n, "%d", *OPT_FIELD((render_settings *)rs, o->offset, int)); break;
+  case LMC_OPT_INT64:
+    snprintf(out, n, "%lld", (long long)*OPT_FIELD((render_settings *)rs, o->offset, int64_t));
+    break;
+  case LMC_OPT_DOUBLE: snprintf(out, n, "%g", *OPT_FIELD((render_settings *)rs, o->offset, double)); break;
+  case LMC_OPT_CHOICE: {
+    int v = *OPT_FIELD((render_settings *)rs, o->offset, int);
+    const char *name = "?";
+    for (int i = 0; o->choices[i]; i++)
+      if ((o->values ? o->values[i] : i) == v) name = o->choices[i];
+    snprintf(out, n, "%s", name);
+    break;
+  }
+  case LMC_OPT_PAIR:
+    snprintf(out, n, "%g,%g", *OPT_FIELD((render_settings *)rs, o->offset, double),
+             *OPT_FIELD((render_settings *)rs, o->offset2, double));
+    break;
+  }
+}
+
+/* The flag and its argument as the help shows them: "--sigma S",
+ * "--direct separate|mcmc". */
+static void opt__usage(const lmc_opt *o, char *out, size_t n) {
+  size_t k = (size_t)snprintf(out, n, "--%s", o->name);
+  if (o->kind == LMC_OPT_CHOICE && !o->arg) {
+    for (int i = 0; o->choices[i] && k < n; i++)
+      k += (size_t)snprintf(out + k, n - k, "%s%s", i ? "|" : " ", o->choices[i]);
+  } else if (k < n) {
+    snprintf(out + k, n - k, " %s", o->arg ? o->arg : "X");
+  }
+}
+
+#define OPT_HELP_COL 27
+#define OPT_HELP_WIDTH 92
+
+void lmc_opt_help(FILE *f, const lmc_opt_table *t) {
+  render_settings d = render_settings_default();
+  fprintf(f, "%s:\n", t->title);
+  for (int i = 0; i < t->n; i++) {
+    const lmc_opt *o = &t->opts[i];
+    char use[128], def[96], text[1024];
+    opt__usage(o, use, sizeof use);
+    lmc_opt_format(o, &d, def, sizeof def);
+    snprintf(text, sizeof text, "%s (default %s)", o->help, def);
+    /* The flag, then the text wrapped at OPT_HELP_WIDTH from column OPT_HELP_COL. */
+    int col = fprintf(f, "  %s", use);
+    const char *p = text;
+    if (col >= OPT_HELP_COL - 1) {
+      fputc('\n', f);
+      col = 0;
+    }
+    while (*p) {
+      fprintf(f, "%*s", OPT_HELP_COL - col, "");
+      int room = OPT_HELP_WIDTH - OPT_HELP_COL, len = (int)strlen(p);
+      int cut = len;
+      if (len > room) {
+        cut = room;
+        while (cut > 0 && p[cut] != ' ') cut--;
+        if (cut == 0) cut = room;
+      }
+      fprintf(f, "%.*s\n", cut, p);
+      p += cut;
+      while (*p == ' ') p++;
+      col = 0;
+    }
+  }
+  fputc('\n', f);
+}
+
+void lmc_opt_markdown(FILE *f, const lmc_opt_table *t) {
+  render_settings d = render_settings_default();
+  fprintf(f, "| flag | meaning | default |\n| --- | --- | --- |\n");
+  for (int i = 0; i < t->n; i++) {
+    const lmc_opt *o = &t->opts[i];
+    char use[128], def[96];
+    opt__usage(o, use, sizeof use);
+    lmc_opt_format(o, &d, def, sizeof def);
+    fputs("| `", f);
+    for (const char *c = use; *c; c++) fputs(*c == '|' ? "\\|" : (char[2]){*c, 0}, f);
+    fputs("` | ", f);
+    /* (a | would end the cell; a < would open an HTML tag) */
+    for (const char *c = o->help; *c; c++) fputs(*c == '|' ? "\\|" : *c == '<' ? "&lt;" : (char[2]){*c, 0}, f);
+    fprintf(f, " | %s |\n", def);
+  }
+}

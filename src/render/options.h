@@ -1,0 +1,73 @@
+/*
+ * options.h: settings as tables. Each part of lmc that has settings (the
+ * renderer, the MCMC driver, each state space and each MCMC integrator)
+ * declares its flags once, as an lmc_opt table: name, kind, the field of
+ * render_settings it sets, its range or choices, its default and its help.
+ * The command line parses with the tables (lmc_opt_parse) and prints
+ * `lmc render --help` from them (lmc_opt_help), so a flag is accepted
+ * exactly when it is documented, and its range is checked in one place.
+ *
+ * A flag is given as `--name value` or `--name=value`. A bad value is
+ * refused with a message that names the flag and what it accepts.
+ */
+#ifndef LMC_RENDER_OPTIONS_H
+#define LMC_RENDER_OPTIONS_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "render/settings.h"
+
+typedef enum lmc_opt_kind {
+  LMC_OPT_INT = 0, /* an int in [lo, hi] */
+  LMC_OPT_INT64,   /* an int64_t in [lo, hi] */
+  LMC_OPT_DOUBLE,  /* a finite double in [lo, hi] */
+  LMC_OPT_CHOICE,  /* one of choices[]: stores values[i] (or i) as an int */
+  LMC_OPT_PAIR     /* "A,B": two doubles in [lo, hi] with A <= B, at offset and offset2 */
+} lmc_opt_kind;
+
+typedef struct lmc_opt {
+  const char *name;            /* the flag without its dashes: "sigma" for --sigma */
+  lmc_opt_kind kind;
+  size_t offset;               /* the field of render_settings */
+  size_t offset2;              /* LMC_OPT_PAIR: the second field */
+  double lo, hi;               /* the range of numbers (inclusive) */
+  const char *const *choices;  /* LMC_OPT_CHOICE: the names, NULL-terminated */
+  const int *values;           /* LMC_OPT_CHOICE: the value of each name (NULL: its index) */
+  unsigned set_bit;            /* SET_* marked when given (0: none) */
+  const char *arg;             /* the value's name in the help ("S"); choices: NULL */
+  const char *def;             /* the default as the help says it (NULL: from
+                                  render_settings_default) */
+  const char *help;            /* one sentence or two; wrapped by lmc_opt_help */
+} lmc_opt;
+
+/* One part's flags, under a title in the help. */
+typedef struct lmc_opt_table {
+  const char *title; /* "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)" */
+  const lmc_opt *opts;
+  int n;
+} lmc_opt_table;
+
+/* The renderer's own flags (options.c): --spp, --time, --threads, --seed,
+ * --maxdepth, --rrdepth, --sampler, --snapshot. */
+extern const lmc_opt_table lmc_render_options;
+
+/* The option `name` (without dashes) among tables[0 .. n-1], the first
+ * that has it; NULL when none does. */
+const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name);
+
+/* Parses s as the value of option o into *rs and marks its set bit.
+ * Returns 1, or 0 with a message naming the flag and what it accepts in
+ * msg (room for n). */
+int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *msg, size_t n);
+
+/* The option's value in rs as the help shows it (o->def when given). */
+void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n);
+
+/* Writes a table's flags as help text: `  --name ARG   help (default D)`. */
+void lmc_opt_help(FILE *f, const lmc_opt_table *t);
+
+/* Writes a table's flags as a Markdown table (the README's). */
+void lmc_opt_markdown(FILE *f, const lmc_opt_table *t);
+
+#endif

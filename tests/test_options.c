@@ -1,0 +1,227 @@
+/*
+ * test_options.c: the flag tables (render/options.h) of the renderer, the
+ * MCMC driver, the state spaces and the integrators, one table-driven test
+ * over every flag of every table:
+ *
+ *  - lmc_opt_parse takes a valid value (inside the range, different from
+ *    the default; a choice; a pair), stores it in the flag's field and
+ *    marks its set bit; it refuses a bad value (not a number, out of
+ *    range, an unknown choice, a reversed pair) with a message naming the
+ *    flag;
+ *  - `lmc render --help` mentions every flag;
+ *  - the README's flag tables are `lmc render --help-markdown`, verbatim,
+ *    between its markers (so they are made from the same tables);
+ *  - the binary accepts the valid value as `--flag value` and as
+ *    `--flag=value` (a tiny pt render of the furnace, exit 0), and exits 2
+ *    on the bad one with a message naming the flag.
+ * The counts of flags and checks are asserted (every table has one flag
+ * at least; no flag appears in two tables unless it sets the same field).
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include "lmc/mcmc.h"
+#include "render/options.h"
+#include "test_util.h"
+
+#define TMP "/tmp/lmc_test_options"
+#define MAX_TABLES 32
+
+static char out_text[1 << 16], err_text[1 << 14];
+
+static void slurp(const char *path, char *buf, size_t size) {
+  FILE *f = fopen(path, "rb");
+  size_t n = f ? fread(buf, 1, size - 1, f) : 0;
+  buf[n] = '\0';
+  if (f) fclose(f);
+}
+
+static int run_lmc(const char *args) {
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
+  int rc = system(cmd);
+  slurp(TMP "/out.txt", out_text, sizeof out_text);
+  slurp(TMP "/err.txt", err_text, sizeof err_text);
+  if (rc == -1 || !WIFEXITED(rc)) return -1;
+  return WEXITSTATUS(rc);
+}
+
+static int tables(const lmc_opt_table **t) {
+  t[0] = &lmc_render_options;
+  return 1 + mcmc_option_tables(t + 1, MAX_TABLES - 1);
+}
+
+/* The field's bytes (for comparing before and after). */
+static size_t field_size(const lmc_opt *o) {
+  switch (o->kind) {
+  case LMC_OPT_INT64: return sizeof(int64_t);
+  case LMC_OPT_DOUBLE: return sizeof(double);
+  case LMC_OPT_PAIR: return sizeof(double);
+  default: return sizeof(int);
+  }
+}
+
+/* A valid value of o other than its default d, into out. */
+static void good_value(const lmc_opt *o, const render_settings *d, char *out, size_t n) {
+  const char *f = (const char *)d + o->offset;
+  switch (o->kind) {
+  case LMC_OPT_INT:
+  case LMC_OPT_INT64: {
+    int64_t def = o->kind == LMC_OPT_INT ? *(const int *)f : *(const int64_t *)f;
+    int64_t v = (int64_t)o->lo;
+    if (v == def) v++;
+    snprintf(out, n, "%lld", (long long)v);
+    break;
+  }
+  case LMC_OPT_DOUBLE: {
+    double v = 0.5 * (o->lo + fmin(o->hi, o->lo + 1.0));
+    if (v == *(const double *)f) v = 0.25 * (o->lo + fmin(o->hi, o->lo + 1.0)) + 0.5 * o->lo;
+    snprintf(out, n, "%.17g", v);
+    break;
+  }
+  case LMC_OPT_CHOICE: {
+    int def = *(const int *)f, k = 0;
+    while (o->choices[k]) k++;
+    int pick = k - 1;
+    if ((o->values ? o->values[pick] : pick) == def) pick = 0;
+    snprintf(out, n, "%s", o->choices[pick]);
+    break;
+  }
+  case LMC_OPT_PAIR: snprintf(out, n, "0.5,2"); break;
+  }
+}
+
+/* A bad value of o. */
+static void bad_value(const lmc_opt *o, int which, char *out, size_t n) {
+  if (o->kind == LMC_OPT_CHOICE) snprintf(out, n, "%s", which ? "bogus" : "");
+  else if (o->kind == LMC_OPT_PAIR) snprintf(out, n, "%s", which ? "2,0.5" : "x");
+  else if (which && isfinite(o->hi) && o->hi < 1e15) snprintf(out, n, "%.17g", o->hi * 2.0 + 1.0);
+  else snprintf(out, n, "%s", which ? "1e999" : "x1");
+}
+
+static void test_parse(void **state) {
+  (void)state;
+  const lmc_opt_table *t[MAX_TABLES];
+  int nt = tables(t), flags = 0, checks = 0;
+  assert_true(nt >= 4); /* render, driver, bdpt states, lmc, h2mc */
+  render_settings d = render_settings_default();
+  for (int ti = 0; ti < nt; ti++) {
+    assert_true(t[ti]->n >= 1);
+    for (int i = 0; i < t[ti]->n; i++) {
+      const lmc_opt *o = &t[ti]->opts[i];
+      flags++;
+      /* A name in two tables must mean the same field. */
+      const lmc_opt *first = lmc_opt_find(t, nt, o->name);
+      assert_ptr_not_equal(first, NULL);
+      assert_true(first->offset == o->offset && first->kind == o->kind);
+      char v[128], msg[512];
+      good_value(o, &d, v, sizeof v);
+      render_settings rs = render_settings_default();
+      rs.set = 0;
+      if (!lmc_opt_parse(o, v, &rs, msg, sizeof msg)) fail_msg("--%s %s refused: %s", o->name, v, msg);
+      if (!memcmp((char *)&rs + o->offset, (char *)&d + o->offset, field_size(o)))
+        fail_msg("--%s %s left its field at the default", o->name, v);
+      assert_true((rs.set & o->set_bit) == o->set_bit);
+      checks++;
+      for (int w = 0; w < 2; w++) {
+        bad_value(o, w, v, sizeof v);
+        rs = render_settings_default();
+        msg[0] = '\0';
+        if (lmc_opt_parse(o, v, &rs, msg, sizeof msg)) fail_msg("--%s '%s' accepted", o->name, v);
+        char want[80];
+        snprintf(want, sizeof want, "--%s", o->name);
+        if (!strstr(msg, want)) fail_msg("message for --%s '%s' does not name it: %s", o->name, v, msg);
+        checks++;
+      }
+    }
+  }
+  fprintf(stderr, "  %d flags in %d tables, %d parse checks\n", flags, nt, checks);
+  assert_int_equal(checks, 3 * flags);
+  assert_int_equal(flags, 37); /* render 8, driver 10, bdpt states 1, lmc 17, h2mc 1 */
+}
+
+static void test_binary(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  const lmc_opt_table *t[MAX_TABLES];
+  int nt = tables(t), checks = 0, flags = 0;
+  render_settings d = render_settings_default();
+  assert_int_equal(run_lmc("render --help"), 0);
+  char help[sizeof out_text];
+  memcpy(help, out_text, sizeof help);
+  char base[1024];
+  snprintf(base, sizeof base,
+           "render '%s/tests/data/analytic/furnace.xml' --integrator pt --spp 1 --resolution 4x4 "
+           "-q -o " TMP "/out.exr",
+           LMC_SOURCE_DIR);
+  for (int ti = 0; ti < nt; ti++)
+    for (int i = 0; i < t[ti]->n; i++) {
+      const lmc_opt *o = &t[ti]->opts[i];
+      if (lmc_opt_find(t, nt, o->name) != o) continue; /* (listed once) */
+      flags++;
+      char flag[80], v[128], args[2048];
+      snprintf(flag, sizeof flag, "--%s", o->name);
+      /* The help names it at the start of a line. */
+      char line[96];
+      snprintf(line, sizeof line, "\n  %s ", flag);
+      if (!strstr(help, line)) fail_msg("render --help does not list %s", flag);
+      good_value(o, &d, v, sizeof v);
+      snprintf(args, sizeof args, "%s %s '%s'", base, flag, v);
+      if (run_lmc(args) != 0) fail_msg("%s %s: exit not 0: %s", flag, v, err_text);
+      snprintf(args, sizeof args, "%s '%s=%s'", base, flag, v);
+      if (run_lmc(args) != 0) fail_msg("%s=%s: exit not 0: %s", flag, v, err_text);
+      bad_value(o, 1, v, sizeof v);
+      snprintf(args, sizeof args, "%s %s '%s'", base, flag, v);
+      if (run_lmc(args) != 2) fail_msg("%s %s: exit not 2", flag, v);
+      if (!strstr(err_text, flag)) fail_msg("%s %s: the message does not name it: %s", flag, v, err_text);
+      checks += 4;
+    }
+  fprintf(stderr, "  %d flags, %d checks of the binary\n", flags, checks);
+  assert_int_equal(checks, 4 * flags);
+  assert_int_equal(flags, 37); /* render 8, driver 10, bdpt states 1, lmc 17, h2mc 1 */
+}
+
+static void test_readme(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  assert_int_equal(run_lmc("render --help-markdown"), 0);
+  static char readme[1 << 17];
+  slurp(LMC_SOURCE_DIR "/README.md", readme, sizeof readme);
+  const char *begin = strstr(readme, "<!-- flags: lmc render --help-markdown -->\n");
+  const char *end = strstr(readme, "<!-- /flags -->");
+  assert_non_null(begin);
+  assert_non_null(end);
+  begin += strlen("<!-- flags: lmc render --help-markdown -->\n");
+  size_t n = (size_t)(end - begin);
+  if (n != strlen(out_text) || memcmp(begin, out_text, n))
+    fail_msg("README.md's flag tables differ from `lmc render --help-markdown`:\n%s", out_text);
+  /* Every flag's row is there. */
+  const lmc_opt_table *t[MAX_TABLES];
+  int nt = tables(t), rows = 0;
+  for (int ti = 0; ti < nt; ti++)
+    for (int i = 0; i < t[ti]->n; i++) {
+      char row[96];
+      snprintf(row, sizeof row, "| `--%s", t[ti]->opts[i].name);
+      if (!strstr(out_text, row)) fail_msg("no row for --%s", t[ti]->opts[i].name);
+      rows++;
+    }
+  assert_int_equal(rows, 37);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_parse),
+      cmocka_unit_test(test_binary),
+      cmocka_unit_test(test_readme),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
