@@ -423,8 +423,17 @@ static int lmc_cmd_render(int argc, char **argv) {
     camera_set_resolution(&s->cam, res_w, res_h);
   }
 
-  /* The scene's settings, overridden by the command line. */
-  render_settings rs = s->settings;
+  /* The scene's settings (with its <integrator>/<dpt> parameters through
+   * the option tables), overridden by the command line. */
+  render_settings rs;
+  if (mcmc_scene_settings(s, &rs, &err) != LMC_OK) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    scene_destroy(s);
+    free(given);
+    return EXIT_BADINPUT;
+  }
   if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
   if (cli.set & SET_INTEGRATOR) memcpy(rs.integrator, cli.integrator, sizeof rs.integrator);
   /* The flags as given, in order, over the scene's settings. */

@@ -19,6 +19,7 @@
 
 #include <cmocka.h>
 
+#include "lmc/mcmc.h"
 #include "render/io/io.h"
 #include "render/sampler.h"
 
@@ -377,8 +378,11 @@ static void test_happy(void **state) {
   assert_true(near(s->cam.pos.z, 10.0, 1e-12) && near(s->cam.forward.z, -1.0, 1e-12));
   assert_int_equal(s->filter.type, FILTER_TENT);
 
-  /* Settings: pssmlt with its own maxDepth; rrDepth from the nested path. */
-  const render_settings *r = &s->settings;
+  /* Settings: pssmlt with its own maxDepth; rrDepth from the nested path;
+   * pLarge passed on to the option tables (the --largestep flag's). */
+  render_settings rset;
+  assert_int_equal(mcmc_scene_settings(s, &rset, &err), LMC_OK);
+  const render_settings *r = &rset;
   assert_string_equal(r->integrator, "pssmlt");
   assert_int_equal(r->maxdepth, 7);
   assert_int_equal(r->rrdepth, 3);

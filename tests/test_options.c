@@ -9,6 +9,12 @@
  *    range, an unknown choice, a reversed pair) with a message naming the
  *    flag;
  *  - `lmc render --help` mentions every flag;
+ *  - a scene file sets every flag by its name as a parameter of
+ *    <integrator type="lmc"> (the same field value as the command line's),
+ *    and by the other names the tables give it in a <dpt> block (the LMC
+ *    paper's scenes: largestepprob, numinitsamples, ...); a <boolean> sets
+ *    an on/off flag; a bad value fails with the file, the line and the
+ *    parameter named; an unknown parameter is a warning;
  *  - the README's flag tables are `lmc render --help-markdown`, verbatim,
  *    between its markers (so they are made from the same tables);
  *  - the binary accepts the valid value as `--flag value` and as
@@ -30,6 +36,7 @@
 #include <sys/wait.h>
 
 #include "lmc/mcmc.h"
+#include "render/io/io.h"
 #include "render/options.h"
 #include "test_util.h"
 
@@ -146,7 +153,7 @@ static void test_parse(void **state) {
   }
   fprintf(stderr, "  %d flags in %d tables, %d parse checks\n", flags, nt, checks);
   assert_int_equal(checks, 3 * flags);
-  assert_int_equal(flags, 37); /* render 8, driver 10, bdpt states 1, lmc 17, h2mc 1 */
+  assert_int_equal(flags, 38); /* render 8, driver 11, bdpt states 1, lmc 17, h2mc 1 */
 }
 
 static void test_binary(void **state) {
@@ -187,7 +194,109 @@ static void test_binary(void **state) {
     }
   fprintf(stderr, "  %d flags, %d checks of the binary\n", flags, checks);
   assert_int_equal(checks, 4 * flags);
-  assert_int_equal(flags, 37); /* render 8, driver 10, bdpt states 1, lmc 17, h2mc 1 */
+  assert_int_equal(flags, 38); /* render 8, driver 11, bdpt states 1, lmc 17, h2mc 1 */
+}
+
+/* Writes a scene with `block` (an <integrator> or <dpt> element) to path. */
+static void write_scene(const char *path, const char *block) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fprintf(f,
+          "<scene version=\"0.6.0\">\n"
+          "%s\n"
+          "  <sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" "
+          "value=\"4\"/><integer name=\"height\" value=\"4\"/></film></sensor>\n"
+          "  <emitter type=\"constant\"/>\n"
+          "</scene>\n",
+          block);
+  fclose(f);
+}
+
+/* Loads path and applies its parameters; the status of the latter. */
+static lmc_status scene_settings(const char *path, render_settings *rs, lmc_error *err) {
+  scene *s = NULL;
+  lmc_error_clear(err);
+  assert_int_equal(scene_load_xml(path, NULL, 0, &s, err), LMC_OK);
+  lmc_status st = mcmc_scene_settings(s, rs, err);
+  scene_destroy(s);
+  return st;
+}
+
+static void test_scene(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  const lmc_opt_table *t[MAX_TABLES];
+  int nt = tables(t), flags = 0, aliases = 0, checks = 0;
+  render_settings d = render_settings_default();
+  const char *path = TMP "/scene.xml";
+  lmc_warn_set_quiet(1);
+  for (int ti = 0; ti < nt; ti++)
+    for (int i = 0; i < t[ti]->n; i++) {
+      const lmc_opt *o = &t[ti]->opts[i];
+      if (lmc_opt_find(t, nt, o->name) != o) continue;
+      char v[128], block[1024], msg[512];
+      good_value(o, &d, v, sizeof v);
+      render_settings want = render_settings_default(), got;
+      assert_true(lmc_opt_parse(o, v, &want, msg, sizeof msg));
+      /* By its flag's name, and by each scene name in a <dpt>. */
+      for (int form = 0;; form++) {
+        const char *name = o->name;
+        char alias[64];
+        if (form > 0) {
+          const char *p = o->scene;
+          for (int k = 1; p && *p && k < form; k++) {
+            p += strcspn(p, " ");
+            while (*p == ' ') p++;
+          }
+          if (!p || !*p) break;
+          snprintf(alias, sizeof alias, "%.*s", (int)strcspn(p, " "), p);
+          name = alias;
+          aliases++;
+        }
+        snprintf(block, sizeof block,
+                 form ? "  <dpt><string name=\"integrator\" value=\"mcmc\"/><string name=\"%s\" value=\"%s\"/></dpt>"
+                      : "  <integrator type=\"lmc\"><string name=\"%s\" value=\"%s\"/></integrator>",
+                 name, v);
+        write_scene(path, block);
+        lmc_error err;
+        if (scene_settings(path, &got, &err) != LMC_OK) fail_msg("%s = %s: %s", name, v, err.msg);
+        if (memcmp((char *)&got + o->offset, (char *)&want + o->offset, field_size(o)))
+          fail_msg("scene parameter %s = %s does not set --%s's field", name, v, o->name);
+        assert_true((got.set & o->set_bit) == o->set_bit);
+        checks++;
+      }
+      /* A bad value: file, line and name. */
+      bad_value(o, 1, v, sizeof v);
+      snprintf(block, sizeof block,
+               "  <integrator type=\"lmc\">\n    <string name=\"%s\" value=\"%s\"/></integrator>",
+               o->name, v);
+      write_scene(path, block);
+      lmc_error err;
+      assert_int_equal(scene_settings(path, &got, &err), LMC_EPARSE);
+      assert_int_equal(err.line, 3);
+      assert_non_null(strstr(err.file, "scene.xml"));
+      if (!strstr(err.msg, o->name)) fail_msg("message does not name %s: %s", o->name, err.msg);
+      checks++;
+      flags++;
+    }
+  /* <boolean> on an on/off flag, and an unknown parameter. */
+  render_settings got;
+  lmc_error err;
+  write_scene(path, "  <integrator type=\"lmc\"><boolean name=\"delayed\" value=\"true\"/>"
+                    "<boolean name=\"cache-drift\" value=\"false\"/></integrator>");
+  assert_int_equal(scene_settings(path, &got, &err), LMC_OK);
+  assert_int_equal(got.delayed, 1);
+  assert_int_equal(got.cache_no_drift, 1);
+  int w0 = lmc_warning_count();
+  write_scene(path, "  <integrator type=\"lmc\"><float name=\"no-such-flag\" value=\"1\"/></integrator>");
+  assert_int_equal(scene_settings(path, &got, &err), LMC_OK);
+  assert_int_equal(lmc_warning_count() - w0, 1);
+  lmc_warn_set_quiet(0);
+  fprintf(stderr, "  %d flags, %d scene names besides them, %d checks\n", flags, aliases, checks);
+  assert_int_equal(flags, 38);
+  assert_int_equal(aliases, 6); /* pLarge largestepprob largestepscale numchains numinitsamples
+                                   roughnessthreshold */
+  assert_int_equal(checks, 2 * flags + aliases);
 }
 
 static void test_readme(void **state) {
@@ -214,7 +323,7 @@ static void test_readme(void **state) {
       if (!strstr(out_text, row)) fail_msg("no row for --%s", t[ti]->opts[i].name);
       rows++;
     }
-  assert_int_equal(rows, 37);
+  assert_int_equal(rows, 38);
 }
 
 int main(void) {
@@ -222,6 +331,7 @@ int main(void) {
       cmocka_unit_test(test_parse),
       cmocka_unit_test(test_binary),
       cmocka_unit_test(test_readme),
+      cmocka_unit_test(test_scene),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

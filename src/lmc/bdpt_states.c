@@ -379,7 +379,8 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx) {
 static const lmc_opt bs__opts[] = {
     {"roughness-threshold", LMC_OPT_DOUBLE, offsetof(render_settings, rough_min), 0, 0, 1e6, NULL,
      NULL, SET_ROUGH, "R", NULL,
-     "directions at BSDFs rougher than R are moved as absolute world directions (1: never)"},
+     "directions at BSDFs rougher than R are moved as absolute world directions (1: never)",
+     "roughnessthreshold"},
 };
 
 const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1};

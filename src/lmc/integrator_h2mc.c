@@ -3,7 +3,7 @@
  * rendering (Li, Lehtinen, Ramamoorthi, Jakob and Durand 2015), on the
  * MCMC driver (method.h). Its chains mix the large step (--largestep),
  * Kelemen's isotropic small step (--iso-prob), on per-length states the
- * technique mutation (H2MC_TECHNIQUE_PROB of the rest) and H2MC's
+ * technique mutation (--technique-prob of the rest) and H2MC's
  * proposal (h2mc.h: a Gaussian from the second-order model of log f at the
  * state, with the prior --h2mc-sigma) in what is left. Paths of one or two
  * segments take Kelemen's step instead (f is smooth there; a Hessian costs
@@ -20,7 +20,6 @@
 #include "lmc/lmc_kernel.h"
 #include "lmc/method.h"
 
-#define H2MC_TECHNIQUE_PROB 0.1 /* per-length states: share of the technique mutation */
 #define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
 
 typedef struct h2mc_run {
@@ -79,7 +78,7 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
   (void)setup;
   h2mc_run *run = r;
   double large = run->rs.largestep, iso = run->rs.iso_prob;
-  double tech = F->technique >= 0 ? H2MC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
+  double tech = F->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
   OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
@@ -123,7 +122,7 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
 
 static const lmc_opt h2mc__opts[] = {
     {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(render_settings, h2mc_sigma), 0, 1e-6, 0.5, NULL, NULL,
-     0, "S", "0.01", "the prior's standard deviation on the proposal's offset"},
+     0, "S", "0.01", "the prior's standard deviation on the proposal's offset", NULL},
 };
 
 static const lmc_opt_table h2mc__options = {

@@ -193,7 +193,7 @@ static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *
   double large = run->rs.largestep, iso = run->rs.iso_prob;
   double indep = run->rs.adapt == LMC_ADAPT_CACHE ? run->rs.cache_indep : 0.0;
   int length = F->sf->length;
-  double tech = F->sf->technique >= 0 ? LMC_TECHNIQUE_PROB * (1.0 - large) : 0.0;
+  double tech = F->sf->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
   OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
@@ -427,44 +427,44 @@ static const char *const lmc__on_off[] = {"on", "off", NULL}; /* (stores 1 for o
 static const lmc_opt lmc__opts[] = {
     {"adapt", LMC_OPT_CHOICE, offsetof(render_settings, adapt), 0, 0, 0, lmc__adapts,
      lmc__adapt_values, SET_ADAPT, NULL, NULL,
-     "the preconditioner's adaptation: none, adam (biased), diminish or cache"},
+     "the preconditioner's adaptation: none, adam (biased), diminish or cache", NULL},
     {"step", LMC_OPT_DOUBLE, offsetof(render_settings, lmc_step), 0, 1e-12, 1, NULL, NULL, 0, "S",
-     NULL, "Langevin step s: y ~ N(x + s/2 M g, s M)"},
+     NULL, "Langevin step s: y ~ N(x + s/2 M g, s M)", NULL},
     {"step-range", LMC_OPT_DOUBLE, offsetof(render_settings, step_range), 0, 1, 1e6, NULL, NULL, 0,
-     "R", NULL, "each Langevin step draws s log-uniformly from [S/R, S R]"},
+     "R", NULL, "each Langevin step draws s log-uniformly from [S/R, S R]", NULL},
     {"adam-eps", LMC_OPT_DOUBLE, offsetof(render_settings, adam_eps), 0, 0, 1e6, NULL, NULL, 0, "E",
-     NULL, "M = clamp(1 / (E + sqrt(v)), LO, HI)"},
+     NULL, "M = clamp(1 / (E + sqrt(v)), LO, HI)", NULL},
     {"precond-clamp", LMC_OPT_PAIR, offsetof(render_settings, precond_lo),
      offsetof(render_settings, precond_hi), 1e-300, 1e300, NULL, NULL, 0, "LO,HI", NULL,
-     "the clamp of M"},
+     "the clamp of M", NULL},
     {"grad-bound", LMC_OPT_DOUBLE, offsetof(render_settings, grad_bound), 0, 1e-9, 1e300, NULL,
-     NULL, 0, "B", NULL, "truncate |grad log f| to B"},
+     NULL, 0, "B", NULL, "truncate |grad log f| to B", NULL},
     {"cache-fraction", LMC_OPT_DOUBLE, offsetof(render_settings, cache_fraction), 0, 0, 0.99, NULL,
-     NULL, 0, "F", NULL, "--adapt cache: share of the budget for stage 1"},
+     NULL, 0, "F", NULL, "--adapt cache: share of the budget for stage 1", NULL},
     {"iso-prob", LMC_OPT_DOUBLE, offsetof(render_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
-     NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)"},
+     NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
     {"lmc-states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
-     mc_space_ids, SET_STATES, NULL, "bdpt", "the same as --states"},
+     mc_space_ids, SET_STATES, NULL, "bdpt", "the same as --states", NULL},
     {"cache-gradient", LMC_OPT_CHOICE, offsetof(render_settings, cache_gradient), 0, 0, 0,
      lmc__off_on, NULL, 0, NULL, NULL,
      "--adapt cache, bdpt states: stage 2 evaluates gradients (MALA with the cached M) instead of "
-     "the cached walk"},
+     "the cached walk", NULL},
     {"cache-step", LMC_OPT_DOUBLE, offsetof(render_settings, cache_step), 0, 1e-9, 0.5, NULL, NULL,
-     0, "S", "0.005", "the cached walk: cov = 1 / (1 / (S^2 (M + 1)) + 1 / P^2)"},
+     0, "S", "0.005", "the cached walk: cov = 1 / (1 / (S^2 (M + 1)) + 1 / P^2)", NULL},
     {"cache-prior", LMC_OPT_DOUBLE, offsetof(render_settings, cache_prior), 0, 1e-9, 0.5, NULL,
-     NULL, 0, "P", "0.005", "its prior standard deviation, the width where no entry is near"},
+     NULL, 0, "P", "0.005", "its prior standard deviation, the width where no entry is near", NULL},
     {"cache-radius", LMC_OPT_DOUBLE, offsetof(render_settings, cache_radius), 0, 1e-9, 1, NULL,
-     NULL, 0, "R", "0.01", "its neighbours lie within R sqrt(n)"},
+     NULL, 0, "R", "0.01", "its neighbours lie within R sqrt(n)", NULL},
     {"cache-k", LMC_OPT_INT, offsetof(render_settings, cache_k), 0, 1, 32, NULL, NULL, 0, "K", "5",
-     "its neighbours"},
+     "its neighbours", NULL},
     {"cache-drift", LMC_OPT_CHOICE, offsetof(render_settings, cache_no_drift), 0, 0, 0, lmc__on_off,
-     NULL, 0, NULL, NULL, "drift from the cached first moment"},
+     NULL, 0, NULL, NULL, "drift from the cached first moment", NULL},
     {"cache-indep", LMC_OPT_DOUBLE, offsetof(render_settings, cache_indep), 0, 0, 0.5, NULL, NULL,
      0, "P", NULL,
      "--adapt cache: probability of the cache's independence proposal (a Gaussian around a cached "
-     "state; on ring-caustics it accepted none of 51291)"},
+     "state; on ring-caustics it accepted none of 51291)", NULL},
     {"delayed", LMC_OPT_CHOICE, offsetof(render_settings, delayed), 0, 0, 0, lmc__off_on, NULL, 0,
-     NULL, NULL, "Langevin proposals first tested without their gradient (delayed acceptance, exact)"},
+     NULL, NULL, "Langevin proposals first tested without their gradient (delayed acceptance, exact)", NULL},
 };
 
 static const lmc_opt_table lmc__options = {"LMC (--integrator lmc)", lmc__opts,

@@ -13,7 +13,7 @@
  *
  * Each chain mixes the large step (--largestep), Kelemen's isotropic
  * small step (--iso-prob), for mmlt states the technique mutation
- * (LMC_TECHNIQUE_PROB, as mmlt), and LMC's preconditioned MALA step
+ * (--technique-prob, as mmlt), and LMC's preconditioned MALA step
  * (lmc_kernel.h; the rest). Both small steps are scaled down on the
  * coordinates that pick a light triangle (mc_light_u1_scale and
  * mc_pt_step_scale, as mmlt and pssmlt); for MALA that is a constant
@@ -49,7 +49,6 @@
 
 #include "lmc/method.h"
 
-#define LMC_TECHNIQUE_PROB 0.1 /* mmlt states: share of the technique mutation */
 #define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
 
 #endif

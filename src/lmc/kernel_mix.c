@@ -18,8 +18,8 @@ int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, m
   if (F->technique < 0) return 2;
   /* The technique mutation: the strategy redrawn, the rest small steps. */
   OUT_k[2] = mc_kernel_technique(F->technique);
-  OUT_p[1] = 0.9 * (1.0 - large);
-  OUT_p[2] = 0.1 * (1.0 - large);
+  OUT_p[1] = (1.0 - rs->technique_prob) * (1.0 - large);
+  OUT_p[2] = rs->technique_prob * (1.0 - large);
   return 3;
 }
 

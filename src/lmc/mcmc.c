@@ -129,33 +129,37 @@ static const lmc_opt mcmc__opts[] = {
      mc_space_ids, SET_STATES, NULL, "the integrator's: mmlt for mmlt, else bdpt",
      "the chains' states: bdpt (a BDPT sample and one of its strategies, every length in one "
      "family), mmlt (one family per path length, a strategy coordinate) or pt (a path tracer's "
-     "numbers)"},
+     "numbers)", NULL},
     {"largestep", LMC_OPT_DOUBLE, offsetof(render_settings, largestep), 0, 0, 1, NULL, NULL,
-     SET_LARGESTEP, "P", NULL, "large-step probability"},
+     SET_LARGESTEP, "P", NULL, "large-step probability", "pLarge largestepprob"},
     {"largestep-scale", LMC_OPT_DOUBLE, offsetof(render_settings, largestep_scale), 0, 0, 1e6, NULL,
      NULL, SET_LARGESTEP_SCALE, "X", NULL,
      "the large-step probability times X after the first tenth of the budget (the LMC paper's "
-     "largestepscale)"},
+     "largestepscale)", "largestepscale"},
     {"small-step", LMC_OPT_CHOICE, offsetof(render_settings, small_gauss), 0, 0, 0,
      mcmc__small_steps, NULL, SET_SMALL_STEP, NULL, NULL,
-     "kelemen: offsets log-uniform in (1/1024, S]; gauss: normal offsets of standard deviation S"},
+     "kelemen: offsets log-uniform in (1/1024, S]; gauss: normal offsets of standard deviation S", NULL},
+    {"technique-prob", LMC_OPT_DOUBLE, offsetof(render_settings, technique_prob), 0, 0, 1, NULL,
+     NULL, 0, "P", NULL,
+     "per-length states: the technique mutation's share of the steps that are not large",
+     NULL},
     {"sigma", LMC_OPT_DOUBLE, offsetof(render_settings, sigma), 0, 1e-9, 1, NULL, NULL, SET_SIGMA,
-     "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S"},
+     "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S", NULL},
     {"chains", LMC_OPT_INT, offsetof(render_settings, chains), 0, 1, 1 << 20, NULL, NULL,
-     SET_CHAINS, "N", "256", "Markov chains"},
+     SET_CHAINS, "N", "256", "Markov chains", "numchains"},
     {"bootstrap", LMC_OPT_INT64, offsetof(render_settings, bootstrap), 0, 1, (double)(INT64_MAX / 2),
      NULL, NULL, SET_BOOTSTRAP, "N", "a tenth of --time, or under --spp enough for --bootstrap-error",
-     "independent paths that estimate the normalisation b"},
+     "independent paths that estimate the normalisation b", "numinitsamples"},
     {"bootstrap-error", LMC_OPT_DOUBLE, offsetof(render_settings, bootstrap_error), 0, 1e-4, 1, NULL,
-     NULL, 0, "E", NULL, "without --bootstrap, under --spp: b's target relative standard error"},
+     NULL, 0, "E", NULL, "without --bootstrap, under --spp: b's target relative standard error", NULL},
     {"direct", LMC_OPT_CHOICE, offsetof(render_settings, direct_separate), 0, 0, 0,
      mcmc__direct_modes, mcmc__direct_values, SET_DIRECT, NULL, NULL,
      "separate: pt renders the paths of one and two segments, MCMC the longer ones; mcmc: MCMC "
-     "renders every path"},
+     "renders every path", NULL},
     {"allocate", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_even), 0, 0, 0, mcmc__allocations,
      NULL, 0, NULL, NULL,
      "per-length states: mutations per length in proportion to its b, or the same for every "
-     "chain"},
+     "chain", NULL},
 };
 
 const lmc_opt_table mcmc_driver_options = {

@@ -19,6 +19,11 @@ int mcmc_is_integrator(const char *name);
  * max tables into OUT; returns their count. */
 int mcmc_option_tables(const lmc_opt_table **OUT, int max);
 
+/* The settings of scene s: its own (s->settings), then its passed-on
+ * <integrator>/<dpt> parameters through every table (the renderer's and
+ * mcmc_option_tables'), into *OUT. Fails on a bad value (file, line). */
+lmc_status mcmc_scene_settings(const scene *s, render_settings *OUT, lmc_error *err);
+
 /* The MCMC integrators' names, up to max into OUT; returns their count. */
 int mcmc_integrator_names(const char **OUT, int max);
 

@@ -75,7 +75,7 @@ lmc_status mc_method_register(const mc_method *m, lmc_error *err);
  * (kernel_mix.c): the large step with probability rs->largestep, the small
  * step (Kelemen's with offsets in (1/1024, rs->sigma], or --small-step
  * gauss) and, on a family with a technique coordinate, the technique
- * mutation (9:1 with the small step). Returns the kernels' count. */
+ * mutation (--technique-prob of the rest, 0.1). Returns the kernels' count. */
 int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, mc_kernel *OUT_k,
                           double *OUT_p);
 

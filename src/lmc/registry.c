@@ -69,6 +69,14 @@ int mcmc_option_tables(const lmc_opt_table **OUT, int max) {
   return n;
 }
 
+lmc_status mcmc_scene_settings(const scene *s, render_settings *OUT, lmc_error *err) {
+  const lmc_opt_table *t[32];
+  t[0] = &lmc_render_options;
+  int n = 1 + mcmc_option_tables(t + 1, 31);
+  *OUT = s->settings;
+  return lmc_opt_apply_scene(t, n, s, OUT, err);
+}
+
 int mcmc_integrator_names(const char **OUT, int max) {
   int n = 0;
   for (size_t i = 0; i < sizeof mc__methods / sizeof mc__methods[0] && n < max; i++)

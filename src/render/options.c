@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "render/sampler.h"
+#include "render/scene.h"
 
 #define OPT_FIELD(rs, off, type) ((type *)((char *)(rs) + (off)))
 
@@ -20,24 +21,24 @@ static const int opt__sampler_values[] = {LMC_SAMPLER_INDEPENDENT, LMC_SAMPLER_S
 static const lmc_opt opt__render[] = {
     {"spp", LMC_OPT_INT64, offsetof(render_settings, spp), 0, 1, (double)(INT64_MAX / 2), NULL,
      NULL, SET_SPP, "N", "the scene's, else 16",
-     "samples per pixel (MCMC: mutations per pixel)"},
+     "samples per pixel (MCMC: mutations per pixel)", NULL},
     {"time", LMC_OPT_DOUBLE, offsetof(render_settings, time_limit), 0, 1e-3, 1e9, NULL, NULL,
-     SET_TIME, "SECONDS", "none", "stop after this long (with --spp: whichever comes first)"},
+     SET_TIME, "SECONDS", "none", "stop after this long (with --spp: whichever comes first)", NULL},
     {"threads", LMC_OPT_INT, offsetof(render_settings, threads), 0, 1, 1024, NULL, NULL, 0, "N",
-     "all cores", "worker threads"},
+     "all cores", "worker threads", NULL},
     {"seed", LMC_OPT_INT64, offsetof(render_settings, seed), 0, 0, (double)INT64_MAX, NULL, NULL, 0,
-     "S", NULL, "random seed; the same seed and --spp give the same image for any --threads"},
+     "S", NULL, "random seed; the same seed and --spp give the same image for any --threads", NULL},
     {"maxdepth", LMC_OPT_INT, offsetof(render_settings, maxdepth), 0, -1, 1000, NULL, NULL,
      SET_MAXDEPTH, "N", "the scene's, else -1",
-     "longest path in segments, Mitsuba's maxDepth (-1: unbounded)"},
+     "longest path in segments, Mitsuba's maxDepth (-1: unbounded)", NULL},
     {"rrdepth", LMC_OPT_INT, offsetof(render_settings, rrdepth), 0, 1, 1000, NULL, NULL,
-     SET_RRDEPTH, "N", NULL, "Russian roulette from this length on"},
+     SET_RRDEPTH, "N", NULL, "Russian roulette from this length on", NULL},
     {"sampler", LMC_OPT_CHOICE, offsetof(render_settings, sampler), 0, 0, 0, opt__samplers,
      opt__sampler_values, SET_SAMPLER, NULL, "the scene's, else independent",
      "pt, bdpt and MCMC's direct pass: independent numbers, or sobol (Owen-scrambled, "
-     "stratified across a pixel's samples)"},
+     "stratified across a pixel's samples)", NULL},
     {"snapshot", LMC_OPT_DOUBLE, offsetof(render_settings, snapshot), 0, 1e-3, 1e9, NULL, NULL, 0,
-     "S", "none", "also write OUT-<seconds>s.exr every S seconds"},
+     "S", "none", "also write OUT-<seconds>s.exr every S seconds", NULL},
 };
 
 const lmc_opt_table lmc_render_options = {"Rendering", opt__render,
@@ -136,6 +137,46 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *ms
   }
   rs->set |= o->set_bit;
   return 1;
+}
+
+/* 1 when `name` is one of o's names in a scene. */
+static int opt__scene_name(const lmc_opt *o, const char *name) {
+  if (!strcmp(o->name, name)) return 1;
+  size_t n = strlen(name);
+  for (const char *p = o->scene; p && *p;) {
+    size_t len = strcspn(p, " ");
+    if (len == n && !strncmp(p, name, n)) return 1;
+    p += len;
+    while (*p == ' ') p++;
+  }
+  return 0;
+}
+
+lmc_status lmc_opt_apply_scene(const lmc_opt_table *const *tables, int n, const scene *s,
+                               render_settings *rs, lmc_error *err) {
+  for (int k = 0; k < s->n_params; k++) {
+    const scene_param *p = &s->params[k];
+    const lmc_opt *o = NULL;
+    for (int t = 0; t < n && !o; t++)
+      for (int i = 0; tables[t] && i < tables[t]->n && !o; i++)
+        if (opt__scene_name(&tables[t]->opts[i], p->name)) o = &tables[t]->opts[i];
+    if (!o) {
+      lmc_warn(p->file, p->line, "parameter '%s' is not used by lmc: ignored", p->name);
+      continue;
+    }
+    /* A <boolean> of an on/off choice. */
+    const char *v = p->value;
+    if (p->is_bool && o->kind == LMC_OPT_CHOICE)
+      for (int i = 0; o->choices[i]; i++)
+        if (!strcmp(o->choices[i], "on")) v = !strcmp(p->value, "true") ? "on" : "off";
+    char msg[512];
+    if (!lmc_opt_parse(o, v, rs, msg, sizeof msg)) {
+      const char *why = strstr(msg, ": ");
+      return lmc_error_set(err, LMC_EPARSE, p->file, p->line, "parameter '%s' (--%s): %s",
+                           p->name, o->name, why ? why + 2 : msg);
+    }
+  }
+  return LMC_OK;
 }
 
 void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n) {

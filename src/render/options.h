@@ -16,6 +16,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "render/error.h"
 #include "render/settings.h"
 
 typedef enum lmc_opt_kind {
@@ -39,6 +40,8 @@ typedef struct lmc_opt {
   const char *def;             /* the default as the help says it (NULL: from
                                   render_settings_default) */
   const char *help;            /* one sentence or two; wrapped by lmc_opt_help */
+  const char *scene;           /* other names of it in a scene's <integrator> or <dpt>,
+                                  space-separated (NULL: none; its own name always works) */
 } lmc_opt;
 
 /* One part's flags, under a title in the help. */
@@ -63,6 +66,15 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *ms
 
 /* The option's value in rs as the help shows it (o->def when given). */
 void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n);
+
+/* Applies the scene's passed-on parameters (scene.h's params: the
+ * <integrator> and <dpt> values the loader did not read) to *rs with the
+ * tables: each by its flag's name or one of its scene names. A bad value
+ * fails with LMC_EPARSE, its file and line and the parameter named; an
+ * unknown parameter is warned about and ignored. */
+struct scene;
+lmc_status lmc_opt_apply_scene(const lmc_opt_table *const *tables, int n, const struct scene *s,
+                               render_settings *rs, lmc_error *err);
 
 /* Writes a table's flags as help text: `  --name ARG   help (default D)`. */
 void lmc_opt_help(FILE *f, const lmc_opt_table *t);

@@ -39,6 +39,7 @@ void scene_destroy(scene *s) {
   free(s->lights);
   free(s->images);
   free(s->infinite_lights);
+  free(s->params);
   free(s);
 }
 

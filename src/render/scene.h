@@ -19,6 +19,17 @@
 #include "render/mesh.h"
 #include "render/settings.h"
 
+/* A parameter of the scene's <integrator> or <dpt> block that the loader
+ * passes on as it stands (its value as text): the integrators' own
+ * settings, applied with their option tables (render/options.h). */
+typedef struct scene_param {
+  char name[64];
+  char value[256];
+  char file[512];
+  int line;
+  int is_bool; /* the value came from a <boolean> ("true" / "false") */
+} scene_param;
+
 typedef struct scene {
   char path[512];          /* the scene file, for messages */
   mesh *meshes;
@@ -34,6 +45,8 @@ typedef struct scene {
   camera cam;
   film_filter filter;
   render_settings settings; /* from the scene's <integrator>/<dpt> */
+  scene_param *params;      /* the rest of those blocks' parameters (owned) */
+  int n_params;
   vec3 bounds_min, bounds_max;
   vec3 center;
   double radius;           /* bounding sphere radius (> 0) */

@@ -60,6 +60,7 @@ typedef struct render_settings {
   int sampler;           /* pt and bdpt: LMC_SAMPLER_INDEPENDENT or _SOBOL (render/sampler.h) */
   /* MCMC (src/lmc) */
   double largestep;      /* large-step probability */
+  double technique_prob; /* the technique mutation's share of the other steps (per-length states) */
   double sigma;          /* Kelemen small-step scale (the Gaussian's standard deviation) */
   int small_gauss;       /* --small-step gauss: Gaussian small steps instead of Kelemen's */
   double largestep_scale; /* the large-step probability times this after the first tenth of
@@ -111,6 +112,7 @@ static inline render_settings render_settings_default(void) {
   s.spp = 16;
   s.seed = 1;
   s.largestep = 0.3;
+  s.technique_prob = 0.1;
   s.sigma = 1.0 / 64.0;
   s.largestep_scale = 1.0;
   s.rough_min = 0.3;

@@ -108,6 +108,33 @@ static void xml__warn_unused(pset *o) {
   }
 }
 
+/* Passes the unread plain values of an <integrator> or <dpt> block on to
+ * the scene's params (scene.h), for the integrators' option tables. */
+static lmc_status xml__keep_params(builder *B, pset *o) {
+  scene *s = B->s;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    if (p->used || (p->kind != PROP_INT && p->kind != PROP_FLOAT && p->kind != PROP_BOOL &&
+                    p->kind != PROP_STRING))
+      continue;
+    scene_param *a = realloc(s->params, (size_t)(s->n_params + 1) * sizeof *a);
+    if (!a) return xml__fail(B, LMC_ENOMEM, p->file, p->line, "out of memory");
+    s->params = a;
+    scene_param *q = &a[s->n_params++];
+    memset(q, 0, sizeof *q);
+    snprintf(q->name, sizeof q->name, "%s", p->name);
+    snprintf(q->file, sizeof q->file, "%s", p->file ? p->file : "");
+    q->line = p->line;
+    q->is_bool = p->kind == PROP_BOOL;
+    if (p->kind == PROP_INT) snprintf(q->value, sizeof q->value, "%lld", p->i);
+    else if (p->kind == PROP_FLOAT) snprintf(q->value, sizeof q->value, "%.17g", p->f);
+    else if (p->kind == PROP_BOOL) snprintf(q->value, sizeof q->value, "%s", p->b ? "true" : "false");
+    else snprintf(q->value, sizeof q->value, "%s", p->s ? p->s : "");
+    p->used = 1;
+  }
+  return LMC_OK;
+}
+
 /* Marks the named properties as read without using them (accepted silently). */
 static void xml__accept(pset *o, const char *const *names) {
   for (int i = 0; i < o->n_props; i++)
@@ -1157,7 +1184,7 @@ static lmc_status xml__sensor(builder *B, pset *o) {
 /* ---- Integrators. ------------------------------------------------------- */
 
 static void xml__set_integrator(render_settings *r, const char *name) {
-  snprintf(r->integrator, sizeof r->integrator, "%s", name);
+  snprintf(r->integrator, sizeof r->integrator, "%.*s", (int)sizeof r->integrator - 1, name);
   r->set |= SET_INTEGRATOR;
 }
 
@@ -1199,13 +1226,7 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
       lmc_warn(o->file, o->line, "path-space MLT (\"mlt\") maps to multiplexed MLT (mmlt)");
     if (t[0] == 'e') lmc_warn(o->file, o->line, "integrator \"erpt\" maps to pssmlt");
     if (choose) xml__set_integrator(r, t[0] == 'm' ? "mmlt" : "pssmlt");
-    double pl;
     int found;
-    if ((st = xml__float(B, o, "pLarge", 0.3, &pl, &found)) != LMC_OK) return st;
-    if (found) {
-      r->largestep = pl;
-      r->set |= SET_LARGESTEP;
-    }
     /* Direct light: Mitsuba's directSamples (default 16, pt's samples per
      * pixel for paths of <= 2 segments; -1: MLT renders them too) and
      * separateDirect. Our default is separate as well. */
@@ -1241,6 +1262,9 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
                                              "causticPerturbation", "manifoldPerturbation",
                                              NULL};
     xml__accept(o, mlt_silent);
+  } else if (strcmp(t, "mmlt") == 0 || strcmp(t, "lmc") == 0 || strcmp(t, "h2mc") == 0) {
+    /* lmc's own MCMC integrators; their parameters are their flags. */
+    if (choose) xml__set_integrator(r, t);
   } else {
     int has_inner = 0;
     for (int i = 0; i < o->n_props; i++)
@@ -1263,6 +1287,7 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
       if ((st = xml__integrator(B, p->obj, 1)) != LMC_OK) return st;
     }
   }
+  if ((st = xml__keep_params(B, o)) != LMC_OK) return st;
   xml__warn_unused(o);
   return LMC_OK;
 }
@@ -1275,7 +1300,6 @@ static lmc_status xml__dpt(builder *B, pset *o) {
   prop *ip;
   int bidir, mala, h2mc, found;
   long long v;
-  double d;
   if ((st = xml__string(B, o, "integrator", "mcmc", &integ, &ip)) != LMC_OK) return st;
   if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, NULL)) != LMC_OK) return st;
   if ((st = xml__bool(B, o, "mala", 0, &mala, NULL)) != LMC_OK) return st;
@@ -1321,38 +1345,9 @@ static lmc_status xml__dpt(builder *B, pset *o) {
     r->set |= SET_SPP;
     B->spp_from_dpt = 1;
   }
-  if ((st = xml__float(B, o, "largestepprob", 0.3, &d, &found)) != LMC_OK) return st;
-  if (found) {
-    r->largestep = d;
-    r->set |= SET_LARGESTEP;
-  }
-  if ((st = xml__int(B, o, "numinitsamples", 0, &v, &found)) != LMC_OK) return st;
-  if (found) {
-    r->bootstrap = v;
-    r->set |= SET_BOOTSTRAP;
-  }
-  /* The rest of dpt's options that have a counterpart here. */
-  if ((st = xml__float(B, o, "largestepscale", 1.0, &d, &found)) != LMC_OK) return st;
-  if (found) {
-    if (!(d >= 0.0) || !isfinite(d))
-      return xml__fail(B, LMC_EPARSE, o->file, o->line, "largestepscale must be >= 0");
-    r->largestep_scale = d;
-    r->set |= SET_LARGESTEP_SCALE;
-  }
-  if ((st = xml__float(B, o, "roughnessthreshold", 0.05, &d, &found)) != LMC_OK) return st;
-  if (found) {
-    if (!(d >= 0.0) || !isfinite(d))
-      return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughnessthreshold must be >= 0");
-    r->rough_min = d;
-    r->set |= SET_ROUGH;
-  }
-  if ((st = xml__int(B, o, "numchains", 128, &v, &found)) != LMC_OK) return st;
-  if (found) {
-    if (v < 1 || v > (1 << 20))
-      return xml__fail(B, LMC_EPARSE, o->file, o->line, "numchains must lie in [1, 2^20]");
-    r->chains = (int)v;
-    r->set |= SET_CHAINS;
-  }
+  /* largestepprob, numinitsamples, largestepscale, roughnessthreshold,
+   * numchains and every flag's own name pass on to the option tables
+   * (scene.params). */
   if ((st = xml__int(B, o, "directspp", 256, &v, &found)) != LMC_OK) return st;
   if (found) {
     if (v < 0) return xml__fail(B, LMC_EPARSE, o->file, o->line, "directspp must be >= 0");
@@ -1360,12 +1355,8 @@ static lmc_status xml__dpt(builder *B, pset *o) {
     r->direct_spp = v;
     r->set |= SET_DIRECT;
   }
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    if (p->used) continue;
-    p->used = 1;
-    lmc_warn(p->file, p->line, "<dpt> parameter '%s' is not used by lmc: ignored", p->name);
-  }
+  if ((st = xml__keep_params(B, o)) != LMC_OK) return st;
+  xml__warn_unused(o);
   return LMC_OK;
 }
 
