@@ -319,6 +319,7 @@ static int lmc_cmd_render(int argc, char **argv) {
   const lmc_opt_table *tables[LMC_MAX_TABLES];
   int n_tables = lmc_option_tables(tables);
   typedef struct lmc_given {
+    const lmc_opt_table *table;
     const lmc_opt *opt;
     const char *value;
   } lmc_given;
@@ -376,7 +377,8 @@ static int lmc_cmd_render(int argc, char **argv) {
       char name[64];
       size_t len = strcspn(arg + 2, "=");
       snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), arg + 2);
-      const lmc_opt *o = lmc_opt_find(tables, n_tables, name);
+      const lmc_opt_table *ot = NULL;
+      const lmc_opt *o = lmc_opt_find(tables, n_tables, name, &ot);
       if (!o) {
         fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
         goto bad;
@@ -384,11 +386,11 @@ static int lmc_cmd_render(int argc, char **argv) {
       a.inline_value = arg[2 + len] == '=' ? arg + 3 + len : NULL;
       if (!(v = lmc_flag_value(&a))) goto bad;
       char msg[512];
-      if (!lmc_opt_parse(o, v, &cli, msg, sizeof msg)) {
+      if (!lmc_opt_set(ot, o, v, &cli, msg, sizeof msg)) {
         fprintf(stderr, "lmc: %s\n", msg);
         goto bad;
       }
-      given[n_given++] = (lmc_given){o, v};
+      given[n_given++] = (lmc_given){ot, o, v};
     } else if (arg[0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
       goto bad;
@@ -437,9 +439,11 @@ static int lmc_cmd_render(int argc, char **argv) {
   if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
   if (cli.set & SET_INTEGRATOR) memcpy(rs.integrator, cli.integrator, sizeof rs.integrator);
   /* The flags as given, in order, over the scene's settings. */
+  int adapt_given = 0;
   for (int i = 0; i < n_given; i++) {
     char msg[512];
-    lmc_opt_parse(given[i].opt, given[i].value, &rs, msg, sizeof msg); /* (checked above) */
+    lmc_opt_set(given[i].table, given[i].opt, given[i].value, &rs, msg, sizeof msg); /* (checked above) */
+    adapt_given |= !strcmp(given[i].opt->name, "adapt");
   }
   free(given);
   given = NULL;
@@ -455,7 +459,7 @@ static int lmc_cmd_render(int argc, char **argv) {
              rs.integrator);
     snprintf(rs.integrator, sizeof rs.integrator, "bdpt");
   }
-  if ((cli.set & SET_ADAPT) && strcmp(rs.integrator, "lmc"))
+  if (adapt_given && strcmp(rs.integrator, "lmc"))
     lmc_warn(NULL, 0, "--adapt only applies to --integrator lmc; ignored for %s", rs.integrator);
 
   /* Render, then write what we have even when interrupted. */

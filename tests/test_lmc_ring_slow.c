@@ -43,13 +43,14 @@
 static int g_checks;
 
 /* Mean and SE over RUNS of the region means (index GRID*GRID: the image). */
-static void run_stats(const scene *s, const char *integrator, lmc_adapt adapt, int states,
+static void run_stats(const scene *s, const char *integrator, const char *adapt, int states,
                       double mean[N_STATS], double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
-    rs.adapt = adapt;
+    lmc_error err;
+    assert_int_equal(mcmc_set(&rs, "adapt", adapt, &err), LMC_OK);
     rs.mcmc_states = states; /* (the driver's --states) */
     rs.spp = 128;
     rs.set |= SET_SPP;
@@ -75,9 +76,8 @@ static void check_scene(const char *folder) {
   camera_set_resolution(&s->cam, 24, 18);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", LMC_ADAPT_NONE, MCMC_STATES_DEFAULT, ref, ref_se);
-  const lmc_adapt modes[MODES] = {LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,
-                                  LMC_ADAPT_NONE, LMC_ADAPT_NONE};
+  run_stats(s, "bdpt", "none", MCMC_STATES_DEFAULT, ref, ref_se);
+  const char *const modes[MODES] = {"diminish", "cache", "cache", "none", "none"};
   const int states[MODES] = {MCMC_STATES_MMLT, MCMC_STATES_MMLT, MCMC_STATES_PT,
                              MCMC_STATES_BDPT, MCMC_STATES_MMLT};
   const char *names[MODES] = {"diminish", "cache", "cache, pt states", "bdpt states",

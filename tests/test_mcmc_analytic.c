@@ -274,17 +274,17 @@ static void test_refined_b(void **state) {
 /* adaptive: the default bootstrap (bootstrap.h: batches until b's standard
  * error is below --bootstrap-error, Neyman-allocated over mmlt's lengths)
  * instead of a fixed count; returns the bootstrap's size. */
-static int64_t render_film(const scene *s, const char *integrator, lmc_adapt adapt, uint64_t seed,
+static int64_t render_film(const scene *s, const char *integrator, const char *adapt, uint64_t seed,
                            int threads, int adaptive, film *OUT_f) {
   render_settings rs = settings(s, integrator, 4, seed, threads);
-  rs.adapt = adapt;
-  rs.cache_gradient = g_cache_gradient;
+  lmc_error err;
+  assert_int_equal(mcmc_set(&rs, "adapt", adapt, &err), LMC_OK);
+  assert_int_equal(mcmc_set(&rs, "cache-gradient", g_cache_gradient ? "on" : "off", &err), LMC_OK);
   if (adaptive) {
     rs.bootstrap = 0;
     rs.bootstrap_error = 0.003;
   }
   render_stats st;
-  lmc_error err;
   assert_int_equal(mcmc_render_run(s, &rs, OUT_f, &st, &err), LMC_OK);
   /* Every integrator makes the whole budget (lmc's cache mode too: its
    * stage 1 is part of the image). */
@@ -308,9 +308,8 @@ static void test_determinism(void **state) {
    * one film; the last: lmc --cache-gradient on (stage 2 of the cache with
    * Langevin proposals, whose preconditioner is looked up per label). */
   const char *names[9] = {"pssmlt", "mmlt", "mmlt", "lmc", "lmc", "lmc", "mmlt", "lmc", "lmc"};
-  const lmc_adapt adapts[9] = {LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE,
-                               LMC_ADAPT_NONE,  LMC_ADAPT_DIMINISH, LMC_ADAPT_CACHE,
-                               LMC_ADAPT_CACHE, LMC_ADAPT_CACHE,    LMC_ADAPT_CACHE};
+  const char *const adapts[9] = {"cache", "cache",    "cache", "none", "diminish",
+                                 "cache", "cache",    "cache", "cache"};
   int checked = 0;
   for (int i = 0; i < 9; i++) {
     g_direct = i >= 6 && i < 8;

@@ -383,7 +383,7 @@ static const lmc_opt bs__opts[] = {
      "roughnessthreshold"},
 };
 
-const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1};
+const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1, NULL, 0};
 
 typedef struct bs__space {
   mc_bdpt_states ctx;

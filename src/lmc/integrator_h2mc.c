@@ -22,8 +22,18 @@
 
 #define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
 
+/* h2mc's own settings (its flags, the table below). */
+typedef struct h2mc_settings {
+  double sigma;    /* the prior's standard deviation (0: h2mc.h's default) */
+  double iso_prob; /* Kelemen's isotropic small step's probability */
+} h2mc_settings;
+
+static const h2mc_settings h2mc__defaults = {0.0, 0.4};
+static const lmc_opt_table h2mc__options; /* (below) */
+
 typedef struct h2mc_run {
   render_settings rs;
+  h2mc_settings hs;
   const mc_space *space; /* borrowed */
   lmc_kernel_params kp;  /* the small steps' s1, s2 (as lmc's) */
   int n;
@@ -51,8 +61,15 @@ static lmc_status h2mc__create(void **OUT_run, const mc_method_setup *setup, lmc
   h2mc_run *run = calloc(1, sizeof *run);
   if (!run) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
   run->rs = *setup->rs;
+  lmc_status st = lmc_opt_read(&h2mc__options, setup->rs, &run->hs, err);
+  if (st) {
+    free(run);
+    return st;
+  }
   run->space = setup->space;
-  run->kp = lmc_kernel_params_from_settings(setup->rs);
+  /* The small step's offsets as lmc's: in (1/1024, --sigma]. */
+  run->kp = lmc_kernel_params_default();
+  if (setup->rs->sigma > run->kp.s1 && setup->rs->sigma < 0.5) run->kp.s2 = setup->rs->sigma;
   *OUT_run = run;
   return LMC_OK;
 }
@@ -63,7 +80,7 @@ static lmc_status h2mc__set_chains(void *r, int n, const int *family, lmc_error 
   run->chain_fam = calloc((size_t)n, sizeof *run->chain_fam);
   if (!run->h2 || !run->chain_fam) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
   h2mc_params hp = h2mc_params_default();
-  if (run->rs.h2mc_sigma > 0.0) hp.sigma = run->rs.h2mc_sigma;
+  if (run->hs.sigma > 0.0) hp.sigma = run->hs.sigma;
   for (int i = 0; i < n; i++) {
     run->chain_fam[i] = family[i];
     lmc_status st = h2mc_kernel_init(&run->h2[i], &run->space->fam[family[i]].target, &hp, err);
@@ -77,7 +94,7 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
                                const mc_space_family *F, mc_kernel *OUT_k, double *OUT_p) {
   (void)setup;
   h2mc_run *run = r;
-  double large = run->rs.largestep, iso = run->rs.iso_prob;
+  double large = run->rs.largestep, iso = run->hs.iso_prob;
   double tech = F->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
@@ -100,7 +117,7 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
   const h2mc_run *run = r;
   fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, iso %g, light-triangle step scale %g\n",
           run->space->name, run->n > 0 ? run->h2[0].p.sigma : 0.0,
-          run->n > 0 ? run->h2[0].p.L : 0.0, run->rs.iso_prob,
+          run->n > 0 ? run->h2[0].p.L : 0.0, run->hs.iso_prob,
           run->space->n_fam > 0 ? mc_step_scale_min(&run->space->fam[0].target) : 1.0);
   int64_t hp = 0, hm = 0, ho = 0, hf = 0;
   for (int i = 0; i < run->n; i++) {
@@ -121,12 +138,14 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
 }
 
 static const lmc_opt h2mc__opts[] = {
-    {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(render_settings, h2mc_sigma), 0, 1e-6, 0.5, NULL, NULL,
-     0, "S", "0.01", "the prior's standard deviation on the proposal's offset", NULL},
+    {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(h2mc_settings, sigma), 0, 1e-6, 0.5, NULL, NULL, 0,
+     "S", "0.01", "the prior's standard deviation on the proposal's offset", NULL},
+    {"iso-prob", LMC_OPT_DOUBLE, offsetof(h2mc_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
+     NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
 };
 
-static const lmc_opt_table h2mc__options = {
-    "H2MC (--integrator h2mc; --largestep and --iso-prob as for lmc)", h2mc__opts, 1};
+static const lmc_opt_table h2mc__options = {"H2MC (--integrator h2mc)", h2mc__opts, 2,
+                                            &h2mc__defaults, sizeof(h2mc_settings)};
 
 const mc_method mc_method_h2mc = {
     .name = "h2mc",

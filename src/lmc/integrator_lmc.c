@@ -41,7 +41,8 @@ typedef struct lmc__family {
 typedef struct lmc_run lmc_run;
 
 struct lmc_run {
-  render_settings rs;
+  render_settings rs;    /* the chains' settings (the driver's) */
+  lmc_settings ls;       /* lmc's own (its flags) */
   const mc_space *space; /* borrowed */
   int n_fam;
   lmc__family *fam;
@@ -59,6 +60,7 @@ struct lmc_run {
 };
 
 static void lmc_run_destroy(lmc_run *run);
+static const lmc_opt_table lmc__options; /* lmc's flags (below) */
 
 /* One lmc family per family of the space. */
 static lmc_status lmc_run_create(lmc_run **OUT_run, const mc_method_setup *setup, lmc_error *err) {
@@ -71,14 +73,19 @@ static lmc_status lmc_run_create(lmc_run **OUT_run, const mc_method_setup *setup
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
   run->rs = *setup->rs;
+  lmc_status st = lmc_opt_read(&lmc__options, setup->rs, &run->ls, err);
+  if (st) {
+    free(run->fam), free(run);
+    return st;
+  }
   run->space = sp;
   run->n_fam = sp->n_fam;
-  run->stage1 = run->rs.adapt == LMC_ADAPT_CACHE && run->rs.cache_fraction > 0.0;
+  run->stage1 = run->ls.adapt == LMC_ADAPT_CACHE && run->ls.cache_fraction > 0.0;
   for (int g = 0; g < sp->n_fam; g++) {
     lmc__family *F = &run->fam[g];
     F->sf = &sp->fam[g];
     F->target = &F->sf->target;
-    F->kp = lmc_kernel_params_from_settings(&run->rs);
+    F->kp = lmc_kernel_params_from_settings(&run->ls, run->rs.sigma);
     /* The coordinates that pick a light triangle: a smaller step for the
      * chain's Kelemen step and a factor c^2 on MALA's preconditioner
      * (lmc_kernel.h). */
@@ -157,7 +164,7 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
   run->chains_start = omp_get_wtime();
-  if (!run->stage1 && run->rs.adapt == LMC_ADAPT_CACHE) {
+  if (!run->stage1 && run->ls.adapt == LMC_ADAPT_CACHE) {
     /* --cache-fraction 0: stage 2 with empty caches. */
     for (int g = 0; g < run->n_fam; g++)
       if (!(run->fam[g].cache = lmc__empty_cache(&run->fam[g])))
@@ -174,10 +181,10 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
       st = lmc__record_create(F, LMC_CACHE_DOUBLES / n, &run->rec[i], err);
       if (st) return st;
       lmc_mala_set_record(&run->mala[i], run->rec[i]);
-    } else if (run->rs.adapt == LMC_ADAPT_CACHE) {
+    } else if (run->ls.adapt == LMC_ADAPT_CACHE) {
       lmc_mala_begin_stage2(&run->mala[i], F->cache);
-      if (!run->rs.cache_gradient && F->target->label_coords) {
-        lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
+      if (!run->ls.cache_gradient && F->target->label_coords) {
+        lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->ls);
         st = lmc_cwalk_init(&run->cwalk[i], F->target, F->cache, &cp, err);
         if (st) return st;
         run->cwalk_on = 1;
@@ -190,8 +197,8 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
 /* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
 static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
   lmc__family *F = &run->fam[run->chain_fam[i]];
-  double large = run->rs.largestep, iso = run->rs.iso_prob;
-  double indep = run->rs.adapt == LMC_ADAPT_CACHE ? run->rs.cache_indep : 0.0;
+  double large = run->rs.largestep, iso = run->ls.iso_prob;
+  double indep = run->ls.adapt == LMC_ADAPT_CACHE ? run->ls.cache_indep : 0.0;
   int length = F->sf->length;
   double tech = F->sf->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
@@ -247,13 +254,13 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
     if (!F->cache) F->cache = lmc__empty_cache(F);
     F->indep.cache = F->cache;
   }
-  run->cwalk_on = !run->rs.cache_gradient;
+  run->cwalk_on = !run->ls.cache_gradient;
   for (int i = 0; i < run->n; i++) {
     gcache_destroy(run->rec[i]);
     run->rec[i] = NULL;
     const lmc__family *F = &run->fam[run->chain_fam[i]];
     if (run->cwalk_on && F->target->label_coords) {
-      lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->rs);
+      lmc_cwalk_params cp = lmc_cwalk_params_from_settings(&run->ls);
       if (lmc_cwalk_init(&run->cwalk[i], F->target, F->cache, &cp, &err) != LMC_OK)
         run->cwalk_on = 0; /* out of memory: the gradient-evaluating stage 2 */
     }
@@ -268,7 +275,7 @@ static void lmc__end_stage1(lmc_run *run, int64_t done) {
 
 /* Stage 1's share of an --spp budget, in mutations per chain. */
 static int64_t lmc__stage1_budget(const lmc_run *run, int64_t budget) {
-  return (int64_t)ceil(run->rs.cache_fraction * (double)budget);
+  return (int64_t)ceil(run->ls.cache_fraction * (double)budget);
 }
 
 /* The most mutations per chain the next round may make: stage 1 ends on
@@ -289,7 +296,7 @@ static int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, doubl
   double chains_elapsed = omp_get_wtime() - run->chains_start;
   double chain_time = run->rs.time_limit - (elapsed - chains_elapsed);
   if (run->rs.time_limit > 0.0 && budget == INT64_MAX)
-    end = chains_elapsed >= run->rs.cache_fraction * chain_time;
+    end = chains_elapsed >= run->ls.cache_fraction * chain_time;
   else
     end = done >= lmc__stage1_budget(run, budget);
   if (!end) return 0;
@@ -329,15 +336,15 @@ static int lmc__key_length(const lmc_run *run, const mc_space_family *SF, int fa
 
 static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
-  int adapt = run->rs.adapt >= 0 && run->rs.adapt <= 3 ? (int)run->rs.adapt : 0;
+  int adapt = run->ls.adapt >= 0 && run->ls.adapt <= 3 ? (int)run->ls.adapt : 0;
   const lmc__family *F0 = &run->fam[0];
   fprintf(stderr,
           "lmc: adapt %s, %s states, step %g (range x%g), precond clamp [%g, %g], grad bound %g, "
           "iso %g, light-triangle step scale %g\n",
           mode[adapt], run->space->name, F0->kp.step, F0->kp.step_range, F0->kp.lo, F0->kp.hi,
-          F0->kp.grad_bound, run->rs.iso_prob, mc_step_scale_min(F0->target));
+          F0->kp.grad_bound, run->ls.iso_prob, mc_step_scale_min(F0->target));
   /* The caches. */
-  if (run->rs.adapt == LMC_ADAPT_CACHE) {
+  if (run->ls.adapt == LMC_ADAPT_CACHE) {
     int trees = 0;
     int64_t entries = 0;
     double bytes = 0.0;
@@ -425,50 +432,49 @@ static const char *const lmc__off_on[] = {"off", "on", NULL};
 static const char *const lmc__on_off[] = {"on", "off", NULL}; /* (stores 1 for off) */
 
 static const lmc_opt lmc__opts[] = {
-    {"adapt", LMC_OPT_CHOICE, offsetof(render_settings, adapt), 0, 0, 0, lmc__adapts,
-     lmc__adapt_values, SET_ADAPT, NULL, NULL,
+    {"adapt", LMC_OPT_CHOICE, offsetof(lmc_settings, adapt), 0, 0, 0, lmc__adapts,
+     lmc__adapt_values, 0, NULL, NULL,
      "the preconditioner's adaptation: none, adam (biased), diminish or cache", NULL},
-    {"step", LMC_OPT_DOUBLE, offsetof(render_settings, lmc_step), 0, 1e-12, 1, NULL, NULL, 0, "S",
+    {"step", LMC_OPT_DOUBLE, offsetof(lmc_settings, step), 0, 1e-12, 1, NULL, NULL, 0, "S",
      NULL, "Langevin step s: y ~ N(x + s/2 M g, s M)", NULL},
-    {"step-range", LMC_OPT_DOUBLE, offsetof(render_settings, step_range), 0, 1, 1e6, NULL, NULL, 0,
+    {"step-range", LMC_OPT_DOUBLE, offsetof(lmc_settings, step_range), 0, 1, 1e6, NULL, NULL, 0,
      "R", NULL, "each Langevin step draws s log-uniformly from [S/R, S R]", NULL},
-    {"adam-eps", LMC_OPT_DOUBLE, offsetof(render_settings, adam_eps), 0, 0, 1e6, NULL, NULL, 0, "E",
+    {"adam-eps", LMC_OPT_DOUBLE, offsetof(lmc_settings, adam_eps), 0, 0, 1e6, NULL, NULL, 0, "E",
      NULL, "M = clamp(1 / (E + sqrt(v)), LO, HI)", NULL},
-    {"precond-clamp", LMC_OPT_PAIR, offsetof(render_settings, precond_lo),
-     offsetof(render_settings, precond_hi), 1e-300, 1e300, NULL, NULL, 0, "LO,HI", NULL,
+    {"precond-clamp", LMC_OPT_PAIR, offsetof(lmc_settings, precond_lo),
+     offsetof(lmc_settings, precond_hi), 1e-300, 1e300, NULL, NULL, 0, "LO,HI", NULL,
      "the clamp of M", NULL},
-    {"grad-bound", LMC_OPT_DOUBLE, offsetof(render_settings, grad_bound), 0, 1e-9, 1e300, NULL,
+    {"grad-bound", LMC_OPT_DOUBLE, offsetof(lmc_settings, grad_bound), 0, 1e-9, 1e300, NULL,
      NULL, 0, "B", NULL, "truncate |grad log f| to B", NULL},
-    {"cache-fraction", LMC_OPT_DOUBLE, offsetof(render_settings, cache_fraction), 0, 0, 0.99, NULL,
+    {"cache-fraction", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_fraction), 0, 0, 0.99, NULL,
      NULL, 0, "F", NULL, "--adapt cache: share of the budget for stage 1", NULL},
-    {"iso-prob", LMC_OPT_DOUBLE, offsetof(render_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
+    {"iso-prob", LMC_OPT_DOUBLE, offsetof(lmc_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
-    {"lmc-states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
-     mc_space_ids, SET_STATES, NULL, "bdpt", "the same as --states", NULL},
-    {"cache-gradient", LMC_OPT_CHOICE, offsetof(render_settings, cache_gradient), 0, 0, 0,
+    {"cache-gradient", LMC_OPT_CHOICE, offsetof(lmc_settings, cache_gradient), 0, 0, 0,
      lmc__off_on, NULL, 0, NULL, NULL,
      "--adapt cache, bdpt states: stage 2 evaluates gradients (MALA with the cached M) instead of "
      "the cached walk", NULL},
-    {"cache-step", LMC_OPT_DOUBLE, offsetof(render_settings, cache_step), 0, 1e-9, 0.5, NULL, NULL,
+    {"cache-step", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_step), 0, 1e-9, 0.5, NULL, NULL,
      0, "S", "0.005", "the cached walk: cov = 1 / (1 / (S^2 (M + 1)) + 1 / P^2)", NULL},
-    {"cache-prior", LMC_OPT_DOUBLE, offsetof(render_settings, cache_prior), 0, 1e-9, 0.5, NULL,
+    {"cache-prior", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_prior), 0, 1e-9, 0.5, NULL,
      NULL, 0, "P", "0.005", "its prior standard deviation, the width where no entry is near", NULL},
-    {"cache-radius", LMC_OPT_DOUBLE, offsetof(render_settings, cache_radius), 0, 1e-9, 1, NULL,
+    {"cache-radius", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_radius), 0, 1e-9, 1, NULL,
      NULL, 0, "R", "0.01", "its neighbours lie within R sqrt(n)", NULL},
-    {"cache-k", LMC_OPT_INT, offsetof(render_settings, cache_k), 0, 1, 32, NULL, NULL, 0, "K", "5",
+    {"cache-k", LMC_OPT_INT, offsetof(lmc_settings, cache_k), 0, 1, 32, NULL, NULL, 0, "K", "5",
      "its neighbours", NULL},
-    {"cache-drift", LMC_OPT_CHOICE, offsetof(render_settings, cache_no_drift), 0, 0, 0, lmc__on_off,
+    {"cache-drift", LMC_OPT_CHOICE, offsetof(lmc_settings, cache_no_drift), 0, 0, 0, lmc__on_off,
      NULL, 0, NULL, NULL, "drift from the cached first moment", NULL},
-    {"cache-indep", LMC_OPT_DOUBLE, offsetof(render_settings, cache_indep), 0, 0, 0.5, NULL, NULL,
+    {"cache-indep", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_indep), 0, 0, 0.5, NULL, NULL,
      0, "P", NULL,
      "--adapt cache: probability of the cache's independence proposal (a Gaussian around a cached "
      "state; on ring-caustics it accepted none of 51291)", NULL},
-    {"delayed", LMC_OPT_CHOICE, offsetof(render_settings, delayed), 0, 0, 0, lmc__off_on, NULL, 0,
+    {"delayed", LMC_OPT_CHOICE, offsetof(lmc_settings, delayed), 0, 0, 0, lmc__off_on, NULL, 0,
      NULL, NULL, "Langevin proposals first tested without their gradient (delayed acceptance, exact)", NULL},
 };
 
 static const lmc_opt_table lmc__options = {"LMC (--integrator lmc)", lmc__opts,
-                                           (int)(sizeof lmc__opts / sizeof lmc__opts[0])};
+                                           (int)(sizeof lmc__opts / sizeof lmc__opts[0]),
+                                           &lmc_settings_defaults, sizeof(lmc_settings)};
 
 static lmc_status lmc__m_create(void **OUT_run, const mc_method_setup *setup, lmc_error *err) {
   lmc_run *run = NULL;

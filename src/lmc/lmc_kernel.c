@@ -31,19 +31,33 @@ lmc_kernel_params lmc_kernel_params_default(void) {
   return p;
 }
 
-lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs) {
+const lmc_settings lmc_settings_defaults = {
+    .adapt = LMC_ADAPT_CACHE,
+    .step = 1e-5,
+    .step_range = 1.0,
+    .adam_eps = 1e-8,
+    .precond_lo = 1e-3,
+    .precond_hi = 1e3,
+    .grad_bound = 1e3,
+    .cache_fraction = 0.1,
+    .iso_prob = 0.4,
+};
+
+lmc_settings lmc_settings_default(void) { return lmc_settings_defaults; }
+
+lmc_kernel_params lmc_kernel_params_from_settings(const lmc_settings *ls, double sigma) {
   lmc_kernel_params p = lmc_kernel_params_default();
-  p.adapt = rs->adapt;
-  p.step = rs->lmc_step;
-  p.step_range = rs->step_range;
-  p.eps = rs->adam_eps;
-  p.lo = rs->precond_lo;
-  p.hi = rs->precond_hi;
-  p.grad_bound = rs->grad_bound;
+  p.adapt = (lmc_adapt)ls->adapt;
+  p.step = ls->step;
+  p.step_range = ls->step_range;
+  p.eps = ls->adam_eps;
+  p.lo = ls->precond_lo;
+  p.hi = ls->precond_hi;
+  p.grad_bound = ls->grad_bound;
   /* Kelemen's offsets as mmlt and pssmlt draw them: in (1/1024, sigma]. */
-  if (rs->sigma > p.s1 && rs->sigma < 0.5) p.s2 = rs->sigma;
+  if (sigma > p.s1 && sigma < 0.5) p.s2 = sigma;
   p.cache.eps = p.eps, p.cache.lo = p.lo, p.cache.hi = p.hi;
-  p.delayed = rs->delayed;
+  p.delayed = ls->delayed;
   return p;
 }
 
@@ -331,13 +345,13 @@ lmc_cwalk_params lmc_cwalk_params_default(void) {
   return p;
 }
 
-lmc_cwalk_params lmc_cwalk_params_from_settings(const render_settings *rs) {
+lmc_cwalk_params lmc_cwalk_params_from_settings(const lmc_settings *ls) {
   lmc_cwalk_params p = lmc_cwalk_params_default();
-  if (rs->cache_step > 0.0) p.step = rs->cache_step;
-  if (rs->cache_prior > 0.0) p.prior = rs->cache_prior;
-  if (rs->cache_radius > 0.0) p.radius = rs->cache_radius;
-  if (rs->cache_k > 0) p.k = rs->cache_k < GCACHE_MAX_K ? rs->cache_k : GCACHE_MAX_K;
-  if (rs->cache_no_drift) p.drift_max = 0.0;
+  if (ls->cache_step > 0.0) p.step = ls->cache_step;
+  if (ls->cache_prior > 0.0) p.prior = ls->cache_prior;
+  if (ls->cache_radius > 0.0) p.radius = ls->cache_radius;
+  if (ls->cache_k > 0) p.k = ls->cache_k < GCACHE_MAX_K ? ls->cache_k : GCACHE_MAX_K;
+  if (ls->cache_no_drift) p.drift_max = 0.0;
   return p;
 }
 

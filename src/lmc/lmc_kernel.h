@@ -17,7 +17,7 @@
  * q(x | y) is MALA's when y has a gradient and Kelemen's when it has not:
  * the ratio stays exact and no state is ever reset.
  *
- * The preconditioner M (lmc_adapt of render/settings.h):
+ * The preconditioner M (lmc_adapt, below):
  *   NONE       M = I.
  *   ADAM       M = Adam's clamp(1 / (eps + sqrt(v))) of this chain's
  *              gradients so far, updated after every step of the chain
@@ -93,6 +93,37 @@
 #include "lmc/gcache.h"
 #include "render/settings.h"
 
+/* LMC preconditioner adaptation (--adapt). */
+typedef enum lmc_adapt {
+  LMC_ADAPT_NONE = 0, /* plain MALA, M = I */
+  LMC_ADAPT_ADAM,     /* Adam along the chain, used directly (biased; for comparison) */
+  LMC_ADAPT_DIMINISH, /* Adam whose influence fades as 1/t (asymptotically unbiased) */
+  LMC_ADAPT_CACHE     /* Adam in stage 1, frozen k-d tree cache in stage 2 (default) */
+} lmc_adapt;
+
+/* lmc's own settings, its flags (integrator_lmc.c's table). */
+typedef struct lmc_settings {
+  int adapt;             /* lmc_adapt */
+  double step;           /* s: proposal N(x + s/2 M g, s M) */
+  double step_range;     /* R: each LMC step draws s log-uniformly from [s / R, s R] */
+  double adam_eps;       /* M = clamp(1 / (eps + sqrt(v)), lo, hi) */
+  double precond_lo, precond_hi;
+  double grad_bound;     /* |g| is truncated to this norm */
+  double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
+  double iso_prob;       /* probability of Kelemen's isotropic small step */
+  int cache_gradient;    /* stage 2 of the cache evaluates gradients (MALA with the cached M)
+                            instead of the cached walk */
+  double cache_step, cache_prior, cache_radius; /* the cached walk's (0: its defaults) */
+  int cache_k;           /* its neighbours (0: default) */
+  double cache_indep;    /* probability of the cache's independence proposal */
+  int cache_no_drift;    /* no drift from the cached first moment */
+  int delayed;           /* Langevin proposals get a gradient-free first test */
+} lmc_settings;
+
+/* The defaults of lmc_settings. */
+extern const lmc_settings lmc_settings_defaults;
+lmc_settings lmc_settings_default(void);
+
 /* Normalisation of an adapted M over the state's key coordinates (the
  * first k(x)): M / c with c their mean, geometric mean or maximum, so the
  * step s keeps the meaning it has for M = I. */
@@ -113,10 +144,10 @@ typedef struct lmc_kernel_params {
   int delayed;          /* delayed acceptance with the first-order screen (below) */
 } lmc_kernel_params;
 
-/* The parameters of render settings (rs->lmc_step, adam_eps, precond_lo/hi,
- * grad_bound, adapt), with s1 = 1/1024, s2 = sigma (mmlt's and pssmlt's) and the defaults
- * below for the rest. */
-lmc_kernel_params lmc_kernel_params_from_settings(const render_settings *rs);
+/* The parameters of lmc's settings (step, adam_eps, precond_lo/hi,
+ * grad_bound, adapt, delayed), with s1 = 1/1024, s2 = sigma (the small
+ * step's, --sigma) and the defaults below for the rest. */
+lmc_kernel_params lmc_kernel_params_from_settings(const lmc_settings *ls, double sigma);
 lmc_kernel_params lmc_kernel_params_default(void);
 
 #define LMC_STAT_KEYS 64 /* per-key statistics: keys 0 .. 63 (larger ones in the last) */
@@ -213,9 +244,9 @@ typedef struct lmc_cwalk_params {
 } lmc_cwalk_params;
 
 lmc_cwalk_params lmc_cwalk_params_default(void);
-/* The defaults with render settings' --cache-step, --cache-prior,
- * --cache-radius, --cache-k and --cache-drift where given. */
-lmc_cwalk_params lmc_cwalk_params_from_settings(const render_settings *rs);
+/* The defaults with lmc's --cache-step, --cache-prior, --cache-radius,
+ * --cache-k and --cache-drift where given. */
+lmc_cwalk_params lmc_cwalk_params_from_settings(const lmc_settings *ls);
 
 typedef struct lmc_cwalk_stats {
   int64_t proposed, accepted;

@@ -130,6 +130,9 @@ static const lmc_opt mcmc__opts[] = {
      "the chains' states: bdpt (a BDPT sample and one of its strategies, every length in one "
      "family), mmlt (one family per path length, a strategy coordinate) or pt (a path tracer's "
      "numbers)", NULL},
+    {"lmc-states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
+     mc_space_ids, SET_STATES, NULL, "the integrator's",
+     "the same as --states (the name it had for lmc alone)", NULL},
     {"largestep", LMC_OPT_DOUBLE, offsetof(render_settings, largestep), 0, 0, 1, NULL, NULL,
      SET_LARGESTEP, "P", NULL, "large-step probability", "pLarge largestepprob"},
     {"largestep-scale", LMC_OPT_DOUBLE, offsetof(render_settings, largestep_scale), 0, 0, 1e6, NULL,
@@ -164,7 +167,7 @@ static const lmc_opt mcmc__opts[] = {
 
 const lmc_opt_table mcmc_driver_options = {
     "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)", mcmc__opts,
-    (int)(sizeof mcmc__opts / sizeof mcmc__opts[0])};
+    (int)(sizeof mcmc__opts / sizeof mcmc__opts[0]), NULL, 0};
 
 /* --- splat records ----------------------------------------------------------- */
 

@@ -19,6 +19,11 @@ int mcmc_is_integrator(const char *name);
  * max tables into OUT; returns their count. */
 int mcmc_option_tables(const lmc_opt_table **OUT, int max);
 
+/* Sets the flag `name` (without dashes) of any table to value in *rs, as
+ * `--name value` on the command line would (lmc_opt_set). Fails with
+ * LMC_EINVAL and the message on an unknown flag or a bad value. */
+lmc_status mcmc_set(render_settings *rs, const char *name, const char *value, lmc_error *err);
+
 /* The settings of scene s: its own (s->settings), then its passed-on
  * <integrator>/<dpt> parameters through every table (the renderer's and
  * mcmc_option_tables'), into *OUT. Fails on a bad value (file, line). */

@@ -69,6 +69,18 @@ int mcmc_option_tables(const lmc_opt_table **OUT, int max) {
   return n;
 }
 
+lmc_status mcmc_set(render_settings *rs, const char *name, const char *value, lmc_error *err) {
+  const lmc_opt_table *t[32], *ot = NULL;
+  t[0] = &lmc_render_options;
+  int n = 1 + mcmc_option_tables(t + 1, 31);
+  const lmc_opt *o = lmc_opt_find(t, n, name, &ot);
+  if (!o) return lmc_error_set(err, LMC_EINVAL, NULL, 0, "unknown flag --%s", name);
+  char msg[512];
+  if (!lmc_opt_set(ot, o, value, rs, msg, sizeof msg))
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s", msg);
+  return LMC_OK;
+}
+
 lmc_status mcmc_scene_settings(const scene *s, render_settings *OUT, lmc_error *err) {
   const lmc_opt_table *t[32];
   t[0] = &lmc_render_options;

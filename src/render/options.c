@@ -13,7 +13,7 @@
 #include "render/sampler.h"
 #include "render/scene.h"
 
-#define OPT_FIELD(rs, off, type) ((type *)((char *)(rs) + (off)))
+#define OPT_FIELD(base, off, type) ((type *)((char *)(base) + (off)))
 
 static const char *const opt__samplers[] = {"independent", "sobol", NULL};
 static const int opt__sampler_values[] = {LMC_SAMPLER_INDEPENDENT, LMC_SAMPLER_SOBOL};
@@ -41,13 +41,17 @@ static const lmc_opt opt__render[] = {
      "S", "none", "also write OUT-<seconds>s.exr every S seconds", NULL},
 };
 
-const lmc_opt_table lmc_render_options = {"Rendering", opt__render,
-                                          (int)(sizeof opt__render / sizeof opt__render[0])};
+const lmc_opt_table lmc_render_options = {
+    "Rendering", opt__render, (int)(sizeof opt__render / sizeof opt__render[0]), NULL, 0};
 
-const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name) {
+const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name,
+                            const lmc_opt_table **OUT_table) {
   for (int t = 0; t < n; t++)
     for (int i = 0; tables[t] && i < tables[t]->n; i++)
-      if (!strcmp(tables[t]->opts[i].name, name)) return &tables[t]->opts[i];
+      if (!strcmp(tables[t]->opts[i].name, name)) {
+        if (OUT_table) *OUT_table = tables[t];
+        return &tables[t]->opts[i];
+      }
   return NULL;
 }
 
@@ -82,7 +86,7 @@ static void opt__choices(const lmc_opt *o, char *out, size_t n) {
                           o->choices[i]);
 }
 
-int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *msg, size_t n) {
+int lmc_opt_parse(const lmc_opt *o, const char *s, void *base, char *msg, size_t n) {
   int64_t iv;
   double dv;
   switch (o->kind) {
@@ -92,15 +96,15 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *ms
       snprintf(msg, n, "flag --%s: '%s' is not an integer in [%.0f, %.0f]", o->name, s, o->lo, o->hi);
       return 0;
     }
-    if (o->kind == LMC_OPT_INT) *OPT_FIELD(rs, o->offset, int) = (int)iv;
-    else *OPT_FIELD(rs, o->offset, int64_t) = iv;
+    if (o->kind == LMC_OPT_INT) *OPT_FIELD(base, o->offset, int) = (int)iv;
+    else *OPT_FIELD(base, o->offset, int64_t) = iv;
     break;
   case LMC_OPT_DOUBLE:
     if (!opt__number(s, o->lo, o->hi, &dv)) {
       snprintf(msg, n, "flag --%s: '%s' is not a number in [%g, %g]", o->name, s, o->lo, o->hi);
       return 0;
     }
-    *OPT_FIELD(rs, o->offset, double) = dv;
+    *OPT_FIELD(base, o->offset, double) = dv;
     break;
   case LMC_OPT_CHOICE: {
     int i = 0;
@@ -111,7 +115,7 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *ms
       snprintf(msg, n, "flag --%s: '%s' is not one of %s", o->name, s, list);
       return 0;
     }
-    *OPT_FIELD(rs, o->offset, int) = o->values ? o->values[i] : i;
+    *OPT_FIELD(base, o->offset, int) = o->values ? o->values[i] : i;
     break;
   }
   case LMC_OPT_PAIR: {
@@ -130,13 +134,55 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *ms
                o->name, s, o->arg ? o->arg : "A,B", o->lo, o->hi);
       return 0;
     }
-    *OPT_FIELD(rs, o->offset, double) = x;
-    *OPT_FIELD(rs, o->offset2, double) = y;
+    *OPT_FIELD(base, o->offset, double) = x;
+    *OPT_FIELD(base, o->offset2, double) = y;
     break;
   }
   }
-  rs->set |= o->set_bit;
+  if (o->set_bit) ((render_settings *)base)->set |= o->set_bit;
   return 1;
+}
+
+int lmc_opt_set(const lmc_opt_table *t, const lmc_opt *o, const char *s, render_settings *rs,
+                char *msg, size_t n) {
+  if (!t->defaults) return lmc_opt_parse(o, s, rs, msg, n);
+  /* A plugin's own: checked on a copy of its defaults, kept as text. */
+  char scratch[4096];
+  if (t->size > sizeof scratch) {
+    snprintf(msg, n, "flag --%s: its table's settings are too large", o->name);
+    return 0;
+  }
+  memcpy(scratch, t->defaults, t->size);
+  if (!lmc_opt_parse(o, s, scratch, msg, n)) return 0;
+  if (strlen(o->name) >= sizeof rs->params[0].name || strlen(s) >= sizeof rs->params[0].value) {
+    snprintf(msg, n, "flag --%s: '%s' is too long", o->name, s);
+    return 0;
+  }
+  int k = 0;
+  while (k < rs->n_params && strcmp(rs->params[k].name, o->name)) k++;
+  if (k == rs->n_params) {
+    if (k == LMC_MAX_PARAMS) {
+      snprintf(msg, n, "flag --%s: more than %d plugin settings", o->name, LMC_MAX_PARAMS);
+      return 0;
+    }
+    rs->n_params++;
+  }
+  snprintf(rs->params[k].name, sizeof rs->params[k].name, "%s", o->name);
+  snprintf(rs->params[k].value, sizeof rs->params[k].value, "%s", s);
+  return 1;
+}
+
+lmc_status lmc_opt_read(const lmc_opt_table *t, const render_settings *rs, void *OUT,
+                        lmc_error *err) {
+  memcpy(OUT, t->defaults, t->size);
+  for (int k = 0; k < rs->n_params; k++)
+    for (int i = 0; i < t->n; i++) {
+      if (strcmp(t->opts[i].name, rs->params[k].name)) continue;
+      char msg[512];
+      if (!lmc_opt_parse(&t->opts[i], rs->params[k].value, OUT, msg, sizeof msg))
+        return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s", msg);
+    }
+  return LMC_OK;
 }
 
 /* 1 when `name` is one of o's names in a scene. */
@@ -157,9 +203,10 @@ lmc_status lmc_opt_apply_scene(const lmc_opt_table *const *tables, int n, const 
   for (int k = 0; k < s->n_params; k++) {
     const scene_param *p = &s->params[k];
     const lmc_opt *o = NULL;
+    const lmc_opt_table *ot = NULL;
     for (int t = 0; t < n && !o; t++)
       for (int i = 0; tables[t] && i < tables[t]->n && !o; i++)
-        if (opt__scene_name(&tables[t]->opts[i], p->name)) o = &tables[t]->opts[i];
+        if (opt__scene_name(&tables[t]->opts[i], p->name)) o = &tables[t]->opts[i], ot = tables[t];
     if (!o) {
       lmc_warn(p->file, p->line, "parameter '%s' is not used by lmc: ignored", p->name);
       continue;
@@ -170,7 +217,7 @@ lmc_status lmc_opt_apply_scene(const lmc_opt_table *const *tables, int n, const 
       for (int i = 0; o->choices[i]; i++)
         if (!strcmp(o->choices[i], "on")) v = !strcmp(p->value, "true") ? "on" : "off";
     char msg[512];
-    if (!lmc_opt_parse(o, v, rs, msg, sizeof msg)) {
+    if (!lmc_opt_set(ot, o, v, rs, msg, sizeof msg)) {
       const char *why = strstr(msg, ": ");
       return lmc_error_set(err, LMC_EPARSE, p->file, p->line, "parameter '%s' (--%s): %s",
                            p->name, o->name, why ? why + 2 : msg);
@@ -179,19 +226,19 @@ lmc_status lmc_opt_apply_scene(const lmc_opt_table *const *tables, int n, const 
   return LMC_OK;
 }
 
-void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n) {
+void lmc_opt_format(const lmc_opt *o, const void *rs, char *out, size_t n) {
   if (o->def) {
     snprintf(out, n, "%s", o->def);
     return;
   }
   switch (o->kind) {
-  case LMC_OPT_INT: snprintf(out, n, "%d", *OPT_FIELD((render_settings *)rs, o->offset, int)); break;
+  case LMC_OPT_INT: snprintf(out, n, "%d", *OPT_FIELD((void *)rs, o->offset, int)); break;
   case LMC_OPT_INT64:
-    snprintf(out, n, "%lld", (long long)*OPT_FIELD((render_settings *)rs, o->offset, int64_t));
+    snprintf(out, n, "%lld", (long long)*OPT_FIELD((void *)rs, o->offset, int64_t));
     break;
-  case LMC_OPT_DOUBLE: snprintf(out, n, "%g", *OPT_FIELD((render_settings *)rs, o->offset, double)); break;
+  case LMC_OPT_DOUBLE: snprintf(out, n, "%g", *OPT_FIELD((void *)rs, o->offset, double)); break;
   case LMC_OPT_CHOICE: {
-    int v = *OPT_FIELD((render_settings *)rs, o->offset, int);
+    int v = *OPT_FIELD((void *)rs, o->offset, int);
     const char *name = "?";
     for (int i = 0; o->choices[i]; i++)
       if ((o->values ? o->values[i] : i) == v) name = o->choices[i];
@@ -199,8 +246,8 @@ void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size
     break;
   }
   case LMC_OPT_PAIR:
-    snprintf(out, n, "%g,%g", *OPT_FIELD((render_settings *)rs, o->offset, double),
-             *OPT_FIELD((render_settings *)rs, o->offset2, double));
+    snprintf(out, n, "%g,%g", *OPT_FIELD((void *)rs, o->offset, double),
+             *OPT_FIELD((void *)rs, o->offset2, double));
     break;
   }
 }
@@ -221,13 +268,14 @@ static void opt__usage(const lmc_opt *o, char *out, size_t n) {
 #define OPT_HELP_WIDTH 92
 
 void lmc_opt_help(FILE *f, const lmc_opt_table *t) {
-  render_settings d = render_settings_default();
+  render_settings rd = render_settings_default();
+  const void *d = t->defaults ? t->defaults : (const void *)&rd;
   fprintf(f, "%s:\n", t->title);
   for (int i = 0; i < t->n; i++) {
     const lmc_opt *o = &t->opts[i];
     char use[128], def[96], text[1024];
     opt__usage(o, use, sizeof use);
-    lmc_opt_format(o, &d, def, sizeof def);
+    lmc_opt_format(o, d, def, sizeof def);
     snprintf(text, sizeof text, "%s (default %s)", o->help, def);
     /* The flag, then the text wrapped at OPT_HELP_WIDTH from column OPT_HELP_COL. */
     int col = fprintf(f, "  %s", use);
@@ -255,13 +303,14 @@ void lmc_opt_help(FILE *f, const lmc_opt_table *t) {
 }
 
 void lmc_opt_markdown(FILE *f, const lmc_opt_table *t) {
-  render_settings d = render_settings_default();
+  render_settings rd = render_settings_default();
+  const void *d = t->defaults ? t->defaults : (const void *)&rd;
   fprintf(f, "| flag | meaning | default |\n| --- | --- | --- |\n");
   for (int i = 0; i < t->n; i++) {
     const lmc_opt *o = &t->opts[i];
     char use[128], def[96];
     opt__usage(o, use, sizeof use);
-    lmc_opt_format(o, &d, def, sizeof def);
+    lmc_opt_format(o, d, def, sizeof def);
     fputs("| `", f);
     for (const char *c = use; *c; c++) fputs(*c == '|' ? "\\|" : (char[2]){*c, 0}, f);
     fputs("` | ", f);

@@ -9,6 +9,13 @@
  *
  * A flag is given as `--name value` or `--name=value`. A bad value is
  * refused with a message that names the flag and what it accepts.
+ *
+ * Where a setting's value lives. The renderer's and the MCMC driver's
+ * tables set fields of render_settings. A plugin's own table (an
+ * integrator's) sets fields of its own struct, which render/ never sees:
+ * its values travel in render_settings.params as checked text (name,
+ * value), and the plugin reads them into its struct with lmc_opt_read when
+ * it starts.
  */
 #ifndef LMC_RENDER_OPTIONS_H
 #define LMC_RENDER_OPTIONS_H
@@ -49,6 +56,9 @@ typedef struct lmc_opt_table {
   const char *title; /* "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)" */
   const lmc_opt *opts;
   int n;
+  const void *defaults; /* a plugin's own struct with its defaults (offsets are into it), or
+                           NULL: the offsets are into render_settings */
+  size_t size;          /* sizeof that struct */
 } lmc_opt_table;
 
 /* The renderer's own flags (options.c): --spp, --time, --threads, --seed,
@@ -56,16 +66,32 @@ typedef struct lmc_opt_table {
 extern const lmc_opt_table lmc_render_options;
 
 /* The option `name` (without dashes) among tables[0 .. n-1], the first
- * that has it; NULL when none does. */
-const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name);
+ * that has it, and its table in *OUT_table (may be NULL); NULL when none
+ * does. */
+const lmc_opt *lmc_opt_find(const lmc_opt_table *const *tables, int n, const char *name,
+                            const lmc_opt_table **OUT_table);
 
-/* Parses s as the value of option o into *rs and marks its set bit.
+/* Parses s as the value of option o into the struct at base (render_settings
+ * or the table's own) and marks its set bit (render_settings only).
  * Returns 1, or 0 with a message naming the flag and what it accepts in
  * msg (room for n). */
-int lmc_opt_parse(const lmc_opt *o, const char *s, render_settings *rs, char *msg, size_t n);
+int lmc_opt_parse(const lmc_opt *o, const char *s, void *base, char *msg, size_t n);
 
-/* The option's value in rs as the help shows it (o->def when given). */
-void lmc_opt_format(const lmc_opt *o, const render_settings *rs, char *out, size_t n);
+/* Sets option o of table t to s in *rs: into its field (the renderer's
+ * and driver's tables) or, checked, into rs->params (a plugin's own).
+ * Returns 1, or 0 with a message as lmc_opt_parse. */
+int lmc_opt_set(const lmc_opt_table *t, const lmc_opt *o, const char *s, render_settings *rs,
+                char *msg, size_t n);
+
+/* A plugin's settings: t's defaults, then rs->params of t's options, into
+ * OUT (t->size bytes). Fails (LMC_EINVAL, the flag named) on a value that
+ * does not parse. */
+lmc_status lmc_opt_read(const lmc_opt_table *t, const render_settings *rs, void *OUT,
+                        lmc_error *err);
+
+/* The option's value in the struct at base as the help shows it (o->def
+ * when given). */
+void lmc_opt_format(const lmc_opt *o, const void *base, char *out, size_t n);
 
 /* Applies the scene's passed-on parameters (scene.h's params: the
  * <integrator> and <dpt> values the loader did not read) to *rs with the

@@ -19,7 +19,6 @@ enum {
   SET_LARGESTEP = 1 << 5,
   SET_SIGMA = 1 << 6,
   SET_MINDEPTH = 1 << 7,
-  SET_ADAPT = 1 << 8,
   SET_BOOTSTRAP = 1 << 9,
   SET_DIRECT = 1 << 10,
   SET_SAMPLER = 1 << 11,
@@ -30,14 +29,6 @@ enum {
   SET_CHAINS = 1 << 16
 };
 
-/* LMC preconditioner adaptation (--adapt). */
-typedef enum lmc_adapt {
-  LMC_ADAPT_NONE = 0, /* plain MALA, M = I */
-  LMC_ADAPT_ADAM,     /* Adam along the chain, used directly (biased; for comparison) */
-  LMC_ADAPT_DIMINISH, /* Adam whose influence fades as 1/t (asymptotically unbiased) */
-  LMC_ADAPT_CACHE     /* Adam in stage 1, frozen k-d tree cache in stage 2 (default) */
-} lmc_adapt;
-
 /* The state space of the MCMC integrators' chains (--states; src/lmc/space.h). */
 typedef enum mcmc_states {
   MCMC_STATES_DEFAULT = 0, /* the integrator's own: pssmlt pt, mmlt per-length families */
@@ -46,6 +37,13 @@ typedef enum mcmc_states {
   MCMC_STATES_BDPT         /* one family over every length; a state is a BDPT sample's numbers
                               and one of its strategies (mcmc.c) */
 } mcmc_states;
+
+/* A plugin's own setting as checked text (render/options.h). */
+#define LMC_MAX_PARAMS 48
+typedef struct lmc_param {
+  char name[32];
+  char value[96];
+} lmc_param;
 
 typedef struct render_settings {
   unsigned set;          /* SET_* bits of the fields chosen explicitly */
@@ -80,23 +78,9 @@ typedef struct render_settings {
    * the seconds since the render began; main.c writes it. NULL: none. */
   void (*snapshot_fn)(void *ctx, const struct film *f, double seconds);
   void *snapshot_ctx;
-  /* LMC (src/lmc/mala.c, adam.c, gcache.c) */
-  lmc_adapt adapt;       /* preconditioner adaptation */
-  double lmc_step;       /* s: proposal N(x + s/2 M g, s M) */
-  double step_range;     /* R: each LMC step draws s log-uniformly from [s / R, s R] */
-  double adam_eps;       /* M = clamp(1 / (eps + sqrt(v)), lo, hi) */
-  double precond_lo, precond_hi;
-  double grad_bound;     /* |g| is truncated to this norm */
-  double cache_fraction; /* --adapt cache: share of the budget spent building the cache */
-  double iso_prob;       /* probability of Kelemen's isotropic small step in lmc */
-  double h2mc_sigma;     /* h2mc: the prior's standard deviation (0: 0.01, h2mc.h) */
-  int cache_gradient;    /* --cache-gradient on: stage 2 of the cache evaluates gradients (MALA
-                            with the cached M) instead of the cached walk (lmc_kernel.h) */
-  double cache_step, cache_prior, cache_radius; /* the cached walk's (0: its defaults) */
-  int cache_k;           /* its neighbours (0: default) */
-  double cache_indep;    /* --adapt cache: probability of the cache's independence proposal */
-  int cache_no_drift;    /* --cache-drift off: no drift from the cached first moment */
-  int delayed;           /* --delayed on: Langevin proposals get a gradient-free first test (off) */
+  /* The plugins' own settings (an integrator's table, render/options.h). */
+  lmc_param params[LMC_MAX_PARAMS];
+  int n_params;
   int mala;              /* the <dpt> block asked for MALA */
   int h2mc;              /* the <dpt> block asked for H2MC */
   int quiet;             /* no progress bar */
@@ -119,15 +103,6 @@ static inline render_settings render_settings_default(void) {
   s.bootstrap = 0;
   s.bootstrap_error = 0.01;
   s.direct_separate = 1; /* as Mitsuba's pssmlt and the LMC paper's code; see README */
-  s.adapt = LMC_ADAPT_CACHE;
-  s.lmc_step = 1e-5;
-  s.step_range = 1.0;
-  s.adam_eps = 1e-8;
-  s.precond_lo = 1e-3;
-  s.precond_hi = 1e3;
-  s.grad_bound = 1e3;
-  s.cache_fraction = 0.1;
-  s.iso_prob = 0.4;
   return s;
 }
 
