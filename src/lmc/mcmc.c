@@ -6,7 +6,8 @@
  * families, the integrator's run, the bootstrap and b, the chains'
  * allocation and starting states, the rounds with their splats, snapshots
  * and budgets, and the statistics; each is a function below, over one
- * mcmc_render.
+ * mcmc_render (mcmc_internal.h). The bootstrap and the normalisation b
+ * are in mcmc_b.c.
  *
  * Normalisation. For a family g with target f_g, b_g = E[f_g(u)] over
  * uniform u is estimated by the bootstrap, or by the space's own
@@ -96,22 +97,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/bootstrap.h"
-#include "lmc/chain.h"
-#include "lmc/method.h"
-#include "lmc/space.h"
-
-#define MCMC_CHAINS 256
-#define MCMC_MIN_CHAINS 16 /* per family: one stuck chain must not carry a whole length */
-#define MCMC_GAUSS_SIGMA 0.01 /* --small-step gauss: default standard deviation (the LMC
-                                 paper's implementation's perturbStdDev) */
-#define MCMC_LARGESTEP_SCALE_AFTER 0.1 /* --largestep-scale applies after this share of
-                                          the chains' budget (the paper's LS_RATIO) */
-#define MCMC_ROUND 64
-#define MCMC_BOOT_BATCH 8192
-#define MCMC_BOOT_CAP (1 << 22) /* bootstrap samples in all, over the families */
-#define MCMC_EXPECT_SEQ 0x5eed0fb0075a3e11ull /* eval_expect's bootstrap streams: (seed, seq ^ this) */
-#define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* per-family splat buffers, at most */
+#include "lmc/mcmc_internal.h"
 
 int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;
@@ -171,21 +157,6 @@ const lmc_opt_table mcmc_driver_options = {
 
 /* --- splat records ----------------------------------------------------------- */
 
-typedef struct mcmc_splat {
-  double rx, ry;
-  rgb v;
-} mcmc_splat;
-
-typedef struct mcmc_chain_slot {
-  mc_chain *chain;
-  int family;
-  double scale;     /* b_g / n_g */
-  uint64_t start_seq; /* bootstrap sample the chain started from */
-  mcmc_splat *rec;  /* this round's splats */
-  int n_rec, cap_rec;
-  int rec_failed;   /* a splat was dropped: no memory to grow rec */
-} mcmc_chain_slot;
-
 static void mcmc__record(void *ctx, const mc_value *v, double weight) {
   mcmc_chain_slot *sl = ctx;
   if (sl->n_rec == sl->cap_rec) {
@@ -225,167 +196,6 @@ static void mcmc__splat_rows(const film *f, double *splat, const film_filter *fi
       s[1] += w * r->v.g;
       s[2] += w * r->v.b;
     }
-  }
-}
-
-/* --- one render ------------------------------------------------------------------ */
-
-typedef struct mcmc_family {
-  const mc_space_family *sf; /* borrowed from the space: its target */
-  mc_boot bt;         /* the bootstrap's samples and estimate of b (bootstrap.h) */
-  double b_ref, b_ref_var; /* b refined with the chains' large steps, and its variance */
-  int64_t n_large;    /* large-step proposals counted in b_ref */
-  double *splat;      /* per-family buffers: this family's splats, not yet times b (owned) */
-  int n_chains, first_chain;
-  int m_round;        /* mutations per chain in a full round (1 .. MCMC_ROUND; see Allocation) */
-  int64_t done;       /* mutations per chain of this family so far */
-} mcmc_family;
-
-/* How the splats meet b (see Normalisation above). */
-typedef enum mcmc_norm {
-  MCMC_NORM_BOOT = 0, /* b from before the chains baked into each splat (no buffer memory) */
-  MCMC_NORM_SCALE,    /* one family: refined b in film.splat_scale */
-  MCMC_NORM_BUFFERS   /* per-family buffers, summed times refined b_g */
-} mcmc_norm;
-
-typedef struct mcmc_render {
-  const scene *s;
-  const render_settings *rs; /* the caller's */
-  render_settings crs;       /* the chains': mindepth after the direct pass, sigma resolved */
-  film *out;
-  render_stats *st;
-  progress bar;
-  double t0;
-  int timed, by_spp, nthreads;
-  const mc_method *M;
-  void *mrun;
-  mc_method_setup setup;
-  mc_space sp;
-  int n_fam;
-  mcmc_family *fam;
-  mcmc_chain_slot *slots;
-  int n_slots;
-  render_counters *cnt; /* per thread */
-  mcmc_norm norm;
-  int64_t shared_paths; /* samples of the space's own estimate of b */
-  double b_total, b_var; /* b before the chains */
-  int64_t per_chain, done_per_chain;
-  int ls_pending;       /* --largestep-scale not yet in force */
-  double chain_seconds;
-} mcmc_render;
-
-static uint64_t mcmc__boot_seq(int g, int64_t j) {
-  return rng_hash64(((uint64_t)(g + 1) << 44) ^ (uint64_t)j);
-}
-static uint64_t mcmc__chain_seq(int g, int i) {
-  return rng_hash64(((uint64_t)(g + 1) << 44) ^ (1ull << 43) ^ (uint64_t)i);
-}
-
-/* mc_boot_draw_fn over the families: draws bootstrap samples
- * [bt.n, to[g]) of every family g in parallel (each sample from its own
- * stream, so the values do not depend on threads); the cost is rays. */
-static void mcmc__bootstrap_draw(void *ctx, mc_boot *boot, int n_fam, const int64_t *to) {
-  mcmc_render *R = ctx;
-  for (int g = 0; g < n_fam; g++) {
-    const mc_target *T = &R->fam[g].sf->target;
-    mc_boot *B = &boot[g];
-    int64_t from = B->n;
-    const uint64_t seed = R->crs.seed;
-#pragma omp parallel num_threads(R->nthreads)
-    {
-      void *sc = T->scratch_create(T);
-      int tid = omp_get_thread_num();
-#pragma omp for schedule(dynamic, 256)
-      for (int64_t j = from; j < to[g]; j++) {
-        B->f[j] = sc ? mc_eval_independent(T, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
-        if (B->has_fe) {
-          /* An independent sample for b (the one above picks starting states). */
-          lmc_indep_sampler smp;
-          indep_sampler_init(&smp, seed, mcmc__boot_seq(g, j) ^ MCMC_EXPECT_SEQ);
-          double v = sc ? T->eval_expect(T, sc, &smp.base) : 0.0;
-          B->fe[j] = v >= 0.0 && isfinite(v) ? v : 0.0;
-        }
-      }
-      if (sc) {
-        int64_t rays = T->scratch_rays(sc);
-#pragma omp atomic
-        R->cnt[tid].rays += rays;
-#pragma omp atomic
-        B->cost += (double)rays;
-      }
-      T->scratch_destroy(sc);
-    }
-  }
-}
-
-/* Mean and variance of the mean of n samples with sums s, s2. */
-static void mcmc__mean_var(double s, double s2, double n, double *OUT_mean, double *OUT_var) {
-  double mean = n > 0.0 ? s / n : 0.0;
-  double var = n > 1.0 ? fmax(0.0, (s2 - n * mean * mean) / (n - 1.0)) : 0.0;
-  *OUT_mean = mean;
-  *OUT_var = n > 0.0 ? var / n : 0.0;
-}
-
-/* b_ref of every family with chains: the bootstrap's samples pooled with
- * its chains' large-step tallies (on spaces with pool_large), added in
- * chain order (deterministic). Both are unbiased samples of b_g, so the
- * pooled mean is unbiased. A space with its own estimator of b keeps it
- * alone: there a large step is one strategy's value, whose tail is far
- * heavier (on ring-caustics-glass one large step of length 10 took that
- * length's b from 46 to 3657, and the render's relative MSE from 0.04 to
- * 4.2; on the torus pooling lowered b in each of four runs looked at:
- * unbiased, but a typical run darker). (An inverse-variance weighting of
- * the two means was tried and dropped: with heavy tails a low estimate
- * comes with a low estimated variance, and on ring-caustics it pulled the
- * long lengths' b far down.) Returns the sum of b_ref over the families
- * and its variance in OUT_var. */
-static double mcmc__refine_b(mcmc_render *R, double *OUT_var) {
-  double b = 0.0, v = 0.0;
-  for (int g = 0; g < R->n_fam; g++) {
-    mcmc_family *F = &R->fam[g];
-    double s = 0.0, s2 = 0.0;
-    int64_t nl = 0;
-    for (int i = 0; i < F->n_chains && R->sp.pool_large; i++) {
-      const mc_chain *c = R->slots[F->first_chain + i].chain;
-      for (int q = 0; q < c->n_kernels; q++) {
-        if (c->kernels[q].kind != MC_KERNEL_LARGE) continue;
-        s += c->stats[q].f_sum;
-        s2 += c->stats[q].f_sum2;
-        nl += c->stats[q].proposed;
-      }
-    }
-    mcmc__mean_var(F->bt.s + s, F->bt.s2 + s2, (double)(F->bt.n_est + nl), &F->b_ref,
-                   &F->b_ref_var);
-    F->n_large = nl;
-    b += F->b_ref;
-    v += F->b_ref_var;
-  }
-  *OUT_var = v;
-  return b;
-}
-
-/* Puts the chains' image (done mutations per chain) into the film with the
- * refined b: one family through splat_scale; per-family buffers, when
- * compose is set, by summing b_g times each buffer into the film's splats. */
-static void mcmc__publish(mcmc_render *R, int64_t done, int compose) {
-  film *out = R->out;
-  if (done <= 0) return;
-  double v;
-  if (R->norm != MCMC_NORM_BOOT) mcmc__refine_b(R, &v);
-  if (R->norm != MCMC_NORM_BUFFERS) {
-    out->splat_scale = (R->norm == MCMC_NORM_SCALE ? R->fam[0].b_ref : 1.0) / (double)done;
-    return;
-  }
-  /* Per-family buffers: each normalised by its own chains' mutations. */
-  out->splat_scale = 1.0;
-  if (!compose) return;
-  int64_t n = 3 * (int64_t)out->width * out->height;
-  memset(out->splat, 0, (size_t)n * sizeof(double));
-  for (int g = 0; g < R->n_fam; g++) {
-    const mcmc_family *F = &R->fam[g];
-    if (!F->splat || F->done <= 0) continue;
-    double b = F->b_ref / (double)F->done;
-    for (int64_t i = 0; i < n; i++) out->splat[i] += b * F->splat[i];
   }
 }
 
@@ -488,56 +298,6 @@ static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
                                        : rs->sigma;
   R->setup = (mc_method_setup){R->s, &R->crs, &R->sp};
   if (R->M->create) return R->M->create(&R->mrun, &R->setup, err);
-  return LMC_OK;
-}
-
-/* Bootstrap (bootstrap.h): the pilot (or all of --bootstrap N), then the
- * main phase planned from it, in at most a tenth of the time left (after
- * --direct separate's pt pass), at most MCMC_BOOT_CAP samples in all; a
- * space with its own estimator of b gets a pilot per family for the
- * starting states alone, then estimates b in the rest of that time. */
-static lmc_status mcmc__bootstrap(mcmc_render *R, lmc_error *err) {
-  const render_settings *rs = R->rs;
-  const double t_boot = omp_get_wtime();
-  progress_phase(&R->bar, "bootstrap", R->timed ? (t_boot - R->t0) / rs->time_limit : 0.0);
-  mc_boot_params bp = {
-      .fixed = R->sp.estimate_b ? MCMC_BOOT_BATCH : rs->bootstrap > 0 ? rs->bootstrap : 0,
-      .batch = MCMC_BOOT_BATCH,
-      .cap_total = MCMC_BOOT_CAP,
-      .rel_err = rs->bootstrap_error,
-      .seconds = R->timed ? 0.1 * (rs->time_limit - (t_boot - R->t0)) : INFINITY,
-      .stop = render_stop_signal,
-  };
-  mc_boot *boot = malloc((size_t)(R->n_fam > 0 ? R->n_fam : 1) * sizeof(mc_boot));
-  int failed = !boot;
-  if (boot) {
-    for (int g = 0; g < R->n_fam; g++) boot[g] = R->fam[g].bt, boot[g].has_fe = 0;
-    failed = mc_boot_run(boot, R->n_fam, &bp, mcmc__bootstrap_draw, R);
-    if (!failed && R->sp.estimate_b) {
-      double left = R->timed ? bp.seconds - (omp_get_wtime() - t_boot) : INFINITY;
-      mc_space_b_request rq = {rs->bootstrap > 0 ? rs->bootstrap : 0,
-                               R->timed ? fmax(left, 0.0) : INFINITY, rs->bootstrap_error,
-                               MCMC_BOOT_CAP, rs->seed, R->nthreads};
-      R->shared_paths = R->sp.estimate_b(&R->sp, boot, &rq, R->cnt);
-      failed = R->shared_paths < 0;
-    }
-    for (int g = 0; g < R->n_fam; g++) R->fam[g].bt = boot[g];
-    free(boot);
-  }
-  if (failed) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bootstrap");
-  R->b_total = R->b_var = 0.0;
-  for (int g = 0; g < R->n_fam; g++) {
-    mcmc_family *F = &R->fam[g];
-    F->b_ref = F->bt.b;
-    F->b_ref_var = F->bt.b_var;
-    F->n_large = 0;
-    R->b_total += F->bt.b, R->b_var += F->bt.b_var;
-  }
-  render_stats *st = R->st;
-  st->mcmc_b_boot = st->mcmc_b = R->b_total;
-  st->mcmc_boot_paths = R->shared_paths;
-  for (int g = 0; g < R->n_fam; g++) st->mcmc_boot_paths += R->fam[g].bt.n;
-  st->mcmc_b_boot_se = st->mcmc_b_se = sqrt(R->b_var);
   return LMC_OK;
 }
 

@@ -1,0 +1,108 @@
+/*
+ * mcmc_internal.h: the MCMC driver's own types, shared by its files:
+ * mcmc.c (the flow of a render) and mcmc_b.c (the bootstrap and the
+ * normalisation b). Not part of the API.
+ */
+#ifndef LMC_MCMC_MCMC_INTERNAL_H
+#define LMC_MCMC_MCMC_INTERNAL_H
+
+#include <stdint.h>
+
+#include "lmc/bootstrap.h"
+#include "lmc/chain.h"
+#include "lmc/method.h"
+#include "lmc/space.h"
+#include "render/film.h"
+#include "render/integrator.h"
+
+#define MCMC_CHAINS 256
+#define MCMC_MIN_CHAINS 16 /* per family: one stuck chain must not carry a whole length */
+#define MCMC_GAUSS_SIGMA 0.01 /* --small-step gauss: default standard deviation (the LMC
+                                 paper's implementation's perturbStdDev) */
+#define MCMC_LARGESTEP_SCALE_AFTER 0.1 /* --largestep-scale applies after this share of
+                                          the chains' budget (the paper's LS_RATIO) */
+#define MCMC_ROUND 64
+#define MCMC_BOOT_BATCH 8192
+#define MCMC_BOOT_CAP (1 << 22) /* bootstrap samples in all, over the families */
+#define MCMC_EXPECT_SEQ 0x5eed0fb0075a3e11ull /* eval_expect's bootstrap streams: (seed, seq ^ this) */
+#define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* per-family splat buffers, at most */
+
+/* --- a chain's splat records --------------------------------------------------- */
+
+typedef struct mcmc_splat {
+  double rx, ry;
+  rgb v;
+} mcmc_splat;
+
+typedef struct mcmc_chain_slot {
+  mc_chain *chain;
+  int family;
+  double scale;     /* b_g / n_g */
+  uint64_t start_seq; /* bootstrap sample the chain started from */
+  mcmc_splat *rec;  /* this round's splats */
+  int n_rec, cap_rec;
+  int rec_failed;   /* a splat was dropped: no memory to grow rec */
+} mcmc_chain_slot;
+
+/* --- one render ------------------------------------------------------------------ */
+
+typedef struct mcmc_family {
+  const mc_space_family *sf; /* borrowed from the space: its target */
+  mc_boot bt;         /* the bootstrap's samples and estimate of b (bootstrap.h) */
+  double b_ref, b_ref_var; /* b refined with the chains' large steps, and its variance */
+  int64_t n_large;    /* large-step proposals counted in b_ref */
+  double *splat;      /* per-family buffers: this family's splats, not yet times b (owned) */
+  int n_chains, first_chain;
+  int m_round;        /* mutations per chain in a full round (1 .. MCMC_ROUND; see Allocation) */
+  int64_t done;       /* mutations per chain of this family so far */
+} mcmc_family;
+
+/* How the splats meet b (see Normalisation above). */
+typedef enum mcmc_norm {
+  MCMC_NORM_BOOT = 0, /* b from before the chains baked into each splat (no buffer memory) */
+  MCMC_NORM_SCALE,    /* one family: refined b in film.splat_scale */
+  MCMC_NORM_BUFFERS   /* per-family buffers, summed times refined b_g */
+} mcmc_norm;
+
+typedef struct mcmc_render {
+  const scene *s;
+  const render_settings *rs; /* the caller's */
+  render_settings crs;       /* the chains': mindepth after the direct pass, sigma resolved */
+  film *out;
+  render_stats *st;
+  progress bar;
+  double t0;
+  int timed, by_spp, nthreads;
+  const mc_method *M;
+  void *mrun;
+  mc_method_setup setup;
+  mc_space sp;
+  int n_fam;
+  mcmc_family *fam;
+  mcmc_chain_slot *slots;
+  int n_slots;
+  render_counters *cnt; /* per thread */
+  mcmc_norm norm;
+  int64_t shared_paths; /* samples of the space's own estimate of b */
+  double b_total, b_var; /* b before the chains */
+  int64_t per_chain, done_per_chain;
+  int ls_pending;       /* --largestep-scale not yet in force */
+  double chain_seconds;
+} mcmc_render;
+
+/* The streams of family g's bootstrap sample j and of its chain i. */
+uint64_t mcmc__boot_seq(int g, int64_t j);
+uint64_t mcmc__chain_seq(int g, int i);
+
+/* The bootstrap and b before the chains (mcmc_b.c). */
+lmc_status mcmc__bootstrap(mcmc_render *R, lmc_error *err);
+
+/* b refined with the chains' large steps: the sum over the families, its
+ * variance in OUT_var (mcmc_b.c). */
+double mcmc__refine_b(mcmc_render *R, double *OUT_var);
+
+/* The chains' image after `done` mutations per chain into the film
+ * (compose: per-family buffers summed in) (mcmc_b.c). */
+void mcmc__publish(mcmc_render *R, int64_t done, int compose);
+
+#endif
