@@ -102,7 +102,7 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
 
   /* The Hessian: each tangent slot's coordinate and factor, then the
    * slots kept (inside their stream's block) in slot order. */
-  int coord[MC_HESS_MAX], keep[MC_HESS_MAX], nd = pe.n_diff, hn = 0;
+  int coord[MC_HESS_MAX], nd = pe.n_diff;
   double m[MC_HESS_MAX];
   for (int j = 0; j < nd; j++) coord[j] = -1;
   for (int i = 0; i < pe.n_coords; i++) {
@@ -112,18 +112,7 @@ static int bs__eval_grad(const mc_target *t, bs__scratch *sc, lmc_sampler *smp, 
     coord[pc->var] = mc_target_stream_offset(t, pc->stream) + pc->pos;
     m[pc->var] = mc_film_adapter_factor(&a, pc->stream, pc->pos);
   }
-  for (int j = 0; j < nd; j++)
-    if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
-  int q = 0;
-  for (int x = 0; x < hn; x++)
-    for (int y = x; y < hn; y++) {
-      int ja = keep[x], jb = keep[y];
-      double h = pe.hlum[(size_t)ja * nd - (size_t)ja * (size_t)(ja - 1) / 2 + (size_t)(jb - ja)];
-      h *= scale * m[ja] * m[jb];
-      if (!isfinite(h)) return 0;
-      OUT_hess[q++] = h;
-    }
-  *OUT_hn = hn;
+  if (!mc_states_hessian(&pe, nd, coord, m, scale, OUT_hn, OUT_hidx, OUT_hess)) return 0;
   if (OUT_hess_ok) *OUT_hess_ok = 1;
   return 0;
 }

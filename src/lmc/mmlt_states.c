@@ -143,19 +143,7 @@ static int mms__eval_d(const mc_target *t, mms__scratch *sc, lmc_sampler *smp, i
   if (want != PATH_WANT_HESS || !ok || !pe.hess_ok || pe.n_diff > MC_HESS_MAX) return 0;
 
   /* The Hessian over the slots kept, in slot order. */
-  int keep[MC_HESS_MAX], hn = 0;
-  for (int j = 0; j < nd; j++)
-    if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
-  int q = 0;
-  for (int x = 0; x < hn; x++)
-    for (int y = x; y < hn; y++) {
-      int ja = keep[x], jb = keep[y];
-      double h = pe.hlum[(size_t)ja * nd - (size_t)ja * (size_t)(ja - 1) / 2 + (size_t)(jb - ja)];
-      h *= scale * m[ja] * m[jb];
-      if (!isfinite(h)) return 0;
-      OUT_hess[q++] = h;
-    }
-  *OUT_hn = hn;
+  if (!mc_states_hessian(&pe, nd, coord, m, scale, OUT_hn, OUT_hidx, OUT_hess)) return 0;
   *OUT_hess_ok = 1;
   return 0;
 }

@@ -163,6 +163,24 @@ double mc_states_value(mc_value *v, rgb c, double rx, double ry, int64_t *nan_sa
   return f;
 }
 
+int mc_states_hessian(const path_eval *pe, int nd, const int *coord, const double *m,
+                      double scale, int *OUT_hn, int *OUT_hidx, double *OUT_hess) {
+  int keep[MC_HESS_MAX], hn = 0;
+  for (int j = 0; j < nd && j < MC_HESS_MAX; j++)
+    if (coord[j] >= 0) keep[hn] = j, OUT_hidx[hn++] = coord[j];
+  int q = 0;
+  for (int x = 0; x < hn; x++)
+    for (int y = x; y < hn; y++) {
+      int ja = keep[x], jb = keep[y];
+      double h = pe->hlum[(size_t)ja * nd - (size_t)ja * (size_t)(ja - 1) / 2 + (size_t)(jb - ja)];
+      h *= scale * m[ja] * m[jb];
+      if (!isfinite(h)) return 0;
+      OUT_hess[q++] = h;
+    }
+  *OUT_hn = hn;
+  return 1;
+}
+
 /* --- the film adapter ----------------------------------------------------- */
 
 static double states__adapter_next(lmc_sampler *self) {

@@ -65,6 +65,15 @@ path_scratch *mc_states_scratch_path(mc_states_scratch *sc);
  * luminance <= 0; f and f_large are the luminance. Returns f. */
 double mc_states_value(mc_value *v, rgb c, double rx, double ry, int64_t *nan_samples);
 
+/* The Hessian of f over the state's coordinates from a path evaluation's
+ * Hessian of the luminance (pe->hlum over its nd = pe->n_diff slots): slot
+ * j is coordinate coord[j] (-1: not one of the state's) with chain-rule
+ * factor m[j]; entries scale m_a m_b d^2 lum, over the slots kept in slot
+ * order, to OUT_hidx (*OUT_hn of them) and OUT_hess (target.h's packing).
+ * Returns 1, or 0 when an entry is not finite. */
+int mc_states_hessian(const path_eval *pe, int nd, const int *coord, const double *m,
+                      double scale, int *OUT_hn, int *OUT_hidx, double *OUT_hess);
+
 /* A sampler in front of a target's own that hands the path evaluators of
  * render/path.h the film numbers they expect: they read the raster
  * position as u W, the spaces' states as -r + u (W + 2r) over the film
