@@ -22,7 +22,7 @@
 #include <cmocka.h>
 #include <math.h>
 
-#include "lmc/adam.h"
+#include "lmc/kernels/adam.h"
 #include "test_util.h"
 
 static int g_checks;

@@ -31,7 +31,7 @@
 
 #include <cmocka.h>
 
-#include "lmc/bdpt_states.h"
+#include "lmc/states/bdpt_states.h"
 #include "render/io/io.h"
 #include "test_util.h"
 

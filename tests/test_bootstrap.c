@@ -1,5 +1,5 @@
 /*
- * test_bootstrap.c: the estimate of b (src/lmc/bootstrap.h). Neyman's
+ * test_bootstrap.c: the estimate of b (src/lmc/driver/bootstrap.h). Neyman's
  * shares and the error rule follow their formulas; --bootstrap N takes
  * exactly N per family; how many samples estimate b never depends on
  * their values (in both main-phase modes); and on a heavy-tailed family (a
@@ -18,7 +18,7 @@
 
 #include <cmocka.h>
 
-#include "lmc/bootstrap.h"
+#include "lmc/driver/bootstrap.h"
 #include "render/rng.h"
 #include "test_util.h"
 

@@ -1,5 +1,5 @@
 /*
- * test_gcache.c: the gradient cache (src/lmc/gcache.h): k-d tree nearest
+ * test_gcache.c: the gradient cache (src/lmc/kernels/gcache.h): k-d tree nearest
  * neighbours against brute force, per-dimension trees, the preconditioner
  * lookup, capacity and merging, and the independence proposal's density
  * (integrates to one, matches its samples).
@@ -13,8 +13,8 @@
 #include <cmocka.h>
 
 #include "chi2.h"
-#include "lmc/gcache.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/gcache.h"
+#include "lmc/kernels/mala.h"
 #include "test_util.h"
 
 /* Fills a cache with n random entries of dimension d (clustered in part,

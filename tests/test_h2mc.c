@@ -27,8 +27,8 @@
 
 #include <cmocka.h>
 
-#include "lmc/h2mc.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/h2mc.h"
+#include "lmc/kernels/mala.h"
 
 typedef struct gbuf {
   double V[9], P[3], m[3], work[16];

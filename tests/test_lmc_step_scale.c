@@ -40,9 +40,9 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "lmc/chain.h"
-#include "lmc/lmc_kernel.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/kernels/lmc_kernel.h"
+#include "lmc/kernels/mala.h"
 #include "test_util.h"
 
 static int g_checks;

@@ -1,5 +1,5 @@
 /*
- * test_lmc_toy_slow.c: the LMC kernel (src/lmc/lmc_kernel.h) driven by the
+ * test_lmc_toy_slow.c: the LMC kernel (src/lmc/kernels/lmc_kernel.h) driven by the
  * chain framework (chain.h) on toy densities in 2 to 6 dimensions:
  *
  *   ridge    2-D, a narrow curved ridge u1 ~ 0.5 + 0.2 sin(2 pi u0), width 0.01;
@@ -52,10 +52,10 @@
 #include <cmocka.h>
 
 #include "chi2.h"
-#include "lmc/chain.h"
-#include "lmc/h2mc.h"
-#include "lmc/lmc_kernel.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/kernels/h2mc.h"
+#include "lmc/kernels/lmc_kernel.h"
+#include "lmc/kernels/mala.h"
 #include "test_util.h"
 
 #define MAXD 6

@@ -1,6 +1,6 @@
 /*
  * test_mala.c: the MALA proposal on the torus and Kelemen's small step
- * (src/lmc/mala.h): their densities integrate to one, match the samples
+ * (src/lmc/kernels/mala.h): their densities integrate to one, match the samples
  * the samplers draw (chi-square on 1-D and 2-D marginals), and wrap
  * around the torus correctly.
  *
@@ -16,7 +16,7 @@
 #include <cmocka.h>
 
 #include "chi2.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/mala.h"
 #include "test_util.h"
 
 #define CHI2_TESTS 6

@@ -33,10 +33,10 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "lmc/chain.h"
-#include "lmc/gcache.h"
-#include "lmc/lmc_kernel.h"
-#include "lmc/mala.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/kernels/gcache.h"
+#include "lmc/kernels/lmc_kernel.h"
+#include "lmc/kernels/mala.h"
 #include "test_util.h"
 
 #define N_CHI2_TESTS 8

@@ -30,7 +30,7 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "lmc/chain.h"
+#include "lmc/kernels/chain.h"
 #include "test_util.h"
 
 static int g_checks;

@@ -1,5 +1,5 @@
 /*
- * test_mcmc_toy.c: the chain of src/lmc/chain.c on toy densities whose
+ * test_mcmc_toy.c: the chain of src/lmc/kernels/chain.c on toy densities whose
  * normalised histograms are known.
  *
  * Densities: a bimodal 1-D density, a narrow ring in 2-D (radius 0.3,
@@ -40,7 +40,7 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "lmc/chain.h"
+#include "lmc/kernels/chain.h"
 #include "test_util.h"
 
 #define N_CHI2_TESTS 14

@@ -26,9 +26,9 @@
 
 #include <cmocka.h>
 
-#include "lmc/mmlt_states.h"
+#include "lmc/states/mmlt_states.h"
 #include "lmc/mcmc.h"
-#include "lmc/states.h"
+#include "lmc/states/states.h"
 #include "render/io/io.h"
 #include "render/path.h"
 #include "test_util.h"

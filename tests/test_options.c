@@ -35,9 +35,9 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
-#include "lmc/lmc_kernel.h"
+#include "lmc/kernels/lmc_kernel.h"
 #include "lmc/mcmc.h"
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 #include "render/io/io.h"
 #include "render/options.h"
 #include "test_util.h"

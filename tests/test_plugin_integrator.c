@@ -30,7 +30,7 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 #include "render/io/io.h"
 #include "test_util.h"
 

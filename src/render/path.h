@@ -23,7 +23,7 @@
  * differentiated; MCMC acceptance takes care of them.
  *
  * The layout of u. The j-th number drawn from stream k is coordinate
- * stream_offset(k) + j of the state (src/lmc/target.h); path_eval reports,
+ * stream_offset(k) + j of the state (src/lmc/kernels/target.h); path_eval reports,
  * for every number drawn, its stream and position. path_eval_pt follows
  * pt_li exactly (integrator.h), all from LMC_STREAM_CAMERA:
  *   0, 1      film position: rx = u0 * width, ry = u1 * height (raster

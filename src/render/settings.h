@@ -29,7 +29,7 @@ enum {
   SET_CHAINS = 1 << 16
 };
 
-/* The state space of the MCMC integrators' chains (--states; src/lmc/space.h). */
+/* The state space of the MCMC integrators' chains (--states; src/lmc/driver/space.h). */
 typedef enum mcmc_states {
   MCMC_STATES_DEFAULT = 0, /* the integrator's own: pssmlt pt, mmlt per-length families */
   MCMC_STATES_PT,          /* the unidirectional path tracer's primary samples (pssmlt) */

@@ -8,13 +8,13 @@
  * most GCACHE_LEAF entries; the entries are reordered so that each leaf is
  * a contiguous range) and picks the independence anchors.
  */
-#include "lmc/gcache.h"
+#include "lmc/kernels/gcache.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mala.h"
+#include "lmc/kernels/mala.h"
 
 #define GCACHE_LEAF 8
 

@@ -1,7 +1,7 @@
 /*
  * bootstrap.c: the two-phase estimate of b (bootstrap.h).
  */
-#include "lmc/bootstrap.h"
+#include "lmc/driver/bootstrap.h"
 
 #include <math.h>
 #include <omp.h>

@@ -74,7 +74,7 @@
 
 #include <stdint.h>
 
-#include "lmc/target.h"
+#include "lmc/kernels/target.h"
 #include "render/error.h"
 #include "render/rng.h"
 

@@ -88,9 +88,9 @@
 
 #include <stdint.h>
 
-#include "lmc/adam.h"
-#include "lmc/chain.h"
-#include "lmc/gcache.h"
+#include "lmc/kernels/adam.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/kernels/gcache.h"
 #include "render/settings.h"
 
 /* LMC preconditioner adaptation (--adapt). */

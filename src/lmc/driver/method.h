@@ -26,8 +26,8 @@
 
 #include <stdint.h>
 
-#include "lmc/chain.h"
-#include "lmc/space.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/driver/space.h"
 #include "render/error.h"
 #include "render/options.h"
 #include "render/scene.h"

@@ -2,7 +2,7 @@
  * states.c: helpers of the primary-sample state spaces that several MCMC
  * integrators share (states.h).
  */
-#include "lmc/states.h"
+#include "lmc/states/states.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -97,7 +97,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mcmc_internal.h"
+#include "lmc/driver/mcmc_internal.h"
 
 int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;

@@ -46,7 +46,7 @@
 
 #include <stdint.h>
 
-#include "lmc/target.h"
+#include "lmc/kernels/target.h"
 #include "render/error.h"
 #include "render/integrator.h"
 #include "render/scene.h"

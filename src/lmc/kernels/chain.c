@@ -26,7 +26,7 @@
  * and mod are saved and its index pushed on a list; a rejection restores
  * exactly those.
  */
-#include "lmc/chain.h"
+#include "lmc/kernels/chain.h"
 
 #include <math.h>
 #include <stdlib.h>

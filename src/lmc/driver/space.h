@@ -23,8 +23,8 @@
 
 #include <stdint.h>
 
-#include "lmc/bootstrap.h"
-#include "lmc/target.h"
+#include "lmc/driver/bootstrap.h"
+#include "lmc/kernels/target.h"
 #include "render/error.h"
 #include "render/integrator.h"
 #include "render/options.h"

@@ -8,7 +8,7 @@
  * families' shares of the mutations follow their b (the driver's
  * allocation), as a single multiplexed chain's would.
  */
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 
 static int mmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
                                const mc_space_family *F, mc_kernel *k, double *p) {

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mcmc_internal.h"
+#include "lmc/driver/mcmc_internal.h"
 
 uint64_t mcmc__boot_seq(int g, int64_t j) {
   return rng_hash64(((uint64_t)(g + 1) << 44) ^ (uint64_t)j);

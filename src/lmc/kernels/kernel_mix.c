@@ -5,7 +5,7 @@
  */
 #include <math.h>
 
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 
 int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, mc_kernel *OUT_k,
                           double *OUT_p) {

@@ -6,8 +6,8 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
-#include "lmc/method.h"
-#include "lmc/space.h"
+#include "lmc/driver/method.h"
+#include "lmc/driver/space.h"
 
 extern const mc_method mc_method_pssmlt, mc_method_mmlt, mc_method_lmc, mc_method_h2mc;
 

@@ -9,7 +9,7 @@
  * bdpt_states.h), as the LMC paper's implementation runs it; --states pt
  * gives Kelemen et al.'s original path-tracer states.
  */
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 
 static int pssmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
                                  const mc_space_family *F, mc_kernel *k, double *p) {

@@ -47,7 +47,7 @@
 
 #include <stdint.h>
 
-#include "lmc/method.h"
+#include "lmc/driver/method.h"
 
 #define LMC_MALA_MIN_LENGTH 3  /* mmlt states: shorter paths take no MALA step (Kelemen's instead) */
 

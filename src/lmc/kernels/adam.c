@@ -1,7 +1,7 @@
 /*
  * adam.c: Adam moments and the preconditioners built from them (adam.h).
  */
-#include "lmc/adam.h"
+#include "lmc/kernels/adam.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,13 +2,13 @@
  * lmc_kernel.c: the LMC (preconditioned MALA) kernel and the cache's
  * independence kernel for chain.h (see lmc_kernel.h for the model).
  */
-#include "lmc/lmc_kernel.h"
+#include "lmc/kernels/lmc_kernel.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mala.h"
+#include "lmc/kernels/mala.h"
 
 lmc_kernel_params lmc_kernel_params_default(void) {
   lmc_kernel_params p;

@@ -8,10 +8,10 @@
 
 #include <stdint.h>
 
-#include "lmc/bootstrap.h"
-#include "lmc/chain.h"
-#include "lmc/method.h"
-#include "lmc/space.h"
+#include "lmc/driver/bootstrap.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/driver/method.h"
+#include "lmc/driver/space.h"
 #include "render/film.h"
 #include "render/integrator.h"
 

@@ -49,7 +49,7 @@
 
 #include <stdint.h>
 
-#include "lmc/chain.h"
+#include "lmc/kernels/chain.h"
 #include "render/error.h"
 
 typedef struct h2mc_params {

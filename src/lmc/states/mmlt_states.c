@@ -56,10 +56,10 @@
 #include <omp.h>
 #include <stdio.h>
 
-#include "lmc/bdpt_states.h"
-#include "lmc/mmlt_states.h"
-#include "lmc/space.h"
-#include "lmc/states.h"
+#include "lmc/states/bdpt_states.h"
+#include "lmc/states/mmlt_states.h"
+#include "lmc/driver/space.h"
+#include "lmc/states/states.h"
 #include "render/path.h"
 
 typedef mc_states_scratch mms__scratch;

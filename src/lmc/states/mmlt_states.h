@@ -7,7 +7,7 @@
 #ifndef LMC_MCMC_MMLT_STATES_H
 #define LMC_MCMC_MMLT_STATES_H
 
-#include "lmc/target.h"
+#include "lmc/kernels/target.h"
 #include "render/error.h"
 #include "render/scene.h"
 #include "render/settings.h"

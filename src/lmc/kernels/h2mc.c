@@ -1,13 +1,13 @@
 /*
  * h2mc.c: the H2MC proposal (h2mc.h).
  */
-#include "lmc/h2mc.h"
+#include "lmc/kernels/h2mc.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/mala.h"
+#include "lmc/kernels/mala.h"
 
 /* LAPACK's symmetric eigensolver (Fortran calling convention). */
 extern void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda,

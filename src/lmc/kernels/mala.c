@@ -2,7 +2,7 @@
  * mala.c: the MALA proposal on the torus and Kelemen's small step (see
  * mala.h for the model and the density conventions).
  */
-#include "lmc/mala.h"
+#include "lmc/kernels/mala.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -8,7 +8,7 @@
  * at the switch the per-chain caches are merged into one, frozen, and the
  * per-chain ones freed.
  */
-#include "lmc/integrator_lmc.h"
+#include "lmc/integrators/integrator_lmc.h"
 
 #include <math.h>
 #include <omp.h>
@@ -17,10 +17,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/gcache.h"
-#include "lmc/lmc_kernel.h"
-#include "lmc/method.h"
-#include "lmc/states.h"
+#include "lmc/kernels/gcache.h"
+#include "lmc/kernels/lmc_kernel.h"
+#include "lmc/driver/method.h"
+#include "lmc/states/states.h"
 
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */

@@ -28,8 +28,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/space.h"
-#include "lmc/states.h"
+#include "lmc/driver/space.h"
+#include "lmc/states/states.h"
 #include "render/path.h"
 
 #define MC_PT_UNBOUNDED 16 /* bounces kept in the state when maxdepth is -1 */

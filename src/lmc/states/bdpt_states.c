@@ -13,7 +13,7 @@
  * rest BSDF-relative ones (the numbers l leaves free), all in the large
  * step's measure.
  */
-#include "lmc/bdpt_states.h"
+#include "lmc/states/bdpt_states.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -21,8 +21,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lmc/space.h"
-#include "lmc/states.h"
+#include "lmc/driver/space.h"
+#include "lmc/states/states.h"
 #include "render/integrator.h"
 #include "render/path.h"
 

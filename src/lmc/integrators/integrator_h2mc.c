@@ -16,9 +16,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "lmc/h2mc.h"
-#include "lmc/lmc_kernel.h"
-#include "lmc/method.h"
+#include "lmc/kernels/h2mc.h"
+#include "lmc/kernels/lmc_kernel.h"
+#include "lmc/driver/method.h"
 
 #define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
 

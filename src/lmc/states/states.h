@@ -6,7 +6,7 @@
 #ifndef LMC_MCMC_STATES_H
 #define LMC_MCMC_STATES_H
 
-#include "lmc/target.h"
+#include "lmc/kernels/target.h"
 #include "render/integrator.h"
 #include "render/path.h"
 #include "render/sampler.h"
