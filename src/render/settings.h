@@ -75,7 +75,7 @@ typedef struct render_settings {
   double snapshot;       /* seconds between intermediate images (0: none) */
   /* Called by the render drivers every `snapshot` seconds with the film
    * normalised as if the render stopped then (borrowed for the call) and
-   * the seconds since the render began; main.c writes it. NULL: none. */
+   * the seconds since the render began; cli/render.c writes it. NULL: none. */
   void (*snapshot_fn)(void *ctx, const struct film *f, double seconds);
   void *snapshot_ctx;
   /* The plugins' own settings (an integrator's table, render/options.h). */

@@ -1,0 +1,154 @@
+/*
+ * compare.c: `lmc compare IMAGE.exr REF.exr`: error metrics, one `name: value` per line, and a heat map.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+
+/* --- lmc compare ---------------------------------------------------------------- */
+
+/* A false-colour ramp (dark blue - cyan - yellow - red) for t in [0, 1]. */
+static rgb lmc_heat_color(double t) {
+  static const double stops[5][3] = {
+      {0.05, 0.05, 0.25}, {0.0, 0.45, 0.85}, {0.1, 0.85, 0.75}, {0.95, 0.9, 0.1}, {0.85, 0.1, 0.05}};
+  t = fmin(1.0, fmax(0.0, t)) * 4.0;
+  int i = (int)t;
+  if (i >= 4) i = 3;
+  double f = t - i;
+  return rgb_make(stops[i][0] + f * (stops[i + 1][0] - stops[i][0]),
+                  stops[i][1] + f * (stops[i + 1][1] - stops[i][1]),
+                  stops[i][2] + f * (stops[i + 1][2] - stops[i][2]));
+}
+
+/* Ascending order of doubles, for qsort. */
+static int lmc_cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+int lmc_cmd_compare(int argc, char **argv) {
+  const char *paths[2] = {NULL, NULL}, *heatmap = NULL;
+  int n_paths = 0;
+  lmc_args a = {argc, 2, argv, NULL};
+  for (a.i = 2; a.i < argc; a.i++) {
+    if (lmc_flag_is(&a, "--heatmap")) {
+      if (!(heatmap = lmc_flag_value(&a))) return EXIT_BADINPUT;
+    } else if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      printf("usage: lmc compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n"
+             "prints mse, relmse (mean of (I-R)^2 / (R^2 + 0.01)), relmse_trimmed\n"
+             "(the same without the 0.1%% of pixels with the largest error) and\n"
+             "mean_ratio (mean luminance of IMAGE over REFERENCE); exit 2 if the\n"
+             "sizes differ\n");
+      return EXIT_OK;
+    } else if (argv[a.i][0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (see lmc compare --help)\n", argv[a.i]);
+      return EXIT_BADINPUT;
+    } else if (n_paths < 2) {
+      paths[n_paths++] = argv[a.i];
+    } else {
+      fprintf(stderr, "lmc compare: too many arguments\n");
+      return EXIT_BADINPUT;
+    }
+  }
+  if (n_paths != 2) {
+    fprintf(stderr, "usage: lmc compare IMAGE.exr REFERENCE.exr [--heatmap ERR.png]\n");
+    return EXIT_BADINPUT;
+  }
+  lmc_image img[2] = {{0}, {0}};
+  lmc_error err;
+  lmc_error_clear(&err);
+  char msg[2048];
+  for (int k = 0; k < 2; k++) {
+    if (image_read(paths[k], 0, &img[k], &err) || image_to_rgb(&img[k], &err)) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: %s\n", msg);
+      image_free(&img[0]);
+      image_free(&img[1]);
+      return EXIT_BADINPUT;
+    }
+  }
+  if (img[0].width != img[1].width || img[0].height != img[1].height) {
+    fprintf(stderr, "lmc: %s is %dx%d but %s is %dx%d\n", paths[0], img[0].width, img[0].height,
+            paths[1], img[1].width, img[1].height);
+    image_free(&img[0]);
+    image_free(&img[1]);
+    return EXIT_BADINPUT;
+  }
+
+  /* The metrics, over pixels and channels; rel[] keeps each pixel's
+   * relative squared error for the trimmed mean. */
+  size_t n = (size_t)img[0].width * (size_t)img[0].height;
+  double mse = 0.0, relmse = 0.0, lum_i = 0.0, lum_r = 0.0;
+  double *rel = malloc(n * sizeof *rel);
+  if (!rel) {
+    fprintf(stderr, "lmc: out of memory\n");
+    image_free(&img[0]);
+    image_free(&img[1]);
+    return EXIT_FAIL;
+  }
+  for (size_t p = 0; p < n; p++) {
+    const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
+    rel[p] = 0.0;
+    for (int c = 0; c < 3; c++) {
+      double d = (double)I[c] - (double)R[c];
+      mse += d * d;
+      rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+    }
+    relmse += rel[p];
+    lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));
+    lum_r += rgb_luminance(rgb_make(R[0], R[1], R[2]));
+  }
+  mse /= 3.0 * (double)n;
+  relmse /= (double)n;
+  /* The trimmed relative MSE: the mean over the pixels left when the
+   * largest 0.1% of the per-pixel errors are dropped (one firefly of a
+   * short render can outweigh the rest of the image). */
+  size_t drop = n / 1000;
+  qsort(rel, n, sizeof *rel, lmc_cmp_double);
+  double trimmed = 0.0;
+  for (size_t p = 0; p + drop < n; p++) trimmed += rel[p];
+  trimmed /= (double)(n - drop);
+  free(rel);
+  printf("mse: %.9g\nrelmse: %.9g\nrelmse_trimmed: %.9g\nmean_ratio: %.9g\n", mse, relmse, trimmed,
+         lum_r != 0.0 ? lum_i / lum_r : (lum_i == 0.0 ? 1.0 : INFINITY));
+
+  /* The heatmap: per-pixel relative error, log scale from 1e-4 to 1. */
+  int status = EXIT_OK;
+  if (heatmap) {
+    lmc_image hm = {0};
+    if (image_init(&hm, img[0].width, img[0].height, 3, &err) == LMC_OK) {
+      for (size_t p = 0; p < n; p++) {
+        const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
+        double e = 0.0;
+        for (int c = 0; c < 3; c++) {
+          double d = (double)I[c] - (double)R[c];
+          e += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+        }
+        double t = (log10(fmax(e, 1e-4)) + 4.0) / 4.0;
+        rgb col = lmc_heat_color(t);
+        hm.data[3 * p] = (float)srgb_to_linear(col.r);
+        hm.data[3 * p + 1] = (float)srgb_to_linear(col.g);
+        hm.data[3 * p + 2] = (float)srgb_to_linear(col.b);
+      }
+      if (image_write_png(heatmap, &hm, 1.0, &err)) status = EXIT_FAIL;
+    } else {
+      status = EXIT_FAIL;
+    }
+    if (status != EXIT_OK) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: %s\n", msg);
+    }
+    image_free(&hm);
+  }
+  image_free(&img[0]);
+  image_free(&img[1]);
+  return status;
+}
+

@@ -1,0 +1,368 @@
+/*
+ * render.c: `lmc render SCENE.xml [flags]`: loads the scene, takes its
+ * settings and the flags (the option tables of render/options.h), renders
+ * with pt, bdpt or an MCMC integrator and writes OUT.exr (linear) and
+ * OUT.png (preview), also when interrupted (Ctrl-C, SIGTERM, --time).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+
+static const char *lmc_render_usage =
+    "usage: lmc render SCENE.xml [flags]   (every flag also as --flag=value)\n"
+    "\n"
+    "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
+    "                           (default: the scene's name in the current folder)\n"
+    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc\n"
+    "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
+    "  --resolution WxH         film size (keeps the field of view)\n"
+    "  -D name=value            override a <default> of the scene (repeatable)\n"
+    "  --exposure STOPS|auto    the PNG preview: radiance times 2^STOPS, clamped, sRGB\n"
+    "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
+    "                           99th percentile of luminance maps to white\n"
+    "  -q, --quiet              no progress bar\n"
+    "  -h, --help               this text\n"
+    "  --help-markdown          the flags below as Markdown tables (the README's)\n"
+    "\n";
+
+/* Every table of flags: the renderer's, then the MCMC driver's, its
+ * state spaces' and integrators' (mcmc.h). */
+#define LMC_MAX_TABLES 32
+static int lmc_option_tables(const lmc_opt_table **OUT) {
+  OUT[0] = &lmc_render_options;
+  return 1 + mcmc_option_tables(OUT + 1, LMC_MAX_TABLES - 1);
+}
+
+/* lmc render --help-markdown: the tables below as the README shows them. */
+static void lmc_render_markdown(FILE *f) {
+  const lmc_opt_table *t[LMC_MAX_TABLES];
+  int n = lmc_option_tables(t);
+  for (int i = 0; i < n; i++) {
+    fprintf(f, "%s%s:\n\n", i ? "\n" : "", t[i]->title);
+    lmc_opt_markdown(f, t[i]);
+  }
+}
+
+/* lmc render --help. */
+static void lmc_render_help(FILE *f) {
+  const lmc_opt_table *t[LMC_MAX_TABLES];
+  int n = lmc_option_tables(t);
+  fputs(lmc_render_usage, f);
+  for (int i = 0; i < n; i++) lmc_opt_help(f, t[i]);
+}
+
+/* Integrators `--integrator` accepts. */
+static int lmc_integrator_known(const char *name) {
+  return !strcmp(name, "pt") || !strcmp(name, "bdpt") || mcmc_is_integrator(name);
+}
+
+/* --- lmc render --------------------------------------------------------------- */
+
+static void lmc_on_signal(int sig) { render_request_stop(sig); }
+
+static void lmc_install_signals(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = lmc_on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+/* Default output name: the scene file's name without .xml, or its folder's
+ * name when the file is called scene.xml. */
+static void lmc_default_output(const char *scene_path, char *out, size_t size) {
+  const char *slash = strrchr(scene_path, '/');
+  const char *base = slash ? slash + 1 : scene_path;
+  char stem[256];
+  snprintf(stem, sizeof stem, "%s", base);
+  char *dot = strrchr(stem, '.');
+  if (dot) *dot = '\0';
+  if (strcmp(stem, "scene") == 0 && slash) {
+    const char *end = slash, *start = slash;
+    while (start > scene_path && start[-1] != '/') start--;
+    if (end > start) snprintf(stem, sizeof stem, "%.*s", (int)(end - start), start);
+  }
+  snprintf(out, size, "%s.exr", stem);
+}
+
+/* Exposure of the preview: the 99th percentile of luminance maps to 1. */
+static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size,
+                             const lmc_exposure *exposure) {
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_image img = {0};
+  char msg[2048];
+  if (film_develop(f, &img, &err) || image_write_exr(exr_path, &img, &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    image_free(&img);
+    return 0;
+  }
+  snprintf(png_path, png_size, "%s", exr_path);
+  size_t len = strlen(png_path);
+  if (len > 4 && strcmp(png_path + len - 4, ".exr") == 0) png_path[len - 4] = '\0';
+  strncat(png_path, ".png", png_size - strlen(png_path) - 1);
+  if (image_write_png(png_path, &img, lmc_exposure_scale(exposure, &img), &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    image_free(&img);
+    return 0;
+  }
+  image_free(&img);
+  return 1;
+}
+
+/* --snapshot: writes OUTSTEM-<seconds>s.exr (safe write: temporary file
+ * and rename, as the final output). */
+typedef struct lmc_snapshot_ctx {
+  const char *out_exr;
+} lmc_snapshot_ctx;
+
+static void lmc_write_snapshot(void *ctx, const struct film *f, double seconds) {
+  const lmc_snapshot_ctx *sc = ctx;
+  char path[1100], stem[1024];
+  snprintf(stem, sizeof stem, "%s", sc->out_exr);
+  size_t len = strlen(stem);
+  if (len > 4 && strcmp(stem + len - 4, ".exr") == 0) stem[len - 4] = '\0';
+  snprintf(path, sizeof path, "%s-%.1fs.exr", stem, seconds);
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_image img = {0};
+  if (film_develop(f, &img, &err) || image_write_exr(path, &img, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: snapshot: %s\n", msg);
+  }
+  image_free(&img);
+}
+
+/* A flag of the tables as given on the command line (checked). */
+typedef struct lmc_given {
+  const lmc_opt_table *table;
+  const lmc_opt *opt;
+  const char *value;
+} lmc_given;
+
+/* The scene's settings (with its <integrator>/<dpt> parameters through
+ * the option tables), overridden by the command line: cli's own fields
+ * and the flags given, in order. */
+static lmc_status render__settings(const scene *s, const char *scene_path,
+                                   const render_settings *cli, const lmc_given *given,
+                                   int n_given, render_settings *OUT, lmc_error *err) {
+  render_settings rs;
+  lmc_status st = mcmc_scene_settings(s, &rs, err);
+  if (st) return st;
+  if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
+  if (cli->set & SET_INTEGRATOR) memcpy(rs.integrator, cli->integrator, sizeof rs.integrator);
+  int adapt_given = 0;
+  for (int i = 0; i < n_given; i++) {
+    char msg[512];
+    lmc_opt_set(given[i].table, given[i].opt, given[i].value, &rs, msg, sizeof msg); /* (checked) */
+    adapt_given |= !strcmp(given[i].opt->name, "adapt");
+  }
+  if ((cli->set & SET_TIME) && !(cli->set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
+  /* The scene's directSamples is a sample count for its own spp: --spp
+   * given here sets both passes. */
+  if (cli->set & SET_SPP) rs.direct_spp = 0;
+  rs.quiet = cli->quiet;
+  if (!lmc_integrator_known(rs.integrator)) {
+    lmc_warn(scene_path, 0,
+             "the scene asks for integrator '%s', which lmc does not have; "
+             "rendering with bdpt (choose with --integrator)",
+             rs.integrator);
+    snprintf(rs.integrator, sizeof rs.integrator, "bdpt");
+  }
+  if (adapt_given && strcmp(rs.integrator, "lmc"))
+    lmc_warn(NULL, 0, "--adapt only applies to --integrator lmc; ignored for %s", rs.integrator);
+  *OUT = rs;
+  return LMC_OK;
+}
+
+/* Renders s with rs, then writes what there is even when interrupted;
+ * the exit status. */
+static int render__run(scene *s, render_settings *rs, const char *output, const char *scene_path,
+                       const lmc_exposure *exposure, double t_load) {
+  char out_exr[1024], out_png[1100];
+  if (output)
+    snprintf(out_exr, sizeof out_exr, "%s", output);
+  else
+    lmc_default_output(scene_path, out_exr, sizeof out_exr);
+  lmc_install_signals();
+  lmc_snapshot_ctx snap = {out_exr};
+  if (rs->snapshot > 0.0) {
+    rs->snapshot_fn = lmc_write_snapshot;
+    rs->snapshot_ctx = &snap;
+  }
+  film f;
+  render_stats st;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status rst = mcmc_is_integrator(rs->integrator) ? mcmc_render_run(s, rs, &f, &st, &err)
+                                                        : render_run(s, rs, &f, &st, &err);
+  if (rst) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    return EXIT_FAIL;
+  }
+  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure);
+  fprintf(stderr,
+          "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
+          "%.3g Mrays/s%s%s\n",
+          rs->integrator, f.width, f.height, (long long)st.passes, (long long)st.samples,
+          st.seconds, t_load, (double)st.rays, st.rays / fmax(st.seconds, 1e-9) / 1e6,
+          st.interrupted ? ", interrupted" : "", st.timed_out ? ", time limit reached" : "");
+  if (st.nan_samples > 0)
+    fprintf(stderr, "lmc: dropped %lld non-finite samples\n", (long long)st.nan_samples);
+  if (ok) printf("wrote %s\nwrote %s\n", out_exr, out_png);
+  film_free(&f);
+  if (!ok) return EXIT_FAIL;
+  if (st.interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
+  return EXIT_OK;
+}
+
+int lmc_cmd_render(int argc, char **argv) {
+  const char *scene_path = NULL, *output = NULL;
+  const char **defines = calloc((size_t)argc + 1, sizeof(char *));
+  int n_defines = 0;
+  render_settings cli = render_settings_default();
+  cli.set = 0;
+  int res_w = 0, res_h = 0;
+  lmc_exposure exposure = {0, 0.0};
+  lmc_args a = {argc, 2, argv, NULL};
+  if (!defines) return EXIT_FAIL;
+
+  /* Parse the flags; the scene's own settings are merged below. The flags
+   * of the tables are checked into cli now and applied to the scene's
+   * settings after loading (given[]). */
+  const lmc_opt_table *tables[LMC_MAX_TABLES];
+  int n_tables = lmc_option_tables(tables);
+  lmc_given *given = calloc((size_t)argc + 1, sizeof *given);
+  int n_given = 0;
+  if (!given) {
+    free(defines);
+    return EXIT_FAIL;
+  }
+  for (a.i = 2; a.i < argc; a.i++) {
+    const char *arg = argv[a.i], *v;
+    if (lmc_flag_is(&a, "--help") || lmc_flag_is(&a, "-h")) {
+      lmc_render_help(stdout);
+      free(defines), free(given);
+      return EXIT_OK;
+    } else if (lmc_flag_is(&a, "--help-markdown")) {
+      lmc_render_markdown(stdout);
+      free(defines), free(given);
+      return EXIT_OK;
+    } else if (lmc_flag_is(&a, "-o") || lmc_flag_is(&a, "--output")) {
+      if (!(output = lmc_flag_value(&a))) goto bad;
+    } else if (lmc_flag_is(&a, "--integrator")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (!lmc_integrator_known(v)) {
+        const char *names[16];
+        int n = mcmc_integrator_names(names, 16);
+        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt", v);
+        for (int i = 0; i < n; i++) fprintf(stderr, ", %s", names[i]);
+        fprintf(stderr, ")\n");
+        goto bad;
+      }
+      snprintf(cli.integrator, sizeof cli.integrator, "%s", v);
+      cli.set |= SET_INTEGRATOR;
+    } else if (lmc_flag_is(&a, "--resolution")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      char tail;
+      if (sscanf(v, "%dx%d%c", &res_w, &res_h, &tail) != 2 || res_w <= 0 || res_h <= 0 ||
+          res_w > 65536 || res_h > 65536) {
+        fprintf(stderr, "lmc: flag --resolution: '%s' is not WIDTHxHEIGHT (e.g. 320x240)\n", v);
+        goto bad;
+      }
+    } else if (strcmp(arg, "-D") == 0 || (strncmp(arg, "-D", 2) == 0 && arg[2] != '\0')) {
+      const char *d = arg[2] ? arg + 2 : (a.i + 1 < argc ? argv[++a.i] : NULL);
+      if (!d || !strchr(d, '=') || d[0] == '=') {
+        fprintf(stderr, "lmc: flag -D needs name=value\n");
+        goto bad;
+      }
+      defines[n_defines++] = d;
+    } else if (lmc_flag_is(&a, "--exposure")) {
+      if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) goto bad;
+    } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
+      cli.quiet = 1;
+    } else if (!strncmp(arg, "--", 2)) {
+      /* A flag of the tables: --name value or --name=value. */
+      char name[64];
+      size_t len = strcspn(arg + 2, "=");
+      snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), arg + 2);
+      const lmc_opt_table *ot = NULL;
+      const lmc_opt *o = lmc_opt_find(tables, n_tables, name, &ot);
+      if (!o) {
+        fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
+        goto bad;
+      }
+      a.inline_value = arg[2 + len] == '=' ? arg + 3 + len : NULL;
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      char msg[512];
+      if (!lmc_opt_set(ot, o, v, &cli, msg, sizeof msg)) {
+        fprintf(stderr, "lmc: %s\n", msg);
+        goto bad;
+      }
+      given[n_given++] = (lmc_given){ot, o, v};
+    } else if (arg[0] == '-') {
+      fprintf(stderr, "lmc: unknown flag '%s' (see lmc render --help)\n", arg);
+      goto bad;
+    } else if (!scene_path) {
+      scene_path = arg;
+    } else {
+      fprintf(stderr, "lmc: unexpected argument '%s' (one scene at a time)\n", arg);
+      goto bad;
+    }
+  }
+  if (!scene_path) {
+    fprintf(stderr, "lmc render: no scene given\n");
+    lmc_render_help(stderr);
+    goto bad;
+  }
+
+  /* Load the scene. */
+  lmc_error err;
+  lmc_error_clear(&err);
+  scene *s = NULL;
+  double t_load = omp_get_wtime();
+  if (scene_load_xml(scene_path, defines, n_defines, &s, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    free(defines), free(given);
+    return EXIT_BADINPUT;
+  }
+  free(defines);
+  t_load = omp_get_wtime() - t_load;
+  if (res_w > 0) {
+    camera_set_resolution(&s->cam, res_w, res_h);
+  }
+
+  /* Its settings and the flags, then the render. */
+  render_settings rs;
+  lmc_status sst = render__settings(s, scene_path, &cli, given, n_given, &rs, &err);
+  free(given);
+  if (sst) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    scene_destroy(s);
+    return EXIT_BADINPUT;
+  }
+  int status = render__run(s, &rs, output, scene_path, &exposure, t_load);
+  scene_destroy(s);
+  return status;
+bad:
+  free(defines), free(given);
+  return EXIT_BADINPUT;
+}
+
