@@ -1,193 +1,14 @@
 /*
- * chain.c: the lazy primary sample vector (Kelemen et al. 2002, "A simple
- * and robust mutation strategy for the Metropolis light transport
- * algorithm"), the built-in kernels and the Metropolis-Hastings step with
- * expected-value splatting. See chain.h for the model.
- *
- * Lazy coordinates. Each coordinate i keeps its value and mod[i], the
- * iteration it was last brought up to date at. `iter` counts accepted
- * iterations plus the one being proposed (a rejection rolls it back), and
- * `last_large` is the iteration of the last accepted large step. Reading
- * coordinate i at iteration iter when mod[i] < iter:
- *   - a large step is being proposed: a fresh uniform;
- *   - else, if mod[i] < last_large: a fresh uniform (as of last_large),
- *     then iter - last_large small steps;
- *   - else iter - mod[i] small steps.
- * The small steps are those the accepted iterations in between would have
- * applied (only accepted iterations count: a rejected one restores what it
- * touched), and all of them were small steps, since a large or full step
- * brings every coordinate it proposes up to date. When more than
- * PSS_MAX_REPLAY steps are owed the coordinate gets a fresh uniform
- * instead: that is still a symmetric proposal for a coordinate f did not
- * read (its exact stationary law is uniform either way), and it bounds the
- * work of a read.
- *
- * Backup: the first time an iteration changes a coordinate, its old value
- * and mod are saved and its index pushed on a list; a rejection restores
- * exactly those.
+ * chain.c: the built-in kernels and the Metropolis-Hastings step with
+ * expected-value splatting, on the lazy primary sample vector of pss.c.
+ * See chain.h for the model.
  */
 #include "lmc/kernels/chain.h"
+#include "lmc/kernels/pss.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define PSS_MAX_REPLAY 64 /* 16 made mmlt worse on ring-caustics: 0.0141 against 0.0108 at 60 s */
-#define PSS_STEP_TABLE 256 /* Kelemen's step lengths, tabulated (chain__kelemen) */
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
-
-struct mc_pss {
-  lmc_sampler base; /* reads coordinates (the target draws from it) */
-  int dim;
-  int stream_off[LMC_STREAM_COUNT], stream_dim[LMC_STREAM_COUNT];
-  int stream, pos[LMC_STREAM_COUNT];
-  double *val, *bak;
-  int64_t *mod, *mod_bak;
-  int *touched, n_touched;
-  int64_t iter, last_large;
-  int large;        /* the proposal being evaluated is a large step */
-  double s1, s2;    /* the chain's small step (owed steps are replayed with it) */
-  double step_table[PSS_STEP_TABLE + 1]; /* Kelemen: (s1 / s2)^(i / PSS_STEP_TABLE) */
-  const double *scale; /* per-coordinate factor on s1, s2 (target.h; NULL: 1) */
-  rng *r;
-  int64_t *overflow;
-};
-
-/* --- the small step ------------------------------------------------------- */
-
-/* A standard normal number (Box-Muller; one of the pair). */
-static double chain__normal(rng *r) {
-  double u1 = 1.0 - rng_uniform(r), u2 = rng_uniform(r);
-  return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
-}
-
-/* The Gaussian small step of n owed iterations: x + sqrt(n) sigma N(0, 1)
- * wrapped into [0, 1) (n steps of N(0, sigma^2) add up to one of n sigma^2). */
-static double chain__gauss(double x, double sigma, int64_t n, rng *r) {
-  double y = x + sigma * sqrt((double)n) * chain__normal(r);
-  y -= floor(y);
-  return y < 1.0 ? y : 0.0;
-}
-
-/* Kelemen's mutation: +-r with r log-uniform in (s1, s2], wrapped. */
-/* The step lengths of Kelemen's mutation for xi in [0, 1] on a table of
- * PSS_STEP_TABLE intervals, (s1 / s2)^xi at the nodes and linear between
- * them: the length is a fixed function of xi in both directions, so the
- * step stays symmetric, and a read costs no exp. */
-
-static double chain__kelemen(double x, double s2, const double *table, rng *r) {
-  /* One 32-bit draw: the sign from its top bit, xi from the other 31. */
-  uint32_t bits = rng_next_u32(r);
-  double sign = (bits >> 31) ? -1.0 : 1.0;
-  double t = (double)(bits & 0x7fffffffu) * (PSS_STEP_TABLE * 0x1.0p-31);
-  int i = (int)t;
-  double d = s2 * (table[i] + (t - i) * (table[i + 1] - table[i]));
-  /* Wrapped into [0, 1) (|sign d| < 1/2). */
-  double y = x + sign * d;
-  if (y < 0.0) y += 1.0;
-  else if (y >= 1.0) y -= 1.0;
-  return y < 1.0 ? y : 0.0;
-}
-
-/* --- the lazy vector ------------------------------------------------------ */
-
-static void pss__backup(mc_pss *p, int i) {
-  p->bak[i] = p->val[i];
-  p->mod_bak[i] = p->mod[i];
-  p->touched[p->n_touched++] = i;
-}
-
-/* Brings coordinate i up to date for the current iteration. */
-static double pss__get(mc_pss *p, int i) {
-  if (p->mod[i] < p->iter) {
-    pss__backup(p, i);
-    if (p->large) {
-      p->val[i] = rng_uniform(p->r);
-    } else {
-      int64_t from = p->mod[i];
-      if (from < p->last_large) {
-        p->val[i] = rng_uniform(p->r);
-        from = p->last_large;
-      }
-      int64_t n = p->iter - from;
-      double sc = p->scale ? p->scale[i] : 1.0;
-      if (n > PSS_MAX_REPLAY) {
-        p->val[i] = rng_uniform(p->r);
-      } else if (sc > 0.0 && p->s1 == 0.0) {
-        if (n > 0) p->val[i] = chain__gauss(p->val[i], sc * p->s2, n, p->r);
-      } else if (sc > 0.0) {
-        for (int64_t k = 0; k < n; k++)
-          p->val[i] = chain__kelemen(p->val[i], sc * p->s2, p->step_table, p->r);
-      }
-    }
-    p->mod[i] = p->iter;
-  }
-  return p->val[i];
-}
-
-/* Sets coordinate i for the current iteration (full kernels). */
-static void pss__set(mc_pss *p, int i, double v) {
-  if (p->mod[i] < p->iter) pss__backup(p, i);
-  p->val[i] = v;
-  p->mod[i] = p->iter;
-}
-
-static double pss__next(lmc_sampler *self) {
-  mc_pss *p = (mc_pss *)self;
-  int k = p->stream;
-  if (p->pos[k] >= p->stream_dim[k]) {
-    /* Past the block: a fresh number (pseudo-marginal, see chain.h). */
-    (*p->overflow)++;
-    return rng_uniform(p->r);
-  }
-  return pss__get(p, p->stream_off[k] + p->pos[k]++);
-}
-
-static void pss__skip(lmc_sampler *self, int n) {
-  mc_pss *p = (mc_pss *)self;
-  p->pos[p->stream] += n;
-}
-
-static void pss__use_stream(lmc_sampler *self, int stream) {
-  mc_pss *p = (mc_pss *)self;
-  if (stream >= 0 && stream < LMC_STREAM_COUNT) p->stream = stream;
-}
-
-static void pss__rewind(mc_pss *p) {
-  p->stream = 0;
-  for (int k = 0; k < LMC_STREAM_COUNT; k++) p->pos[k] = 0;
-}
-
-/* Starts proposing iteration iter + 1. */
-static void pss__begin(mc_pss *p, int large) {
-  p->iter++;
-  p->large = large;
-  p->n_touched = 0;
-  pss__rewind(p);
-}
-
-static void pss__accept(mc_pss *p) {
-  if (p->large) p->last_large = p->iter;
-  p->n_touched = 0;
-}
-
-static void pss__reject(mc_pss *p) {
-  for (int k = 0; k < p->n_touched; k++) {
-    int i = p->touched[k];
-    p->val[i] = p->bak[i];
-    p->mod[i] = p->mod_bak[i];
-  }
-  p->n_touched = 0;
-  p->iter--;
-}
-
-/* Brings every coordinate up to date (before a full kernel) and copies them. */
-static void pss__materialise(mc_pss *p, double *OUT_u) {
-  p->large = 0;
-  for (int i = 0; i < p->dim; i++) OUT_u[i] = pss__get(p, i);
-}
 
 /* --- kernels ----------------------------------------------------------------- */
 
@@ -258,22 +79,16 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
     return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_create: probabilities sum to 0");
 
   mc_chain *c = calloc(1, sizeof *c);
-  mc_pss *p = calloc(1, sizeof *p);
+  mc_pss *p = mc_pss_create(target->dim);
   int D = target->dim;
   if (c) c->pss = p;
   if (!c || !p) goto oom;
-  p->val = calloc((size_t)D, sizeof(double));
-  p->bak = calloc((size_t)D, sizeof(double));
-  p->mod = calloc((size_t)D, sizeof(int64_t));
-  p->mod_bak = calloc((size_t)D, sizeof(int64_t));
-  p->touched = calloc((size_t)D, sizeof(int));
   c->x.u = calloc((size_t)D, sizeof(double));
   c->y.u = calloc((size_t)D, sizeof(double));
   c->sub = calloc((size_t)D, sizeof(int));
   c->x.grad = calloc((size_t)D, sizeof(double));
   c->y.grad = calloc((size_t)D, sizeof(double));
-  if (!p->val || !p->bak || !p->mod || !p->mod_bak || !p->touched || !c->x.u || !c->y.u ||
-      !c->x.grad || !c->y.grad || !c->sub)
+  if (!c->x.u || !c->y.u || !c->x.grad || !c->y.grad || !c->sub)
     goto oom;
   if (target->eval_hess) {
     size_t hsz = (size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2;
@@ -295,22 +110,7 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
     if (!c->cy || !c->cx || !c->drawn) goto oom;
   }
   c->x.dim = c->y.dim = D;
-  p->dim = D;
-  for (int s = 0, off = 0; s < LMC_STREAM_COUNT; s++) {
-    p->stream_off[s] = off;
-    p->stream_dim[s] = target->stream_dim[s];
-    off += target->stream_dim[s];
-  }
-  p->base.next = pss__next;
-  p->base.use_stream = pss__use_stream;
-  p->base.skip_n = pss__skip;
-  p->r = &c->r;
-  p->s1 = s1;
-  p->s2 = s2;
-  for (int i = 0; i <= PSS_STEP_TABLE; i++)
-    p->step_table[i] = s1 > 0.0 ? exp(-log(s2 / s1) * i / PSS_STEP_TABLE) : 0.0;
-  p->scale = target->step_scale;
-  p->overflow = &c->overflow;
+  mc_pss_init(p, target, s1, s2, &c->r, &c->overflow);
   c->target = target;
   c->n_kernels = n;
   double acc = 0.0;
@@ -335,21 +135,14 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
   return LMC_OK;
 oom:
   mc_chain_destroy(c);
-  if (!c) free(p);
+  if (!c) mc_pss_destroy(p);
   return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for a chain of %d coordinates",
                        D);
 }
 
 void mc_chain_destroy(mc_chain *c) {
   if (!c) return;
-  if (c->pss) {
-    free(c->pss->val);
-    free(c->pss->bak);
-    free(c->pss->mod);
-    free(c->pss->mod_bak);
-    free(c->pss->touched);
-    free(c->pss);
-  }
+  mc_pss_destroy(c->pss);
   free(c->x.u);
   free(c->y.u);
   free(c->sub);
@@ -371,7 +164,7 @@ void mc_chain_destroy(mc_chain *c) {
  * with its gradient when want_grad >= 1 and its Hessian when 2 (targets
  * with eval_hess). */
 static void chain__eval(mc_chain *c, mc_state *st, int want_grad) {
-  pss__rewind(c->pss);
+  mc_pss_rewind(c->pss);
   st->grad_ok = 0;
   st->hess_ok = 0;
   st->grad_eval = want_grad;
@@ -474,14 +267,14 @@ double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_s
   p->iter = 0;
   p->last_large = 0;
   rng_seed(&c->r, seed, seq);
-  pss__begin(p, 1);
+  mc_pss_begin(p, 1);
   if (T->n_labels > 0) {
     /* Every label of the starting numbers; the state takes one in
      * proportion to its f (drawn from the chain's own stream). */
-    pss__rewind(p);
+    mc_pss_rewind(p);
     int n = T->eval_all(T, c->scratch, &p->base, -1, c->cy);
     n = chain__clean(c->cy, n < 0 ? 0 : n, &c->sum_x);
-    pss__accept(p);
+    mc_pss_accept(p);
     rng_seed(&c->r, seed, chain_seq);
     double u = rng_uniform(&c->r);
     memset(&c->x.v, 0, sizeof c->x.v);
@@ -498,7 +291,7 @@ double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_s
     return c->x.v.f;
   }
   chain__eval(c, &c->x, 0);
-  pss__accept(p);
+  mc_pss_accept(p);
   rng_seed(&c->r, seed, chain_seq);
   c->steps = 0;
   c->x.from_large = 1;
@@ -627,8 +420,8 @@ static void chain__rec_stream(lmc_sampler *self, int stream) {
 static double chain__sum_current(mc_chain *c) {
   const mc_target *T = c->target;
   mc_pss *p = c->pss;
-  pss__materialise(p, c->x.u);
-  pss__rewind(p);
+  mc_pss_materialise(p, c->x.u);
+  mc_pss_rewind(p);
   c->sum_evals++;
   int n = T->eval_all(T, c->scratch_alt ? c->scratch_alt : c->scratch, &p->base, c->x.label, c->cx);
   double sum = c->x.v.f_large;
@@ -690,9 +483,9 @@ static void chain__large_labelled(mc_chain *c, int ki, mc_splat_fn splat, void *
     ks->accepted++;
     chain__take(c, &c->cy[j], c->y.u);
     c->x.from_large = 1;
-    pss__begin(p, 1);
-    for (int q = 0; q < c->n_drawn; q++) pss__set(p, c->drawn[q], c->y.u[c->drawn[q]]);
-    pss__accept(p);
+    mc_pss_begin(p, 1);
+    for (int q = 0; q < c->n_drawn; q++) mc_pss_set(p, c->drawn[q], c->y.u[c->drawn[q]]);
+    mc_pss_accept(p);
     c->sum_x = sum_y;
   }
   c->steps++;
@@ -706,7 +499,7 @@ static void chain__large_labelled(mc_chain *c, int ki, mc_splat_fn splat, void *
 static void chain__reject_outside(mc_chain *c, int ki, mc_splat_fn splat, void *ctx) {
   if (splat && c->x.v.f > 0.0) splat(ctx, &c->x.v, 1.0 / c->x.v.f);
   c->stats[ki].proposed++;
-  pss__reject(c->pss);
+  mc_pss_reject(c->pss);
   c->steps++;
   for (int i = 0; i < c->n_kernels; i++)
     if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, 0);
@@ -737,12 +530,12 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     int n_sub = k->coords ? k->coords(k->self, &c->x, c->sub) : -1;
     if (n_sub >= 0) {
       p->large = 0;
-      for (int q = 0; q < n_sub; q++) c->x.u[c->sub[q]] = pss__get(p, c->sub[q]);
+      for (int q = 0; q < n_sub; q++) c->x.u[c->sub[q]] = mc_pss_get(p, c->sub[q]);
     } else {
-      pss__materialise(p, c->x.u);
+      mc_pss_materialise(p, c->x.u);
     }
     if (c->x.grad_eval < k->needs_grad) chain__regrad(c, k->needs_grad);
-    pss__begin(p, 0);
+    mc_pss_begin(p, 0);
     double log_fwd = k->propose(k->self, &c->r, &c->x, c->y.u);
     if (log_fwd == -INFINITY) {
       /* y lies outside [0,1)^dim, where the target is zero: rejected as
@@ -751,9 +544,9 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
       return ki;
     }
     if (n_sub >= 0) {
-      for (int q = 0; q < n_sub; q++) pss__set(p, c->sub[q], c->y.u[c->sub[q]]);
+      for (int q = 0; q < n_sub; q++) mc_pss_set(p, c->sub[q], c->y.u[c->sub[q]]);
     } else {
-      for (int i = 0; i < p->dim; i++) pss__set(p, i, c->y.u[i]);
+      for (int i = 0; i < p->dim; i++) mc_pss_set(p, i, c->y.u[i]);
     }
     int delayed = k->log_screen && c->x.v.f > 0.0;
     /* The proposal with what the kernel needs at a state (gradient, or
@@ -779,11 +572,11 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     /* A small step of every other coordinate (the lazy vector owes every
      * accepted non-large iteration a small step) with the technique
      * coordinate redrawn: a product of symmetric proposals. */
-    pss__begin(p, 0);
-    pss__set(p, k->coord, rng_uniform(&c->r));
+    mc_pss_begin(p, 0);
+    mc_pss_set(p, k->coord, rng_uniform(&c->r));
     chain__eval(c, &c->y, k->needs_grad);
   } else {
-    pss__begin(p, k->kind == MC_KERNEL_LARGE);
+    mc_pss_begin(p, k->kind == MC_KERNEL_LARGE);
     chain__eval(c, &c->y, k->needs_grad);
   }
 
@@ -814,14 +607,14 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   ks->f_sum2 += c->y.v.f * c->y.v.f;
   if (accepted) {
     ks->accepted++;
-    pss__accept(p);
+    mc_pss_accept(p);
     mc_state t = c->x;
     c->x = c->y;
     c->y = t;
     c->x.from_large = k->kind == MC_KERNEL_LARGE;
     c->sum_x = 0.0; /* labelled targets: F of the new state is not known */
   } else {
-    pss__reject(p);
+    mc_pss_reject(p);
   }
   c->steps++;
   for (int i = 0; i < c->n_kernels; i++)
