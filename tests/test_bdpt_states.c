@@ -134,10 +134,9 @@ static int rel_equal(double a, double b, double tol) {
 static mc_target make_target(fixture *fx, mc_bdpt_states *ctx, double rough_min) {
   render_settings rs = fx->sc->settings;
   rs.maxdepth = KMAX;
-  rs.rough_min = rough_min;
   mc_target T;
   lmc_error err;
-  assert_int_equal(mc_bdpt_states_init(&T, ctx, fx->sc, &rs, 1, KMAX, &err), LMC_OK);
+  assert_int_equal(mc_bdpt_states_init(&T, ctx, fx->sc, &rs, rough_min, 1, KMAX, &err), LMC_OK);
   return T;
 }
 

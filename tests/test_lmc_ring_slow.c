@@ -43,7 +43,7 @@
 static int g_checks;
 
 /* Mean and SE over RUNS of the region means (index GRID*GRID: the image). */
-static void run_stats(const scene *s, const char *integrator, const char *adapt, int states,
+static void run_stats(const scene *s, const char *integrator, const char *adapt, const char *states,
                       double mean[N_STATS], double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
@@ -51,10 +51,10 @@ static void run_stats(const scene *s, const char *integrator, const char *adapt,
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
     lmc_error err;
     assert_int_equal(mcmc_set(&rs, "adapt", adapt, &err), LMC_OK);
-    rs.mcmc_states = states; /* (the driver's --states) */
+    if (states) assert_int_equal(mcmc_set(&rs, "states", states, &err), LMC_OK);
     rs.spp = 128;
     rs.set |= SET_SPP;
-    rs.bootstrap = 131072; /* b to a few percent: its error is part of each run's, so of the SE */
+    assert_int_equal(mcmc_set(&rs, "bootstrap", "131072", &err), LMC_OK); /* b to a few percent: its error is part of each run's, so of the SE */
     rs.time_limit = 0.0;
     rs.threads = 2;
     rs.seed = 500 + (uint64_t)r;
@@ -76,10 +76,9 @@ static void check_scene(const char *folder) {
   camera_set_resolution(&s->cam, 24, 18);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", "none", MCMC_STATES_DEFAULT, ref, ref_se);
+  run_stats(s, "bdpt", "none", NULL, ref, ref_se);
   const char *const modes[MODES] = {"diminish", "cache", "cache", "none", "none"};
-  const int states[MODES] = {MCMC_STATES_MMLT, MCMC_STATES_MMLT, MCMC_STATES_PT,
-                             MCMC_STATES_BDPT, MCMC_STATES_MMLT};
+  const char *const states[MODES] = {"mmlt", "mmlt", "pt", "bdpt", "mmlt"};
   const char *names[MODES] = {"diminish", "cache", "cache, pt states", "bdpt states",
                               "mmlt states"};
   const char *integ[MODES] = {"lmc", "lmc", "lmc", "h2mc", "h2mc"};

@@ -15,6 +15,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <cmocka.h>
@@ -283,16 +284,16 @@ static int write_texture(void **state) {
 static void test_direct_samples(void **state) {
   (void)state;
   static const struct {
-    const char *prop; /* the integrator's property, or "" */
-    int separate, set;
-    long long spp;
+    const char *prop;   /* the integrator's property, or "" */
+    const char *direct; /* --direct as passed on (NULL: not given) */
+    const char *spp;    /* --direct-spp as passed on (NULL: not given) */
     int warnings;
   } cases[] = {
-      {"", 1, 0, 0, 0},
-      {"<integer name=\"directSamples\" value=\"32\"/>", 1, 1, 32, 0},
-      {"<integer name=\"directSamples\" value=\"-1\"/>", 0, 1, 0, 0},
-      {"<integer name=\"directSamples\" value=\"0\"/>", 1, 1, 0, 1},
-      {"<boolean name=\"separateDirect\" value=\"false\"/>", 0, 1, 0, 0},
+      {"", NULL, NULL, 0},
+      {"<integer name=\"directSamples\" value=\"32\"/>", "separate", "32", 0},
+      {"<integer name=\"directSamples\" value=\"-1\"/>", "mcmc", NULL, 0},
+      {"<integer name=\"directSamples\" value=\"0\"/>", "separate", "0", 1},
+      {"<boolean name=\"separateDirect\" value=\"false\"/>", "mcmc", NULL, 0},
   };
   int checked = 0;
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -303,9 +304,12 @@ static void test_direct_samples(void **state) {
              cases[i].prop);
     int warnings;
     scene *s = load_case_ok("/tmp/lmc_loader_direct.xml", xml, i, &warnings);
-    assert_int_equal(s->settings.direct_separate, cases[i].separate);
-    assert_int_equal((s->settings.set & SET_DIRECT) != 0, cases[i].set);
-    assert_int_equal(s->settings.direct_spp, cases[i].spp);
+    render_settings rs;
+    lmc_error err;
+    assert_int_equal(mcmc_scene_settings(s, &rs, &err), LMC_OK);
+    const char *direct = lmc_opt_value(&rs, "direct"), *spp = lmc_opt_value(&rs, "direct-spp");
+    assert_true(cases[i].direct ? direct && !strcmp(direct, cases[i].direct) : !direct);
+    assert_true(cases[i].spp ? spp && !strcmp(spp, cases[i].spp) : !spp);
     assert_int_equal(warnings, cases[i].warnings);
     scene_destroy(s);
     checked++;
@@ -386,9 +390,11 @@ static void test_happy(void **state) {
   assert_string_equal(r->integrator, "pssmlt");
   assert_int_equal(r->maxdepth, 7);
   assert_int_equal(r->rrdepth, 3);
-  assert_true(near(r->largestep, 0.25, 1e-15));
+  const char *large = lmc_opt_value(r, "largestep");
+  assert_non_null(large);
+  assert_true(near(strtod(large, NULL), 0.25, 1e-15));
   assert_int_equal((int)r->spp, 32);
-  unsigned want = SET_INTEGRATOR | SET_MAXDEPTH | SET_RRDEPTH | SET_LARGESTEP | SET_SPP;
+  unsigned want = SET_INTEGRATOR | SET_MAXDEPTH | SET_RRDEPTH | SET_SPP;
   assert_int_equal(r->set, want);
 
   /* BSDFs. */
@@ -549,8 +555,6 @@ static void check_torus(const char *name, int h2mc) {
   assert_int_equal(s->settings.maxdepth, 8);
   assert_int_equal(s->settings.mindepth, -1);
   assert_int_equal((int)s->settings.spp, h2mc ? 67 : 245);
-  assert_int_equal(s->settings.h2mc, h2mc);
-  assert_int_equal(s->settings.mala, !h2mc);
   /* The floor's phong uses the checker bitmap with uvscale 100. */
   int bitmaps = 0;
   for (int i = 0; i < s->n_bsdfs; i++)

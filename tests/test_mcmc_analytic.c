@@ -62,7 +62,7 @@ static int g_checks;
 static int g_even; /* --allocate even for the renders of check_scene */
 static int g_direct; /* --direct separate for the renders (the CLI's default; 0: mcmc) */
 static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
-static int g_states;     /* --states for the renders (MCMC_STATES_DEFAULT: the integrator's) */
+static const char *g_states; /* --states for the renders (NULL: the integrator's) */
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
 
 static scene *load(const char *name) {
@@ -86,11 +86,12 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   rs.time_limit = 0.0;
   rs.threads = threads;
   rs.seed = seed;
-  rs.bootstrap = 16384;
   rs.quiet = 1;
-  rs.mcmc_even = g_even;
-  rs.direct_separate = g_direct;
-  rs.mcmc_states = g_states;
+  lmc_error err;
+  assert_int_equal(mcmc_set(&rs, "bootstrap", "16384", &err), LMC_OK);
+  assert_int_equal(mcmc_set(&rs, "allocate", g_even ? "even" : "b", &err), LMC_OK);
+  assert_int_equal(mcmc_set(&rs, "direct", g_direct ? "separate" : "mcmc", &err), LMC_OK);
+  if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
   return rs;
 }
 
@@ -200,10 +201,10 @@ static void test_h2mc(void **state) {
   rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
-  g_states = MCMC_STATES_MMLT;
+  g_states = "mmlt";
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.003);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
-  g_states = MCMC_STATES_DEFAULT;
+  g_states = NULL;
 }
 
 static void test_diffuse_sphere(void **state) {
@@ -281,8 +282,8 @@ static int64_t render_film(const scene *s, const char *integrator, const char *a
   assert_int_equal(mcmc_set(&rs, "adapt", adapt, &err), LMC_OK);
   assert_int_equal(mcmc_set(&rs, "cache-gradient", g_cache_gradient ? "on" : "off", &err), LMC_OK);
   if (adaptive) {
-    rs.bootstrap = 0;
-    rs.bootstrap_error = 0.003;
+    lmc_opt_unset(&rs, "bootstrap");
+    assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.003", &err), LMC_OK);
   }
   render_stats st;
   assert_int_equal(mcmc_render_run(s, &rs, OUT_f, &st, &err), LMC_OK);

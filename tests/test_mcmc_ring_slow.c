@@ -48,7 +48,9 @@ static void run_stats(const scene *s, const char *integrator, double mean[N_STAT
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
     rs.spp = 80;
     rs.set |= SET_SPP;
-    rs.bootstrap_error = 0.03; /* the default, adaptive bootstrap; its error is part of the SE */
+    lmc_error err;
+    /* The default, adaptive bootstrap; its error is part of the SE. */
+    assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
     rs.time_limit = 0.0;
     rs.threads = 2;
     rs.seed = 1000 + (uint64_t)r;

@@ -125,18 +125,18 @@ static void check_scene(const char *file, const rgb *expect, int n_groups) {
   double sum[2][3] = {{0}}, sum2[2][3] = {{0}};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
+    lmc_error err;
     snprintf(rs.integrator, sizeof rs.integrator, "indep-bdpt");
     rs.spp = spp;
     rs.set |= SET_SPP;
     rs.time_limit = 0.0;
     rs.threads = 2;
     rs.seed = 300 + (uint64_t)r;
-    rs.bootstrap = 16384;
+    assert_int_equal(mcmc_set(&rs, "bootstrap", "16384", &err), LMC_OK);
     rs.quiet = 0; /* (the report is called only when not quiet) */
-    rs.direct_separate = 0;
+    assert_int_equal(mcmc_set(&rs, "direct", "mcmc", &err), LMC_OK);
     film f;
     render_stats st;
-    lmc_error err;
     lmc_error_clear(&err);
     memset(&g_last, 0, sizeof g_last);
     assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);

@@ -162,6 +162,9 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
   if (st) return st;
   if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
   if (cli->set & SET_INTEGRATOR) memcpy(rs.integrator, cli->integrator, sizeof rs.integrator);
+  /* The scene's directSamples is a sample count for its own spp: --spp
+   * given here sets both passes (unless --direct-spp is given too). */
+  if (cli->set & SET_SPP) lmc_opt_unset(&rs, "direct-spp");
   int adapt_given = 0;
   for (int i = 0; i < n_given; i++) {
     char msg[512];
@@ -169,9 +172,6 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
     adapt_given |= !strcmp(given[i].opt->name, "adapt");
   }
   if ((cli->set & SET_TIME) && !(cli->set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
-  /* The scene's directSamples is a sample count for its own spp: --spp
-   * given here sets both passes. */
-  if (cli->set & SET_SPP) rs.direct_spp = 0;
   rs.quiet = cli->quiet;
   if (!lmc_integrator_known(rs.integrator)) {
     lmc_warn(scene_path, 0,

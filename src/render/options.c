@@ -185,6 +185,20 @@ lmc_status lmc_opt_read(const lmc_opt_table *t, const render_settings *rs, void 
   return LMC_OK;
 }
 
+const char *lmc_opt_value(const render_settings *rs, const char *name) {
+  for (int k = 0; k < rs->n_params; k++)
+    if (!strcmp(rs->params[k].name, name)) return rs->params[k].value;
+  return NULL;
+}
+
+void lmc_opt_unset(render_settings *rs, const char *name) {
+  int k = 0;
+  while (k < rs->n_params && strcmp(rs->params[k].name, name)) k++;
+  if (k == rs->n_params) return;
+  memmove(&rs->params[k], &rs->params[k + 1], (size_t)(rs->n_params - k - 1) * sizeof rs->params[0]);
+  rs->n_params--;
+}
+
 /* 1 when `name` is one of o's names in a scene. */
 static int opt__scene_name(const lmc_opt *o, const char *name) {
   if (!strcmp(o->name, name)) return 1;

@@ -10,12 +10,12 @@
  * A flag is given as `--name value` or `--name=value`. A bad value is
  * refused with a message that names the flag and what it accepts.
  *
- * Where a setting's value lives. The renderer's and the MCMC driver's
- * tables set fields of render_settings. A plugin's own table (an
- * integrator's) sets fields of its own struct, which render/ never sees:
- * its values travel in render_settings.params as checked text (name,
- * value), and the plugin reads them into its struct with lmc_opt_read when
- * it starts.
+ * Where a setting's value lives. The renderer's table sets fields of
+ * render_settings. A plugin's table (the MCMC driver's, a state space's,
+ * an integrator's) sets fields of its own struct, which render/ never
+ * sees: its values travel in render_settings.params as checked text
+ * (name, value), and the plugin reads them into its struct with
+ * lmc_opt_read when it starts.
  */
 #ifndef LMC_RENDER_OPTIONS_H
 #define LMC_RENDER_OPTIONS_H
@@ -88,6 +88,13 @@ int lmc_opt_set(const lmc_opt_table *t, const lmc_opt *o, const char *s, render_
  * does not parse. */
 lmc_status lmc_opt_read(const lmc_opt_table *t, const render_settings *rs, void *OUT,
                         lmc_error *err);
+
+/* The value given to the setting `name` (a plugin's, without dashes) in
+ * rs->params, as checked text; NULL when it was not given. */
+const char *lmc_opt_value(const render_settings *rs, const char *name);
+
+/* Forgets the setting `name` given in rs->params (nothing when none). */
+void lmc_opt_unset(render_settings *rs, const char *name);
 
 /* The option's value in the struct at base as the help shows it (o->def
  * when given). */

@@ -111,49 +111,63 @@ static const int mcmc__direct_values[] = {1, 0};
 static const char *const mcmc__allocations[] = {"b", "even", NULL};
 
 static const lmc_opt mcmc__opts[] = {
-    {"states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
-     mc_space_ids, SET_STATES, NULL, "the integrator's: mmlt for mmlt, else bdpt",
+    {"states", LMC_OPT_CHOICE, offsetof(mcmc_settings, states), 0, 0, 0, mc_space_names,
+     mc_space_ids, 0, NULL, "the integrator's: mmlt for mmlt, else bdpt",
      "the chains' states: bdpt (a BDPT sample and one of its strategies, every length in one "
      "family), mmlt (one family per path length, a strategy coordinate) or pt (a path tracer's "
      "numbers)", NULL},
-    {"lmc-states", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_states), 0, 0, 0, mc_space_names,
-     mc_space_ids, SET_STATES, NULL, "the integrator's",
+    {"lmc-states", LMC_OPT_CHOICE, offsetof(mcmc_settings, states), 0, 0, 0, mc_space_names,
+     mc_space_ids, 0, NULL, "the integrator's",
      "the same as --states (the name it had for lmc alone)", NULL},
-    {"largestep", LMC_OPT_DOUBLE, offsetof(render_settings, largestep), 0, 0, 1, NULL, NULL,
-     SET_LARGESTEP, "P", NULL, "large-step probability", "pLarge largestepprob"},
-    {"largestep-scale", LMC_OPT_DOUBLE, offsetof(render_settings, largestep_scale), 0, 0, 1e6, NULL,
-     NULL, SET_LARGESTEP_SCALE, "X", NULL,
+    {"largestep", LMC_OPT_DOUBLE, offsetof(mcmc_settings, largestep), 0, 0, 1, NULL, NULL,
+     0, "P", NULL, "large-step probability", "pLarge largestepprob"},
+    {"largestep-scale", LMC_OPT_DOUBLE, offsetof(mcmc_settings, largestep_scale), 0, 0, 1e6, NULL,
+     NULL, 0, "X", NULL,
      "the large-step probability times X after the first tenth of the budget (the LMC paper's "
      "largestepscale)", "largestepscale"},
-    {"small-step", LMC_OPT_CHOICE, offsetof(render_settings, small_gauss), 0, 0, 0,
-     mcmc__small_steps, NULL, SET_SMALL_STEP, NULL, NULL,
+    {"small-step", LMC_OPT_CHOICE, offsetof(mcmc_settings, small_gauss), 0, 0, 0,
+     mcmc__small_steps, NULL, 0, NULL, NULL,
      "kelemen: offsets log-uniform in (1/1024, S]; gauss: normal offsets of standard deviation S", NULL},
-    {"technique-prob", LMC_OPT_DOUBLE, offsetof(render_settings, technique_prob), 0, 0, 1, NULL,
+    {"technique-prob", LMC_OPT_DOUBLE, offsetof(mcmc_settings, technique_prob), 0, 0, 1, NULL,
      NULL, 0, "P", NULL,
      "per-length states: the technique mutation's share of the steps that are not large",
      NULL},
-    {"sigma", LMC_OPT_DOUBLE, offsetof(render_settings, sigma), 0, 1e-9, 1, NULL, NULL, SET_SIGMA,
+    {"sigma", LMC_OPT_DOUBLE, offsetof(mcmc_settings, sigma), 0, 1e-9, 1, NULL, NULL, 0,
      "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S", NULL},
-    {"chains", LMC_OPT_INT, offsetof(render_settings, chains), 0, 1, 1 << 20, NULL, NULL,
-     SET_CHAINS, "N", "256", "Markov chains", "numchains"},
-    {"bootstrap", LMC_OPT_INT64, offsetof(render_settings, bootstrap), 0, 1, (double)(INT64_MAX / 2),
-     NULL, NULL, SET_BOOTSTRAP, "N", "a tenth of --time, or under --spp enough for --bootstrap-error",
+    {"chains", LMC_OPT_INT, offsetof(mcmc_settings, chains), 0, 1, 1 << 20, NULL, NULL,
+     0, "N", "256", "Markov chains", "numchains"},
+    {"bootstrap", LMC_OPT_INT64, offsetof(mcmc_settings, bootstrap), 0, 1, (double)(INT64_MAX / 2),
+     NULL, NULL, 0, "N", "a tenth of --time, or under --spp enough for --bootstrap-error",
      "independent paths that estimate the normalisation b", "numinitsamples"},
-    {"bootstrap-error", LMC_OPT_DOUBLE, offsetof(render_settings, bootstrap_error), 0, 1e-4, 1, NULL,
+    {"bootstrap-error", LMC_OPT_DOUBLE, offsetof(mcmc_settings, bootstrap_error), 0, 1e-4, 1, NULL,
      NULL, 0, "E", NULL, "without --bootstrap, under --spp: b's target relative standard error", NULL},
-    {"direct", LMC_OPT_CHOICE, offsetof(render_settings, direct_separate), 0, 0, 0,
-     mcmc__direct_modes, mcmc__direct_values, SET_DIRECT, NULL, NULL,
+    {"direct", LMC_OPT_CHOICE, offsetof(mcmc_settings, direct_separate), 0, 0, 0,
+     mcmc__direct_modes, mcmc__direct_values, 0, NULL, NULL,
      "separate: pt renders the paths of one and two segments, MCMC the longer ones; mcmc: MCMC "
      "renders every path", NULL},
-    {"allocate", LMC_OPT_CHOICE, offsetof(render_settings, mcmc_even), 0, 0, 0, mcmc__allocations,
+    {"direct-spp", LMC_OPT_INT64, offsetof(mcmc_settings, direct_spp), 0, 0, (double)(INT64_MAX / 2),
+     NULL, NULL, 0, "N", "--spp",
+     "--direct separate under --spp: the path-traced pass's samples per pixel (Mitsuba's "
+     "directSamples)", NULL},
+    {"allocate", LMC_OPT_CHOICE, offsetof(mcmc_settings, even), 0, 0, 0, mcmc__allocations,
      NULL, 0, NULL, NULL,
      "per-length states: mutations per length in proportion to its b, or the same for every "
      "chain", NULL},
 };
 
+static const mcmc_settings mcmc__defaults = {
+    .states = MCMC_STATES_DEFAULT,
+    .largestep = 0.3,
+    .largestep_scale = 1.0,
+    .technique_prob = 0.1,
+    .sigma = 1.0 / 64.0,
+    .bootstrap_error = 0.01,
+    .direct_separate = 1, /* as Mitsuba's pssmlt and the LMC paper's code; see README */
+};
+
 const lmc_opt_table mcmc_driver_options = {
     "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)", mcmc__opts,
-    (int)(sizeof mcmc__opts / sizeof mcmc__opts[0]), NULL, 0};
+    (int)(sizeof mcmc__opts / sizeof mcmc__opts[0]), &mcmc__defaults, sizeof mcmc__defaults};
 
 /* --- splat records ----------------------------------------------------------- */
 
@@ -223,8 +237,8 @@ static int64_t mcmc__mutations(const mcmc_render *R) {
 static int mcmc__kernels(mcmc_render *R, int i, mc_kernel *k, double *p) {
   const mcmc_family *F = &R->fam[R->slots[i].family];
   int n = R->M->chain_kernels(R->mrun, &R->setup, i, F->sf, k, p);
-  if (!R->ls_pending && R->rs->largestep_scale != 1.0)
-    mc_kernels_scale_large(k, p, n, R->rs->largestep_scale);
+  if (!R->ls_pending && R->ms.largestep_scale != 1.0)
+    mc_kernels_scale_large(k, p, n, R->ms.largestep_scale);
   return n;
 }
 
@@ -248,14 +262,14 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
   const render_settings *rs = R->rs;
   *OUT_done = 0;
   R->crs = *rs;
-  if (!rs->direct_separate) return film_init(R->out, R->s->cam.width, R->s->cam.height, err);
+  if (!R->ms.direct_separate) return film_init(R->out, R->s->cam.width, R->s->cam.height, err);
   progress_phase(&R->bar, "direct light", 0.0);
   render_settings prs = *rs;
   snprintf(prs.integrator, sizeof prs.integrator, "pt");
   prs.maxdepth = rs->maxdepth >= 0 && rs->maxdepth < 2 ? rs->maxdepth : 2;
   prs.snapshot = 0.0;
   prs.snapshot_fn = NULL;
-  if (rs->direct_spp > 0) prs.spp = rs->direct_spp;
+  if (R->ms.direct_spp > 0) prs.spp = R->ms.direct_spp;
   if (R->timed) {
     prs.time_limit = 0.15 * rs->time_limit;
     if (!(rs->set & SET_SPP)) prs.set &= ~(unsigned)SET_SPP;
@@ -280,7 +294,7 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
  * scale and the integrator's run. */
 static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
   const render_settings *rs = R->rs;
-  int id = rs->mcmc_states != MCMC_STATES_DEFAULT ? rs->mcmc_states : R->M->default_states;
+  int id = R->ms.states != MCMC_STATES_DEFAULT ? R->ms.states : R->M->default_states;
   const mc_space_type *type = mc_space_find(id);
   if (!type) return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s: unknown states", rs->integrator);
   lmc_status status = type->create(&R->sp, R->s, &R->crs, err);
@@ -292,11 +306,9 @@ static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
   for (int g = 0; g < R->n_fam; g++) R->fam[g].sf = &R->sp.fam[g];
   /* Kelemen's s2: --sigma, else the space's default (or 1/64), 0.01 for
    * --small-step gauss. */
-  R->crs.sigma = (rs->set & SET_SIGMA) ? rs->sigma
-                 : rs->small_gauss     ? MCMC_GAUSS_SIGMA
-                 : R->sp.sigma > 0.0   ? R->sp.sigma
-                                       : rs->sigma;
-  R->setup = (mc_method_setup){R->s, &R->crs, &R->sp};
+  if (!lmc_opt_value(rs, "sigma"))
+    R->ms.sigma = R->ms.small_gauss ? MCMC_GAUSS_SIGMA : R->sp.sigma > 0.0 ? R->sp.sigma : R->ms.sigma;
+  R->setup = (mc_method_setup){R->s, &R->crs, &R->ms, &R->sp};
   if (R->M->create) return R->M->create(&R->mrun, &R->setup, err);
   return LMC_OK;
 }
@@ -312,7 +324,7 @@ static void mcmc__allocate(mcmc_render *R) {
   for (int g = 0; g < R->n_fam; g++) {
     mcmc_family *F = &R->fam[g];
     if (!(F->bt.b > 0.0)) continue;
-    int n_chains = rs->chains > 0 ? rs->chains : MCMC_CHAINS;
+    int n_chains = R->ms.chains > 0 ? R->ms.chains : MCMC_CHAINS;
     int nc = (int)floor(n_chains * F->bt.b / R->b_total + 0.5);
     F->n_chains = nc < MCMC_MIN_CHAINS ? MCMC_MIN_CHAINS : nc;
     F->first_chain = R->n_slots;
@@ -342,7 +354,7 @@ static void mcmc__allocate(mcmc_render *R) {
     mcmc_family *F = &R->fam[g];
     F->m_round = MCMC_ROUND;
     F->done = 0;
-    if (R->norm != MCMC_NORM_BUFFERS || rs->mcmc_even || F->n_chains == 0) continue;
+    if (R->norm != MCMC_NORM_BUFFERS || R->ms.even || F->n_chains == 0) continue;
     double w = F->bt.b / F->n_chains / top;
     int m = (int)floor(MCMC_ROUND * w + 0.5);
     F->m_round = m < 1 ? 1 : m > MCMC_ROUND ? MCMC_ROUND : m;
@@ -367,9 +379,10 @@ static lmc_status mcmc__start_chains(mcmc_render *R, lmc_error *err) {
   lmc_status status = R->M->set_chains ? R->M->set_chains(R->mrun, R->n_slots, family, err) : LMC_OK;
   free(family);
   if (status) return status;
-  if (!(crs->sigma > (crs->small_gauss ? 0.0 : 1.0 / 1024.0) && crs->sigma < 0.5))
+  const mcmc_settings *ms = &R->ms;
+  if (!(ms->sigma > (ms->small_gauss ? 0.0 : 1.0 / 1024.0) && ms->sigma < 0.5))
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
-                         crs->small_gauss ? "--sigma must lie in (0, 1/2)"
+                         ms->small_gauss ? "--sigma must lie in (0, 1/2)"
                                           : "--sigma must lie in (1/1024, 1/2)");
   for (int g = 0; g < R->n_fam; g++) {
     mcmc_family *F = &R->fam[g];
@@ -640,15 +653,17 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
                          "integrator %s is not built on this framework yet", rs->integrator);
   R.s = s, R.rs = rs, R.out = out, R.st = st;
+  lmc_status status = lmc_opt_read(&mcmc_driver_options, rs, &R.ms, err);
+  if (status) return status;
   R.nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
   R.timed = rs->time_limit > 0.0;
   R.by_spp = !R.timed || (rs->set & SET_SPP);
-  R.ls_pending = rs->largestep_scale != 1.0;
+  R.ls_pending = R.ms.largestep_scale != 1.0;
   R.t0 = omp_get_wtime();
   /* One progress line over the phases: direct light, bootstrap, chains. */
   progress_init(&R.bar, rs->integrator, rs->quiet);
   int done = 0;
-  lmc_status status = mcmc__direct(&R, &done, err);
+  status = mcmc__direct(&R, &done, err);
   if (status || done) {
     progress_end(&R.bar);
     st->seconds = omp_get_wtime() - R.t0;
@@ -664,7 +679,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
       fprintf(stderr, "lmc: %s's bootstrap found no light on paths of %d or more segments (%lld "
               "paths): %s\n", rs->integrator, R.crs.mindepth > 1 ? R.crs.mindepth : 1,
               (long long)st->mcmc_boot_paths,
-              rs->direct_separate ? "the image is --direct separate's path-traced pass alone"
+              R.ms.direct_separate ? "the image is --direct separate's path-traced pass alone"
                                   : "the image is black");
   } else if (!status) {
     status = mcmc__start_chains(&R, err);

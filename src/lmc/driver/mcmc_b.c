@@ -136,10 +136,10 @@ lmc_status mcmc__bootstrap(mcmc_render *R, lmc_error *err) {
   const double t_boot = omp_get_wtime();
   progress_phase(&R->bar, "bootstrap", R->timed ? (t_boot - R->t0) / rs->time_limit : 0.0);
   mc_boot_params bp = {
-      .fixed = R->sp.estimate_b ? MCMC_BOOT_BATCH : rs->bootstrap > 0 ? rs->bootstrap : 0,
+      .fixed = R->sp.estimate_b ? MCMC_BOOT_BATCH : R->ms.bootstrap > 0 ? R->ms.bootstrap : 0,
       .batch = MCMC_BOOT_BATCH,
       .cap_total = MCMC_BOOT_CAP,
-      .rel_err = rs->bootstrap_error,
+      .rel_err = R->ms.bootstrap_error,
       .seconds = R->timed ? 0.1 * (rs->time_limit - (t_boot - R->t0)) : INFINITY,
       .stop = render_stop_signal,
   };
@@ -150,8 +150,8 @@ lmc_status mcmc__bootstrap(mcmc_render *R, lmc_error *err) {
     failed = mc_boot_run(boot, R->n_fam, &bp, mcmc__bootstrap_draw, R);
     if (!failed && R->sp.estimate_b) {
       double left = R->timed ? bp.seconds - (omp_get_wtime() - t_boot) : INFINITY;
-      mc_space_b_request rq = {rs->bootstrap > 0 ? rs->bootstrap : 0,
-                               R->timed ? fmax(left, 0.0) : INFINITY, rs->bootstrap_error,
+      mc_space_b_request rq = {R->ms.bootstrap > 0 ? R->ms.bootstrap : 0,
+                               R->timed ? fmax(left, 0.0) : INFINITY, R->ms.bootstrap_error,
                                MCMC_BOOT_CAP, rs->seed, R->nthreads};
       R->shared_paths = R->sp.estimate_b(&R->sp, boot, &rq, R->cnt);
       failed = R->shared_paths < 0;

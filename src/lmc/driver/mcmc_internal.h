@@ -67,7 +67,8 @@ typedef enum mcmc_norm {
 typedef struct mcmc_render {
   const scene *s;
   const render_settings *rs; /* the caller's */
-  render_settings crs;       /* the chains': mindepth after the direct pass, sigma resolved */
+  render_settings crs;       /* the chains': mindepth after the direct pass */
+  mcmc_settings ms;          /* the driver's (its flags), sigma resolved at setup */
   film *out;
   render_stats *st;
   progress bar;

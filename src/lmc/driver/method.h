@@ -33,11 +33,30 @@
 #include "render/scene.h"
 #include "render/settings.h"
 
+/* The driver's settings: its flags (mcmc.c's table), read from
+ * render_settings.params when a render starts. */
+typedef struct mcmc_settings {
+  int states;             /* --states: MCMC_STATES_* (space.h; DEFAULT: the integrator's) */
+  double largestep;       /* --largestep: the large step's probability */
+  double largestep_scale; /* --largestep-scale: it times this after a tenth of the budget */
+  int small_gauss;        /* --small-step gauss: Gaussian small steps instead of Kelemen's */
+  double technique_prob;  /* --technique-prob: the technique mutation's share of the rest */
+  double sigma;           /* --sigma: the small step's scale; an integrator sees it resolved
+                             (the space's default, or 0.01 for gauss, when not given) */
+  int chains;             /* --chains */
+  int64_t bootstrap;      /* --bootstrap: paths that estimate b (0: adaptive) */
+  double bootstrap_error; /* --bootstrap-error: b's target relative standard error */
+  int direct_separate;    /* --direct separate: pt renders the paths of <= 2 segments */
+  int64_t direct_spp;     /* --direct-spp: that pass's samples per pixel (0: --spp) */
+  int even;               /* --allocate even: every chain the same mutations */
+} mcmc_settings;
+
 /* What the driver tells an integrator at create. */
 typedef struct mc_method_setup {
   const scene *s;            /* borrowed */
-  const render_settings *rs; /* the chains' settings: sigma the small step's (--sigma or the
-                                space's default), mindepth as the chains see it */
+  const render_settings *rs; /* the chains' settings: mindepth as the chains see it, and the
+                                plugins' own (lmc_opt_read) */
+  const mcmc_settings *ms;   /* the driver's, sigma resolved */
   const mc_space *space;     /* borrowed: the families and their targets */
 } mc_method_setup;
 
@@ -72,11 +91,11 @@ const mc_method *mc_method_find(const char *name);
 lmc_status mc_method_register(const mc_method *m, lmc_error *err);
 
 /* The default mix of Kelemen et al. 2002 and Hachisuka et al. 2014
- * (kernel_mix.c): the large step with probability rs->largestep, the small
- * step (Kelemen's with offsets in (1/1024, rs->sigma], or --small-step
+ * (kernel_mix.c): the large step with probability ms->largestep, the small
+ * step (Kelemen's with offsets in (1/1024, ms->sigma], or --small-step
  * gauss) and, on a family with a technique coordinate, the technique
  * mutation (--technique-prob of the rest, 0.1). Returns the kernels' count. */
-int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, mc_kernel *OUT_k,
+int mc_kernels_metropolis(const mcmc_settings *ms, const mc_space_family *F, mc_kernel *OUT_k,
                           double *OUT_p);
 
 /* --largestep-scale: the large step's probability (kernel 0, when it is

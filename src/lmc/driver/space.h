@@ -73,11 +73,20 @@ struct mc_space {
   void *ctx;                     /* the space's own data */
 };
 
+/* The state spaces' ids (--states). */
+typedef enum mcmc_states {
+  MCMC_STATES_DEFAULT = 0, /* the integrator's own */
+  MCMC_STATES_PT,          /* a unidirectional path tracer's primary samples */
+  MCMC_STATES_MMLT,        /* one family of chains per path length (Hachisuka et al. 2014) */
+  MCMC_STATES_BDPT         /* one family over every length: a BDPT sample's numbers and one
+                              of its strategies */
+} mcmc_states;
+
 /* A kind of state space, by --states name. create fills *OUT (zeroed by
  * the caller) for the chains' settings rs (mindepth as the chains see it). */
 typedef struct mc_space_type {
   const char *name;
-  int id; /* MCMC_STATES_* (render/settings.h) */
+  int id; /* MCMC_STATES_* */
   lmc_status (*create)(mc_space *OUT, const scene *s, const render_settings *rs, lmc_error *err);
   const lmc_opt_table *opts; /* its own flags (NULL: none) */
 } mc_space_type;

@@ -32,7 +32,7 @@ static const h2mc_settings h2mc__defaults = {0.0, 0.4};
 static const lmc_opt_table h2mc__options; /* (below) */
 
 typedef struct h2mc_run {
-  render_settings rs;
+  mcmc_settings ms;
   h2mc_settings hs;
   const mc_space *space; /* borrowed */
   lmc_kernel_params kp;  /* the small steps' s1, s2 (as lmc's) */
@@ -60,7 +60,7 @@ static lmc_status h2mc__create(void **OUT_run, const mc_method_setup *setup, lmc
                            setup->space->name);
   h2mc_run *run = calloc(1, sizeof *run);
   if (!run) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
-  run->rs = *setup->rs;
+  run->ms = *setup->ms;
   lmc_status st = lmc_opt_read(&h2mc__options, setup->rs, &run->hs, err);
   if (st) {
     free(run);
@@ -69,7 +69,7 @@ static lmc_status h2mc__create(void **OUT_run, const mc_method_setup *setup, lmc
   run->space = setup->space;
   /* The small step's offsets as lmc's: in (1/1024, --sigma]. */
   run->kp = lmc_kernel_params_default();
-  if (setup->rs->sigma > run->kp.s1 && setup->rs->sigma < 0.5) run->kp.s2 = setup->rs->sigma;
+  if (setup->ms->sigma > run->kp.s1 && setup->ms->sigma < 0.5) run->kp.s2 = setup->ms->sigma;
   *OUT_run = run;
   return LMC_OK;
 }
@@ -94,11 +94,11 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
                                const mc_space_family *F, mc_kernel *OUT_k, double *OUT_p) {
   (void)setup;
   h2mc_run *run = r;
-  double large = run->rs.largestep, iso = run->hs.iso_prob;
-  double tech = F->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
+  double large = run->ms.largestep, iso = run->hs.iso_prob;
+  double tech = F->technique >= 0 ? run->ms.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
-  OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
+  OUT_k[n] = run->ms.small_gauss ? mc_kernel_small_gauss(run->ms.sigma)
                                  : mc_kernel_small(run->kp.s1, run->kp.s2);
   OUT_p[n++] = iso;
   /* Short paths: H2MC's slot gets nothing, the mix is renormalised. */

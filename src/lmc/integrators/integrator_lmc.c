@@ -41,7 +41,8 @@ typedef struct lmc__family {
 typedef struct lmc_run lmc_run;
 
 struct lmc_run {
-  render_settings rs;    /* the chains' settings (the driver's) */
+  render_settings rs;    /* the chains' settings */
+  mcmc_settings ms;      /* the driver's */
   lmc_settings ls;       /* lmc's own (its flags) */
   const mc_space *space; /* borrowed */
   int n_fam;
@@ -73,6 +74,7 @@ static lmc_status lmc_run_create(lmc_run **OUT_run, const mc_method_setup *setup
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   }
   run->rs = *setup->rs;
+  run->ms = *setup->ms;
   lmc_status st = lmc_opt_read(&lmc__options, setup->rs, &run->ls, err);
   if (st) {
     free(run->fam), free(run);
@@ -85,7 +87,7 @@ static lmc_status lmc_run_create(lmc_run **OUT_run, const mc_method_setup *setup
     lmc__family *F = &run->fam[g];
     F->sf = &sp->fam[g];
     F->target = &F->sf->target;
-    F->kp = lmc_kernel_params_from_settings(&run->ls, run->rs.sigma);
+    F->kp = lmc_kernel_params_from_settings(&run->ls, run->ms.sigma);
     /* The coordinates that pick a light triangle: a smaller step for the
      * chain's Kelemen step and a factor c^2 on MALA's preconditioner
      * (lmc_kernel.h). */
@@ -197,13 +199,13 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
 /* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
 static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
   lmc__family *F = &run->fam[run->chain_fam[i]];
-  double large = run->rs.largestep, iso = run->ls.iso_prob;
+  double large = run->ms.largestep, iso = run->ls.iso_prob;
   double indep = run->ls.adapt == LMC_ADAPT_CACHE ? run->ls.cache_indep : 0.0;
   int length = F->sf->length;
-  double tech = F->sf->technique >= 0 ? run->rs.technique_prob * (1.0 - large) : 0.0;
+  double tech = F->sf->technique >= 0 ? run->ms.technique_prob * (1.0 - large) : 0.0;
   int n = 0;
   OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
-  OUT_k[n] = run->rs.small_gauss ? mc_kernel_small_gauss(run->rs.sigma)
+  OUT_k[n] = run->ms.small_gauss ? mc_kernel_small_gauss(run->ms.sigma)
                                  : mc_kernel_small(F->kp.s1, F->kp.s2);
   OUT_p[n++] = iso;
   /* Paths of one or two segments (emitters seen directly, direct light on

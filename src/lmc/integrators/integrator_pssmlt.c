@@ -14,7 +14,7 @@
 static int pssmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
                                  const mc_space_family *F, mc_kernel *k, double *p) {
   (void)run, (void)i;
-  return mc_kernels_metropolis(setup->rs, F, k, p);
+  return mc_kernels_metropolis(setup->ms, F, k, p);
 }
 
 const mc_method mc_method_pssmlt = {

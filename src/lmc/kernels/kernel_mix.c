@@ -7,19 +7,19 @@
 
 #include "lmc/driver/method.h"
 
-int mc_kernels_metropolis(const render_settings *rs, const mc_space_family *F, mc_kernel *OUT_k,
+int mc_kernels_metropolis(const mcmc_settings *ms, const mc_space_family *F, mc_kernel *OUT_k,
                           double *OUT_p) {
-  double large = rs->largestep;
+  double large = ms->largestep;
   OUT_k[0] = mc_kernel_large();
   OUT_p[0] = large;
-  OUT_k[1] = rs->small_gauss ? mc_kernel_small_gauss(rs->sigma)
-                             : mc_kernel_small(1.0 / 1024.0, rs->sigma);
+  OUT_k[1] = ms->small_gauss ? mc_kernel_small_gauss(ms->sigma)
+                             : mc_kernel_small(1.0 / 1024.0, ms->sigma);
   OUT_p[1] = 1.0 - large;
   if (F->technique < 0) return 2;
   /* The technique mutation: the strategy redrawn, the rest small steps. */
   OUT_k[2] = mc_kernel_technique(F->technique);
-  OUT_p[1] = (1.0 - rs->technique_prob) * (1.0 - large);
-  OUT_p[2] = rs->technique_prob * (1.0 - large);
+  OUT_p[1] = (1.0 - ms->technique_prob) * (1.0 - large);
+  OUT_p[2] = ms->technique_prob * (1.0 - large);
   return 3;
 }
 

@@ -284,7 +284,8 @@ static int bs__label_coords(const mc_target *t, int label, int *OUT_idx) {
 }
 
 lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const scene *s,
-                               const render_settings *rs, int kmin, int kmax, lmc_error *err) {
+                               const render_settings *rs, double rough_min, int kmin, int kmax,
+                               lmc_error *err) {
   memset(OUT_target, 0, sizeof *OUT_target);
   memset(ctx, 0, sizeof *ctx);
   if (kmin < 1) kmin = 1;
@@ -297,7 +298,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   ctx->rs.maxdepth = kmax;
   ctx->margin = s->filter.radius;
   ctx->area = (s->cam.width + 2.0 * ctx->margin) * (s->cam.height + 2.0 * ctx->margin);
-  ctx->rough_min = rs->rough_min;
+  ctx->rough_min = rough_min;
   ctx->kmin = kmin, ctx->kmax = kmax;
 
   /* The labels: length k has t = 1 .. k + 1, s = k + 1 - t, without
@@ -365,14 +366,22 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx) {
  * The space: one family over the lengths kmin .. kmax, and its flag.
  */
 
+/* The space's own settings (its flag table). */
+typedef struct bs__settings {
+  double rough_min; /* --roughness-threshold */
+} bs__settings;
+
+static const bs__settings bs__defaults = {0.3};
+
 static const lmc_opt bs__opts[] = {
-    {"roughness-threshold", LMC_OPT_DOUBLE, offsetof(render_settings, rough_min), 0, 0, 1e6, NULL,
-     NULL, SET_ROUGH, "R", NULL,
+    {"roughness-threshold", LMC_OPT_DOUBLE, offsetof(bs__settings, rough_min), 0, 0, 1e6, NULL,
+     NULL, 0, "R", NULL,
      "directions at BSDFs rougher than R are moved as absolute world directions (1: never)",
      "roughnessthreshold"},
 };
 
-const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1, NULL, 0};
+const lmc_opt_table mc_space_bdpt_options = {"The bdpt states (--states bdpt)", bs__opts, 1,
+                                             &bs__defaults, sizeof bs__defaults};
 
 typedef struct bs__space {
   mc_bdpt_states ctx;
@@ -399,11 +408,14 @@ lmc_status mc_space_bdpt_create(mc_space *OUT, const scene *s, const render_sett
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
             rs->integrator, kmax);
+  bs__settings bs;
+  lmc_status st = lmc_opt_read(&mc_space_bdpt_options, rs, &bs, err);
+  if (st) return st;
   bs__space *B = calloc(1, sizeof *B);
   if (!B) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bdpt states");
   OUT->ctx = B;
   OUT->destroy = bs__space_destroy;
-  lmc_status st = mc_bdpt_states_init(&B->fam.target, &B->ctx, s, rs, kmin, kmax, err);
+  st = mc_bdpt_states_init(&B->fam.target, &B->ctx, s, rs, bs.rough_min, kmin, kmax, err);
   if (st) return st; /* (the caller frees the space) */
   B->fam.length = 0;
   B->fam.technique = -1;

@@ -73,9 +73,11 @@ typedef struct mc_bdpt_states {
 
 /* Sets up *OUT_target over ctx (both owned by the caller; ctx must outlive
  * the target and be freed with mc_bdpt_states_free) for the lengths kmin ..
- * kmax of scene s, with rs's depths, roulette and rs->rough_min. */
+ * kmax of scene s, with rs's depths and roulette; directions at vertices
+ * rougher than rough_min are absolute (>= 1: none; --roughness-threshold). */
 lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const scene *s,
-                               const render_settings *rs, int kmin, int kmax, lmc_error *err);
+                               const render_settings *rs, double rough_min, int kmin, int kmax,
+                               lmc_error *err);
 void mc_bdpt_states_free(mc_bdpt_states *ctx);
 
 /* Path length (segments) of a label. */

@@ -323,12 +323,11 @@ static int64_t mms__estimate_b(const mc_space *sp, mc_boot *boot, const mc_space
   const mms__space *M = sp->ctx;
   int n_fam = sp->n_fam, kmin = sp->kmin;
   if (n_fam == 0) return 0;
-  render_settings brs = M->rs;
-  brs.rough_min = 2.0;
   mc_target T;
   mc_bdpt_states ctx;
   lmc_error err;
-  if (mc_bdpt_states_init(&T, &ctx, M->s, &brs, kmin, kmin + n_fam - 1, &err) != LMC_OK) return -1;
+  if (mc_bdpt_states_init(&T, &ctx, M->s, &M->rs, 2.0, kmin, kmin + n_fam - 1, &err) != LMC_OK)
+    return -1;
   mms__shared sb = {n_fam, 0, 0, NULL, NULL};
   double t0 = omp_get_wtime();
   int64_t cap = (rq->cap + MMLT_SHARED_BLOCK - 1) / MMLT_SHARED_BLOCK;

@@ -135,6 +135,22 @@ static lmc_status xml__keep_params(builder *B, pset *o) {
   return LMC_OK;
 }
 
+/* Passes a setting the loader translated from p (a Mitsuba parameter) on
+ * to the option tables as the flag `name` with `value`, at p's place. */
+static lmc_status xml__pass(builder *B, const prop *p, const char *name, const char *value) {
+  scene *s = B->s;
+  scene_param *a = realloc(s->params, (size_t)(s->n_params + 1) * sizeof *a);
+  if (!a) return xml__fail(B, LMC_ENOMEM, p->file, p->line, "out of memory");
+  s->params = a;
+  scene_param *q = &a[s->n_params++];
+  memset(q, 0, sizeof *q);
+  snprintf(q->name, sizeof q->name, "%s", name);
+  snprintf(q->value, sizeof q->value, "%s", value);
+  snprintf(q->file, sizeof q->file, "%s", p->file ? p->file : "");
+  q->line = p->line;
+  return LMC_OK;
+}
+
 /* Marks the named properties as read without using them (accepted silently). */
 static void xml__accept(pset *o, const char *const *names) {
   for (int i = 0; i < o->n_props; i++)
@@ -1235,27 +1251,25 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
     if ((st = xml__int(B, o, "directSamples", 16, &ds, &found)) != LMC_OK) return st;
     if (found) {
       prop *p = xml__find(o, "directSamples");
-      r->direct_separate = ds >= 0;
-      r->direct_spp = ds > 0 ? ds : 0;
-      r->set |= SET_DIRECT;
+      char n[32];
+      snprintf(n, sizeof n, "%lld", ds > 0 ? ds : 0);
+      if ((st = xml__pass(B, p, "direct", ds >= 0 ? "separate" : "mcmc")) != LMC_OK) return st;
+      if (ds >= 0 && (st = xml__pass(B, p, "direct-spp", n)) != LMC_OK) return st;
       if (ds == 0)
         lmc_warn(p->file, p->line,
                  "directSamples 0 (direct light hidden) is not supported: direct light is "
                  "rendered separately with the scene's samples per pixel");
     }
     if ((st = xml__bool(B, o, "separateDirect", 1, &sep, &found_sep)) != LMC_OK) return st;
-    if (found_sep && !(found && ds < 0)) {
-      r->direct_separate = sep;
-      r->set |= SET_DIRECT;
-    }
+    if (found_sep && !(found && ds < 0) &&
+        (st = xml__pass(B, xml__find(o, "separateDirect"), "direct", sep ? "separate" : "mcmc")))
+      return st;
     /* Mitsuba's bidirectional (default true): pssmlt on a BDPT sample, our
      * bdpt states; false: on a path tracer's samples. */
     int bidir, found_bidir;
     if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, &found_bidir)) != LMC_OK) return st;
-    if (found_bidir && !bidir) {
-      r->mcmc_states = MCMC_STATES_PT;
-      r->set |= SET_STATES;
-    }
+    if (found_bidir && !bidir && (st = xml__pass(B, xml__find(o, "bidirectional"), "states", "pt")))
+      return st;
     static const char *const mlt_silent[] = {"lambda", "chainLength",
                                              "numChains", "maxChains", "bidirectionalMutation",
                                              "lensPerturbation", "multiChainPerturbation",
@@ -1304,15 +1318,10 @@ static lmc_status xml__dpt(builder *B, pset *o) {
   if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, NULL)) != LMC_OK) return st;
   if ((st = xml__bool(B, o, "mala", 0, &mala, NULL)) != LMC_OK) return st;
   if ((st = xml__bool(B, o, "h2mc", 0, &h2mc, NULL)) != LMC_OK) return st;
-  r->mala = mala;
-  r->h2mc = h2mc;
   if (strcmp(integ, "mcmc") == 0) {
     /* dpt's chains live in the bdpt states (bidirectional, the default) or
      * on a path tracer's samples. */
-    if (!bidir) {
-      r->mcmc_states = MCMC_STATES_PT;
-      r->set |= SET_STATES;
-    }
+    if (!bidir && (st = xml__pass(B, xml__find(o, "bidirectional"), "states", "pt"))) return st;
     if (mala) {
       xml__set_integrator(r, "lmc");
     } else if (h2mc) {
@@ -1351,9 +1360,11 @@ static lmc_status xml__dpt(builder *B, pset *o) {
   if ((st = xml__int(B, o, "directspp", 256, &v, &found)) != LMC_OK) return st;
   if (found) {
     if (v < 0) return xml__fail(B, LMC_EPARSE, o->file, o->line, "directspp must be >= 0");
-    r->direct_separate = v > 0;
-    r->direct_spp = v;
-    r->set |= SET_DIRECT;
+    prop *p = xml__find(o, "directspp");
+    char n[32];
+    snprintf(n, sizeof n, "%lld", v);
+    if ((st = xml__pass(B, p, "direct", v > 0 ? "separate" : "mcmc")) != LMC_OK) return st;
+    if (v > 0 && (st = xml__pass(B, p, "direct-spp", n)) != LMC_OK) return st;
   }
   if ((st = xml__keep_params(B, o)) != LMC_OK) return st;
   xml__warn_unused(o);
