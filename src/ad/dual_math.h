@@ -247,4 +247,13 @@ static inline ad ad_erfinv(ad_arena *A, ad a) {
   return ad__op1(A, x, c, 2.0 * x * c * c, a); /* f'' = 2 x f'^2 */
 }
 
+/* A dual with value v and the tangent (and Hessian) of t: t - t.v + v, which
+ * shares t's block and allocates nothing; the value is exactly v when t.v is
+ * finite. For a value computed by iteration whose derivatives come from the
+ * implicit function theorem. */
+static inline ad ad_with_value(const ad_arena *A, ad t, double v) {
+  if (!isfinite(t.v)) return (ad){v, t.d};
+  return ad_add_s(A, ad_sub_s(A, t, t.v), v);
+}
+
 #endif

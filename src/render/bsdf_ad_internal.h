@@ -24,14 +24,6 @@ static inline adrgb adrgb_zero(const ad_arena *A) {
 static inline adrgb adrgb_scale_s(ad_arena *A, adrgb a, double s) {
   return (adrgb){ad_mul_s(A, a.r, s), ad_mul_s(A, a.g, s), ad_mul_s(A, a.b, s)};
 }
-/* A dual with value v and the tangent of t (t - t.v + v: shares t's tangent,
- * allocates nothing; the value is exactly v when t.v is finite). Used where
- * a value comes from an iteration and its tangent from the implicit
- * function theorem. */
-static inline ad bsdf__ad_with_value(const ad_arena *A, ad t, double v) {
-  if (!isfinite(t.v)) return (ad){v, t.d};
-  return ad_add_s(A, ad_sub_s(A, t, t.v), v);
-}
 /* (-w.x, -w.y, w.z): the mirror direction about the shading normal. */
 static inline adv3 bsdf__ad_mirror(ad_arena *A, adv3 w) {
   return adv3_make(ad_neg(A, w.x), ad_neg(A, w.y), w.z);
