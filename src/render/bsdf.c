@@ -2,6 +2,10 @@
  * bsdf.c: the BSDF front end: dispatch on the model, the twosided flip,
  * Fresnel equations, the named IOR and conductor tables, and Mitsuba 0.6's
  * default parameters. The models live in bsdf_smooth.c and bsdf_rough.c.
+ * The Fresnel equations, the sample record and the dispatch are written
+ * once (bsdf_generic.h) and compiled here twice, in doubles (bsdf.h) and in
+ * duals (bsdf_ad.h, for the gradients of lmc and h2mc); render/real.h says
+ * how.
  *
  * Twosided (Mitsuba's `twosided` adapter): for the reflection-only models,
  * a query with wo below the surface is answered by the model with both
@@ -29,51 +33,10 @@
 #include <math.h>
 #include <string.h>
 
+#include "render/bsdf_ad_internal.h"
 #include "render/bsdf_internal.h"
 
-/* ---- Fresnel ----------------------------------------------------------- */
-
-double fresnel_dielectric(double cos_i, double eta, double *cos_t) {
-  double dummy;
-  if (!cos_t) cos_t = &dummy;
-  if (eta == 1.0) {
-    *cos_t = -cos_i;
-    return 0.0;
-  }
-  /* Swap the sides when the incident direction is inside. */
-  double e = cos_i > 0.0 ? eta : 1.0 / eta;
-  double ci = fabs(cos_i);
-  double ct2 = 1.0 - (1.0 - ci * ci) / (e * e);
-  if (ct2 <= 0.0) {
-    *cos_t = 0.0;
-    return 1.0;
-  }
-  double ct = sqrt(ct2);
-  double rs = (ci - e * ct) / (ci + e * ct);
-  double rp = (e * ci - ct) / (e * ci + ct);
-  *cos_t = cos_i > 0.0 ? -ct : ct;
-  return 0.5 * (rs * rs + rp * rp);
-}
-
-/* The exact conductor Fresnel reflectance of one channel (formula above). */
-static double bsdf__fresnel_conductor1(double c, double eta, double k) {
-  double c2 = c * c, s2 = 1.0 - c2;
-  double t = eta * eta - k * k - s2;
-  double a2pb2 = sqrt(t * t + 4.0 * eta * eta * k * k);
-  double a = sqrt(lmc_fmax(0.0, 0.5 * (a2pb2 + t)));
-  double t1 = a2pb2 + c2, t2 = 2.0 * a * c;
-  if (!(t1 + t2 > 0.0)) return 1.0;
-  double rs = (t1 - t2) / (t1 + t2);
-  double t3 = a2pb2 * c2 + s2 * s2, t4 = t2 * s2;
-  double rp = t3 + t4 > 0.0 ? rs * (t3 - t4) / (t3 + t4) : rs;
-  return 0.5 * (rs + rp);
-}
-
-rgb fresnel_conductor(double cos_i, rgb eta, rgb k) {
-  double c = lmc_fmin(1.0, fabs(cos_i));
-  return rgb_make(bsdf__fresnel_conductor1(c, eta.r, k.r), bsdf__fresnel_conductor1(c, eta.g, k.g),
-                  bsdf__fresnel_conductor1(c, eta.b, k.b));
-}
+/* ---- Fresnel (value-only parts) --------------------------------------- */
 
 /* F_dr(eta) = int_0^1 F(c) 2 c dc. Below the critical cosine c_c (eta < 1)
  * F = 1, which contributes c_c^2; the rest is integrated with composite
@@ -111,20 +74,6 @@ double bsdf__specular_weight(const texture *spec, const texture *diff) {
   double s = rgb_luminance(tex_mean(spec)), d = rgb_luminance(tex_mean(diff));
   if (!(s + d > 0.0)) return 0.5;
   return s / (s + d);
-}
-
-int bsdf__finish(bsdf_sample *out, vec3 wi, rgb f, double pdf, double eta, int flags) {
-  out->wi = wi;
-  out->f = f;
-  out->pdf = pdf;
-  out->eta = eta;
-  out->flags = flags;
-  out->weight = rgb_zero();
-  if (!(pdf > 0.0) || !isfinite(pdf) || !v3_isfinite(wi)) return 0;
-  rgb w = rgb_scale(f, fabs(wi.z) / pdf);
-  if (!rgb_isfinite(w) || rgb_is_black(w)) return 0;
-  out->weight = w;
-  return 1;
 }
 
 /* ---- Named IORs and conductors ---------------------------------------- */
@@ -297,118 +246,40 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
   }
 }
 
-/* ---- Dispatch ------------------------------------------------------------ */
+/* ---- Arena bookkeeping of the dual entry points ------------------------------ */
 
-/* 1 when the model is reflection-only and the twosided flip applies to wo. */
-static int bsdf__flip(const bsdf *b, vec3 wo) {
-  return b->twosided && wo.z < 0.0 && b->type != BSDF_DIELECTRIC && b->type != BSDF_ROUGHDIELECTRIC;
+/* Rewinds A to mark, keeping the duals *xs[0 .. count-1]: every kept tangent
+ * that lives above the mark is first copied to fresh storage at the top,
+ * then the copies are moved down to the mark in order. The first copy lies
+ * at least one tangent above the mark (the kept dual it came from did), so
+ * each move reads from above what it writes and never overlaps its source. */
+static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
+  if (ad_arena_n(A) == 0 || mark < A->base || mark > A->top) {
+    ad_arena_rewind(A, mark);
+    return;
+  }
+  const double *lo = A->buf + mark;
+  int moved[16];
+  int n_moved = 0;
+  for (int i = 0; i < count && n_moved < 16; i++)
+    if (xs[i]->d >= lo) {
+      *xs[i] = ad_copy(A, *xs[i]);
+      moved[n_moved++] = i;
+    }
+  if (n_moved == 0 || !ad_arena_ok(A)) {
+    ad_arena_rewind(A, mark);
+    return;
+  }
+  ad_arena_rewind(A, mark);
+  for (int j = 0; j < n_moved; j++) *xs[moved[j]] = ad_copy(A, *xs[moved[j]]);
 }
 
-rgb bsdf_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode) {
-  if (bsdf__flip(b, wo)) {
-    wo.z = -wo.z;
-    wi.z = -wi.z;
-  }
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-    return bsdf__diffuse_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_PHONG:
-    return bsdf__phong_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_CONDUCTOR:
-    return bsdf__conductor_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_ROUGHCONDUCTOR:
-    return bsdf__roughconductor_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_DIELECTRIC:
-    return bsdf__dielectric_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_ROUGHDIELECTRIC:
-    return bsdf__roughdielectric_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_PLASTIC:
-    return bsdf__plastic_eval(b, tu, tv, wo, wi, mode);
-  case BSDF_TYPE_COUNT:
-    break;
-  }
-  return rgb_zero();
-}
+/* ---- Fresnel, the sample record and the dispatch, in doubles then in duals -- */
 
-double bsdf_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi) {
-  if (bsdf__flip(b, wo)) {
-    wo.z = -wo.z;
-    wi.z = -wi.z;
-  }
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-    return bsdf__diffuse_pdf(b, tu, tv, wo, wi);
-  case BSDF_PHONG:
-    return bsdf__phong_pdf(b, tu, tv, wo, wi);
-  case BSDF_CONDUCTOR:
-    return bsdf__conductor_pdf(b, tu, tv, wo, wi);
-  case BSDF_ROUGHCONDUCTOR:
-    return bsdf__roughconductor_pdf(b, tu, tv, wo, wi);
-  case BSDF_DIELECTRIC:
-    return bsdf__dielectric_pdf(b, tu, tv, wo, wi);
-  case BSDF_ROUGHDIELECTRIC:
-    return bsdf__roughdielectric_pdf(b, tu, tv, wo, wi);
-  case BSDF_PLASTIC:
-    return bsdf__plastic_pdf(b, tu, tv, wo, wi);
-  case BSDF_TYPE_COUNT:
-    break;
-  }
-  return 0.0;
-}
-
-rgb bsdf_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode,
-                  double *OUT_pdf) {
-  vec3 fo = wo, fi = wi;
-  if (bsdf__flip(b, wo)) {
-    fo.z = -fo.z;
-    fi.z = -fi.z;
-  }
-  switch (b->type) {
-  case BSDF_PHONG:
-    return bsdf__phong_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
-  case BSDF_ROUGHCONDUCTOR:
-    return bsdf__roughconductor_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
-  case BSDF_ROUGHDIELECTRIC:
-    return bsdf__roughdielectric_eval_pdf(b, tu, tv, fo, fi, mode, OUT_pdf);
-  default:
-    break;
-  }
-  /* Nothing to share: the two dispatchers (each applies the flip itself). */
-  *OUT_pdf = bsdf_pdf(b, tu, tv, wo, wi);
-  return bsdf_eval(b, tu, tv, wo, wi, mode);
-}
-
-int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                  transport_mode mode, bsdf_sample *out) {
-  int flip = bsdf__flip(b, wo);
-  if (flip) wo.z = -wo.z;
-  int ok = 0;
-  memset(out, 0, sizeof *out);
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-    ok = bsdf__diffuse_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_PHONG:
-    ok = bsdf__phong_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_CONDUCTOR:
-    ok = bsdf__conductor_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_ROUGHCONDUCTOR:
-    ok = bsdf__roughconductor_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_DIELECTRIC:
-    ok = bsdf__dielectric_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_ROUGHDIELECTRIC:
-    ok = bsdf__roughdielectric_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_PLASTIC:
-    ok = bsdf__plastic_sample(b, tu, tv, wo, u_lobe, u1, u2, mode, out);
-    break;
-  case BSDF_TYPE_COUNT:
-    break;
-  }
-  if (flip) out->wi.z = -out->wi.z;
-  return ok;
-}
+#define R_DUAL 0
+#include "render/real.h"
+#include "render/bsdf_generic.h"
+#undef R_DUAL
+#define R_DUAL 1
+#include "render/real.h"
+#include "render/bsdf_generic.h"

@@ -21,29 +21,9 @@
 #include "ad/dual.h"
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
+#include "render/rgb_ad.h"
 #include "render/bsdf.h"
 #include "render/texture.h"
-
-/* RGB of duals. */
-typedef struct adrgb {
-  ad r, g, b;
-} adrgb;
-
-static inline adrgb adrgb_const(const ad_arena *A, rgb c) {
-  return (adrgb){ad_const(A, c.r), ad_const(A, c.g), ad_const(A, c.b)};
-}
-static inline rgb adrgb_value(adrgb c) { return rgb_make(c.r.v, c.g.v, c.b.v); }
-static inline adrgb adrgb_mul(ad_arena *A, adrgb a, adrgb b) {
-  return (adrgb){ad_mul(A, a.r, b.r), ad_mul(A, a.g, b.g), ad_mul(A, a.b, b.b)};
-}
-static inline adrgb adrgb_scale(ad_arena *A, adrgb a, ad s) {
-  return (adrgb){ad_mul(A, a.r, s), ad_mul(A, a.g, s), ad_mul(A, a.b, s)};
-}
-static inline adrgb adrgb_add(ad_arena *A, adrgb a, adrgb b) {
-  return (adrgb){ad_add(A, a.r, b.r), ad_add(A, a.g, b.g), ad_add(A, a.b, b.b)};
-}
-/* Luminance with the weights of rgb_luminance (vec3.h). */
-ad adrgb_luminance(ad_arena *A, adrgb c);
 
 /* A BSDF sample in duals (see bsdf_sample in bsdf.h). */
 typedef struct bsdf_sample_ad {
@@ -58,13 +38,19 @@ typedef struct bsdf_sample_ad {
 /* Texture value at (u, v), bilinear for bitmaps (differentiable in u, v). */
 adrgb tex_eval_ad(ad_arena *A, const texture *t, ad u, ad v);
 
-/* bsdf_eval, bsdf_pdf and bsdf_sample_f of bsdf.h in duals. (The sampler is
- * bsdf_sample_f_ad, after bsdf_sample_f: C cannot have a function named
- * like the typedef bsdf_sample_ad.) Each call rewinds the arena to where it
- * found it, keeping only the duals it returns. */
+/* bsdf_eval, bsdf_pdf, bsdf_eval_pdf and bsdf_sample_f of bsdf.h in duals,
+ * from the same source (bsdf_generic.h). (The sampler is bsdf_sample_f_ad,
+ * after bsdf_sample_f: C cannot have a function named like the typedef
+ * bsdf_sample_ad.) eval, pdf and sample rewind the arena to where they
+ * found it, keeping only the duals they return. */
 adrgb bsdf_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
                    transport_mode mode);
 ad bsdf_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi);
+adrgb bsdf_eval_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
+                       transport_mode mode, ad *OUT_pdf);
+/* Fresnel reflectance of a dielectric and of a conductor (bsdf.h) in duals. */
+ad fresnel_dielectric_ad(ad_arena *A, ad cos_i, double eta, ad *OUT_cos_t);
+adrgb fresnel_conductor_ad(ad_arena *A, ad cos_i, rgb eta, rgb k);
 int bsdf_sample_f_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, ad u_lobe, ad u1, ad u2,
                      transport_mode mode, bsdf_sample_ad *OUT_sample);
 

@@ -2,7 +2,9 @@
  * bsdf_internal.h: what the BSDF files share (not API). bsdf.c dispatches
  * on the model and holds Fresnel, the IOR tables and the defaults;
  * bsdf_smooth.c has diffuse, phong, the smooth conductor, the smooth
- * dielectric and plastic; bsdf_rough.c the microfacet models.
+ * dielectric and plastic; bsdf_rough.c the microfacet models. Each
+ * compiles its *_generic.h body twice: in doubles (declared here) and in
+ * duals (bsdf_ad_internal.h).
  *
  * Every model gets its arguments already in the orientation it expects
  * (bsdf.c applies the twosided flip), and the conventions of bsdf.h.
@@ -26,46 +28,42 @@ double bsdf__fresnel_diffuse_reflectance(double eta);
 double bsdf__specular_weight(const texture *spec, const texture *diff);
 
 /* The models: eval, pdf and sample with the signatures of bsdf.h; the
- * models whose eval and pdf share work also have eval_pdf (bsdf_eval_pdf). */
-rgb bsdf__diffuse_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__diffuse_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-int bsdf__diffuse_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
+ * models whose eval and pdf share work also have eval_pdf (bsdf_eval_pdf).
+ * Their dual forms are in bsdf_ad_internal.h; both come from one source
+ * (bsdf_smooth_generic.h, bsdf_rough_generic.h). */
+#define BSDF__MODEL(NAME)                                                                        \
+  rgb bsdf__##NAME##_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,               \
+                          transport_mode mode);                                                 \
+  double bsdf__##NAME##_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);            \
+  int bsdf__##NAME##_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe,       \
+                            double u1, double u2, transport_mode mode, bsdf_sample *out);
+#define BSDF__MODEL_EVAL_PDF(NAME)                                                               \
+  rgb bsdf__##NAME##_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,           \
+                              transport_mode mode, double *OUT_pdf);
 
-rgb bsdf__phong_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__phong_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-rgb bsdf__phong_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
-                         transport_mode mode, double *OUT_pdf);
-int bsdf__phong_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
+BSDF__MODEL(diffuse)
+BSDF__MODEL(phong)
+BSDF__MODEL(conductor)
+BSDF__MODEL(roughconductor)
+BSDF__MODEL(dielectric)
+BSDF__MODEL(roughdielectric)
+BSDF__MODEL(plastic)
+BSDF__MODEL_EVAL_PDF(phong)
+BSDF__MODEL_EVAL_PDF(roughconductor)
+BSDF__MODEL_EVAL_PDF(roughdielectric)
 
-rgb bsdf__conductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__conductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-int bsdf__conductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
+#undef BSDF__MODEL
+#undef BSDF__MODEL_EVAL_PDF
 
-rgb bsdf__roughconductor_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__roughconductor_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-rgb bsdf__roughconductor_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
-                         transport_mode mode, double *OUT_pdf);
-int bsdf__roughconductor_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
-
-rgb bsdf__dielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__dielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-int bsdf__dielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
-
-rgb bsdf__roughdielectric_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__roughdielectric_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-rgb bsdf__roughdielectric_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
-                         transport_mode mode, double *OUT_pdf);
-int bsdf__roughdielectric_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
-
-rgb bsdf__plastic_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
-double bsdf__plastic_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);
-int bsdf__plastic_sample(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1, double u2,
-                     transport_mode mode, bsdf_sample *out);
+/* The models by type, for the dispatchers (bsdf_generic.h): each
+ * BSDF__CASE(TYPE, name) stands for one model. */
+#define BSDF__CASES                                                                              \
+  BSDF__CASE(BSDF_DIFFUSE, diffuse)                                                              \
+  BSDF__CASE(BSDF_PHONG, phong)                                                                  \
+  BSDF__CASE(BSDF_CONDUCTOR, conductor)                                                          \
+  BSDF__CASE(BSDF_ROUGHCONDUCTOR, roughconductor)                                                \
+  BSDF__CASE(BSDF_DIELECTRIC, dielectric)                                                        \
+  BSDF__CASE(BSDF_ROUGHDIELECTRIC, roughdielectric)                                              \
+  BSDF__CASE(BSDF_PLASTIC, plastic)
 
 #endif

@@ -7,7 +7,7 @@
  * The same source as the plain functions (microfacet_generic.h, compiled
  * twice by microfacet.c; see microfacet.h for the papers: Walter et al.
  * 2007, Heitz and d'Eon 2014, Heitz 2018), so with tangent length 0 the
- * values are the plain ones bit for bit. The
+ * values are the plain ones to rounding. The
  * roughness alpha is a dual because the rough dielectric widens it with
  * cos(wo) when it does not sample visible normals. Sampling the visible
  * Beckmann slopes inverts a CDF by Newton iteration; the iteration runs on

@@ -19,8 +19,8 @@
  *   #include "render/real.h"
  *   #include "render/microfacet_generic.h"   (mf_D_ad, mf_G1_ad, ...)
  *
- * The vocabulary. REAL, REAL3 and RRGB are double, vec3 and rgb, or ad,
- * adv3 and adrgb. R_FN(name) names a function: name, or name_ad. A function
+ * The vocabulary. REAL, REAL3, RRGB and RFRAME are double, vec3, rgb and
+ * frame, or ad, adv3, adrgb and ad_frame. R_FN(name) names a function: name, or name_ad. A function
  * of the body declares its arena with R_CTX (nothing, or `ad_arena *A,`)
  * first in its parameters and passes it on with R_ARG; the dual operations
  * below use that `A`. R_V(x) is x's value (a double), R_C(c) a constant.
@@ -32,11 +32,14 @@
  *
  * Rules for a body. Branch on R_V(...) only. Write each formula in the order
  * of operations the plain code should have: the plain form then rounds as
- * the hand-written code would, and the dual form's values equal the plain
- * ones bit for bit (each dual operation computes its value with the same
- * double operation). What only one form needs (a derivative rule that is
- * not the chain rule through the values, as the implicit-function tangent
- * of an iterative solve) goes in `#if R_DUAL` blocks.
+ * the hand-written code would, and the dual form computes its values with
+ * the same operations in the same order (ad/dual.h: each dual operation's
+ * value is the double operation's, but for division, which multiplies by
+ * the reciprocal), so its values equal the plain ones to rounding and its
+ * derivatives are those of the plain formula. What only one form needs (a
+ * derivative rule that is not the chain rule through the values, as the
+ * implicit-function tangent of an iterative solve) goes in `#if R_DUAL`
+ * blocks.
  */
 #ifndef R_DUAL
 #error "define R_DUAL (0: plain doubles, 1: duals) before including render/real.h"
@@ -44,6 +47,7 @@
 
 #include <math.h>
 
+#include "render/frame.h"
 #include "render/vec3.h"
 
 #undef REAL
@@ -91,6 +95,9 @@
 #undef R3_CROSS
 #undef R3_NORMALIZE
 #undef R3_REFLECT
+#undef RFRAME
+#undef R3_FRAME_FROM_Z
+#undef R3_TO_WORLD
 #undef RRGB_CONST
 #undef RRGB_ZERO
 #undef RRGB_MAKE
@@ -112,7 +119,7 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #include "ad/dual.h"
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
-#include "render/bsdf_ad.h"
+#include "render/rgb_ad.h"
 
 #define REAL ad
 #define REAL3 adv3
@@ -159,8 +166,11 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #define R3_CROSS(a, b) adv3_cross(A, (a), (b))
 #define R3_NORMALIZE(a) adv3_normalize(A, (a))
 #define R3_REFLECT(w, n) adv3_reflect(A, (w), (n))
+#define RFRAME ad_frame
+#define R3_FRAME_FROM_Z(n) adv3_frame_from_z(A, (n))
+#define R3_TO_WORLD(f, v) adv3_to_world(A, (f), (v))
 #define RRGB_CONST(c) adrgb_const(A, (c))
-#define RRGB_ZERO() adrgb_const(A, rgb_zero())
+#define RRGB_ZERO() adrgb_zero(A)
 #define RRGB_MAKE(r, g, b) ((adrgb){(r), (g), (b)})
 #define RRGB_ADD(a, b) adrgb_add(A, (a), (b))
 #define RRGB_MUL(a, b) adrgb_mul(A, (a), (b))
@@ -215,6 +225,9 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #define R3_CROSS(a, b) v3_cross((a), (b))
 #define R3_NORMALIZE(a) v3_normalize(a)
 #define R3_REFLECT(w, n) v3_reflect((w), (n))
+#define RFRAME frame
+#define R3_FRAME_FROM_Z(n) frame_from_z(n)
+#define R3_TO_WORLD(f, v) frame_to_world((f), (v))
 #define RRGB_CONST(c) (c)
 #define RRGB_ZERO() rgb_zero()
 #define RRGB_MAKE(r, g, b) rgb_make((r), (g), (b))

@@ -26,10 +26,14 @@
  * color1 = 0.2. Its mean is the average of the two colours (Mitsuba's
  * getAverage).
  *
+ * The lookups are written once (texture_generic.h) and compiled here twice,
+ * in doubles and in duals (render/real.h).
+ *
  * Lookups are pure and thread safe; the bitmap mean is cached in the texture
  * value by tex_bitmap / tex_update_mean (the scene is immutable afterwards).
  */
 #include "render/texture.h"
+#include "render/bsdf_ad.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -48,25 +52,6 @@ static rgb tex__texel(const lmc_image *img, int x, int y) {
   const float *p = img->data + ((size_t)y * (size_t)img->width + (size_t)x) * (size_t)img->channels;
   if (img->channels >= 3) return rgb_make(p[0], p[1], p[2]);
   return rgb_gray(p[0]);
-}
-
-/* Bilinear lookup at (u', v') with repeat wrapping; pixel centres at half-integers. */
-static rgb tex__bilinear(const lmc_image *img, double u, double v) {
-  if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels <= 0)
-    return rgb_zero();
-  if (!isfinite(u) || !isfinite(v)) return rgb_zero();
-  /* Bring the coordinates near [0, 1) first so the integer conversion cannot overflow. */
-  u -= floor(u);
-  v -= floor(v);
-  double x = u * img->width - 0.5, y = v * img->height - 0.5;
-  double fx = floor(x), fy = floor(y);
-  int x0 = (int)fx, y0 = (int)fy;
-  double dx = x - fx, dy = y - fy;
-  rgb c00 = tex__texel(img, x0, y0), c10 = tex__texel(img, x0 + 1, y0);
-  rgb c01 = tex__texel(img, x0, y0 + 1), c11 = tex__texel(img, x0 + 1, y0 + 1);
-  rgb top = rgb_add(rgb_scale(c00, 1.0 - dx), rgb_scale(c10, dx));
-  rgb bottom = rgb_add(rgb_scale(c01, 1.0 - dx), rgb_scale(c11, dx));
-  return rgb_add(rgb_scale(top, 1.0 - dy), rgb_scale(bottom, dy));
 }
 
 /* Mean of all pixels (in double precision). */
@@ -94,6 +79,23 @@ static int tex__check_parity(double s) {
   return tex__mod(i, 2);
 }
 
+/* The checkerboard's colour at (u, v) (before the uv transform). */
+static rgb tex__checkerboard(const texture *t, double u, double v) {
+  double su = u * t->uscale + t->uoffset, sv = v * t->vscale + t->voffset;
+  if (!isfinite(su) || !isfinite(sv)) return t->color1;
+  return tex__check_parity(su) == tex__check_parity(sv) ? t->color0 : t->color1;
+}
+
+/* The lookups in doubles (tex_eval), then in duals (tex_eval_ad, bsdf_ad.h),
+ * from one source. */
+#define R_DUAL 0
+#include "render/real.h"
+#include "render/texture_generic.h"
+#undef R_DUAL
+#define R_DUAL 1
+#include "render/real.h"
+#include "render/texture_generic.h"
+
 texture tex_bitmap(const lmc_image *img) {
   texture t = {0};
   t.type = TEX_BITMAP;
@@ -116,21 +118,6 @@ void tex_update_mean(texture *t) {
   if (!t || t->type != TEX_BITMAP) return;
   t->mean = tex__image_mean(t->image);
   t->mean_valid = 1;
-}
-
-rgb tex_eval(const texture *t, double u, double v) {
-  switch (t->type) {
-  case TEX_CONSTANT:
-    return t->value;
-  case TEX_BITMAP:
-    return tex__bilinear(t->image, u * t->uscale + t->uoffset, v * t->vscale + t->voffset);
-  case TEX_CHECKERBOARD: {
-    double su = u * t->uscale + t->uoffset, sv = v * t->vscale + t->voffset;
-    if (!isfinite(su) || !isfinite(sv)) return t->color1;
-    return tex__check_parity(su) == tex__check_parity(sv) ? t->color0 : t->color1;
-  }
-  }
-  return rgb_zero();
 }
 
 rgb tex_mean(const texture *t) {

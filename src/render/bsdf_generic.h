@@ -1,0 +1,218 @@
+/*
+ * bsdf_generic.h: the BSDF front end written once in render/real.h's
+ * vocabulary and compiled twice by bsdf.c: the Fresnel equations, the
+ * sample record, the twosided flip and the dispatch on the model, in
+ * doubles (bsdf.h) and in duals (bsdf_ad.h). Not a header: no include guard.
+ * The formulas are in bsdf.c's opening comment.
+ *
+ * In duals the four entry points also keep the arena small: each marks it
+ * on entry and, on exit, moves the duals it returns down to the mark
+ * (bsdf__ad_keep in bsdf.c), so a call costs the arena only what it hands
+ * back: 3 tangents for an eval, 1 for a pdf, 10 for a sample.
+ */
+
+/* ---- Fresnel --------------------------------------------------------------- */
+
+REAL R_FN(fresnel_dielectric)(R_CTX REAL cos_i, double eta, REAL *OUT_cos_t) {
+  REAL dummy;
+  if (!OUT_cos_t) OUT_cos_t = &dummy;
+  if (eta == 1.0) {
+    *OUT_cos_t = R_NEG(cos_i);
+    return R_C(0.0);
+  }
+  /* Swap the sides when the incident direction is inside. */
+  double e = R_V(cos_i) > 0.0 ? eta : 1.0 / eta;
+  REAL ci = R_FABS(cos_i);
+  /* cos_t^2 = 1 - (1 - ci^2) / e^2 */
+  REAL ct2 = R_S_SUB(1.0, R_DIV_S(R_S_SUB(1.0, R_SQR(ci)), e * e));
+  if (R_V(ct2) <= 0.0) {
+    *OUT_cos_t = R_C(0.0);
+    return R_C(1.0);
+  }
+  REAL ct = R_SQRT(ct2);
+  /* r_s = (ci - e ct) / (ci + e ct),  r_p = (e ci - ct) / (e ci + ct) */
+  REAL ect = R_MUL_S(ct, e), eci = R_MUL_S(ci, e);
+  REAL rs = R_DIV(R_SUB(ci, ect), R_ADD(ci, ect));
+  REAL rp = R_DIV(R_SUB(eci, ct), R_ADD(eci, ct));
+  *OUT_cos_t = R_V(cos_i) > 0.0 ? R_NEG(ct) : ct;
+  /* F = (r_s^2 + r_p^2) / 2 */
+  return R_MUL_S(R_ADD(R_SQR(rs), R_SQR(rp)), 0.5);
+}
+
+/* The exact conductor Fresnel reflectance of one channel (bsdf.c). */
+static REAL R_FN(bsdf__fresnel_conductor1)(R_CTX REAL c, double eta, double k) {
+  REAL c2 = R_SQR(c);
+  REAL s2 = R_S_SUB(1.0, c2);
+  /* t = eta^2 - k^2 - sin^2,  a^2 + b^2 = sqrt(t^2 + 4 eta^2 k^2) */
+  REAL t = R_S_SUB(eta * eta - k * k, s2);
+  REAL a2pb2 = R_SQRT(R_ADD_S(R_SQR(t), 4.0 * eta * eta * k * k));
+  /* a = sqrt(max(0, (a^2 + b^2 + t) / 2)) */
+  REAL a = R_SAFE_SQRT(R_MUL_S(R_ADD(a2pb2, t), 0.5));
+  REAL t1 = R_ADD(a2pb2, c2);
+  REAL t2 = R_MUL(R_MUL_S(a, 2.0), c);
+  if (!(R_V(t1) + R_V(t2) > 0.0)) return R_C(1.0);
+  /* R_s = (t1 - t2) / (t1 + t2) */
+  REAL rs = R_DIV(R_SUB(t1, t2), R_ADD(t1, t2));
+  /* R_p = R_s (t3 - t4) / (t3 + t4),  t3 = (a^2 + b^2) cos^2 + sin^4,  t4 = t2 sin^2 */
+  REAL t3 = R_ADD(R_MUL(a2pb2, c2), R_SQR(s2));
+  REAL t4 = R_MUL(t2, s2);
+  REAL rp = R_V(t3) + R_V(t4) > 0.0 ? R_DIV(R_MUL(rs, R_SUB(t3, t4)), R_ADD(t3, t4)) : rs;
+  return R_MUL_S(R_ADD(rs, rp), 0.5);
+}
+
+RRGB R_FN(fresnel_conductor)(R_CTX REAL cos_i, rgb eta, rgb k) {
+  REAL c = R_FABS(cos_i);
+  if (R_V(c) > 1.0 || isnan(R_V(c))) c = R_C(1.0);
+  return RRGB_MAKE(R_FN(bsdf__fresnel_conductor1)(R_ARG c, eta.r, k.r),
+                   R_FN(bsdf__fresnel_conductor1)(R_ARG c, eta.g, k.g),
+                   R_FN(bsdf__fresnel_conductor1)(R_ARG c, eta.b, k.b));
+}
+
+/* ---- The sample record ------------------------------------------------------ */
+
+int R_FN(bsdf__finish)(R_CTX R_FN(bsdf_sample) *out, REAL3 wi, RRGB f, REAL pdf, double eta,
+                       int flags) {
+  out->wi = wi;
+  out->f = f;
+  out->pdf = pdf;
+  out->eta = eta;
+  out->flags = flags;
+  out->weight = RRGB_ZERO();
+  if (!(R_V(pdf) > 0.0) || !isfinite(R_V(pdf)) || !isfinite(R_V(wi.x)) || !isfinite(R_V(wi.y)) ||
+      !isfinite(R_V(wi.z)))
+    return 0;
+  /* weight = f (|cos wi| / pdf) */
+  RRGB w = RRGB_SCALE(f, R_DIV(R_FABS(wi.z), pdf));
+#if R_DUAL
+  rgb wv = adrgb_value(w);
+#else
+  rgb wv = w;
+#endif
+  if (!rgb_isfinite(wv) || rgb_is_black(wv)) return 0;
+  out->weight = w;
+  return 1;
+}
+
+/* ---- Dispatch --------------------------------------------------------------- */
+
+/* 1 when the model is reflection-only and the twosided flip applies to wo. */
+static int R_FN(bsdf__flip)(const bsdf *b, REAL3 wo) {
+  return b->twosided && R_V(wo.z) < 0.0 && b->type != BSDF_DIELECTRIC &&
+         b->type != BSDF_ROUGHDIELECTRIC;
+}
+
+/* The twosided flip of a (wo, wi) pair: both mirrored to the upper side. */
+static void R_FN(bsdf__flip_pair)(R_CTX const bsdf *b, REAL3 *wo, REAL3 *wi) {
+  if (!R_FN(bsdf__flip)(b, *wo)) return;
+  wo->z = R_NEG(wo->z);
+  wi->z = R_NEG(wi->z);
+}
+
+RRGB R_FN(bsdf_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                     transport_mode mode) {
+#if R_DUAL
+  size_t mark = ad_arena_mark(A);
+#endif
+  R_FN(bsdf__flip_pair)(R_ARG b, &wo, &wi);
+  RRGB f;
+  switch (b->type) {
+#define BSDF__CASE(TYPE, NAME)                                                                     \
+  case TYPE:                                                                                       \
+    f = R_FN(bsdf__##NAME##_eval)(R_ARG b, tu, tv, wo, wi, mode);                                  \
+    break;
+    BSDF__CASES
+#undef BSDF__CASE
+  default:
+    f = RRGB_ZERO();
+    break;
+  }
+#if R_DUAL
+  ad *keep[3] = {&f.r, &f.g, &f.b};
+  bsdf__ad_keep(A, mark, keep, 3);
+#endif
+  return f;
+}
+
+REAL R_FN(bsdf_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+#if R_DUAL
+  size_t mark = ad_arena_mark(A);
+#endif
+  R_FN(bsdf__flip_pair)(R_ARG b, &wo, &wi);
+  REAL p;
+  switch (b->type) {
+#define BSDF__CASE(TYPE, NAME)                                                                     \
+  case TYPE:                                                                                       \
+    p = R_FN(bsdf__##NAME##_pdf)(R_ARG b, tu, tv, wo, wi);                                         \
+    break;
+    BSDF__CASES
+#undef BSDF__CASE
+  default:
+    p = R_C(0.0);
+    break;
+  }
+#if R_DUAL
+  ad *keep[1] = {&p};
+  bsdf__ad_keep(A, mark, keep, 1);
+#endif
+  return p;
+}
+
+RRGB R_FN(bsdf_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                         transport_mode mode, REAL *OUT_pdf) {
+  REAL3 fo = wo, fi = wi;
+  R_FN(bsdf__flip_pair)(R_ARG b, &fo, &fi);
+  RRGB f;
+  switch (b->type) {
+  case BSDF_PHONG:
+    f = R_FN(bsdf__phong_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
+    break;
+  case BSDF_ROUGHCONDUCTOR:
+    f = R_FN(bsdf__roughconductor_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
+    break;
+  case BSDF_ROUGHDIELECTRIC:
+    f = R_FN(bsdf__roughdielectric_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
+    break;
+  default:
+    /* Nothing to share: the two dispatchers (each applies the flip itself). */
+    *OUT_pdf = R_FN(bsdf_pdf)(R_ARG b, tu, tv, wo, wi);
+    return R_FN(bsdf_eval)(R_ARG b, tu, tv, wo, wi, mode);
+  }
+  return f;
+}
+
+int R_FN(bsdf_sample_f)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe, REAL u1,
+                        REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+#if R_DUAL
+  size_t mark = ad_arena_mark(A);
+#endif
+  int flip = R_FN(bsdf__flip)(b, wo);
+  if (flip) wo.z = R_NEG(wo.z);
+#if R_DUAL
+  out->wi = R3_CONST(0.0, 0.0, 0.0);
+  out->f = RRGB_ZERO();
+  out->pdf = R_C(0.0);
+  out->weight = RRGB_ZERO();
+  out->eta = 0.0;
+  out->flags = 0;
+#else
+  memset(out, 0, sizeof *out);
+#endif
+  int ok = 0;
+  switch (b->type) {
+#define BSDF__CASE(TYPE, NAME)                                                                     \
+  case TYPE:                                                                                       \
+    ok = R_FN(bsdf__##NAME##_sample)(R_ARG b, tu, tv, wo, u_lobe, u1, u2, mode, out);              \
+    break;
+    BSDF__CASES
+#undef BSDF__CASE
+  default:
+    break;
+  }
+  if (flip) out->wi.z = R_NEG(out->wi.z);
+#if R_DUAL
+  ad *keep[10] = {&out->wi.x, &out->wi.y, &out->wi.z, &out->f.r,      &out->f.g,
+                  &out->f.b,  &out->pdf,  &out->weight.r, &out->weight.g, &out->weight.b};
+  bsdf__ad_keep(A, mark, keep, 10);
+#endif
+  return ok;
+}

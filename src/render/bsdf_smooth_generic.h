@@ -1,0 +1,270 @@
+/*
+ * bsdf_smooth_generic.h: the models without microfacets (diffuse, phong,
+ * the smooth conductor and dielectric, plastic), written once in
+ * render/real.h's vocabulary and compiled twice by bsdf_smooth.c, in
+ * doubles and in duals. Not a header: no include guard. The models are
+ * described in bsdf_smooth.c's opening comment.
+ */
+
+/* (-w.x, -w.y, w.z): the mirror direction about the shading normal. */
+static REAL3 R_FN(bsdf__mirror)(R_CTX REAL3 w) { return R3_MAKE(R_NEG(w.x), R_NEG(w.y), w.z); }
+
+/* Cosine-weighted hemisphere: warp_square_to_cosine_hemisphere (warp.c);
+ * in duals the same concentric map (Shirley and Chiu 1997) with its
+ * derivatives. */
+static REAL3 R_FN(bsdf__cosine_hemisphere)(R_CTX REAL u1, REAL u2) {
+#if R_DUAL
+  /* (a, b) in [-1, 1]^2 to the disk. */
+  ad a = ad_sub_s(A, ad_mul_s(A, u1, 2.0), 1.0);
+  ad b = ad_sub_s(A, ad_mul_s(A, u2, 2.0), 1.0);
+  if (a.v == 0.0 && b.v == 0.0) return adv3_const(A, 0.0, 0.0, 1.0);
+  ad r, phi;
+  if (fabs(a.v) > fabs(b.v)) {
+    /* r = a, phi = pi/4 (b / a) */
+    r = a;
+    phi = ad_mul_s(A, ad_div(A, b, a), M_PI / 4.0);
+  } else {
+    /* r = b, phi = pi/2 - pi/4 (a / b) */
+    r = b;
+    phi = ad_s_sub(A, M_PI / 2.0, ad_mul_s(A, ad_div(A, a, b), M_PI / 4.0));
+  }
+  ad x = ad_mul(A, r, ad_cos(A, phi));
+  ad y = ad_mul(A, r, ad_sin(A, phi));
+  /* Lift to the hemisphere: z = sqrt(max(0, 1 - x^2 - y^2)). */
+  ad z = ad_safe_sqrt(A, ad_sub(A, ad_s_sub(A, 1.0, ad_sqr(A, x)), ad_sqr(A, y)));
+  return adv3_make(x, y, z);
+#else
+  return warp_square_to_cosine_hemisphere(u1, u2);
+#endif
+}
+
+/* ---- diffuse --------------------------------------------------------------- */
+
+RRGB R_FN(bsdf__diffuse_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                              transport_mode mode) {
+  (void)mode;
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return RRGB_ZERO();
+  /* f = R / pi */
+  return RRGB_SCALE_S(R_FN(tex_eval)(R_ARG &b->diffuse, tu, tv), 1.0 / M_PI);
+}
+
+REAL R_FN(bsdf__diffuse_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  (void)b, (void)tu, (void)tv;
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return R_C(0.0);
+  return R_DIV_S(wi.z, M_PI);
+}
+
+int R_FN(bsdf__diffuse_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe,
+                               REAL u1, REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+  (void)u_lobe;
+  if (R_V(wo.z) <= 0.0) return 0;
+  REAL3 wi = R_FN(bsdf__cosine_hemisphere)(R_ARG u1, u2);
+  if (R_V(wi.z) <= 0.0) return 0;
+  return R_FN(bsdf__finish)(R_ARG out, wi, R_FN(bsdf__diffuse_eval)(R_ARG b, tu, tv, wo, wi, mode),
+                            R_DIV_S(wi.z, M_PI), 1.0, BSDF_REFLECTION | BSDF_DIFFUSE_LOBE);
+}
+
+/* ---- phong ----------------------------------------------------------------- */
+
+/* f and pdf of one (wo, wi) pair in one pass (eval, pdf and sample all
+ * come here), sharing cos^n(a), the costly pow. want_f = 0 skips f;
+ * OUT_pdf = NULL skips the pdf. */
+static RRGB R_FN(bsdf__ph_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                    int want_f, REAL *OUT_pdf) {
+  if (OUT_pdf) *OUT_pdf = R_C(0.0);
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return RRGB_ZERO();
+  /* cos(a) = wi . r with r the mirror of wo about the normal. */
+  REAL ca = R3_DOT(wi, R_FN(bsdf__mirror)(R_ARG wo));
+  double n = b->exponent;
+  REAL can = R_V(ca) > 0.0 ? R_POW_S(ca, n) : R_C(0.0);
+  if (OUT_pdf) {
+    /* pdf = w (n + 1)/(2 pi) cos^n(a) + (1 - w) cos(wi) / pi */
+    double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+    REAL diff = R_DIV_S(R_MUL_S(wi.z, 1.0 - w), M_PI);
+    *OUT_pdf = R_V(ca) > 0.0 ? R_ADD(R_MUL_S(R_MUL_S(can, (n + 1.0) / (2.0 * M_PI)), w), diff)
+                             : diff;
+  }
+  if (!want_f) return RRGB_ZERO();
+  /* f = kd / pi + ks (n + 2) / (2 pi) cos^n(a) */
+  RRGB f = RRGB_SCALE_S(R_FN(tex_eval)(R_ARG &b->diffuse, tu, tv), 1.0 / M_PI);
+  if (R_V(ca) > 0.0)
+    f = RRGB_ADD(f, RRGB_SCALE(R_FN(tex_eval)(R_ARG &b->specular, tu, tv),
+                               R_MUL_S(can, (n + 2.0) / (2.0 * M_PI))));
+  return f;
+}
+
+RRGB R_FN(bsdf__phong_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                            transport_mode mode) {
+  (void)mode;
+  return R_FN(bsdf__ph_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, NULL);
+}
+
+REAL R_FN(bsdf__phong_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  REAL pdf;
+  R_FN(bsdf__ph_eval_pdf)(R_ARG b, tu, tv, wo, wi, 0, &pdf);
+  return pdf;
+}
+
+RRGB R_FN(bsdf__phong_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                transport_mode mode, REAL *OUT_pdf) {
+  (void)mode;
+  return R_FN(bsdf__ph_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, OUT_pdf);
+}
+
+int R_FN(bsdf__phong_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe,
+                             REAL u1, REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+  (void)mode;
+  if (R_V(wo.z) <= 0.0) return 0;
+  double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  REAL3 wi;
+  int flags;
+  if (R_V(u_lobe) < w) {
+    /* Specular lobe: cos(a) = u2^(1/(n+1)) around the mirror direction,
+     * azimuth 2 pi u1, in the frame of the mirror direction. */
+    double n = b->exponent;
+    REAL ca = R_POW_S(u2, 1.0 / (n + 1.0));
+    REAL sa = R_SAFE_SQRT(R_S_SUB(1.0, R_SQR(ca)));
+    REAL phi = R_MUL_S(u1, 2.0 * M_PI);
+    RFRAME fr = R3_FRAME_FROM_Z(R_FN(bsdf__mirror)(R_ARG wo));
+    REAL3 local = R3_MAKE(R_MUL(sa, R_COS(phi)), R_MUL(sa, R_SIN(phi)), ca);
+    wi = R3_NORMALIZE(R3_TO_WORLD(&fr, local));
+    flags = BSDF_REFLECTION | BSDF_GLOSSY;
+  } else {
+    wi = R_FN(bsdf__cosine_hemisphere)(R_ARG u1, u2);
+    flags = BSDF_REFLECTION | BSDF_DIFFUSE_LOBE;
+  }
+  if (R_V(wi.z) <= 0.0) return 0;
+  REAL pdf;
+  RRGB f = R_FN(bsdf__ph_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, &pdf);
+  return R_FN(bsdf__finish)(R_ARG out, wi, f, pdf, 1.0, flags);
+}
+
+/* ---- conductor (smooth) ------------------------------------------------- */
+
+RRGB R_FN(bsdf__conductor_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                transport_mode mode) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi, (void)mode;
+  return RRGB_ZERO();
+}
+
+REAL R_FN(bsdf__conductor_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi;
+  return R_C(0.0);
+}
+
+int R_FN(bsdf__conductor_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe,
+                                 REAL u1, REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+  (void)u_lobe, (void)u1, (void)u2, (void)mode;
+  if (R_V(wo.z) <= 0.0) return 0;
+  REAL3 wi = R_FN(bsdf__mirror)(R_ARG wo);
+  /* weight = ks F_cond(cos wo); delta convention: pdf 1, f = weight / cos wi. */
+  RRGB weight = RRGB_MUL(R_FN(tex_eval)(R_ARG &b->specular, tu, tv),
+                         R_FN(fresnel_conductor)(R_ARG wo.z, b->cond_eta, b->cond_k));
+  return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(weight, R_S_DIV(1.0, wi.z)), R_C(1.0), 1.0,
+                            BSDF_REFLECTION | BSDF_DELTA);
+}
+
+/* ---- dielectric (smooth) ------------------------------------------------ */
+
+RRGB R_FN(bsdf__dielectric_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                 transport_mode mode) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi, (void)mode;
+  return RRGB_ZERO();
+}
+
+REAL R_FN(bsdf__dielectric_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi;
+  return R_C(0.0);
+}
+
+int R_FN(bsdf__dielectric_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe,
+                                  REAL u1, REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+  (void)u1, (void)u2;
+  if (R_V(wo.z) == 0.0) return 0;
+  REAL cos_t;
+  REAL fr = R_FN(fresnel_dielectric)(R_ARG wo.z, b->eta, &cos_t);
+  if (R_V(u_lobe) < R_V(fr)) {
+    /* Reflection, chosen with probability F: weight = specularReflectance,
+     * f = ks F / |cos wi|. */
+    REAL3 wi = R_FN(bsdf__mirror)(R_ARG wo);
+    RRGB weight = R_FN(tex_eval)(R_ARG &b->specular, tu, tv);
+    return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(weight, R_DIV(fr, R_FABS(wi.z))), fr, 1.0,
+                              BSDF_REFLECTION | BSDF_DELTA);
+  }
+  /* Refraction, probability 1 - F. s = eta_o / eta_i of the two sides:
+   * wi = (-s wo.x, -s wo.y, cos_t). */
+  if (R_V(cos_t) == 0.0) return 0;
+  double s = R_V(wo.z) > 0.0 ? 1.0 / b->eta : b->eta;
+  REAL3 wi = R3_MAKE(R_MUL_S(wo.x, -s), R_MUL_S(wo.y, -s), cos_t);
+  double scale = mode == TRANSPORT_RADIANCE ? s * s : 1.0;
+  RRGB weight = RRGB_SCALE_S(R_FN(tex_eval)(R_ARG &b->transmittance, tu, tv), scale);
+  REAL pdf = R_S_SUB(1.0, fr);
+  return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(weight, R_DIV(pdf, R_FABS(cos_t))), pdf,
+                            R_V(cos_t) < 0.0 ? b->eta : 1.0 / b->eta,
+                            BSDF_TRANSMISSION | BSDF_DELTA);
+}
+
+/* ---- plastic -------------------------------------------------------------- */
+
+/* Probability of choosing the specular coating given F_i:
+ * p = F_i w / (F_i w + (1 - F_i)(1 - w)). */
+static REAL R_FN(bsdf__plastic_prob_specular)(R_CTX const bsdf *b, REAL fi) {
+  double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  REAL fiw = R_MUL_S(fi, w);
+  REAL den = R_ADD(fiw, R_MUL_S(R_S_SUB(1.0, fi), 1.0 - w));
+  return R_V(den) > 0.0 ? R_DIV(fiw, den) : R_C(0.0);
+}
+
+RRGB R_FN(bsdf__plastic_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                              transport_mode mode) {
+  (void)mode;
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return RRGB_ZERO();
+  REAL fi = R_FN(fresnel_dielectric)(R_ARG wo.z, b->eta, NULL);
+  REAL fo = R_FN(fresnel_dielectric)(R_ARG wi.z, b->eta, NULL);
+  double fdr = bsdf__fresnel_diffuse_reflectance(1.0 / b->eta);
+  RRGB kd = R_FN(tex_eval)(R_ARG &b->diffuse, tu, tv);
+  /* kd' = kd / (1 - kd F_dr) (nonlinear; 0 where the denominator is 0, as
+   * rgb_div) or kd / (1 - F_dr). */
+  RRGB kdp;
+  if (b->nonlinear) {
+    REAL *c[3] = {&kd.r, &kd.g, &kd.b};
+    REAL *o[3] = {&kdp.r, &kdp.g, &kdp.b};
+    for (int i = 0; i < 3; i++) {
+      REAL den = R_S_SUB(1.0, R_MUL_S(*c[i], fdr));
+      *o[i] = R_V(den) != 0.0 ? R_DIV(*c[i], den) : R_C(0.0);
+    }
+  } else {
+    kdp = RRGB_SCALE_S(kd, 1.0 / (1.0 - fdr));
+  }
+  /* f = kd' (1 - F_i)(1 - F_o) / (pi eta^2) */
+  REAL s = R_DIV_S(R_MUL(R_S_SUB(1.0, fi), R_S_SUB(1.0, fo)), M_PI * b->eta * b->eta);
+  return RRGB_SCALE(kdp, s);
+}
+
+REAL R_FN(bsdf__plastic_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  (void)tu, (void)tv;
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return R_C(0.0);
+  REAL p = R_FN(bsdf__plastic_prob_specular)(
+      R_ARG b, R_FN(fresnel_dielectric)(R_ARG wo.z, b->eta, NULL));
+  /* (1 - p) cos(wi) / pi */
+  return R_DIV_S(R_MUL(R_S_SUB(1.0, p), wi.z), M_PI);
+}
+
+int R_FN(bsdf__plastic_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_lobe,
+                               REAL u1, REAL u2, transport_mode mode, R_FN(bsdf_sample) *out) {
+  if (R_V(wo.z) <= 0.0) return 0;
+  REAL fi = R_FN(fresnel_dielectric)(R_ARG wo.z, b->eta, NULL);
+  REAL p = R_FN(bsdf__plastic_prob_specular)(R_ARG b, fi);
+  if (R_V(u_lobe) < R_V(p)) {
+    /* Specular coating: f = ks F_i / cos, pdf = p (weight ks F_i / p). */
+    REAL3 wi = R_FN(bsdf__mirror)(R_ARG wo);
+    RRGB ks = R_FN(tex_eval)(R_ARG &b->specular, tu, tv);
+    return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(ks, R_DIV(fi, wi.z)), p, 1.0,
+                              BSDF_REFLECTION | BSDF_DELTA);
+  }
+  REAL3 wi = R_FN(bsdf__cosine_hemisphere)(R_ARG u1, u2);
+  if (R_V(wi.z) <= 0.0) return 0;
+  REAL pdf = R_DIV_S(R_MUL(R_S_SUB(1.0, p), wi.z), M_PI);
+  return R_FN(bsdf__finish)(R_ARG out, wi, R_FN(bsdf__plastic_eval)(R_ARG b, tu, tv, wo, wi, mode),
+                            pdf, 1.0, BSDF_REFLECTION | BSDF_DIFFUSE_LOBE);
+}

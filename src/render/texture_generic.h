@@ -1,0 +1,66 @@
+/*
+ * texture_generic.h: the texture lookups, written once in render/real.h's
+ * vocabulary and compiled twice by texture.c: tex_eval in doubles and
+ * tex_eval_ad in duals (bsdf_ad.h), whose derivatives are those of the
+ * texture coordinates. Not a header: no include guard.
+ *
+ * Derivatives. constant: 0. bitmap: the bilinear interpolation
+ *   c = (1 - dy) ((1 - dx) c00 + dx c10) + dy ((1 - dx) c01 + dx c11),
+ *   x = frac(u') width - 1/2,  dx = x - floor(x),
+ * so dc/du' = width ((1 - dy)(c10 - c00) + dy (c11 - c01)): continuous inside
+ * a texel, a kink on texel boundaries (the derivative is the one of the
+ * texel containing the point); frac(u') = u' - floor(u') has derivative 1.
+ * checkerboard: piecewise constant, derivative 0 (its jumps are left to the
+ * MCMC acceptance step, as every discontinuity).
+ */
+
+/* (1 - t) c0 + t c1 for one channel, with s = 1 - t given (in duals: one
+ * allocation). */
+static REAL R_FN(tex__lerp)(R_CTX REAL s, REAL t, double c0, double c1) {
+#if R_DUAL
+  return ad_lincomb(A, c0, s, c1, t);
+#else
+  return c0 * s + c1 * t;
+#endif
+}
+
+/* Bilinear lookup at (u', v') with repeat wrapping; pixel centres at
+ * half-integers. */
+static RRGB R_FN(tex__bilinear)(R_CTX const lmc_image *img, REAL u, REAL v) {
+  if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels <= 0)
+    return RRGB_ZERO();
+  if (!isfinite(R_V(u)) || !isfinite(R_V(v))) return RRGB_ZERO();
+  /* Bring the coordinates near [0, 1) first so the integer conversion
+   * cannot overflow (u - floor(u) keeps u's derivative). */
+  u = R_SUB_S(u, floor(R_V(u)));
+  v = R_SUB_S(v, floor(R_V(v)));
+  REAL x = R_SUB_S(R_MUL_S(u, (double)img->width), 0.5);
+  REAL y = R_SUB_S(R_MUL_S(v, (double)img->height), 0.5);
+  double fx = floor(R_V(x)), fy = floor(R_V(y));
+  int x0 = (int)fx, y0 = (int)fy;
+  REAL dx = R_SUB_S(x, fx), dy = R_SUB_S(y, fy);
+  REAL sx = R_S_SUB(1.0, dx), sy = R_S_SUB(1.0, dy);
+  rgb c00 = tex__texel(img, x0, y0), c10 = tex__texel(img, x0 + 1, y0);
+  rgb c01 = tex__texel(img, x0, y0 + 1), c11 = tex__texel(img, x0 + 1, y0 + 1);
+  /* Interpolate along x in both rows, then along y. */
+  RRGB top = RRGB_MAKE(R_FN(tex__lerp)(R_ARG sx, dx, c00.r, c10.r),
+                       R_FN(tex__lerp)(R_ARG sx, dx, c00.g, c10.g),
+                       R_FN(tex__lerp)(R_ARG sx, dx, c00.b, c10.b));
+  RRGB bottom = RRGB_MAKE(R_FN(tex__lerp)(R_ARG sx, dx, c01.r, c11.r),
+                          R_FN(tex__lerp)(R_ARG sx, dx, c01.g, c11.g),
+                          R_FN(tex__lerp)(R_ARG sx, dx, c01.b, c11.b));
+  return RRGB_ADD(RRGB_SCALE(top, sy), RRGB_SCALE(bottom, dy));
+}
+
+RRGB R_FN(tex_eval)(R_CTX const texture *t, REAL u, REAL v) {
+  switch (t->type) {
+  case TEX_CONSTANT:
+    return RRGB_CONST(t->value);
+  case TEX_BITMAP:
+    return R_FN(tex__bilinear)(R_ARG t->image, R_ADD_S(R_MUL_S(u, t->uscale), t->uoffset),
+                               R_ADD_S(R_MUL_S(v, t->vscale), t->voffset));
+  case TEX_CHECKERBOARD:
+    return RRGB_CONST(tex__checkerboard(t, R_V(u), R_V(v)));
+  }
+  return RRGB_ZERO();
+}
