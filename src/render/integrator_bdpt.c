@@ -52,6 +52,10 @@
  * are summed over all infinite lights (each weighted by its selection
  * probability). Russian roulette is not part of the densities.
  *
+ * The steps that path_bdpt.c's differentiable strategy shares (vertex
+ * queries, f cos, the densities of the MIS walk and the MIS weight) are
+ * written once, in bdpt_generic.h.
+ *
  * Random numbers: the layout of integrator.h (camera, light and connect
  * streams, a fixed number per vertex). Russian roulette, as pt_li, from
  * rrdepth segments on with survival min(0.95, max(throughput)): on the
@@ -68,156 +72,28 @@
 #endif
 
 /* ---------------------------------------------------------------------------
- * Vertex queries.
+ * The steps shared with path_bdpt.c (bdpt_generic.h), in doubles.
  */
 
-static double bdpt__remap0(double x) { return x != 0.0 ? x : 1.0; }
-
-/* The light a vertex acts as when it is a path's light endpoint, or -1. */
-static int bdpt__light_index(const bdpt_vertex *v) {
-  return v->type == BDPT_VERTEX_LIGHT || v->type == BDPT_VERTEX_SURFACE ? v->light : -1;
-}
-
-/* Light endpoint standing for the infinite lights (escaped ray, constant, envmap). */
-static int bdpt__is_infinite(const scene *sc, const bdpt_vertex *v) {
-  if (v->type != BDPT_VERTEX_LIGHT) return 0;
-  return v->light < 0 || light_is_infinite(&sc->lights[v->light]);
-}
-
-/* Light endpoint whose position is at infinity (infinite or directional). */
-static int bdpt__at_infinity(const scene *sc, const bdpt_vertex *v) {
-  if (v->type != BDPT_VERTEX_LIGHT) return 0;
-  return bdpt__is_infinite(sc, v) || sc->lights[v->light].type == LIGHT_DIRECTIONAL;
-}
-
-static int bdpt__is_delta_light(const scene *sc, const bdpt_vertex *v) {
-  return v->type == BDPT_VERTEX_LIGHT && v->light >= 0 && light_is_delta(&sc->lights[v->light]);
-}
-
-static int bdpt__has_normal(const bdpt_vertex *v) { return v3_len2(v->n) > 0.0; }
-
-/* Scattering vertex whose BSDF has a non-delta part (can be connected). */
-static int bdpt__connectible(const bdpt_vertex *v) {
-  return v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf);
-}
-
-/* Unit direction from vertex a towards vertex b (either may be at infinity). */
-static vec3 bdpt__dir_to(const scene *sc, const bdpt_vertex *a, const bdpt_vertex *b) {
-  if (bdpt__at_infinity(sc, b)) return v3_neg(b->dir);
-  if (bdpt__at_infinity(sc, a)) return a->dir;
-  return v3_normalize(v3_sub(b->p, a->p));
-}
-
-/* Local direction of w at a surface, and whether w lies on the same side
- * of the geometric and the shading surface (Mitsuba's rule). */
-static int bdpt__side_ok(const surface_hit *h, vec3 w, vec3 *OUT_local) {
-  *OUT_local = frame_to_local(&h->sh, w);
-  return v3_dot(w, h->ng) * OUT_local->z > 0.0;
-}
-
-/* Veach's shading-normal correction for importance transport:
- *   |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|). */
-static double bdpt__shading_correction(const surface_hit *h, vec3 wo, vec3 wi) {
-  double num = fabs(v3_dot(wo, h->sh.n)) * fabs(v3_dot(wi, h->ng));
-  double den = fabs(v3_dot(wo, h->ng)) * fabs(v3_dot(wi, h->sh.n));
-  return den > 0.0 ? num / den : 0.0;
-}
-
-/* f(wo, wi) |wi . n_s| at a surface vertex, towards the unit direction wi,
- * with the correction above in importance mode; 0 when a direction breaks
- * the side rule. */
-static rgb bdpt__f_cos(const bdpt_vertex *v, vec3 wi, transport_mode mode) {
-  const surface_hit *h = &v->hit;
-  vec3 wo_l, wi_l;
-  if (!bdpt__side_ok(h, v->wo, &wo_l) || !bdpt__side_ok(h, wi, &wi_l)) return rgb_zero();
-  rgb f = bsdf_eval(h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
-  double c = fabs(wi_l.z);
-  if (mode == TRANSPORT_IMPORTANCE) c *= bdpt__shading_correction(h, v->wo, wi);
-  return rgb_scale(f, c);
-}
-
-/* ---------------------------------------------------------------------------
- * Densities (pbrt's Vertex::ConvertDensity, Pdf, PdfLight, PdfLightOrigin).
- */
-
-/* Solid-angle density at `from` of the direction to `to`, as a density of
- * `to`: per unit area (times |cos| at `to` over the squared distance), or
- * unchanged when `to` is at infinity. */
-static double bdpt__convert(const scene *sc, double pdf_sa, const bdpt_vertex *from,
-                            const bdpt_vertex *to) {
-  if (bdpt__at_infinity(sc, to)) return pdf_sa;
-  vec3 d = v3_sub(to->p, from->p);
-  double d2 = v3_len2(d);
-  if (!(d2 > 0.0)) return 0.0;
-  double pdf = pdf_sa / d2;
-  if (bdpt__has_normal(to)) pdf *= fabs(v3_dot(to->n, d)) / sqrt(d2);
-  return pdf;
-}
-
-/* Density of `next` when emitted from the light endpoint v. */
-static double bdpt__pdf_light(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *next) {
-  int li = bdpt__light_index(v);
-  if (bdpt__at_infinity(sc, v)) {
-    /* Planar density of light_sample_le's disk: 1/(pi r^2) |cos|. */
-    double pdf = 1.0 / (M_PI * sc->radius * sc->radius);
-    if (bdpt__has_normal(next)) pdf *= fabs(v3_dot(next->n, v->dir));
-    return pdf;
-  }
-  if (li < 0) return 0.0;
-  vec3 d = v3_sub(next->p, v->p);
-  double d2 = v3_len2(d);
-  if (!(d2 > 0.0)) return 0.0;
-  vec3 w = v3_scale(d, 1.0 / sqrt(d2));
+/* The emission density of direction w from point p (normal n) of light l. */
+static double bdpt__pdf_le_dir(const scene *sc, const light *l, vec3 p, vec3 n, vec3 w) {
   double pdf_pos, pdf_dir;
-  light_pdf_le(&sc->lights[li], sc, v->p, v->n, w, &pdf_pos, &pdf_dir);
-  double pdf = pdf_dir / d2;
-  if (bdpt__has_normal(next)) pdf *= fabs(v3_dot(next->n, w));
-  return pdf;
+  light_pdf_le(l, sc, p, n, w, &pdf_pos, &pdf_dir);
+  return pdf_dir;
 }
 
-/* Density of choosing v as the light endpoint (with the light selection
- * probability); `next` is the vertex it connects to. Infinite lights: the
- * solid-angle density summed over all infinite lights. Delta positions
- * and directional lights: the selection probability alone. */
-static double bdpt__pdf_light_origin(const scene *sc, const bdpt_vertex *v,
-                                     const bdpt_vertex *next) {
-  if (bdpt__is_infinite(sc, v)) {
-    vec3 w_env = v3_neg(v->dir);
-    double pdf = 0.0;
-    for (int k = 0; k < sc->n_infinite; k++) {
-      int li = sc->infinite_lights[k];
-      pdf += scene_light_pmf(sc, li) *
-             light_pdf_li(&sc->lights[li], sc, next->p, w_env, next->p, next->n);
-    }
-    return pdf;
-  }
-  int li = bdpt__light_index(v);
-  if (li < 0) return 0.0;
-  const light *l = &sc->lights[li];
-  double pmf = scene_light_pmf(sc, li);
-  if (light_is_delta(l)) return pmf;
-  double pdf_pos, pdf_dir;
-  light_pdf_le(l, sc, v->p, v->n, bdpt__dir_to(sc, v, next), &pdf_pos, &pdf_dir);
-  return pmf * pdf_pos;
-}
-
-/* Density of `next` when sampled at v, which was reached from `prev`
- * (pbrt's Vertex::Pdf). Light endpoints use bdpt__pdf_light. */
-static double bdpt__pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *prev,
-                        const bdpt_vertex *next) {
-  if (v->type == BDPT_VERTEX_LIGHT) return bdpt__pdf_light(sc, v, next);
-  vec3 wi = bdpt__dir_to(sc, v, next);
-  double pdf_sa;
-  if (v->type == BDPT_VERTEX_CAMERA) {
-    pdf_sa = camera_pdf_dir(&sc->cam, wi);
-  } else {
-    if (!prev) return 0.0;
-    const surface_hit *h = &v->hit;
-    vec3 wo = bdpt__dir_to(sc, v, prev);
-    pdf_sa = bsdf_pdf(h->bsdf, h->tu, h->tv, frame_to_local(&h->sh, wo), frame_to_local(&h->sh, wi));
-  }
-  return bdpt__convert(sc, pdf_sa, v, next);
-}
+#define R_DUAL 0
+#include "render/real.h"
+#define BDPT_VERTEX bdpt_vertex
+#define BDPT_HIT surface_hit
+#define BDPT_CTX const scene *scene_
+#define BDPT_C scene_
+#define BDPT_SC scene_
+#define BDPT_ARENA
+#define BDPT_CAM_PDF_DIR(w) camera_pdf_dir(&scene_->cam, (w))
+#define BDPT_PDF_LE_DIR(l, p, n, w) bdpt__pdf_le_dir(scene_, (l), (p), (n), (w))
+#define BDPT_PDF_LI(l, ref, w, p, n) light_pdf_li((l), scene_, (ref), (w), (p), (n))
+#include "render/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
  * The sphere map of absolute directions (bdpt_param).
@@ -455,47 +331,7 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
 
 double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                        int s, const bdpt_vertex *sampled) {
-  if (t < 1 || s + t < 2) return 0.0;
-  /* The connection vertices and their predecessors. */
-  const bdpt_vertex *qs = s > 0 ? ((s == 1 && sampled) ? sampled : &lp[s - 1]) : NULL;
-  const bdpt_vertex *pt = &cam[t - 1];
-  const bdpt_vertex *qsm = s > 1 ? &lp[s - 2] : NULL;
-  const bdpt_vertex *ptm = t > 1 ? &cam[t - 2] : NULL;
-
-  /* Reverse densities of the joined path next to the connection. */
-  double pt_rev = s > 0 ? bdpt__pdf(sc, qs, qsm, pt) : bdpt__pdf_light_origin(sc, pt, ptm);
-  double ptm_rev = 0.0, qs_rev = 0.0, qsm_rev = 0.0;
-  if (ptm) ptm_rev = s > 0 ? bdpt__pdf(sc, pt, qs, ptm) : bdpt__pdf_light(sc, pt, ptm);
-  if (qs) qs_rev = bdpt__pdf(sc, pt, ptm, qs);
-  if (qsm) qsm_rev = bdpt__pdf(sc, qs, pt, qsm);
-
-  double sum = 0.0;
-
-  /* Walking the camera subpath towards the camera, vertex i moves to the
-   * light side: strategy (s + t - i, i) joins cam[i-1] and cam[i]. */
-  double ri = 1.0;
-  for (int i = t - 1; i >= 1; i--) {
-    double rev = i == t - 1 ? pt_rev : (i == t - 2 ? ptm_rev : cam[i].pdf_rev);
-    ri *= bdpt__remap0(rev) / bdpt__remap0(cam[i].pdf_fwd);
-    int delta_i = i == t - 1 ? 0 : cam[i].delta;
-    int ok = !delta_i && !cam[i - 1].delta;
-    if (i == 1 && s + t - 1 < 2) ok = 0; /* (s', t') = (1, 1) is not used */
-    if (ok) sum += ri * ri;
-  }
-
-  /* Walking the light subpath towards the light, vertex i moves to the
-   * camera side: strategy (i, s + t - i) joins lp[i-1] and lp[i]. */
-  ri = 1.0;
-  for (int i = s - 1; i >= 0; i--) {
-    const bdpt_vertex *v = i == s - 1 ? qs : &lp[i];
-    double rev = i == s - 1 ? qs_rev : (i == s - 2 ? qsm_rev : lp[i].pdf_rev);
-    ri *= bdpt__remap0(rev) / bdpt__remap0(v->pdf_fwd);
-    int delta_i = i == s - 1 ? 0 : lp[i].delta;
-    int delta_prev = i > 0 ? lp[i - 1].delta
-                           : bdpt__is_delta_light(sc, s == 1 ? qs : &lp[0]);
-    if (!delta_i && !delta_prev) sum += ri * ri;
-  }
-  return 1.0 / (1.0 + sum);
+  return bdpt__mis_weight(sc, cam, t, lp, s, sampled);
 }
 
 void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, int s) {

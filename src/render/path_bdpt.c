@@ -7,9 +7,11 @@
  * 2020).
  *
  * This is integrator_bdpt.c's bdpt_camera_subpath, bdpt_light_subpath,
- * bdpt_connect and bdpt_mis_weight, step for step, over duals: for the same
- * numbers the value is bdpt_connect's (tests/test_path_grad*.c check it to
- * 1e-9 relative). It runs on the machinery of path.c (path_internal.h):
+ * bdpt_connect and bdpt_mis_weight, step for step, over duals; the steps
+ * that do not draw numbers or trace rays (vertex queries, f cos, the
+ * densities of the MIS walk, the MIS weight) are one source with it
+ * (bdpt_generic.h). For the same numbers the value is bdpt_connect's
+ * (tests/test_path_grad*.c check it to 1e-9 relative). It runs on the machinery of path.c (path_internal.h):
  * numbers are drawn and recorded by path__draw, closest hits and shadow
  * rays are traced in pass 1 and replayed in pass 2 (path__intersect,
  * path__blocked), each vertex is re-evaluated on its recorded triangle
@@ -75,73 +77,6 @@ static adv3 pbd__sphere_dir(ad_arena *A, ad v1, ad v2, ad *OUT_jac) {
   w.y = ad_mul(A, st, ad_sin(A, phi));
   w.z = ad_cos(A, theta);
   return w;
-}
-
-/* ---------------------------------------------------------------------------
- * Vertex queries (integrator_bdpt.c's, on dual vertices).
- */
-
-static ad pbd__remap0(const ad_arena *A, ad x) { return x.v != 0.0 ? x : ad_const(A, 1.0); }
-
-static int pbd__light_index(const path__bdv *v) {
-  return v->type == BDPT_VERTEX_LIGHT || v->type == BDPT_VERTEX_SURFACE ? v->light : -1;
-}
-
-static int pbd__is_infinite(const scene *sc, const path__bdv *v) {
-  if (v->type != BDPT_VERTEX_LIGHT) return 0;
-  return v->light < 0 || light_is_infinite(&sc->lights[v->light]);
-}
-
-static int pbd__at_infinity(const scene *sc, const path__bdv *v) {
-  if (v->type != BDPT_VERTEX_LIGHT) return 0;
-  return pbd__is_infinite(sc, v) || sc->lights[v->light].type == LIGHT_DIRECTIONAL;
-}
-
-static int pbd__is_delta_light(const scene *sc, const path__bdv *v) {
-  return v->type == BDPT_VERTEX_LIGHT && v->light >= 0 && light_is_delta(&sc->lights[v->light]);
-}
-
-static int pbd__has_normal(const path__bdv *v) { return v3_len2(v->n) > 0.0; }
-
-static int pbd__connectible(const path__bdv *v) {
-  return v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf);
-}
-
-/* Unit direction from a towards b (either may be at infinity). */
-static adv3 pbd__dir_to(path__ctx *c, const path__bdv *a, const path__bdv *b) {
-  if (pbd__at_infinity(c->sc, b)) return adv3_neg(c->A, b->dir);
-  if (pbd__at_infinity(c->sc, a)) return a->dir;
-  return adv3_normalize(c->A, adv3_sub(c->A, b->p, a->p));
-}
-
-/* Local direction of w and Mitsuba's side rule (w on the same side of the
- * geometric and the shading surface). */
-static int pbd__side_ok(path__ctx *c, const path__hit *h, adv3 w, adv3 *OUT_local) {
-  *OUT_local = adv3_to_local(c->A, &h->sh, w);
-  return v3_dot(path__val(w), h->ng) * OUT_local->z.v > 0.0;
-}
-
-/* Veach's shading-normal correction for importance transport:
- *   |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|). */
-static ad pbd__shading_correction(path__ctx *c, const path__hit *h, adv3 wo, adv3 wi) {
-  ad_arena *A = c->A;
-  ad num = ad_mul(A, ad_fabs(A, adv3_dot(A, wo, h->sh.n)), ad_fabs(A, path__dot_c(A, h->ng, wi)));
-  ad den = ad_mul(A, ad_fabs(A, path__dot_c(A, h->ng, wo)), ad_fabs(A, adv3_dot(A, wi, h->sh.n)));
-  return den.v > 0.0 ? ad_div(A, num, den) : ad_const(A, 0.0);
-}
-
-/* f(wo, wi) |wi . ns| at a surface vertex (with the correction above for
- * importance); 0 when a direction breaks the side rule. */
-static adrgb pbd__f_cos(path__ctx *c, const path__bdv *v, adv3 wi, transport_mode mode) {
-  ad_arena *A = c->A;
-  const path__hit *h = &v->hit;
-  adv3 wo_l, wi_l;
-  if (!pbd__side_ok(c, h, v->wo, &wo_l) || !pbd__side_ok(c, h, wi, &wi_l))
-    return adrgb_const(A, rgb_zero());
-  adrgb f = bsdf_eval_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
-  ad cs = ad_fabs(A, wi_l.z);
-  if (mode == TRANSPORT_IMPORTANCE) cs = ad_mul(A, cs, pbd__shading_correction(c, h, v->wo, wi));
-  return adrgb_scale(A, f, cs);
 }
 
 /* ---------------------------------------------------------------------------
@@ -357,87 +292,22 @@ static ad pbd__pdf_le_dir(path__ctx *c, const light *l, adv3 p, vec3 n, adv3 w) 
 }
 
 /* ---------------------------------------------------------------------------
- * Densities (integrator_bdpt.c's bdpt__convert, bdpt__pdf_light,
- * bdpt__pdf_light_origin, bdpt__pdf).
+ * The steps shared with integrator_bdpt.c (bdpt_generic.h), in duals: vertex
+ * queries, f cos, the densities of the MIS walk and the MIS weight.
  */
 
-/* Solid-angle density at `from` towards `to` as a density of `to`. */
-static ad pbd__convert(path__ctx *c, ad pdf_sa, const path__bdv *from, const path__bdv *to) {
-  ad_arena *A = c->A;
-  if (pbd__at_infinity(c->sc, to)) return pdf_sa;
-  adv3 d = adv3_sub(A, to->p, from->p);
-  ad d2 = adv3_len2(A, d);
-  if (!(d2.v > 0.0)) return ad_const(A, 0.0);
-  ad pdf = ad_div(A, pdf_sa, d2);
-  if (pbd__has_normal(to))
-    pdf = ad_mul(A, pdf, ad_div(A, ad_fabs(A, path__dot_c(A, to->n, d)), ad_sqrt(A, d2)));
-  return pdf;
-}
-
-/* Density of `next` when emitted from the light endpoint v. */
-static ad pbd__pdf_light(path__ctx *c, const path__bdv *v, const path__bdv *next) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  int li = pbd__light_index(v);
-  if (pbd__at_infinity(sc, v)) {
-    double pdf = 1.0 / (M_PI * sc->radius * sc->radius);
-    if (!pbd__has_normal(next)) return ad_const(A, pdf);
-    return ad_mul_s(A, ad_fabs(A, path__dot_c(A, next->n, v->dir)), pdf);
-  }
-  if (li < 0) return ad_const(A, 0.0);
-  adv3 d = adv3_sub(A, next->p, v->p);
-  ad d2 = adv3_len2(A, d);
-  if (!(d2.v > 0.0)) return ad_const(A, 0.0);
-  adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
-  ad pdf = ad_div(A, pbd__pdf_le_dir(c, &sc->lights[li], v->p, v->n, w), d2);
-  if (pbd__has_normal(next)) pdf = ad_mul(A, pdf, ad_fabs(A, path__dot_c(A, next->n, w)));
-  return pdf;
-}
-
-/* Density of choosing v as the light endpoint (with the selection
- * probability); infinite lights: the solid-angle densities summed. */
-static ad pbd__pdf_light_origin(path__ctx *c, const path__bdv *v, const path__bdv *next) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  if (pbd__is_infinite(sc, v)) {
-    adv3 w_env = adv3_neg(A, v->dir);
-    ad pdf = ad_const(A, 0.0);
-    for (int k = 0; k < sc->n_infinite; k++) {
-      int li = sc->infinite_lights[k];
-      ad p = path__pdf_li(c, &sc->lights[li], next->p, w_env, next->p, next->n);
-      pdf = ad_add(A, pdf, ad_mul_s(A, p, scene_light_pmf(sc, li)));
-    }
-    return pdf;
-  }
-  int li = pbd__light_index(v);
-  if (li < 0) return ad_const(A, 0.0);
-  const light *l = &sc->lights[li];
-  double pmf = scene_light_pmf(sc, li);
-  if (light_is_delta(l)) return ad_const(A, pmf);
-  /* The position density does not depend on the direction (nor on u). */
-  double pdf_pos, pdf_dir;
-  (void)next;
-  light_pdf_le(l, sc, path__val(v->p), v->n, v3(0.0, 0.0, 1.0), &pdf_pos, &pdf_dir);
-  return ad_const(A, pmf * pdf_pos);
-}
-
-/* Density of `next` when sampled at v, reached from `prev`. */
-static ad pbd__pdf(path__ctx *c, const path__bdv *v, const path__bdv *prev, const path__bdv *next) {
-  ad_arena *A = c->A;
-  if (v->type == BDPT_VERTEX_LIGHT) return pbd__pdf_light(c, v, next);
-  adv3 wi = pbd__dir_to(c, v, next);
-  ad pdf_sa;
-  if (v->type == BDPT_VERTEX_CAMERA) {
-    pdf_sa = pbd__cam_pdf_dir(c, wi);
-  } else {
-    if (!prev) return ad_const(A, 0.0);
-    const path__hit *h = &v->hit;
-    adv3 wo = pbd__dir_to(c, v, prev);
-    pdf_sa = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, adv3_to_local(A, &h->sh, wo),
-                         adv3_to_local(A, &h->sh, wi));
-  }
-  return pbd__convert(c, pdf_sa, v, next);
-}
+#define R_DUAL 1
+#include "render/real.h"
+#define BDPT_VERTEX path__bdv
+#define BDPT_HIT path__hit
+#define BDPT_CTX path__ctx *c
+#define BDPT_C c
+#define BDPT_SC (c->sc)
+#define BDPT_ARENA ad_arena *A = c->A;
+#define BDPT_CAM_PDF_DIR(w) pbd__cam_pdf_dir(c, (w))
+#define BDPT_PDF_LE_DIR(l, p, n, w) pbd__pdf_le_dir(c, (l), (p), (n), (w))
+#define BDPT_PDF_LI(l, ref, w, p, n) path__pdf_li(c, (l), (ref), (w), (p), (n))
+#include "render/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
  * Random walks (bdpt__walk).
@@ -483,7 +353,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
     if (planar)
       v->pdf_fwd = ad_mul(A, pdf_dir, ad_fabs(A, path__dot_c(A, v->n, dir)));
     else
-      v->pdf_fwd = pbd__convert(c, pdf_dir, prev, v);
+      v->pdf_fwd = bdpt__convert(c, pdf_dir, prev, v);
     n++;
 
     /* This vertex's numbers (always taken), then stop if long enough. */
@@ -494,7 +364,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
     /* Sample the BSDF for the next direction, or read it (absolute). */
     const path__hit *h = &v->hit;
     adv3 wo_l, wi_l;
-    int ok = pbd__side_ok(c, h, v->wo, &wo_l);
+    int ok = bdpt__side_ok(A, h, v->wo, &wo_l);
     path__topo(c, ok);
     if (!ok) break;
     bsdf_sample_ad bs;
@@ -504,7 +374,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
       /* The direction's spherical coordinates (integrator_bdpt.c's walk). */
       ad J;
       wi = pbd__sphere_dir(A, u1, u2, &J);
-      ok = pbd__side_ok(c, h, wi, &wi_l);
+      ok = bdpt__side_ok(A, h, wi, &wi_l);
       path__topo(c, ok);
       if (!ok) break;
       adrgb f = bsdf_eval_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
@@ -525,7 +395,7 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
       path__topo(c, ok ? bs.flags : -1);
       if (!ok) break;
       wi = adv3_to_world(A, &h->sh, bs.wi);
-      ok = pbd__side_ok(c, h, wi, &wi_l);
+      ok = bdpt__side_ok(A, h, wi, &wi_l);
       path__topo(c, ok);
       if (!ok) break;
     }
@@ -539,10 +409,10 @@ static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, doub
     }
     adrgb weight = bs.weight;
     if (mode == TRANSPORT_IMPORTANCE)
-      weight = adrgb_scale(A, weight, pbd__shading_correction(c, h, v->wo, wi));
+      weight = adrgb_scale(A, weight, bdpt__shading_correction(A, h, v->wo, wi));
     beta = adrgb_mul(A, beta, weight);
     if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
-    prev->pdf_rev = pbd__convert(c, pdf_rev_sa, v, prev);
+    prev->pdf_rev = bdpt__convert(c, pdf_rev_sa, v, prev);
     if (path__rgb_black(beta)) break;
 
     /* Russian roulette on the scattering throughput; on light subpaths
@@ -654,7 +524,7 @@ static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
     memset(&tmp, 0, sizeof tmp);
     tmp.type = BDPT_VERTEX_SURFACE;
     tmp.p = adv3_add(A, les.p, les.dir);
-    y0->pdf_fwd = light_is_infinite(l) ? pbd__pdf_light_origin(c, y0, &tmp) : ad_const(A, pmf);
+    y0->pdf_fwd = light_is_infinite(l) ? bdpt__pdf_light_origin(c, y0, &tmp) : ad_const(A, pmf);
     pdf_next = ad_const(A, les.pdf_pos);
   } else {
     y0->pdf_fwd = ad_const(A, light_is_delta(l) ? pmf : pmf * les.pdf_pos);
@@ -666,53 +536,6 @@ static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
 }
 
 /* ---------------------------------------------------------------------------
- * The MIS weight (bdpt_mis_weight: pbrt's ratio walk) in duals.
- */
-
-static ad pbd__mis_weight(path__ctx *c, const path__bdv *cam, int t, const path__bdv *lp, int s,
-                          const path__bdv *sampled) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  /* The connection vertices and their predecessors. */
-  const path__bdv *qs = s > 0 ? ((s == 1 && sampled) ? sampled : &lp[s - 1]) : NULL;
-  const path__bdv *pt = &cam[t - 1];
-  const path__bdv *qsm = s > 1 ? &lp[s - 2] : NULL;
-  const path__bdv *ptm = t > 1 ? &cam[t - 2] : NULL;
-
-  /* Reverse densities of the joined path next to the connection. */
-  ad pt_rev = s > 0 ? pbd__pdf(c, qs, qsm, pt) : pbd__pdf_light_origin(c, pt, ptm);
-  ad ptm_rev = ad_const(A, 0.0), qs_rev = ad_const(A, 0.0), qsm_rev = ad_const(A, 0.0);
-  if (ptm) ptm_rev = s > 0 ? pbd__pdf(c, pt, qs, ptm) : pbd__pdf_light(c, pt, ptm);
-  if (qs) qs_rev = pbd__pdf(c, pt, ptm, qs);
-  if (qsm) qsm_rev = pbd__pdf(c, qs, pt, qsm);
-
-  ad sum = ad_const(A, 0.0);
-
-  /* Camera side: vertex i moves to the light side, strategy (s + t - i, i). */
-  ad ri = ad_const(A, 1.0);
-  for (int i = t - 1; i >= 1; i--) {
-    ad rev = i == t - 1 ? pt_rev : (i == t - 2 ? ptm_rev : cam[i].pdf_rev);
-    ri = ad_mul(A, ri, ad_div(A, pbd__remap0(A, rev), pbd__remap0(A, cam[i].pdf_fwd)));
-    int delta_i = i == t - 1 ? 0 : cam[i].delta;
-    int ok = !delta_i && !cam[i - 1].delta;
-    if (i == 1 && s + t - 1 < 2) ok = 0; /* (s', t') = (1, 1) is not used */
-    if (ok) sum = ad_add(A, sum, ad_sqr(A, ri));
-  }
-
-  /* Light side: vertex i moves to the camera side, strategy (i, s + t - i). */
-  ri = ad_const(A, 1.0);
-  for (int i = s - 1; i >= 0; i--) {
-    const path__bdv *v = i == s - 1 ? qs : &lp[i];
-    ad rev = i == s - 1 ? qs_rev : (i == s - 2 ? qsm_rev : lp[i].pdf_rev);
-    ri = ad_mul(A, ri, ad_div(A, pbd__remap0(A, rev), pbd__remap0(A, v->pdf_fwd)));
-    int delta_i = i == s - 1 ? 0 : lp[i].delta;
-    int delta_prev = i > 0 ? lp[i - 1].delta : pbd__is_delta_light(sc, s == 1 ? qs : &lp[0]);
-    if (!delta_i && !delta_prev) sum = ad_add(A, sum, ad_sqr(A, ri));
-  }
-  return ad_s_div(A, 1.0, ad_add_s(A, sum, 1.0));
-}
-
-/* ---------------------------------------------------------------------------
  * One strategy (bdpt_connect).
  */
 
@@ -721,9 +544,180 @@ static unsigned pbd__connect_lobes(const path__bdv *v) {
   return path__lobe_flag(bsdf_flags(v->hit.bsdf) & ~BSDF_DELTA);
 }
 
-static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
+/* What a connection found: its contribution before the MIS weight, how far
+ * it got (part of the topology), the emitter and the connection vertices'
+ * lobes, and for s = 1 the light vertex it sampled. */
+typedef struct pbd__join {
+  adrgb L;
+  int stage;
+  unsigned emit, lobes;
+  path__bdv sampled;
+  int has_sampled;
+} pbd__join;
+
+/* s = 0: the camera subpath ends on an emitter. */
+static void pbd__join_emitter(path__ctx *c, const path__bdv *cam, int t, pbd__join *J) {
   ad_arena *A = c->A;
   const scene *sc = c->sc;
+  const path__bdv *pt = &cam[t - 1];
+  if (pt->type == BDPT_VERTEX_SURFACE) {
+    if (pt->light >= 0) {
+      rgb le = light_le_area(&sc->lights[pt->light], pt->n, path__val(pt->wo));
+      J->stage = 1 + !rgb_is_black(le);
+      J->L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
+      J->emit = PATH_EMIT_AREA;
+    }
+  } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
+    vec3 w_env = v3_neg(path__val(pt->dir));
+    rgb le = rgb_zero();
+    for (int k = 0; k < sc->n_infinite; k++) {
+      const light *l = &sc->lights[sc->infinite_lights[k]];
+      rgb lk = light_le_infinite(l, w_env);
+      if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(lk))); /* the pixel */
+      if (!rgb_is_black(lk)) J->emit |= path__emit_flag(l);
+      le = rgb_add(le, lk);
+    }
+    J->stage = 3;
+    J->L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
+  }
+}
+
+/* t = 1: light tracing, y_{s-1} joined to the pinhole and splatted at its
+ * raster point (*OUT_rx, *OUT_ry). */
+static void pbd__join_camera(path__ctx *c, const path__bdv *cam, const path__bdv *lp, int s,
+                             pbd__join *J, ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  const path__bdv *qs = &lp[s - 1];
+  if (!bdpt__connectible(qs)) return;
+  J->stage = 1;
+  adv3 d = adv3_sub(A, qs->p, cam[0].p);
+  ad d2 = adv3_len2(A, d);
+  if (!(d2.v > 0.0)) return;
+  adv3 dir = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
+  ad rx = ad_const(A, 0.0), ry = ad_const(A, 0.0);
+  ad we = pbd__cam_we(c, dir, &rx, &ry);
+  if (!(we.v > 0.0)) return;
+  J->stage = 2;
+  ad cos_cam = path__dot_c(A, sc->cam.forward, dir);
+  adrgb f = bdpt__f_cos(A, qs, adv3_neg(A, dir), TRANSPORT_IMPORTANCE);
+  /* qs.beta f We cos_cam / d^2 */
+  J->L = adrgb_scale(A, adrgb_mul(A, qs->beta, f), ad_div(A, ad_mul(A, we, cos_cam), d2));
+  if (path__rgb_black(J->L)) return;
+  J->stage = 3;
+  if (path__blocked(c, sc->cam.pos, path__val(dir), path__val(qs->p), 0)) {
+    J->L = adrgb_const(A, rgb_zero());
+    return;
+  }
+  J->stage = 4;
+  *OUT_rx = rx;
+  *OUT_ry = ry;
+  J->emit = path__emit_flag(&sc->lights[lp[0].light]);
+  J->lobes |= pbd__connect_lobes(qs);
+}
+
+/* s = 1: next-event estimation from z_{t-1} with a fresh light sample, the
+ * connect triple of this t (the ones of smaller t are drawn, unused). */
+static void pbd__join_light(path__ctx *c, const path__bdv *cam, int t, pbd__join *J) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  const path__bdv *pt = &cam[t - 1];
+  path__use_stream(c, LMC_STREAM_CONNECT);
+  for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) path__draw(c, 0);
+  ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
+  if (!bdpt__connectible(pt) || sc->n_lights == 0) return;
+  double pmf, u_remap;
+  int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
+  path__topo(c, li);
+  path__li ls;
+  J->stage = 1;
+  if (!(li >= 0 && pmf > 0.0 && path__sample_li(c, &sc->lights[li], pt->p, ul1, ul2, &ls) &&
+        ls.pdf.v > 0.0 && !path__rgb_black(ls.li)))
+    return;
+  J->stage = 2;
+  const light *l = &sc->lights[li];
+  adrgb f = bdpt__f_cos(A, pt, ls.wi, TRANSPORT_RADIANCE);
+  /* pt.beta f Li / (pmf pdf) */
+  J->L = adrgb_scale(A, adrgb_mul(A, pt->beta, adrgb_mul(A, f, ls.li)),
+                     ad_inv(A, ad_mul_s(A, ls.pdf, pmf)));
+  if (path__rgb_black(J->L)) return;
+  J->stage = 3;
+  if (path__blocked(c, path__val(pt->p), path__val(ls.wi), ls.p, isinf(ls.dist))) {
+    J->L = adrgb_const(A, rgb_zero());
+    return;
+  }
+  J->stage = 4;
+  path__bdv *v = &J->sampled;
+  memset(v, 0, sizeof *v);
+  v->type = BDPT_VERTEX_LIGHT;
+  v->light = li;
+  v->p = ls.pd;
+  v->n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+  v->dir = adv3_neg(A, ls.wi);
+  v->pdf_rev = ad_const(A, 0.0);
+  v->pdf_fwd = bdpt__pdf_light_origin(c, v, pt);
+  J->has_sampled = 1;
+  J->emit = path__emit_flag(l);
+  J->lobes |= pbd__connect_lobes(pt);
+}
+
+/* s, t >= 2: y_{s-1} and z_{t-1} joined by a shadow ray. */
+static void pbd__join_vertices(path__ctx *c, const path__bdv *cam, int t, const path__bdv *lp,
+                               int s, pbd__join *J) {
+  ad_arena *A = c->A;
+  const scene *sc = c->sc;
+  const path__bdv *qs = &lp[s - 1], *pt = &cam[t - 1];
+  if (!bdpt__connectible(qs) || !bdpt__connectible(pt)) return;
+  J->stage = 1;
+  adv3 d = adv3_sub(A, pt->p, qs->p);
+  ad d2 = adv3_len2(A, d);
+  if (!(d2.v > 0.0)) return;
+  J->stage = 2;
+  adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
+  adrgb fq = bdpt__f_cos(A, qs, w, TRANSPORT_IMPORTANCE);
+  adrgb fp = bdpt__f_cos(A, pt, adv3_neg(A, w), TRANSPORT_RADIANCE);
+  /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
+  J->L = adrgb_scale(A, adrgb_mul(A, adrgb_mul(A, qs->beta, fq), adrgb_mul(A, fp, pt->beta)),
+                     ad_inv(A, d2));
+  if (path__rgb_black(J->L)) return;
+  J->stage = 3;
+  if (path__blocked(c, path__val(qs->p), path__val(w), path__val(pt->p), 0)) {
+    J->L = adrgb_const(A, rgb_zero());
+    return;
+  }
+  J->stage = 4;
+  J->emit = path__emit_flag(&sc->lights[lp[0].light]);
+  J->lobes |= pbd__connect_lobes(qs) | pbd__connect_lobes(pt);
+}
+
+/* Traces the strategy's two subpaths; returns 0 when they are not whole
+ * (the strategy contributes nothing). */
+static int pbd__subpaths(path__ctx *c, int s, int t, path__bdv *cam, path__bdv *lp, ad *OUT_rx,
+                         ad *OUT_ry) {
+  ad_arena *A = c->A;
+  /* The camera subpath: t vertices (t = 1: the pinhole alone, no numbers). */
+  int nc = 1;
+  if (t >= 2) {
+    path__use_stream(c, LMC_STREAM_CAMERA);
+    ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
+    nc = pbd__camera_subpath(c, u0, u1, t, cam, OUT_rx, OUT_ry);
+  } else {
+    pbd__camera_subpath(c, ad_const(A, 0.0), ad_const(A, 0.0), 1, cam, NULL, NULL);
+  }
+  path__topo(c, nc);
+  if (nc < t) return 0;
+  /* The light subpath: s vertices (s <= 1 needs none). */
+  if (s >= 2) {
+    path__use_stream(c, LMC_STREAM_LIGHT);
+    int nl = pbd__light_subpath(c, s, lp);
+    path__topo(c, nl);
+    if (nl < s) return 0;
+  }
+  return 1;
+}
+
+static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
+  ad_arena *A = c->A;
   const render_settings *rs = c->rs;
   const pbd__strategy *st = c->arg;
   int s = st->s, t = st->t;
@@ -740,168 +734,29 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   if (t > max_cam || (s >= 2 && s > max_light)) return;
   if ((rs->maxdepth >= 0 && length > rs->maxdepth) || (rs->mindepth > 0 && length < rs->mindepth))
     return;
-
-  /* The camera subpath: t vertices (t = 1: the pinhole alone, no numbers). */
-  int nc = 1;
-  if (t >= 2) {
-    path__use_stream(c, LMC_STREAM_CAMERA);
-    ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
-    nc = pbd__camera_subpath(c, u0, u1, t, cam, OUT_rx, OUT_ry);
-  } else {
-    pbd__camera_subpath(c, ad_const(A, 0.0), ad_const(A, 0.0), 1, cam, NULL, NULL);
-  }
-  path__topo(c, nc);
-  if (nc < t) return;
-
-  /* The light subpath: s vertices (s <= 1 needs none). */
-  if (s >= 2) {
-    path__use_stream(c, LMC_STREAM_LIGHT);
-    int nl = pbd__light_subpath(c, s, lp);
-    path__topo(c, nl);
-    if (nl < s) return;
-  }
+  if (!pbd__subpaths(c, s, t, cam, lp, OUT_rx, OUT_ry)) return;
   /* An escaped camera ray is only an emitter (s = 0). */
   if (t > 1 && s != 0 && cam[t - 1].type == BDPT_VERTEX_LIGHT) return;
 
   /* The lobes sampled inside both subpaths (the connection vertices' own
-   * lobes are added below). */
-  unsigned lobes = 0;
-  for (int i = 1; i < t - 1; i++) lobes |= cam[i].lobe;
-  for (int i = 1; i < s - 1; i++) lobes |= lp[i].lobe;
-
-  adrgb L = zero;
-  unsigned emit = 0;
-  path__bdv sampled;
-  const path__bdv *samp = NULL;
-  int stage = 0; /* how far the connection got (part of the topology) */
-
-  if (s == 0) {
-    /* The camera subpath ends on an emitter. */
-    const path__bdv *pt = &cam[t - 1];
-    if (pt->type == BDPT_VERTEX_SURFACE) {
-      if (pt->light >= 0) {
-        rgb le = light_le_area(&sc->lights[pt->light], pt->n, path__val(pt->wo));
-        stage = 1 + !rgb_is_black(le);
-        L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
-        emit = PATH_EMIT_AREA;
-      }
-    } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
-      vec3 w_env = v3_neg(path__val(pt->dir));
-      rgb le = rgb_zero();
-      for (int k = 0; k < sc->n_infinite; k++) {
-        const light *l = &sc->lights[sc->infinite_lights[k]];
-        rgb lk = light_le_infinite(l, w_env);
-        if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(lk))); /* the pixel */
-        if (!rgb_is_black(lk)) emit |= path__emit_flag(l);
-        le = rgb_add(le, lk);
-      }
-      stage = 3;
-      L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
-    }
-  } else if (t == 1) {
-    /* Light tracing: join y_{s-1} to the pinhole, splat at its raster point. */
-    const path__bdv *qs = &lp[s - 1];
-    if (pbd__connectible(qs)) {
-      stage = 1;
-      adv3 d = adv3_sub(A, qs->p, cam[0].p);
-      ad d2 = adv3_len2(A, d);
-      if (d2.v > 0.0) {
-        adv3 dir = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
-        ad rx = ad_const(A, 0.0), ry = ad_const(A, 0.0);
-        ad we = pbd__cam_we(c, dir, &rx, &ry);
-        if (we.v > 0.0) {
-          stage = 2;
-          ad cos_cam = path__dot_c(A, sc->cam.forward, dir);
-          adrgb f = pbd__f_cos(c, qs, adv3_neg(A, dir), TRANSPORT_IMPORTANCE);
-          /* qs.beta f We cos_cam / d^2 */
-          L = adrgb_scale(A, adrgb_mul(A, qs->beta, f), ad_div(A, ad_mul(A, we, cos_cam), d2));
-          if (!path__rgb_black(L)) {
-            stage = 3;
-            if (path__blocked(c, sc->cam.pos, path__val(dir), path__val(qs->p), 0)) {
-              L = zero;
-            } else {
-              stage = 4;
-              *OUT_rx = rx;
-              *OUT_ry = ry;
-              emit = path__emit_flag(&sc->lights[lp[0].light]);
-              lobes |= pbd__connect_lobes(qs);
-            }
-          }
-        }
-      }
-    }
-  } else if (s == 1) {
-    /* Next-event estimation from z_{t-1} with a fresh light sample: the
-     * connect triple of this t (the ones of smaller t are drawn, unused). */
-    const path__bdv *pt = &cam[t - 1];
-    path__use_stream(c, LMC_STREAM_CONNECT);
-    for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) path__draw(c, 0);
-    ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
-    if (pbd__connectible(pt) && sc->n_lights > 0) {
-      double pmf, u_remap;
-      int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
-      path__topo(c, li);
-      path__li ls;
-      stage = 1;
-      if (li >= 0 && pmf > 0.0 && path__sample_li(c, &sc->lights[li], pt->p, ul1, ul2, &ls) &&
-          ls.pdf.v > 0.0 && !path__rgb_black(ls.li)) {
-        stage = 2;
-        const light *l = &sc->lights[li];
-        adrgb f = pbd__f_cos(c, pt, ls.wi, TRANSPORT_RADIANCE);
-        /* pt.beta f Li / (pmf pdf) */
-        L = adrgb_scale(A, adrgb_mul(A, pt->beta, adrgb_mul(A, f, ls.li)),
-                        ad_inv(A, ad_mul_s(A, ls.pdf, pmf)));
-        if (!path__rgb_black(L)) {
-          stage = 3;
-          if (path__blocked(c, path__val(pt->p), path__val(ls.wi), ls.p, isinf(ls.dist))) {
-            L = zero;
-          } else {
-            stage = 4;
-            memset(&sampled, 0, sizeof sampled);
-            sampled.type = BDPT_VERTEX_LIGHT;
-            sampled.light = li;
-            sampled.p = ls.pd;
-            sampled.n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
-            sampled.dir = adv3_neg(A, ls.wi);
-            sampled.pdf_rev = ad_const(A, 0.0);
-            sampled.pdf_fwd = pbd__pdf_light_origin(c, &sampled, pt);
-            samp = &sampled;
-            emit = path__emit_flag(l);
-            lobes |= pbd__connect_lobes(pt);
-          }
-        }
-      }
-    }
-  } else {
-    /* Join y_{s-1} and z_{t-1} with a shadow ray. */
-    const path__bdv *qs = &lp[s - 1], *pt = &cam[t - 1];
-    if (pbd__connectible(qs) && pbd__connectible(pt)) {
-      stage = 1;
-      adv3 d = adv3_sub(A, pt->p, qs->p);
-      ad d2 = adv3_len2(A, d);
-      if (d2.v > 0.0) {
-        stage = 2;
-        adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
-        adrgb fq = pbd__f_cos(c, qs, w, TRANSPORT_IMPORTANCE);
-        adrgb fp = pbd__f_cos(c, pt, adv3_neg(A, w), TRANSPORT_RADIANCE);
-        /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
-        L = adrgb_scale(A, adrgb_mul(A, adrgb_mul(A, qs->beta, fq), adrgb_mul(A, fp, pt->beta)),
-                        ad_inv(A, d2));
-        if (!path__rgb_black(L)) {
-          stage = 3;
-          if (path__blocked(c, path__val(qs->p), path__val(w), path__val(pt->p), 0)) {
-            L = zero;
-          } else {
-            stage = 4;
-            emit = path__emit_flag(&sc->lights[lp[0].light]);
-            lobes |= pbd__connect_lobes(qs) | pbd__connect_lobes(pt);
-          }
-        }
-      }
-    }
-  }
-  path__topo(c, stage);
-  if (path__rgb_black(L)) {
+   * lobes are added by the join). */
+  pbd__join J;
+  J.L = zero;
+  J.stage = 0;
+  J.emit = J.lobes = 0;
+  J.has_sampled = 0;
+  for (int i = 1; i < t - 1; i++) J.lobes |= cam[i].lobe;
+  for (int i = 1; i < s - 1; i++) J.lobes |= lp[i].lobe;
+  if (s == 0)
+    pbd__join_emitter(c, cam, t, &J);
+  else if (t == 1)
+    pbd__join_camera(c, cam, lp, s, &J, OUT_rx, OUT_ry);
+  else if (s == 1)
+    pbd__join_light(c, cam, t, &J);
+  else
+    pbd__join_vertices(c, cam, t, lp, s, &J);
+  path__topo(c, J.stage);
+  if (path__rgb_black(J.L)) {
     *OUT_L = zero;
     return;
   }
@@ -909,8 +764,9 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   /* The MIS weight over all strategies of this path (its temporaries are
    * dropped). */
   size_t mark = ad_arena_mark(A);
-  ad w = ad_arena_rewind_keep(A, mark, pbd__mis_weight(c, cam, t, lp, s, samp));
-  *OUT_L = adrgb_scale(A, L, w);
+  const path__bdv *samp = J.has_sampled ? &J.sampled : NULL;
+  ad w = ad_arena_rewind_keep(A, mark, bdpt__mis_weight(c, cam, t, lp, s, samp));
+  *OUT_L = adrgb_scale(A, J.L, w);
   /* Absolute directions: the value in their measure. */
   if (st->rough_min < 1.0) {
     ad jac = ad_const(A, 1.0);
@@ -920,7 +776,7 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
     *OUT_L = adrgb_scale(A, *OUT_L, jac);
   }
   if (!path__rgb_black(*OUT_L)) {
-    c->flags |= emit | lobes;
+    c->flags |= J.emit | J.lobes;
     c->length = length;
   }
 }

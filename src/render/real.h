@@ -23,7 +23,9 @@
  * frame, or ad, adv3, adrgb and ad_frame. R_FN(name) names a function: name, or name_ad. A function
  * of the body declares its arena with R_CTX (nothing, or `ad_arena *A,`)
  * first in its parameters and passes it on with R_ARG; the dual operations
- * below use that `A`. R_V(x) is x's value (a double), R_C(c) a constant.
+ * below use that `A`. R_V(x) is x's value (a double), R_C(c) a constant,
+ * R3_V(a) a vector's value (a vec3), R3_DOT_C(e, a) the dot product with a
+ * constant vec3 e.
  * The operations are named as ad/dual.h's, with the same suffixes for mixed
  * forms (R_MUL_S(dual, scalar), R_S_SUB(scalar, dual)); in the plain form
  * each expands to the C operator or libm function, so the plain code is what
@@ -92,10 +94,14 @@
 #undef R3_SCALE
 #undef R3_SCALE_S
 #undef R3_DOT
+#undef R3_LEN2
 #undef R3_CROSS
 #undef R3_NORMALIZE
 #undef R3_REFLECT
 #undef RFRAME
+#undef R3_TO_LOCAL
+#undef R3_V
+#undef R3_DOT_C
 #undef R3_FRAME_FROM_Z
 #undef R3_TO_WORLD
 #undef RRGB_CONST
@@ -120,6 +126,14 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
 #include "render/rgb_ad.h"
+
+#ifndef LMC_RENDER_REAL_DUAL_HELPERS
+#define LMC_RENDER_REAL_DUAL_HELPERS
+/* e . a for a constant vector e, in v3_dot's order. */
+static inline ad r__dot_c(ad_arena *A, vec3 e, adv3 a) {
+  return ad_add(A, ad_lincomb(A, e.x, a.x, e.y, a.y), ad_mul_s(A, a.z, e.z));
+}
+#endif
 
 #define REAL ad
 #define REAL3 adv3
@@ -163,12 +177,16 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #define R3_SCALE(a, s) adv3_scale(A, (a), (s))
 #define R3_SCALE_S(a, s) adv3_scale_s(A, (a), (s))
 #define R3_DOT(a, b) adv3_dot(A, (a), (b))
+#define R3_LEN2(a) adv3_len2(A, (a))
 #define R3_CROSS(a, b) adv3_cross(A, (a), (b))
 #define R3_NORMALIZE(a) adv3_normalize(A, (a))
 #define R3_REFLECT(w, n) adv3_reflect(A, (w), (n))
 #define RFRAME ad_frame
 #define R3_FRAME_FROM_Z(n) adv3_frame_from_z(A, (n))
 #define R3_TO_WORLD(f, v) adv3_to_world(A, (f), (v))
+#define R3_TO_LOCAL(f, v) adv3_to_local(A, (f), (v))
+#define R3_V(a) v3((a).x.v, (a).y.v, (a).z.v)
+#define R3_DOT_C(e, a) r__dot_c(A, (e), (a))
 #define RRGB_CONST(c) adrgb_const(A, (c))
 #define RRGB_ZERO() adrgb_zero(A)
 #define RRGB_MAKE(r, g, b) ((adrgb){(r), (g), (b)})
@@ -222,12 +240,16 @@ static inline double r__safe_sqrt(double a) { return sqrt(lmc_fmax(0.0, a)); }
 #define R3_SCALE(a, s) v3_scale((a), (s))
 #define R3_SCALE_S(a, s) v3_scale((a), (s))
 #define R3_DOT(a, b) v3_dot((a), (b))
+#define R3_LEN2(a) v3_len2(a)
 #define R3_CROSS(a, b) v3_cross((a), (b))
 #define R3_NORMALIZE(a) v3_normalize(a)
 #define R3_REFLECT(w, n) v3_reflect((w), (n))
 #define RFRAME frame
 #define R3_FRAME_FROM_Z(n) frame_from_z(n)
 #define R3_TO_WORLD(f, v) frame_to_world((f), (v))
+#define R3_TO_LOCAL(f, v) frame_to_local((f), (v))
+#define R3_V(a) (a)
+#define R3_DOT_C(e, a) v3_dot((e), (a))
 #define RRGB_CONST(c) (c)
 #define RRGB_ZERO() rgb_zero()
 #define RRGB_MAKE(r, g, b) rgb_make((r), (g), (b))
