@@ -14,6 +14,8 @@
 #ifndef LMC_RENDER_IMAGE_H
 #define LMC_RENDER_IMAGE_H
 
+#include <stddef.h>
+
 #include "render/error.h"
 
 typedef struct lmc_image {
@@ -66,5 +68,9 @@ lmc_status image_write_png(const char *path, const lmc_image *img, double scale,
 /* sRGB transfer functions. */
 double srgb_to_linear(double v);
 double linear_to_srgb(double v);
+
+/* A temporary file name beside path, "<path>.tmp-<pid>-<n>", unique per
+ * process and call: the writers write there and rename it over path. */
+void image_temp_name(const char *path, char *buf, size_t size);
 
 #endif

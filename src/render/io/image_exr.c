@@ -224,20 +224,11 @@ lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
   return st;
 }
 
-/* "<path>.tmp-<pid>-<n>": unique per process and call. */
-static void exr__temp_name(const char *path, char *buf, size_t size) {
-  static unsigned counter;
-  unsigned n;
-#pragma omp atomic capture
-  n = counter++;
-  snprintf(buf, size, "%s.tmp-%ld-%u", path, (long)getpid(), n);
-}
-
 lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *err) {
   if (!img || !img->data || img->channels != 3 || img->width <= 0 || img->height <= 0)
     return lmc_error_set(err, LMC_EINVAL, path, 0, "image_write_exr needs a 3-channel image");
   char tmp[4096];
-  exr__temp_name(path, tmp, sizeof tmp);
+  image_temp_name(path, tmp, sizeof tmp);
   exr__msg m = {""};
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = exr__on_error;

@@ -290,6 +290,183 @@ static int ply__find(const ply__elem *e, const char *const *names, int n_names) 
   return -1;
 }
 
+/* Where the data mesh_read_ply uses sits: the vertex and face elements,
+ * each vertex property's slot (0..7 = x y z nx ny nz u v, -1 unused) and
+ * the face element's index list. */
+typedef struct ply__layout {
+  int iv, iface, list_prop, has_n, has_uv;
+  int slot_of[64];
+} ply__layout;
+
+static lmc_status ply__locate(const char *path, const ply__elem *elems, int n_elems,
+                              ply__layout *L, lmc_error *err) {
+  L->iv = L->iface = L->list_prop = -1;
+  L->has_n = L->has_uv = 0;
+  for (int i = 0; i < n_elems; i++) {
+    if (strcmp(elems[i].name, "vertex") == 0 && L->iv < 0) L->iv = i;
+    if (strcmp(elems[i].name, "face") == 0 && L->iface < 0) L->iface = i;
+  }
+  if (L->iv < 0) return lmc_error_set(err, LMC_EPARSE, path, 0, "no vertex element");
+  const ply__elem *ev = &elems[L->iv];
+  if (ev->n_props > 64)
+    return lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "too many vertex properties");
+  static const char *const names[8][4] = {
+      {"x"}, {"y"}, {"z"}, {"nx"}, {"ny"}, {"nz"},
+      {"u", "s", "texture_u", "texture_s"}, {"v", "t", "texture_v", "texture_t"}};
+  for (int i = 0; i < 64; i++) L->slot_of[i] = -1;
+  int found[8];
+  for (int s = 0; s < 8; s++) {
+    found[s] = ply__find(ev, names[s], s >= 6 ? 4 : 1);
+    if (found[s] >= 0) {
+      if (ev->props[found[s]].count_type != PLY_NONE) found[s] = -1;
+      else L->slot_of[found[s]] = s;
+    }
+  }
+  if (found[0] < 0 || found[1] < 0 || found[2] < 0)
+    return lmc_error_set(err, LMC_EPARSE, path, 0, "vertex element lacks x, y or z");
+  L->has_n = found[3] >= 0 && found[4] >= 0 && found[5] >= 0;
+  L->has_uv = found[6] >= 0 && found[7] >= 0;
+  if (L->iface >= 0) {
+    static const char *const lnames[] = {"vertex_indices", "vertex_index"};
+    L->list_prop = ply__find(&elems[L->iface], lnames, 2);
+    if (L->list_prop < 0 || elems[L->iface].props[L->list_prop].count_type == PLY_NONE)
+      return lmc_error_set(err, LMC_EPARSE, path, 0, "face element lacks a vertex_indices list");
+  }
+  return LMC_OK;
+}
+
+/* The vertex rows' storage: 8 doubles per vertex. Each row takes at least a
+ * few bytes of the body (the sizes of its scalars and list counts, or in
+ * ASCII one character and one separator per property); bounding the count
+ * by the data keeps the allocation proportional to the file, whatever the
+ * header claims. */
+static lmc_status ply__alloc_vertices(const char *path, const ply__elem *ev, int format,
+                                      size_t body_len, double **OUT_vdata, lmc_error *err) {
+  int64_t n_verts = ev->count, row_min = 0;
+  for (int k = 0; k < ev->n_props; k++) {
+    const ply__prop *pr = &ev->props[k];
+    row_min += format == PLY_ASCII
+                   ? 2
+                   : ply__type_size(pr->count_type != PLY_NONE ? pr->count_type : pr->type);
+  }
+  if (row_min < 1) row_min = 1;
+  if (n_verts > (int64_t)UINT32_MAX || n_verts > ((int64_t)body_len + 1) / row_min)
+    return lmc_error_set(err, LMC_EPARSE, path, 0, "vertex count %lld exceeds the file's data",
+                         (long long)n_verts);
+  if (!(*OUT_vdata = calloc((size_t)n_verts * 8 + 1, sizeof(double))))
+    return lmc_error_set(err, LMC_ENOMEM, path, 0, "out of memory");
+  return LMC_OK;
+}
+
+/* The triangles of the faces, fanned out. */
+typedef struct ply__tris {
+  uint32_t *idx; /* owned: 3 per triangle */
+  int64_t n, cap;
+} ply__tris;
+
+static lmc_status ply__add_tri(ply__tris *T, const char *path, double a, double b, double c,
+                               lmc_error *err) {
+  if (T->n == T->cap) {
+    int64_t cap = T->cap ? 2 * T->cap : 1024;
+    uint32_t *t = realloc(T->idx, (size_t)cap * 3 * sizeof(uint32_t));
+    if (!t) return lmc_error_set(err, LMC_ENOMEM, path, 0, "out of memory");
+    T->idx = t;
+    T->cap = cap;
+  }
+  T->idx[3 * T->n] = (uint32_t)a;
+  T->idx[3 * T->n + 1] = (uint32_t)b;
+  T->idx[3 * T->n + 2] = (uint32_t)c;
+  T->n++;
+  return LMC_OK;
+}
+
+/* One list property of row r of element el: its count, then the items,
+ * fanned into triangles when it is the face list (is_face), else skipped. */
+static lmc_status ply__read_list(ply__in *in, const ply__elem *el, const ply__prop *pr, int64_t r,
+                                 int is_face, int64_t n_verts, ply__tris *T, lmc_error *err) {
+  double cnt, x;
+  /* Range before the cast: converting a double beyond int64 (or NaN, which
+   * ASCII files may spell) is undefined behaviour. */
+  if (!ply__read(in, pr->count_type, &cnt) || !(cnt >= 0.0 && cnt <= 1e15) || cnt != floor(cnt))
+    return ply__eof(in, el->name, err);
+  int64_t c = (int64_t)cnt;
+  int ascii = in->format == PLY_ASCII;
+  if (is_face && c < 3)
+    return lmc_error_set(err, LMC_EPARSE, in->path, ascii ? in->line : 0,
+                         "face %lld has %lld corner(s)", (long long)r, (long long)c);
+  if (!ascii && !is_face) {
+    /* Skip by size. */
+    int64_t bytes = c * ply__type_size(pr->type);
+    if (in->end - in->p < bytes) return ply__eof(in, el->name, err);
+    in->p += bytes;
+    return LMC_OK;
+  }
+  double first = 0, prev = 0;
+  for (int64_t k = 0; k < c; k++) {
+    if (!ply__read(in, pr->type, &x)) return ply__eof(in, el->name, err);
+    if (!is_face) continue;
+    if (!(x >= 0.0 && x < (double)n_verts) || x != floor(x))
+      return lmc_error_set(err, LMC_EPARSE, in->path, ascii ? in->line : 0,
+                           "face %lld: vertex index %g out of range (%lld vertices)",
+                           (long long)r, x, (long long)n_verts);
+    if (k == 0) first = x;
+    if (k >= 2) {
+      lmc_status st = ply__add_tri(T, in->path, first, prev, x, err); /* fan (first, prev, x) */
+      if (st != LMC_OK) return st;
+    }
+    prev = x;
+  }
+  return LMC_OK;
+}
+
+/* The body, element by element: the vertex slots into vdata, the faces
+ * into T, everything else read past. */
+static lmc_status ply__body(ply__in *in, const ply__elem *elems, int n_elems, const ply__layout *L,
+                            double *vdata, ply__tris *T, lmc_error *err) {
+  int64_t n_verts = elems[L->iv].count;
+  for (int e = 0; e < n_elems; e++) {
+    const ply__elem *el = &elems[e];
+    /* An element without properties has no data: its rows take no bytes, so
+     * its count (up to 2^63 in a header) bounds nothing and is not walked. */
+    if (el->n_props == 0) continue;
+    for (int64_t r = 0; r < el->count; r++) {
+      if (in->p >= in->end) return ply__eof(in, el->name, err);
+      for (int pi = 0; pi < el->n_props; pi++) {
+        const ply__prop *pr = &el->props[pi];
+        if (pr->count_type != PLY_NONE) {
+          int is_face = e == L->iface && pi == L->list_prop;
+          lmc_status st = ply__read_list(in, el, pr, r, is_face, n_verts, T, err);
+          if (st != LMC_OK) return st;
+          continue;
+        }
+        double x;
+        if (!ply__read(in, pr->type, &x)) return ply__eof(in, el->name, err);
+        if (e == L->iv && L->slot_of[pi] >= 0) vdata[8 * r + L->slot_of[pi]] = x;
+      }
+    }
+  }
+  return LMC_OK;
+}
+
+/* The mesh from the vertex rows and the triangles. */
+static lmc_status ply__build(const char *path, const ply__layout *L, int64_t n_verts,
+                             const double *vdata, const ply__tris *T, mesh *OUT_mesh,
+                             lmc_error *err) {
+  lmc_status st = mesh_alloc(OUT_mesh, n_verts, T->n, L->has_n, L->has_uv, err);
+  if (st != LMC_OK) return st;
+  for (int64_t i = 0; i < n_verts; i++) {
+    for (int c = 0; c < 3; c++) OUT_mesh->p[3 * i + c] = (float)vdata[8 * i + c];
+    if (L->has_n)
+      for (int c = 0; c < 3; c++) OUT_mesh->n[3 * i + c] = (float)vdata[8 * i + 3 + c];
+    if (L->has_uv)
+      for (int c = 0; c < 2; c++) OUT_mesh->uv[2 * i + c] = (float)vdata[8 * i + 6 + c];
+  }
+  if (T->n) memcpy(OUT_mesh->idx, T->idx, (size_t)T->n * 3 * sizeof(uint32_t));
+  const char *b = strrchr(path, '/');
+  snprintf(OUT_mesh->name, sizeof OUT_mesh->name, "%s", b ? b + 1 : path);
+  return LMC_OK;
+}
+
 lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
   memset(OUT_mesh, 0, sizeof *OUT_mesh);
   OUT_mesh->light = -1;
@@ -306,170 +483,17 @@ lmc_status mesh_read_ply(const char *path, mesh *OUT_mesh, lmc_error *err) {
     free(buf);
     return st;
   }
-
-  /* Locate the vertex and face elements and the properties we use. */
-  int iv = -1, iface = -1;
-  for (int i = 0; i < n_elems; i++) {
-    if (strcmp(elems[i].name, "vertex") == 0 && iv < 0) iv = i;
-    if (strcmp(elems[i].name, "face") == 0 && iface < 0) iface = i;
-  }
-  int slot_of[64]; /* per vertex property: 0..7 = x y z nx ny nz u v, -1 unused */
-  int list_prop = -1, has_n = 0, has_uv = 0;
-  if (iv < 0) {
-    st = lmc_error_set(err, LMC_EPARSE, path, 0, "no vertex element");
-  } else if (elems[iv].n_props > 64) {
-    st = lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "too many vertex properties");
-  } else {
-    static const char *const names[8][4] = {
-        {"x"}, {"y"}, {"z"}, {"nx"}, {"ny"}, {"nz"},
-        {"u", "s", "texture_u", "texture_s"}, {"v", "t", "texture_v", "texture_t"}};
-    for (int i = 0; i < 64; i++) slot_of[i] = -1;
-    int found[8];
-    for (int s = 0; s < 8; s++) {
-      found[s] = ply__find(&elems[iv], names[s], s >= 6 ? 4 : 1);
-      if (found[s] >= 0) {
-        if (elems[iv].props[found[s]].count_type != PLY_NONE) found[s] = -1;
-        else slot_of[found[s]] = s;
-      }
-    }
-    if (found[0] < 0 || found[1] < 0 || found[2] < 0)
-      st = lmc_error_set(err, LMC_EPARSE, path, 0, "vertex element lacks x, y or z");
-    has_n = found[3] >= 0 && found[4] >= 0 && found[5] >= 0;
-    has_uv = found[6] >= 0 && found[7] >= 0;
-  }
-  if (st == LMC_OK && iface >= 0) {
-    static const char *const lnames[] = {"vertex_indices", "vertex_index"};
-    list_prop = ply__find(&elems[iface], lnames, 2);
-    if (list_prop < 0 || elems[iface].props[list_prop].count_type == PLY_NONE)
-      st = lmc_error_set(err, LMC_EPARSE, path, 0, "face element lacks a vertex_indices list");
-  }
-
-  /* Read the body element by element. */
-  double *vdata = NULL; /* 8 doubles per vertex */
-  uint32_t *tris = NULL;
-  int64_t n_tris = 0, cap_tris = 0, n_verts = 0;
+  ply__layout L;
+  double *vdata = NULL;
+  ply__tris T = {NULL, 0, 0};
   ply__in in = {path, buf + body, buf + len, format, line};
-  if (st == LMC_OK) {
-    n_verts = elems[iv].count;
-    /* Each vertex row takes at least this many bytes of the body: the sizes
-     * of its scalars and list counts, or in ASCII one character and one
-     * separator per property. Bounding the count by the data keeps the
-     * allocation proportional to the file, whatever the header claims. */
-    int64_t row_min = 0;
-    for (int k = 0; k < elems[iv].n_props; k++) {
-      const ply__prop *pr = &elems[iv].props[k];
-      row_min += format == PLY_ASCII ? 2
-                 : ply__type_size(pr->count_type != PLY_NONE ? pr->count_type : pr->type);
-    }
-    if (row_min < 1) row_min = 1;
-    if (n_verts > (int64_t)UINT32_MAX || n_verts > ((int64_t)(len - body) + 1) / row_min)
-      st = lmc_error_set(err, LMC_EPARSE, path, 0, "vertex count %lld exceeds the file's data",
-                         (long long)n_verts);
-    else if (!(vdata = calloc((size_t)n_verts * 8 + 1, sizeof(double))))
-      st = lmc_error_set(err, LMC_ENOMEM, path, 0, "out of memory");
-  }
-  for (int e = 0; st == LMC_OK && e < n_elems; e++) {
-    const ply__elem *el = &elems[e];
-    /* An element without properties has no data: its rows take no bytes, so
-     * its count (up to 2^63 in a header) bounds nothing and is not walked. */
-    if (el->n_props == 0) continue;
-    for (int64_t r = 0; st == LMC_OK && r < el->count; r++) {
-      if (in.p >= in.end) {
-        st = ply__eof(&in, el->name, err);
-        break;
-      }
-      for (int pi = 0; st == LMC_OK && pi < el->n_props; pi++) {
-        const ply__prop *pr = &el->props[pi];
-        double x;
-        if (pr->count_type == PLY_NONE) {
-          if (!ply__read(&in, pr->type, &x)) {
-            st = ply__eof(&in, el->name, err);
-            break;
-          }
-          if (e == iv && slot_of[pi] >= 0) vdata[8 * r + slot_of[pi]] = x;
-          continue;
-        }
-        /* A list: its count, then the items. */
-        double cnt;
-        /* Range before the cast: converting a double beyond int64 (or NaN,
-         * which ASCII files may spell) is undefined behaviour. */
-        if (!ply__read(&in, pr->count_type, &cnt) || !(cnt >= 0.0 && cnt <= 1e15) ||
-            cnt != floor(cnt)) {
-          st = ply__eof(&in, el->name, err);
-          break;
-        }
-        int64_t c = (int64_t)cnt;
-        int is_face = e == iface && pi == list_prop;
-        if (is_face && c < 3) {
-          st = lmc_error_set(err, LMC_EPARSE, path, format == PLY_ASCII ? in.line : 0,
-                             "face %lld has %lld corner(s)", (long long)r, (long long)c);
-          break;
-        }
-        if (format != PLY_ASCII && !is_face) {
-          /* Skip by size. */
-          int64_t bytes = c * ply__type_size(pr->type);
-          if (in.end - in.p < bytes) {
-            st = ply__eof(&in, el->name, err);
-            break;
-          }
-          in.p += bytes;
-          continue;
-        }
-        double first = 0, prev = 0;
-        for (int64_t k = 0; k < c; k++) {
-          if (!ply__read(&in, pr->type, &x)) {
-            st = ply__eof(&in, el->name, err);
-            break;
-          }
-          if (!is_face) continue;
-          if (!(x >= 0.0 && x < (double)n_verts) || x != floor(x)) {
-            st = lmc_error_set(err, LMC_EPARSE, path, format == PLY_ASCII ? in.line : 0,
-                               "face %lld: vertex index %g out of range (%lld vertices)",
-                               (long long)r, x, (long long)n_verts);
-            break;
-          }
-          if (k == 0) first = x;
-          if (k >= 2) {
-            /* Fan triangle (first, prev, x). */
-            if (n_tris == cap_tris) {
-              int64_t cap = cap_tris ? 2 * cap_tris : 1024;
-              uint32_t *t = realloc(tris, (size_t)cap * 3 * sizeof(uint32_t));
-              if (!t) {
-                st = lmc_error_set(err, LMC_ENOMEM, path, 0, "out of memory");
-                break;
-              }
-              tris = t;
-              cap_tris = cap;
-            }
-            tris[3 * n_tris] = (uint32_t)first;
-            tris[3 * n_tris + 1] = (uint32_t)prev;
-            tris[3 * n_tris + 2] = (uint32_t)x;
-            n_tris++;
-          }
-          prev = x;
-        }
-      }
-    }
-  }
-
-  /* Build the mesh. */
-  if (st == LMC_OK) st = mesh_alloc(OUT_mesh, n_verts, n_tris, has_n, has_uv, err);
-  if (st == LMC_OK) {
-    for (int64_t i = 0; i < n_verts; i++) {
-      for (int c = 0; c < 3; c++) OUT_mesh->p[3 * i + c] = (float)vdata[8 * i + c];
-      if (has_n)
-        for (int c = 0; c < 3; c++) OUT_mesh->n[3 * i + c] = (float)vdata[8 * i + 3 + c];
-      if (has_uv)
-        for (int c = 0; c < 2; c++) OUT_mesh->uv[2 * i + c] = (float)vdata[8 * i + 6 + c];
-    }
-    if (n_tris) memcpy(OUT_mesh->idx, tris, (size_t)n_tris * 3 * sizeof(uint32_t));
-    const char *b = strrchr(path, '/');
-    snprintf(OUT_mesh->name, sizeof OUT_mesh->name, "%s", b ? b + 1 : path);
-  } else if (err && !err->file[0]) {
-    snprintf(err->file, sizeof err->file, "%s", path);
-  }
+  st = ply__locate(path, elems, n_elems, &L, err);
+  if (st == LMC_OK) st = ply__alloc_vertices(path, &elems[L.iv], format, len - body, &vdata, err);
+  if (st == LMC_OK) st = ply__body(&in, elems, n_elems, &L, vdata, &T, err);
+  if (st == LMC_OK) st = ply__build(path, &L, elems[L.iv].count, vdata, &T, OUT_mesh, err);
+  if (st != LMC_OK && err && !err->file[0]) snprintf(err->file, sizeof err->file, "%s", path);
   free(vdata);
-  free(tris);
+  free(T.idx);
   ply__free_elems(elems, n_elems);
   free(buf);
   return st;

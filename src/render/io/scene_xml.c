@@ -1,7 +1,9 @@
 /*
  * scene_xml.c: second pass of the Mitsuba 0.5/0.6 scene loader, property
  * sets to a scene (the first pass, XML to property sets, is
- * scene_xml_parse.c; the sets are described in props.h).
+ * scene_xml_parse.c; the sets are described in props.h). Its builder and
+ * helpers are in scene_xml_internal.h, the property lookup in
+ * scene_xml_props.c, textures and BSDFs in scene_xml_bsdf.c.
  *
  * scene_load_xml parses the file, registers every object that has an `id`,
  * then walks the children of <scene> in document order:
@@ -40,732 +42,35 @@
  *     their pointers after the last image was added (fix-up list).
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/io/io.h"
-#include "render/io/props.h"
+#include "render/io/scene_xml_internal.h"
 #include "render/sampler.h"
-
-#define XML_PI 3.14159265358979323846
-
-typedef struct tex_fixup {
-  int bsdf;  /* index into scene->bsdfs */
-  int which; /* 0 diffuse, 1 specular, 2 transmittance */
-  int image; /* index into scene->images */
-} tex_fixup;
-
-typedef struct builder {
-  scene *s;
-  lmc_error *err;
-  pdoc *doc;
-  pset **ids;
-  int n_ids, cap_ids;
-  tex_fixup *fix;
-  int n_fix, cap_fix;
-  int default_bsdf; /* shared diffuse 0.5, or -1 */
-  int have_sensor;
-  int spp_from_dpt;
-} builder;
-
-/* ---- Errors and warnings. ----------------------------------------------- */
-
-static lmc_status xml__fail(builder *B, lmc_status code, const char *file, int line,
-                            const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 5, 6)))
-#endif
-    ;
-
-static lmc_status xml__fail(builder *B, lmc_status code, const char *file, int line,
-                            const char *fmt, ...) {
-  char msg[900];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  return lmc_error_set(B->err, code, file, line, "%s", msg);
-}
-
-/* Warns about everything on o the builder did not read, then marks it. */
-static void xml__warn_unused(pset *o) {
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    if (p->used) continue;
-    p->used = 1;
-    if (p->kind == PROP_OBJECT) {
-      lmc_warn(p->file, p->line, "unsupported <%s type=\"%s\"> inside <%s type=\"%s\">: ignored",
-               p->obj->tag, p->obj->type, o->tag, o->type);
-    } else if (p->kind == PROP_REF) {
-      lmc_warn(p->file, p->line, "unused <ref id=\"%s\"> inside <%s type=\"%s\">: ignored",
-               p->ref, o->tag, o->type);
-    } else {
-      lmc_warn(p->file, p->line, "unknown property '%s' (<%s>) on <%s type=\"%s\">: ignored",
-               p->name, p->tag, o->tag, o->type);
-    }
-  }
-}
-
-/* Passes the unread plain values of an <integrator> or <dpt> block on to
- * the scene's params (scene.h), for the integrators' option tables. */
-static lmc_status xml__keep_params(builder *B, pset *o) {
-  scene *s = B->s;
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    if (p->used || (p->kind != PROP_INT && p->kind != PROP_FLOAT && p->kind != PROP_BOOL &&
-                    p->kind != PROP_STRING))
-      continue;
-    scene_param *a = realloc(s->params, (size_t)(s->n_params + 1) * sizeof *a);
-    if (!a) return xml__fail(B, LMC_ENOMEM, p->file, p->line, "out of memory");
-    s->params = a;
-    scene_param *q = &a[s->n_params++];
-    memset(q, 0, sizeof *q);
-    snprintf(q->name, sizeof q->name, "%s", p->name);
-    snprintf(q->file, sizeof q->file, "%s", p->file ? p->file : "");
-    q->line = p->line;
-    q->is_bool = p->kind == PROP_BOOL;
-    if (p->kind == PROP_INT) snprintf(q->value, sizeof q->value, "%lld", p->i);
-    else if (p->kind == PROP_FLOAT) snprintf(q->value, sizeof q->value, "%.17g", p->f);
-    else if (p->kind == PROP_BOOL) snprintf(q->value, sizeof q->value, "%s", p->b ? "true" : "false");
-    else snprintf(q->value, sizeof q->value, "%s", p->s ? p->s : "");
-    p->used = 1;
-  }
-  return LMC_OK;
-}
-
-/* Passes a setting the loader translated from p (a Mitsuba parameter) on
- * to the option tables as the flag `name` with `value`, at p's place. */
-static lmc_status xml__pass(builder *B, const prop *p, const char *name, const char *value) {
-  scene *s = B->s;
-  scene_param *a = realloc(s->params, (size_t)(s->n_params + 1) * sizeof *a);
-  if (!a) return xml__fail(B, LMC_ENOMEM, p->file, p->line, "out of memory");
-  s->params = a;
-  scene_param *q = &a[s->n_params++];
-  memset(q, 0, sizeof *q);
-  snprintf(q->name, sizeof q->name, "%s", name);
-  snprintf(q->value, sizeof q->value, "%s", value);
-  snprintf(q->file, sizeof q->file, "%s", p->file ? p->file : "");
-  q->line = p->line;
-  return LMC_OK;
-}
-
-/* Marks the named properties as read without using them (accepted silently). */
-static void xml__accept(pset *o, const char *const *names) {
-  for (int i = 0; i < o->n_props; i++)
-    for (int k = 0; names[k]; k++)
-      if (o->props[i].kind != PROP_OBJECT && strcmp(o->props[i].name, names[k]) == 0)
-        o->props[i].used = 1;
-}
-
-/* ---- Property lookup. --------------------------------------------------- */
-
-/* The named property (value, named nested object or named ref); marks it. */
-static prop *xml__find(pset *o, const char *name) {
-  prop *found = NULL;
-  for (int i = 0; i < o->n_props; i++) {
-    if (strcmp(o->props[i].name, name) == 0) {
-      /* A later duplicate overrides an earlier one, as in Mitsuba's
-       * property sets; both count as read. */
-      o->props[i].used = 1;
-      found = &o->props[i];
-    }
-  }
-  return found;
-}
-
-static lmc_status xml__wrong(builder *B, const prop *p, const char *want) {
-  return xml__fail(B, LMC_EPARSE, p->file, p->line, "property '%s' must be %s, not <%s>",
-                   p->name, want, p->tag);
-}
-
-static lmc_status xml__missing(builder *B, const pset *o, const char *name) {
-  return xml__fail(B, LMC_EPARSE, o->file, o->line,
-                   "<%s type=\"%s\"> needs the property '%s'", o->tag, o->type, name);
-}
-
-static lmc_status xml__float(builder *B, pset *o, const char *name, double def, double *out,
-                             int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind == PROP_FLOAT) *out = p->f;
-  else if (p->kind == PROP_INT) *out = (double)p->i;
-  else return xml__wrong(B, p, "a <float>");
-  return LMC_OK;
-}
-
-static lmc_status xml__int(builder *B, pset *o, const char *name, long long def, long long *out,
-                           int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind != PROP_INT) return xml__wrong(B, p, "an <integer>");
-  *out = p->i;
-  return LMC_OK;
-}
-
-static lmc_status xml__bool(builder *B, pset *o, const char *name, int def, int *out,
-                            int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind != PROP_BOOL) return xml__wrong(B, p, "a <boolean>");
-  *out = p->b;
-  return LMC_OK;
-}
-
-/* *out is NULL when absent (and def is NULL). */
-static lmc_status xml__string(builder *B, pset *o, const char *name, const char *def,
-                              const char **out, prop **where) {
-  prop *p = xml__find(o, name);
-  if (where) *where = p;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind != PROP_STRING) return xml__wrong(B, p, "a <string>");
-  *out = p->s;
-  return LMC_OK;
-}
-
-static lmc_status xml__rgb(builder *B, pset *o, const char *name, rgb def, rgb *out,
-                           int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind == PROP_RGB) *out = p->c;
-  else if (p->kind == PROP_FLOAT) *out = rgb_gray(p->f);
-  else if (p->kind == PROP_INT) *out = rgb_gray((double)p->i);
-  else return xml__wrong(B, p, "a colour (<rgb>, <spectrum>, <srgb>)");
-  return LMC_OK;
-}
-
-static lmc_status xml__vec(builder *B, pset *o, const char *name, vec3 def, vec3 *out,
-                           int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind != PROP_POINT && p->kind != PROP_VECTOR)
-    return xml__wrong(B, p, "a <point> or <vector>");
-  *out = p->v;
-  return LMC_OK;
-}
-
-static lmc_status xml__xform(builder *B, pset *o, const char *name, xform *out, int *found) {
-  prop *p = xml__find(o, name);
-  if (found) *found = p != NULL;
-  if (!p) {
-    *out = xform_identity();
-    return LMC_OK;
-  }
-  if (p->kind != PROP_TRANSFORM) return xml__wrong(B, p, "a <transform>");
-  *out = p->t;
-  return LMC_OK;
-}
-
-/* An index of refraction: a number or a name known to ior_lookup. */
-static lmc_status xml__ior(builder *B, pset *o, const char *name, double def, double *out) {
-  prop *p = xml__find(o, name);
-  if (!p) {
-    *out = def;
-    return LMC_OK;
-  }
-  if (p->kind == PROP_FLOAT) *out = p->f;
-  else if (p->kind == PROP_INT) *out = (double)p->i;
-  else if (p->kind == PROP_STRING) {
-    if (!ior_lookup(p->s, out))
-      return xml__fail(B, LMC_EPARSE, p->file, p->line, "unknown IOR name '%s' for '%s'", p->s,
-                       p->name);
-  } else {
-    return xml__wrong(B, p, "a <float> or an IOR name <string>");
-  }
-  if (!(*out > 0.0))
-    return xml__fail(B, LMC_EPARSE, p->file, p->line, "'%s' must be positive", p->name);
-  return LMC_OK;
-}
-
-static pset *xml__lookup_id(builder *B, const char *id) {
-  for (int i = 0; i < B->n_ids; i++)
-    if (strcmp(B->ids[i]->id, id) == 0) return B->ids[i];
-  return NULL;
-}
-
-/* The object a ref points to, or an error naming the ref's line. */
-static lmc_status xml__deref(builder *B, const prop *p, pset **out) {
-  *out = xml__lookup_id(B, p->ref);
-  if (!*out)
-    return xml__fail(B, LMC_EPARSE, p->file, p->line, "<ref id=\"%s\">: no object has this id",
-                     p->ref);
-  return LMC_OK;
-}
-
-/* Registers every object with an id, recursively; duplicates are errors. */
-static lmc_status xml__register_ids(builder *B, pset *o) {
-  if (o->id[0]) {
-    pset *prev = xml__lookup_id(B, o->id);
-    if (prev)
-      return xml__fail(B, LMC_EPARSE, o->file, o->line,
-                       "duplicate id \"%s\" (first defined at %s:%d)", o->id, prev->file,
-                       prev->line);
-    if (B->n_ids == B->cap_ids) {
-      int cap = B->cap_ids ? 2 * B->cap_ids : 16;
-      pset **n = realloc(B->ids, (size_t)cap * sizeof *n);
-      if (!n) return xml__fail(B, LMC_ENOMEM, NULL, 0, "out of memory");
-      B->ids = n;
-      B->cap_ids = cap;
-    }
-    B->ids[B->n_ids++] = o;
-  }
-  for (int i = 0; i < o->n_props; i++) {
-    if (o->props[i].kind != PROP_OBJECT) continue;
-    lmc_status st = xml__register_ids(B, o->props[i].obj);
-    if (st != LMC_OK) return st;
-  }
-  return LMC_OK;
-}
-
-/* Resolves a file name against the folder of the XML file `base`. */
-static void xml__resolve(const char *base, const char *name, char *out, size_t size) {
-  const char *slash = strrchr(base, '/');
-  if (name[0] == '/' || !slash) snprintf(out, size, "%s", name);
-  else snprintf(out, size, "%.*s/%s", (int)(slash - base), base, name);
-}
-
-/* A file property, resolved; missing property is an error, and so is a file
- * that cannot be opened (LMC_EIO at the property's line). */
-static lmc_status xml__file(builder *B, pset *o, const char *name, const char *what,
-                            char *out, size_t size, prop **where) {
-  const char *fn;
-  prop *p;
-  lmc_status st = xml__string(B, o, name, NULL, &fn, &p);
-  if (st != LMC_OK) return st;
-  if (!fn) return xml__missing(B, o, name);
-  xml__resolve(p->file, fn, out, size);
-  FILE *f = fopen(out, "rb");
-  if (!f) return xml__fail(B, LMC_EIO, p->file, p->line, "cannot open %s file '%s'", what, out);
-  fclose(f);
-  if (where) *where = p;
-  return LMC_OK;
-}
-
-/* Re-labels an error from a reader (which names the data file) with the
- * XML element that asked for it, keeping the reader's text. */
-static lmc_status xml__relabel(builder *B, lmc_status st, const prop *p, const char *what) {
-  char inner[1100];
-  lmc_error_format(B->err, inner, sizeof inner);
-  return xml__fail(B, st, p->file, p->line, "cannot read %s: %s", what, inner);
-}
-
-/* ---- Textures. ---------------------------------------------------------- */
-
-/* Counts the texels of img that are NaN or infinite; with `repair`, also
- * those that are negative, and sets all of them to 0. */
-static int64_t xml__bad_texels(lmc_image *img, int repair) {
-  int64_t n = (int64_t)img->width * img->height * img->channels, bad = 0;
-  for (int64_t i = 0; i < n; i++) {
-    float v = img->data[i];
-    if (!isfinite(v) || (repair && v < 0.0f)) {
-      bad++;
-      if (repair) img->data[i] = 0.0f;
-    }
-  }
-  return bad;
-}
-
-/* Loads (once per texture object) the image of a bitmap texture. */
-static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
-  if (o->index >= 0) {
-    *out_index = o->index;
-    return LMC_OK;
-  }
-  char path[1024];
-  prop *fp;
-  lmc_status st = xml__file(B, o, "filename", "texture", path, sizeof path, &fp);
-  if (st != LMC_OK) return st;
-  double gamma;
-  int has_gamma;
-  if ((st = xml__float(B, o, "gamma", -1.0, &gamma, &has_gamma)) != LMC_OK) return st;
-  int srgb = 1;
-  if (has_gamma && gamma == 1.0) srgb = 0;
-  else if (has_gamma && gamma != -1.0)
-    lmc_warn(o->file, o->line, "bitmap gamma %g is approximated by the sRGB curve", gamma);
-  lmc_image img = {0};
-  st = image_read(path, srgb, &img, B->err);
-  if (st == LMC_OK) st = image_to_rgb(&img, B->err);
-  if (st != LMC_OK) {
-    image_free(&img);
-    return xml__relabel(B, st, fp, "texture image");
-  }
-  /* NaN or Inf texels are kept (the image is the user's), but said: the
-   * render drops and counts every sample that meets one. */
-  int64_t bad = xml__bad_texels(&img, 0);
-  if (bad > 0)
-    lmc_warn(fp->file, fp->line,
-             "texture image '%s' has %lld NaN or infinite values: samples that meet them will be "
-             "dropped",
-             fp->s, (long long)bad);
-  int idx = scene_add_image(B->s, &img, B->err);
-  if (idx < 0) {
-    image_free(&img);
-    return (lmc_status)idx;
-  }
-  o->index = idx;
-  *out_index = idx;
-  return LMC_OK;
-}
-
-/* uvscale sets both scales; uscale/vscale override it. */
-static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
-  double uv, us, vs;
-  lmc_status st;
-  if ((st = xml__float(B, o, "uvscale", 1.0, &uv, NULL)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "uscale", uv, &us, NULL)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "vscale", uv, &vs, NULL)) != LMC_OK) return st;
-  t->uscale = us;
-  t->vscale = vs;
-  if ((st = xml__float(B, o, "uoffset", 0.0, &t->uoffset, NULL)) != LMC_OK) return st;
-  return xml__float(B, o, "voffset", 0.0, &t->voffset, NULL);
-}
-
-/* Builds a texture object; *image gets the image index (-1: none). An
- * unsupported texture type warns and gives the constant `def`. */
-static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image) {
-  lmc_status st;
-  *image = -1;
-  *out = tex_constant(def);
-  if (strcmp(o->type, "bitmap") == 0) {
-    if ((st = xml__bitmap_image(B, o, image)) != LMC_OK) return st;
-    out->type = TEX_BITMAP;
-    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
-    const char *s;
-    prop *p;
-    if ((st = xml__string(B, o, "filterType", "ewa", &s, &p)) != LMC_OK) return st;
-    if (p && strcmp(s, "ewa") != 0)
-      lmc_warn(p->file, p->line, "bitmap filterType \"%s\": textures are always bilinear", s);
-    const char *wraps[3] = {"wrapMode", "wrapModeU", "wrapModeV"};
-    for (int k = 0; k < 3; k++) {
-      if ((st = xml__string(B, o, wraps[k], "repeat", &s, &p)) != LMC_OK) return st;
-      if (p && strcmp(s, "repeat") != 0)
-        lmc_warn(p->file, p->line, "bitmap %s \"%s\": textures always repeat", wraps[k], s);
-    }
-    static const char *const silent[] = {"cache", "maxAnisotropy", NULL};
-    xml__accept(o, silent);
-  } else if (strcmp(o->type, "checkerboard") == 0) {
-    out->type = TEX_CHECKERBOARD;
-    if ((st = xml__rgb(B, o, "color0", rgb_gray(0.4), &out->color0, NULL)) != LMC_OK) return st;
-    if ((st = xml__rgb(B, o, "color1", rgb_gray(0.2), &out->color1, NULL)) != LMC_OK) return st;
-    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
-  } else {
-    lmc_warn(o->file, o->line,
-             "unsupported texture type \"%s\": using the constant %g %g %g instead", o->type,
-             def.r, def.g, def.b);
-    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
-    return LMC_OK;
-  }
-  xml__warn_unused(o);
-  return LMC_OK;
-}
-
-/* A BSDF parameter: a colour, a nested <texture name=...> or a
- * <ref name=... id=...> to a texture. */
-static lmc_status xml__texture(builder *B, pset *o, const char *name, rgb def, texture *out,
-                               int *image) {
-  *image = -1;
-  prop *p = xml__find(o, name);
-  if (!p) {
-    *out = tex_constant(def);
-    return LMC_OK;
-  }
-  if (p->kind == PROP_RGB || p->kind == PROP_FLOAT || p->kind == PROP_INT) {
-    rgb c;
-    lmc_status st = xml__rgb(B, o, name, def, &c, NULL);
-    if (st != LMC_OK) return st;
-    *out = tex_constant(c);
-    return LMC_OK;
-  }
-  pset *t = NULL;
-  if (p->kind == PROP_OBJECT) t = p->obj;
-  else if (p->kind == PROP_REF) {
-    lmc_status st = xml__deref(B, p, &t);
-    if (st != LMC_OK) return st;
-  } else {
-    return xml__wrong(B, p, "a colour or a texture");
-  }
-  if (strcmp(t->tag, "texture") != 0)
-    return xml__fail(B, LMC_EPARSE, p->file, p->line,
-                     "property '%s' must be a colour or a texture, not a <%s>", name, t->tag);
-  return xml__texture_object(B, t, def, out, image);
-}
-
-/* ---- BSDFs. ------------------------------------------------------------- */
-
-static lmc_status xml__add_fixup(builder *B, int bsdf_index, int which, int image) {
-  if (image < 0) return LMC_OK;
-  if (B->n_fix == B->cap_fix) {
-    int cap = B->cap_fix ? 2 * B->cap_fix : 16;
-    tex_fixup *f = realloc(B->fix, (size_t)cap * sizeof *f);
-    if (!f) return xml__fail(B, LMC_ENOMEM, NULL, 0, "out of memory");
-    B->fix = f;
-    B->cap_fix = cap;
-  }
-  B->fix[B->n_fix].bsdf = bsdf_index;
-  B->fix[B->n_fix].which = which;
-  B->fix[B->n_fix].image = image;
-  B->n_fix++;
-  return LMC_OK;
-}
-
-/* The single nested BSDF of a wrapper (twosided, bumpmap, ...): a nested
- * <bsdf> or a <ref> to one; NULL when there is none. */
-static lmc_status xml__inner_bsdf(builder *B, pset *o, pset **out) {
-  *out = NULL;
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    pset *c = NULL;
-    if (p->kind == PROP_OBJECT && strcmp(p->obj->tag, "bsdf") == 0) c = p->obj;
-    else if (p->kind == PROP_REF) {
-      lmc_status st = xml__deref(B, p, &c);
-      if (st != LMC_OK) return st;
-      if (strcmp(c->tag, "bsdf") != 0) continue;
-    } else {
-      continue;
-    }
-    p->used = 1;
-    if (*out) {
-      lmc_warn(p->file, p->line, "<%s type=\"%s\"> wraps more than one BSDF: using the first",
-               o->tag, o->type);
-      continue;
-    }
-    *out = c;
-  }
-  return LMC_OK;
-}
-
-/* Microfacet parameters shared by the rough models. */
-static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
-  lmc_status st;
-  const char *d;
-  prop *p;
-  if ((st = xml__string(B, o, "distribution", "beckmann", &d, &p)) != LMC_OK) return st;
-  if (strcmp(d, "beckmann") == 0) b->dist = MF_BECKMANN;
-  else if (strcmp(d, "ggx") == 0) b->dist = MF_GGX;
-  else {
-    lmc_warn(p->file, p->line, "microfacet distribution \"%s\" is not supported: using beckmann",
-             d);
-    b->dist = MF_BECKMANN;
-  }
-  double alpha, au, av;
-  int has_a, has_u, has_v;
-  if ((st = xml__float(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
-  if ((has_u || has_v) && au != av) {
-    lmc_warn(o->file, o->line,
-             "anisotropic roughness (alphaU %g, alphaV %g) is not supported: using their mean",
-             au, av);
-  }
-  b->alpha = 0.5 * (au + av);
-  if (!(b->alpha > 0.0))
-    return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughness alpha must be positive");
-  return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
-}
-
-/* Fills *b from a bsdf object; img[3] get image indices of the diffuse,
- * specular and transmittance textures (-1: none). Does not add to the scene. */
-static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int depth) {
-  lmc_status st;
-  img[0] = img[1] = img[2] = -1;
-  if (depth > 8)
-    return xml__fail(B, LMC_EPARSE, o->file, o->line, "BSDFs nested too deeply (a cycle?)");
-  const char *t = o->type;
-  if (strcmp(t, "twosided") == 0 || strcmp(t, "bumpmap") == 0 || strcmp(t, "normalmap") == 0 ||
-      strcmp(t, "mask") == 0 || strcmp(t, "coating") == 0 || strcmp(t, "roughcoating") == 0) {
-    /* Wrappers: twosided sets the flag, the others are not modelled and
-     * fall back to the wrapped BSDF. */
-    pset *inner;
-    if ((st = xml__inner_bsdf(B, o, &inner)) != LMC_OK) return st;
-    if (!inner) {
-      if (strcmp(t, "twosided") == 0)
-        return xml__fail(B, LMC_EPARSE, o->file, o->line, "<bsdf type=\"twosided\"> needs a nested BSDF");
-      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported and wraps nothing: using diffuse", t);
-      bsdf_init_defaults(b, BSDF_DIFFUSE);
-      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
-      return LMC_OK;
-    }
-    if ((st = xml__make_bsdf(B, inner, b, img, depth + 1)) != LMC_OK) return st;
-    if (strcmp(t, "twosided") == 0) {
-      b->twosided = 1;
-      xml__warn_unused(o);
-    } else {
-      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported: using the BSDF it wraps", t);
-      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
-    }
-    if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
-    return LMC_OK;
-  }
-
-  if (strcmp(t, "diffuse") == 0) {
-    bsdf_init_defaults(b, BSDF_DIFFUSE);
-    if ((st = xml__texture(B, o, "reflectance", rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK)
-      return st;
-  } else if (strcmp(t, "phong") == 0) {
-    bsdf_init_defaults(b, BSDF_PHONG);
-    if ((st = xml__float(B, o, "exponent", b->exponent, &b->exponent, NULL)) != LMC_OK) return st;
-    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
-                           &img[0])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
-  } else if (strcmp(t, "conductor") == 0 || strcmp(t, "roughconductor") == 0) {
-    int rough = t[0] == 'r';
-    bsdf_init_defaults(b, rough ? BSDF_ROUGHCONDUCTOR : BSDF_CONDUCTOR);
-    rgb eta = b->cond_eta, k = b->cond_k;
-    const char *mat;
-    prop *mp;
-    if ((st = xml__string(B, o, "material", NULL, &mat, &mp)) != LMC_OK) return st;
-    if (mat && !conductor_lookup(mat, &eta, &k))
-      return xml__fail(B, LMC_EPARSE, mp->file, mp->line, "unknown conductor material '%s'", mat);
-    if ((st = xml__rgb(B, o, "eta", eta, &eta, NULL)) != LMC_OK) return st;
-    if ((st = xml__rgb(B, o, "k", k, &k, NULL)) != LMC_OK) return st;
-    double ext;
-    if ((st = xml__ior(B, o, "extEta", 1.0, &ext)) != LMC_OK) return st;
-    b->cond_eta = rgb_scale(eta, 1.0 / ext);
-    b->cond_k = rgb_scale(k, 1.0 / ext);
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
-    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
-  } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
-             strcmp(t, "thindielectric") == 0) {
-    int rough = t[0] == 'r';
-    if (t[0] == 't')
-      lmc_warn(o->file, o->line, "thindielectric is not supported: using dielectric");
-    bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
-    double int_ior, ext_ior, bk7 = 1.5046, air = 1.000277;
-    ior_lookup("bk7", &bk7);
-    ior_lookup("air", &air);
-    if ((st = xml__ior(B, o, "intIOR", bk7, &int_ior)) != LMC_OK) return st;
-    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
-    b->eta = int_ior / ext_ior;
-    if (b->eta == 1.0)
-      lmc_warn(o->file, o->line,
-               "%s with intIOR = extIOR (eta = 1): an index-matched interface, invisible", t);
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularTransmittance", tex_mean(&b->transmittance),
-                           &b->transmittance, &img[2])) != LMC_OK)
-      return st;
-    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
-  } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
-    if (t[0] == 'r') {
-      lmc_warn(o->file, o->line, "roughplastic is not supported: using smooth plastic");
-      static const char *const rough_names[] = {"alpha", "distribution", "sampleVisible", NULL};
-      xml__accept(o, rough_names);
-    }
-    bsdf_init_defaults(b, BSDF_PLASTIC);
-    double int_ior, ext_ior, pp = 1.49, air = 1.000277;
-    ior_lookup("polypropylene", &pp);
-    ior_lookup("air", &air);
-    if ((st = xml__ior(B, o, "intIOR", pp, &int_ior)) != LMC_OK) return st;
-    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
-    b->eta = int_ior / ext_ior;
-    if (b->eta == 1.0)
-      lmc_warn(o->file, o->line,
-               "%s with intIOR = extIOR (eta = 1): no specular coating, only the diffuse base", t);
-    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
-                           &img[0])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
-    if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
-      return st;
-  } else {
-    lmc_warn(o->file, o->line, "unknown BSDF type \"%s\": using diffuse with reflectance 0.5", t);
-    bsdf_init_defaults(b, BSDF_DIFFUSE);
-    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
-  }
-  if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
-  xml__warn_unused(o);
-  return LMC_OK;
-}
-
-/* Builds a bsdf object into the scene once; returns its index. */
-static lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
-  if (o->built) {
-    *out_index = o->index;
-    return LMC_OK;
-  }
-  bsdf b;
-  memset(&b, 0, sizeof b);
-  int img[3];
-  lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
-  if (st != LMC_OK) return st;
-  int idx = scene_add_bsdf(B->s, &b, B->err);
-  if (idx < 0) return (lmc_status)idx;
-  for (int k = 0; k < 3; k++)
-    if ((st = xml__add_fixup(B, idx, k, img[k])) != LMC_OK) return st;
-  o->built = 1;
-  o->index = idx;
-  *out_index = idx;
-  return LMC_OK;
-}
-
-static lmc_status xml__default_bsdf(builder *B, int *out_index) {
-  if (B->default_bsdf < 0) {
-    bsdf b;
-    memset(&b, 0, sizeof b);
-    bsdf_init_defaults(&b, BSDF_DIFFUSE);
-    b.diffuse = tex_constant(rgb_gray(0.5));
-    snprintf(b.id, sizeof b.id, "(default diffuse)");
-    int idx = scene_add_bsdf(B->s, &b, B->err);
-    if (idx < 0) return (lmc_status)idx;
-    B->default_bsdf = idx;
-  }
-  *out_index = B->default_bsdf;
-  return LMC_OK;
-}
 
 /* ---- Shapes. ------------------------------------------------------------ */
 
-static lmc_status xml__shape(builder *B, pset *o) {
+/* The mesh of shape o in object space, read from its file or generated;
+ * *OUT_label names it when it has no id. Sets *OUT_skip for a type lmc does
+ * not have (warned about, its properties marked read). */
+static lmc_status xml__shape_mesh(builder *B, pset *o, mesh *m, const char **OUT_label,
+                                  int *OUT_skip) {
   lmc_status st;
-  mesh m;
-  memset(&m, 0, sizeof m);
   const char *t = o->type;
-  char path[1024];
-  prop *fp = NULL;
-  const char *label = t;
-
-  /* Read or generate the mesh in object space. */
+  *OUT_label = t;
+  *OUT_skip = 0;
   if (strcmp(t, "obj") == 0 || strcmp(t, "ply") == 0 || strcmp(t, "serialized") == 0) {
+    char path[1024];
+    prop *fp = NULL;
     if ((st = xml__file(B, o, "filename", "mesh", path, sizeof path, &fp)) != LMC_OK) return st;
-    label = fp->s;
+    *OUT_label = fp->s;
     if (t[0] == 'o') {
-      st = mesh_read_obj(path, &m, B->err);
+      st = mesh_read_obj(path, m, B->err);
       static const char *const silent[] = {"flipTexCoords", "collapse", NULL};
       xml__accept(o, silent);
     } else if (t[0] == 'p') {
-      st = mesh_read_ply(path, &m, B->err);
+      st = mesh_read_ply(path, m, B->err);
       static const char *const silent[] = {"srgb", NULL};
       xml__accept(o, silent);
     } else {
@@ -773,31 +78,28 @@ static lmc_status xml__shape(builder *B, pset *o) {
       if ((st = xml__int(B, o, "shapeIndex", 0, &index, NULL)) != LMC_OK) return st;
       if (index < 0 || index > 1000000000LL)
         return xml__fail(B, LMC_EPARSE, o->file, o->line, "bad shapeIndex %lld", index);
-      st = mesh_read_serialized(path, (int)index, &m, B->err);
+      st = mesh_read_serialized(path, (int)index, m, B->err);
     }
-    if (st != LMC_OK) {
-      mesh_free(&m);
-      return xml__relabel(B, st, fp, "mesh");
-    }
+    if (st != LMC_OK) return xml__relabel(B, st, fp, "mesh");
     double angle;
     int has_angle;
-    if ((st = xml__float(B, o, "maxSmoothAngle", 0.0, &angle, &has_angle)) != LMC_OK) goto fail;
+    if ((st = xml__float(B, o, "maxSmoothAngle", 0.0, &angle, &has_angle)) != LMC_OK) return st;
     if (has_angle)
       lmc_warn(o->file, o->line, "maxSmoothAngle is not supported: normals kept as in the file");
-  } else if (strcmp(t, "rectangle") == 0) {
-    st = shape_rectangle(&m, B->err);
-  } else if (strcmp(t, "cube") == 0) {
-    st = shape_cube(&m, B->err);
-  } else if (strcmp(t, "disk") == 0) {
-    st = shape_disk(&m, B->err);
-  } else if (strcmp(t, "sphere") == 0) {
+    return LMC_OK;
+  }
+  if (strcmp(t, "rectangle") == 0) return shape_rectangle(m, B->err);
+  if (strcmp(t, "cube") == 0) return shape_cube(m, B->err);
+  if (strcmp(t, "disk") == 0) return shape_disk(m, B->err);
+  if (strcmp(t, "sphere") == 0) {
     vec3 c;
     double r;
     if ((st = xml__vec(B, o, "center", v3(0, 0, 0), &c, NULL)) != LMC_OK) return st;
     if ((st = xml__float(B, o, "radius", 1.0, &r, NULL)) != LMC_OK) return st;
     if (!(r > 0.0)) return xml__fail(B, LMC_EPARSE, o->file, o->line, "sphere radius must be positive");
-    st = shape_sphere(c, r, &m, B->err);
-  } else if (strcmp(t, "cylinder") == 0) {
+    return shape_sphere(c, r, m, B->err);
+  }
+  if (strcmp(t, "cylinder") == 0) {
     vec3 p0, p1;
     double r;
     if ((st = xml__vec(B, o, "p0", v3(0, 0, 0), &p0, NULL)) != LMC_OK) return st;
@@ -805,32 +107,18 @@ static lmc_status xml__shape(builder *B, pset *o) {
     if ((st = xml__float(B, o, "radius", 1.0, &r, NULL)) != LMC_OK) return st;
     if (!(r > 0.0) || v3_len2(v3_sub(p1, p0)) == 0.0)
       return xml__fail(B, LMC_EPARSE, o->file, o->line, "degenerate cylinder");
-    st = shape_cylinder(p0, p1, r, &m, B->err);
-  } else {
-    lmc_warn(o->file, o->line, "unsupported shape type \"%s\": ignored", t);
-    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
-    return LMC_OK;
+    return shape_cylinder(p0, p1, r, m, B->err);
   }
-  if (st != LMC_OK) {
-    mesh_free(&m);
-    return st;
-  }
+  lmc_warn(o->file, o->line, "unsupported shape type \"%s\": ignored", t);
+  for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+  *OUT_skip = 1;
+  return LMC_OK;
+}
 
-  /* Place it in the world and set the flags. */
-  xform to_world;
-  if ((st = xml__xform(B, o, "toWorld", &to_world, NULL)) != LMC_OK) goto fail;
-  if (!xform_is_identity(&to_world)) mesh_transform(&m, &to_world);
-  if ((st = xml__bool(B, o, "flipNormals", 0, &m.flip_normals, NULL)) != LMC_OK) goto fail;
-  /* faceNormals adds to what the shape itself asks (a cube, a serialized
-   * mesh with its face-normal flag); it never turns that off. */
-  int face_normals = 0;
-  if ((st = xml__bool(B, o, "faceNormals", 0, &face_normals, NULL)) != LMC_OK) goto fail;
-  m.face_normals = m.face_normals || face_normals;
-  snprintf(m.name, sizeof m.name, "%s", o->id[0] ? o->id : label);
-  m.light = -1;
-  if ((st = mesh_validate(&m, o->file, o->line, B->err)) != LMC_OK) goto fail;
-
-  /* Its BSDF and area emitter. */
+/* The shape's BSDF (its first, else the default) into *OUT_bsdf and its
+ * area emitter (the first, or NULL) into *OUT_emitter. */
+static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset **OUT_emitter) {
+  lmc_status st;
   int bsdf_index = -1;
   pset *emitter = NULL;
   for (int i = 0; i < o->n_props; i++) {
@@ -838,7 +126,7 @@ static lmc_status xml__shape(builder *B, pset *o) {
     pset *c = NULL;
     if (p->kind == PROP_OBJECT) c = p->obj;
     else if (p->kind == PROP_REF) {
-      if ((st = xml__deref(B, p, &c)) != LMC_OK) goto fail;
+      if ((st = xml__deref(B, p, &c)) != LMC_OK) return st;
     } else {
       continue;
     }
@@ -848,7 +136,7 @@ static lmc_status xml__shape(builder *B, pset *o) {
         lmc_warn(p->file, p->line, "shape has more than one BSDF: using the first");
         continue;
       }
-      if ((st = xml__bsdf(B, c, &bsdf_index)) != LMC_OK) goto fail;
+      if ((st = xml__bsdf(B, c, &bsdf_index)) != LMC_OK) return st;
     } else if (strcmp(c->tag, "emitter") == 0 && p->kind == PROP_OBJECT) {
       p->used = 1;
       if (strcmp(c->type, "area") != 0) {
@@ -863,19 +151,82 @@ static lmc_status xml__shape(builder *B, pset *o) {
       }
       emitter = c;
     } else if (p->kind == PROP_REF) {
-      st = xml__fail(B, LMC_EPARSE, p->file, p->line,
-                     "<ref id=\"%s\"> inside a shape must name a BSDF, not a <%s>", p->ref, c->tag);
-      goto fail;
+      return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                       "<ref id=\"%s\"> inside a shape must name a BSDF, not a <%s>", p->ref,
+                       c->tag);
     }
   }
-  if (bsdf_index < 0 && (st = xml__default_bsdf(B, &bsdf_index)) != LMC_OK) goto fail;
-  m.bsdf = bsdf_index;
+  if (bsdf_index < 0 && (st = xml__default_bsdf(B, &bsdf_index)) != LMC_OK) return st;
+  *OUT_bsdf = bsdf_index;
+  *OUT_emitter = emitter;
+  return LMC_OK;
+}
 
+/* Places the mesh in the world (toWorld) and reads its flags. */
+static lmc_status xml__shape_place(builder *B, pset *o, const char *label, mesh *m) {
+  lmc_status st;
+  xform to_world;
+  if ((st = xml__xform(B, o, "toWorld", &to_world, NULL)) != LMC_OK) return st;
+  if (!xform_is_identity(&to_world)) mesh_transform(m, &to_world);
+  if ((st = xml__bool(B, o, "flipNormals", 0, &m->flip_normals, NULL)) != LMC_OK) return st;
+  /* faceNormals adds to what the shape itself asks (a cube, a serialized
+   * mesh with its face-normal flag); it never turns that off. */
+  int face_normals = 0;
+  if ((st = xml__bool(B, o, "faceNormals", 0, &face_normals, NULL)) != LMC_OK) return st;
+  m->face_normals = m->face_normals || face_normals;
+  snprintf(m->name, sizeof m->name, "%s", o->id[0] ? o->id : label);
+  m->light = -1;
+  return mesh_validate(m, o->file, o->line, B->err);
+}
+
+/* Adds mesh m (owned from here) and its area emitter of radiance value. */
+static lmc_status xml__shape_add(builder *B, mesh *m, pset *emitter, rgb radiance) {
+  /* An empty mesh (mesh_validate has warned) is left out, with its emitter:
+   * a light of zero area could only produce 0/0 when sampled. */
+  if (m->n_triangles == 0) {
+    if (emitter)
+      lmc_warn(emitter->file, emitter->line, "area emitter on an empty mesh: ignored");
+    mesh_free(m);
+    return LMC_OK;
+  }
+  int mi = scene_add_mesh(B->s, m, B->err);
+  if (mi < 0) {
+    mesh_free(m);
+    return (lmc_status)mi;
+  }
+  if (!emitter) return LMC_OK;
   light l;
   memset(&l, 0, sizeof l);
+  l.value = radiance;
+  l.type = LIGHT_AREA;
+  l.mesh = mi;
+  l.scale = 1.0;
+  l.to_world = xform_identity();
+  int li = scene_add_light(B->s, &l, B->err);
+  if (li < 0) return (lmc_status)li;
+  B->s->meshes[mi].light = li;
+  return LMC_OK;
+}
+
+static lmc_status xml__shape(builder *B, pset *o) {
+  mesh m;
+  memset(&m, 0, sizeof m);
+  const char *label;
+  int skip;
+  lmc_status st = xml__shape_mesh(B, o, &m, &label, &skip);
+  if (st != LMC_OK || skip) {
+    mesh_free(&m);
+    return st;
+  }
+  int bsdf_index = -1;
+  pset *emitter = NULL;
+  rgb radiance = rgb_gray(1.0);
+  if ((st = xml__shape_place(B, o, label, &m)) != LMC_OK) goto fail;
+  if ((st = xml__shape_children(B, o, &bsdf_index, &emitter)) != LMC_OK) goto fail;
+  m.bsdf = bsdf_index;
   if (emitter) {
     int found;
-    if ((st = xml__rgb(B, emitter, "radiance", rgb_gray(1.0), &l.value, &found)) != LMC_OK)
+    if ((st = xml__rgb(B, emitter, "radiance", rgb_gray(1.0), &radiance, &found)) != LMC_OK)
       goto fail;
     if (!found) {
       st = xml__missing(B, emitter, "radiance");
@@ -886,31 +237,7 @@ static lmc_status xml__shape(builder *B, pset *o) {
     xml__warn_unused(emitter);
   }
   xml__warn_unused(o);
-
-  /* An empty mesh (mesh_validate has warned) is left out, with its emitter:
-   * a light of zero area could only produce 0/0 when sampled. */
-  if (m.n_triangles == 0) {
-    if (emitter)
-      lmc_warn(emitter->file, emitter->line, "area emitter on an empty mesh: ignored");
-    mesh_free(&m);
-    return LMC_OK;
-  }
-
-  int mi = scene_add_mesh(B->s, &m, B->err);
-  if (mi < 0) {
-    mesh_free(&m);
-    return (lmc_status)mi;
-  }
-  if (emitter) {
-    l.type = LIGHT_AREA;
-    l.mesh = mi;
-    l.scale = 1.0;
-    l.to_world = xform_identity();
-    int li = scene_add_light(B->s, &l, B->err);
-    if (li < 0) return (lmc_status)li;
-    B->s->meshes[mi].light = li;
-  }
-  return LMC_OK;
+  return xml__shape_add(B, &m, emitter, radiance);
 fail:
   mesh_free(&m);
   return st;

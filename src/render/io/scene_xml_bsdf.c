@@ -1,0 +1,385 @@
+/*
+ * scene_xml_bsdf.c: the scene loader's textures (bitmap, checkerboard)
+ * and BSDFs (Mitsuba's names and defaults, bsdf.h), for
+ * scene_xml_internal.h.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/io/scene_xml_internal.h"
+
+/* ---- Textures. ---------------------------------------------------------- */
+
+/* Counts the texels of img that are NaN or infinite; with `repair`, also
+ * those that are negative, and sets all of them to 0. */
+int64_t xml__bad_texels(lmc_image *img, int repair) {
+  int64_t n = (int64_t)img->width * img->height * img->channels, bad = 0;
+  for (int64_t i = 0; i < n; i++) {
+    float v = img->data[i];
+    if (!isfinite(v) || (repair && v < 0.0f)) {
+      bad++;
+      if (repair) img->data[i] = 0.0f;
+    }
+  }
+  return bad;
+}
+
+/* Loads (once per texture object) the image of a bitmap texture. */
+static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
+  if (o->index >= 0) {
+    *out_index = o->index;
+    return LMC_OK;
+  }
+  char path[1024];
+  prop *fp;
+  lmc_status st = xml__file(B, o, "filename", "texture", path, sizeof path, &fp);
+  if (st != LMC_OK) return st;
+  double gamma;
+  int has_gamma;
+  if ((st = xml__float(B, o, "gamma", -1.0, &gamma, &has_gamma)) != LMC_OK) return st;
+  int srgb = 1;
+  if (has_gamma && gamma == 1.0) srgb = 0;
+  else if (has_gamma && gamma != -1.0)
+    lmc_warn(o->file, o->line, "bitmap gamma %g is approximated by the sRGB curve", gamma);
+  lmc_image img = {0};
+  st = image_read(path, srgb, &img, B->err);
+  if (st == LMC_OK) st = image_to_rgb(&img, B->err);
+  if (st != LMC_OK) {
+    image_free(&img);
+    return xml__relabel(B, st, fp, "texture image");
+  }
+  /* NaN or Inf texels are kept (the image is the user's), but said: the
+   * render drops and counts every sample that meets one. */
+  int64_t bad = xml__bad_texels(&img, 0);
+  if (bad > 0)
+    lmc_warn(fp->file, fp->line,
+             "texture image '%s' has %lld NaN or infinite values: samples that meet them will be "
+             "dropped",
+             fp->s, (long long)bad);
+  int idx = scene_add_image(B->s, &img, B->err);
+  if (idx < 0) {
+    image_free(&img);
+    return (lmc_status)idx;
+  }
+  o->index = idx;
+  *out_index = idx;
+  return LMC_OK;
+}
+
+/* uvscale sets both scales; uscale/vscale override it. */
+static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
+  double uv, us, vs;
+  lmc_status st;
+  if ((st = xml__float(B, o, "uvscale", 1.0, &uv, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "uscale", uv, &us, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "vscale", uv, &vs, NULL)) != LMC_OK) return st;
+  t->uscale = us;
+  t->vscale = vs;
+  if ((st = xml__float(B, o, "uoffset", 0.0, &t->uoffset, NULL)) != LMC_OK) return st;
+  return xml__float(B, o, "voffset", 0.0, &t->voffset, NULL);
+}
+
+/* Builds a texture object; *image gets the image index (-1: none). An
+ * unsupported texture type warns and gives the constant `def`. */
+static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image) {
+  lmc_status st;
+  *image = -1;
+  *out = tex_constant(def);
+  if (strcmp(o->type, "bitmap") == 0) {
+    if ((st = xml__bitmap_image(B, o, image)) != LMC_OK) return st;
+    out->type = TEX_BITMAP;
+    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
+    const char *s;
+    prop *p;
+    if ((st = xml__string(B, o, "filterType", "ewa", &s, &p)) != LMC_OK) return st;
+    if (p && strcmp(s, "ewa") != 0)
+      lmc_warn(p->file, p->line, "bitmap filterType \"%s\": textures are always bilinear", s);
+    const char *wraps[3] = {"wrapMode", "wrapModeU", "wrapModeV"};
+    for (int k = 0; k < 3; k++) {
+      if ((st = xml__string(B, o, wraps[k], "repeat", &s, &p)) != LMC_OK) return st;
+      if (p && strcmp(s, "repeat") != 0)
+        lmc_warn(p->file, p->line, "bitmap %s \"%s\": textures always repeat", wraps[k], s);
+    }
+    static const char *const silent[] = {"cache", "maxAnisotropy", NULL};
+    xml__accept(o, silent);
+  } else if (strcmp(o->type, "checkerboard") == 0) {
+    out->type = TEX_CHECKERBOARD;
+    if ((st = xml__rgb(B, o, "color0", rgb_gray(0.4), &out->color0, NULL)) != LMC_OK) return st;
+    if ((st = xml__rgb(B, o, "color1", rgb_gray(0.2), &out->color1, NULL)) != LMC_OK) return st;
+    if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
+  } else {
+    lmc_warn(o->file, o->line,
+             "unsupported texture type \"%s\": using the constant %g %g %g instead", o->type,
+             def.r, def.g, def.b);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    return LMC_OK;
+  }
+  xml__warn_unused(o);
+  return LMC_OK;
+}
+
+/* A BSDF parameter: a colour, a nested <texture name=...> or a
+ * <ref name=... id=...> to a texture. */
+static lmc_status xml__texture(builder *B, pset *o, const char *name, rgb def, texture *out,
+                               int *image) {
+  *image = -1;
+  prop *p = xml__find(o, name);
+  if (!p) {
+    *out = tex_constant(def);
+    return LMC_OK;
+  }
+  if (p->kind == PROP_RGB || p->kind == PROP_FLOAT || p->kind == PROP_INT) {
+    rgb c;
+    lmc_status st = xml__rgb(B, o, name, def, &c, NULL);
+    if (st != LMC_OK) return st;
+    *out = tex_constant(c);
+    return LMC_OK;
+  }
+  pset *t = NULL;
+  if (p->kind == PROP_OBJECT) t = p->obj;
+  else if (p->kind == PROP_REF) {
+    lmc_status st = xml__deref(B, p, &t);
+    if (st != LMC_OK) return st;
+  } else {
+    return xml__wrong(B, p, "a colour or a texture");
+  }
+  if (strcmp(t->tag, "texture") != 0)
+    return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                     "property '%s' must be a colour or a texture, not a <%s>", name, t->tag);
+  return xml__texture_object(B, t, def, out, image);
+}
+
+/* ---- BSDFs. ------------------------------------------------------------- */
+
+static lmc_status xml__add_fixup(builder *B, int bsdf_index, int which, int image) {
+  if (image < 0) return LMC_OK;
+  if (B->n_fix == B->cap_fix) {
+    int cap = B->cap_fix ? 2 * B->cap_fix : 16;
+    tex_fixup *f = realloc(B->fix, (size_t)cap * sizeof *f);
+    if (!f) return xml__fail(B, LMC_ENOMEM, NULL, 0, "out of memory");
+    B->fix = f;
+    B->cap_fix = cap;
+  }
+  B->fix[B->n_fix].bsdf = bsdf_index;
+  B->fix[B->n_fix].which = which;
+  B->fix[B->n_fix].image = image;
+  B->n_fix++;
+  return LMC_OK;
+}
+
+/* The single nested BSDF of a wrapper (twosided, bumpmap, ...): a nested
+ * <bsdf> or a <ref> to one; NULL when there is none. */
+static lmc_status xml__inner_bsdf(builder *B, pset *o, pset **out) {
+  *out = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    if (p->kind == PROP_OBJECT && strcmp(p->obj->tag, "bsdf") == 0) c = p->obj;
+    else if (p->kind == PROP_REF) {
+      lmc_status st = xml__deref(B, p, &c);
+      if (st != LMC_OK) return st;
+      if (strcmp(c->tag, "bsdf") != 0) continue;
+    } else {
+      continue;
+    }
+    p->used = 1;
+    if (*out) {
+      lmc_warn(p->file, p->line, "<%s type=\"%s\"> wraps more than one BSDF: using the first",
+               o->tag, o->type);
+      continue;
+    }
+    *out = c;
+  }
+  return LMC_OK;
+}
+
+/* Microfacet parameters shared by the rough models. */
+static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
+  lmc_status st;
+  const char *d;
+  prop *p;
+  if ((st = xml__string(B, o, "distribution", "beckmann", &d, &p)) != LMC_OK) return st;
+  if (strcmp(d, "beckmann") == 0) b->dist = MF_BECKMANN;
+  else if (strcmp(d, "ggx") == 0) b->dist = MF_GGX;
+  else {
+    lmc_warn(p->file, p->line, "microfacet distribution \"%s\" is not supported: using beckmann",
+             d);
+    b->dist = MF_BECKMANN;
+  }
+  double alpha, au, av;
+  int has_a, has_u, has_v;
+  if ((st = xml__float(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
+  if ((has_u || has_v) && au != av) {
+    lmc_warn(o->file, o->line,
+             "anisotropic roughness (alphaU %g, alphaV %g) is not supported: using their mean",
+             au, av);
+  }
+  b->alpha = 0.5 * (au + av);
+  if (!(b->alpha > 0.0))
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughness alpha must be positive");
+  return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
+}
+
+/* Fills *b from a bsdf object; img[3] get image indices of the diffuse,
+ * specular and transmittance textures (-1: none). Does not add to the scene. */
+static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int depth) {
+  lmc_status st;
+  img[0] = img[1] = img[2] = -1;
+  if (depth > 8)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "BSDFs nested too deeply (a cycle?)");
+  const char *t = o->type;
+  if (strcmp(t, "twosided") == 0 || strcmp(t, "bumpmap") == 0 || strcmp(t, "normalmap") == 0 ||
+      strcmp(t, "mask") == 0 || strcmp(t, "coating") == 0 || strcmp(t, "roughcoating") == 0) {
+    /* Wrappers: twosided sets the flag, the others are not modelled and
+     * fall back to the wrapped BSDF. */
+    pset *inner;
+    if ((st = xml__inner_bsdf(B, o, &inner)) != LMC_OK) return st;
+    if (!inner) {
+      if (strcmp(t, "twosided") == 0)
+        return xml__fail(B, LMC_EPARSE, o->file, o->line, "<bsdf type=\"twosided\"> needs a nested BSDF");
+      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported and wraps nothing: using diffuse", t);
+      bsdf_init_defaults(b, BSDF_DIFFUSE);
+      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+      return LMC_OK;
+    }
+    if ((st = xml__make_bsdf(B, inner, b, img, depth + 1)) != LMC_OK) return st;
+    if (strcmp(t, "twosided") == 0) {
+      b->twosided = 1;
+      xml__warn_unused(o);
+    } else {
+      lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported: using the BSDF it wraps", t);
+      for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    }
+    if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
+    return LMC_OK;
+  }
+
+  if (strcmp(t, "diffuse") == 0) {
+    bsdf_init_defaults(b, BSDF_DIFFUSE);
+    if ((st = xml__texture(B, o, "reflectance", rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK)
+      return st;
+  } else if (strcmp(t, "phong") == 0) {
+    bsdf_init_defaults(b, BSDF_PHONG);
+    if ((st = xml__float(B, o, "exponent", b->exponent, &b->exponent, NULL)) != LMC_OK) return st;
+    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
+                           &img[0])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+  } else if (strcmp(t, "conductor") == 0 || strcmp(t, "roughconductor") == 0) {
+    int rough = t[0] == 'r';
+    bsdf_init_defaults(b, rough ? BSDF_ROUGHCONDUCTOR : BSDF_CONDUCTOR);
+    rgb eta = b->cond_eta, k = b->cond_k;
+    const char *mat;
+    prop *mp;
+    if ((st = xml__string(B, o, "material", NULL, &mat, &mp)) != LMC_OK) return st;
+    if (mat && !conductor_lookup(mat, &eta, &k))
+      return xml__fail(B, LMC_EPARSE, mp->file, mp->line, "unknown conductor material '%s'", mat);
+    if ((st = xml__rgb(B, o, "eta", eta, &eta, NULL)) != LMC_OK) return st;
+    if ((st = xml__rgb(B, o, "k", k, &k, NULL)) != LMC_OK) return st;
+    double ext;
+    if ((st = xml__ior(B, o, "extEta", 1.0, &ext)) != LMC_OK) return st;
+    b->cond_eta = rgb_scale(eta, 1.0 / ext);
+    b->cond_k = rgb_scale(k, 1.0 / ext);
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
+  } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
+             strcmp(t, "thindielectric") == 0) {
+    int rough = t[0] == 'r';
+    if (t[0] == 't')
+      lmc_warn(o->file, o->line, "thindielectric is not supported: using dielectric");
+    bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
+    double int_ior, ext_ior, bk7 = 1.5046, air = 1.000277;
+    ior_lookup("bk7", &bk7);
+    ior_lookup("air", &air);
+    if ((st = xml__ior(B, o, "intIOR", bk7, &int_ior)) != LMC_OK) return st;
+    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
+    b->eta = int_ior / ext_ior;
+    if (b->eta == 1.0)
+      lmc_warn(o->file, o->line,
+               "%s with intIOR = extIOR (eta = 1): an index-matched interface, invisible", t);
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularTransmittance", tex_mean(&b->transmittance),
+                           &b->transmittance, &img[2])) != LMC_OK)
+      return st;
+    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
+  } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
+    if (t[0] == 'r') {
+      lmc_warn(o->file, o->line, "roughplastic is not supported: using smooth plastic");
+      static const char *const rough_names[] = {"alpha", "distribution", "sampleVisible", NULL};
+      xml__accept(o, rough_names);
+    }
+    bsdf_init_defaults(b, BSDF_PLASTIC);
+    double int_ior, ext_ior, pp = 1.49, air = 1.000277;
+    ior_lookup("polypropylene", &pp);
+    ior_lookup("air", &air);
+    if ((st = xml__ior(B, o, "intIOR", pp, &int_ior)) != LMC_OK) return st;
+    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
+    b->eta = int_ior / ext_ior;
+    if (b->eta == 1.0)
+      lmc_warn(o->file, o->line,
+               "%s with intIOR = extIOR (eta = 1): no specular coating, only the diffuse base", t);
+    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
+                           &img[0])) != LMC_OK)
+      return st;
+    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
+                           &img[1])) != LMC_OK)
+      return st;
+    if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
+      return st;
+  } else {
+    lmc_warn(o->file, o->line, "unknown BSDF type \"%s\": using diffuse with reflectance 0.5", t);
+    bsdf_init_defaults(b, BSDF_DIFFUSE);
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+  }
+  if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
+  xml__warn_unused(o);
+  return LMC_OK;
+}
+
+/* Builds a bsdf object into the scene once; returns its index. */
+lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
+  if (o->built) {
+    *out_index = o->index;
+    return LMC_OK;
+  }
+  bsdf b;
+  memset(&b, 0, sizeof b);
+  int img[3];
+  lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
+  if (st != LMC_OK) return st;
+  int idx = scene_add_bsdf(B->s, &b, B->err);
+  if (idx < 0) return (lmc_status)idx;
+  for (int k = 0; k < 3; k++)
+    if ((st = xml__add_fixup(B, idx, k, img[k])) != LMC_OK) return st;
+  o->built = 1;
+  o->index = idx;
+  *out_index = idx;
+  return LMC_OK;
+}
+
+lmc_status xml__default_bsdf(builder *B, int *out_index) {
+  if (B->default_bsdf < 0) {
+    bsdf b;
+    memset(&b, 0, sizeof b);
+    bsdf_init_defaults(&b, BSDF_DIFFUSE);
+    b.diffuse = tex_constant(rgb_gray(0.5));
+    snprintf(b.id, sizeof b.id, "(default diffuse)");
+    int idx = scene_add_bsdf(B->s, &b, B->err);
+    if (idx < 0) return (lmc_status)idx;
+    B->default_bsdf = idx;
+  }
+  *out_index = B->default_bsdf;
+  return LMC_OK;
+}
+
