@@ -1,5 +1,5 @@
 /*
- * bench_grad.c: cost of the path contribution's gradient (render/path.h)
+ * bench_grad.c: cost of the path contribution's gradient (render/integrators/path.h)
  * relative to the contribution alone, on scenes/ring-caustics.
  *
  * For path lengths 3, 5 and 8 (maxdepth = length, no Russian roulette) it
@@ -20,7 +20,7 @@
 #include <string.h>
 
 #include "render/io/io.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 
 /* One stored primary sample vector: its three streams. */
 typedef struct bench_vec {

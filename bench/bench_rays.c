@@ -20,7 +20,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 
 static int bench_scene(const char *path, int threads, int passes) {

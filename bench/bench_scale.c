@@ -35,7 +35,7 @@
 
 #include "lmc/mcmc.h"
 #include "render/accel.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 
 /* A field of /proc/self/status in bytes ("VmRSS", "VmHWM"), or -1. */

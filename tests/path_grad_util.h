@@ -11,9 +11,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "ad/dual.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 
 /* Which estimator: s < 0 is path_eval_pt, otherwise strategy (s, t). */
 typedef struct pg_strategy {

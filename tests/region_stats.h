@@ -15,7 +15,7 @@
 #include "lmc/mcmc.h"
 #include "render/film.h"
 #include "render/image.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/vec3.h"
 
 /* OUT[g] for g < grid^2: mean luminance of region g (row-major);

@@ -30,7 +30,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 
 #define MAX_GROUPS 8

@@ -38,7 +38,7 @@
 
 #include <cmocka.h>
 
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/scene.h"
 

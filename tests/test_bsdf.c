@@ -41,8 +41,8 @@
 #include "test_util.h"
 
 #include "chi2.h"
-#include "render/bsdf.h"
-#include "render/microfacet.h"
+#include "render/bsdf/bsdf.h"
+#include "render/bsdf/microfacet.h"
 #include "render/rng.h"
 #include "render/warp.h"
 

@@ -37,8 +37,8 @@
 
 #include "test_util.h"
 
-#include "render/bsdf.h"
-#include "render/bsdf_ad.h"
+#include "render/bsdf/bsdf.h"
+#include "render/bsdf/bsdf_ad.h"
 #include "render/rng.h"
 
 #ifndef M_PI

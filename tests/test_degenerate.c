@@ -31,7 +31,7 @@
 
 #include <cmocka.h>
 
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "test_util.h"
 

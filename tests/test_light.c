@@ -35,7 +35,7 @@
 #include "test_util.h"
 
 #include "chi2.h"
-#include "render/light.h"
+#include "render/lights/light.h"
 #include "render/rng.h"
 #include "render/scene.h"
 #include "render/warp.h"

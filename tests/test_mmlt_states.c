@@ -30,7 +30,7 @@
 #include "lmc/mcmc.h"
 #include "lmc/states/states.h"
 #include "render/io/io.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 #include "test_util.h"
 
 static const char *scene_xml =

@@ -1,5 +1,5 @@
 /*
- * test_path_grad.c: the differentiable path sampler (render/path.h) on a
+ * test_path_grad.c: the differentiable path sampler (render/integrators/path.h) on a
  * small built-in scene: a diffuse floor and sphere, a rough metal sphere,
  * a rectangular area light, a point light and a constant sky, so that
  * every kind of vertex and emitter of pt_li occurs.
@@ -29,7 +29,7 @@
 #include <cmocka.h>
 
 #include "render/io/io.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 #include "test_util.h"
 #include "path_grad_util.h"
 

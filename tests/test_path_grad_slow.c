@@ -37,7 +37,7 @@
 #include <cmocka.h>
 
 #include "render/io/io.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 #include "test_util.h"
 #include "path_grad_util.h"
 

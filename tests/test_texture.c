@@ -20,7 +20,7 @@
 
 #include "test_util.h"
 
-#include "render/texture.h"
+#include "render/bsdf/texture.h"
 
 
 /* A w x h image whose pixel (x, y) has red = x + 10 y, green = 100 + x,

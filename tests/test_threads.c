@@ -31,7 +31,7 @@
 #include <unistd.h>
 
 #include "render/image.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "test_util.h"
 

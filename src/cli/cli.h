@@ -11,7 +11,7 @@
 #include "lmc/mcmc.h"
 #include "render/error.h"
 #include "render/image.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/options.h"
 #include "render/scene.h"

@@ -6,7 +6,7 @@
 #define LMC_MCMC_MCMC_H
 
 #include "render/film.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/options.h"
 #include "render/scene.h"
 #include "render/settings.h"

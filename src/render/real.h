@@ -13,11 +13,11 @@
  *
  *   #define R_DUAL 0
  *   #include "render/real.h"
- *   #include "render/microfacet_generic.h"   (mf_D, mf_G1, ...)
+ *   #include "render/bsdf/microfacet_generic.h"   (mf_D, mf_G1, ...)
  *   #undef R_DUAL
  *   #define R_DUAL 1
  *   #include "render/real.h"
- *   #include "render/microfacet_generic.h"   (mf_D_ad, mf_G1_ad, ...)
+ *   #include "render/bsdf/microfacet_generic.h"   (mf_D_ad, mf_G1_ad, ...)
  *
  * The vocabulary. REAL, REAL3, RRGB and RFRAME are double, vec3, rgb and
  * frame, or ad, adv3, adrgb and ad_frame. R_FN(name) names a function: name, or name_ad. A function

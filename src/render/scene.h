@@ -10,12 +10,12 @@
 #define LMC_RENDER_SCENE_H
 
 #include "render/accel.h"
-#include "render/bsdf.h"
+#include "render/bsdf/bsdf.h"
 #include "render/camera.h"
 #include "render/distribution.h"
 #include "render/film.h"
 #include "render/frame.h"
-#include "render/light.h"
+#include "render/lights/light.h"
 #include "render/mesh.h"
 #include "render/settings.h"
 

@@ -13,7 +13,7 @@
 #include "lmc/driver/method.h"
 #include "lmc/driver/space.h"
 #include "render/film.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 
 #define MCMC_CHAINS 256
 #define MCMC_MIN_CHAINS 16 /* per family: one stuck chain must not carry a whole length */

@@ -26,7 +26,7 @@
 #include "lmc/driver/bootstrap.h"
 #include "lmc/kernels/target.h"
 #include "render/error.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/options.h"
 #include "render/scene.h"
 #include "render/settings.h"

@@ -23,8 +23,8 @@
 
 #include "lmc/driver/space.h"
 #include "lmc/states/states.h"
-#include "render/integrator.h"
-#include "render/path.h"
+#include "render/integrators/integrator.h"
+#include "render/integrators/path.h"
 
 typedef mc_states_scratch bs__scratch;
 

@@ -38,7 +38,7 @@
  * 0.05 (its roughnessThreshold), with the discrete numbers perturbed too.
  *
  * Gradients (lmc): eval_label with a gradient runs path_eval_bdpt_abs
- * (render/path.h) on the same numbers, the plain evaluation otherwise
+ * (render/integrators/path.h) on the same numbers, the plain evaluation otherwise
  * (the same value to about 1e-9, and faster).
  */
 #ifndef LMC_MCMC_BDPT_STATES_H
@@ -48,7 +48,7 @@
 
 #include "lmc/kernels/target.h"
 #include "render/error.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/scene.h"
 #include "render/settings.h"
 

@@ -18,7 +18,7 @@
  * coordinate is the BDPT estimate of length k.
  *
  * Derivatives. Without them, f is mc_mmlt_contribution (states.c, plain
- * numbers); with them, path_eval_bdpt (render/path.h), which reads BDPT's
+ * numbers); with them, path_eval_bdpt (render/integrators/path.h), which reads BDPT's
  * own layout (integrator.h): raster position u0 W and the s = 1 light
  * sample at connect positions 3 (t - 2) .. + 2. A sampler adapter
  * translates: it hands path_eval_bdpt the film numbers (-r + u (W + 2r)) / W
@@ -60,7 +60,7 @@
 #include "lmc/states/mmlt_states.h"
 #include "lmc/driver/space.h"
 #include "lmc/states/states.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 
 typedef mc_states_scratch mms__scratch;
 

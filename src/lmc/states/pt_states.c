@@ -1,6 +1,6 @@
 /*
  * pt_states.c: the pt states (--states pt): a state is the camera stream
- * of pt_li (render/integrator.h), the unidirectional path tracer with
+ * of pt_li (render/integrators/integrator.h), the unidirectional path tracer with
  * next-event estimation, as in Kelemen, Szirmay-Kalos, Antal and Csonka
  * 2002. One family over every length.
  *
@@ -14,7 +14,7 @@
  * its luminance.
  *
  * Derivatives. Without a gradient, f comes from pt_li; with one, from
- * path_eval_pt (render/path.h), the same estimator in duals (the same
+ * path_eval_pt (render/integrators/path.h), the same estimator in duals (the same
  * value to rounding). path_eval_pt reads the film position as u W; a
  * sampler adapter hands it (-r + u (W + 2r)) / W, and the gradient of the
  * two film numbers gets the chain-rule factor (W + 2r) / W (and H's).
@@ -30,7 +30,7 @@
 
 #include "lmc/driver/space.h"
 #include "lmc/states/states.h"
-#include "render/path.h"
+#include "render/integrators/path.h"
 
 #define MC_PT_UNBOUNDED 16 /* bounces kept in the state when maxdepth is -1 */
 

@@ -7,8 +7,8 @@
 #define LMC_MCMC_STATES_H
 
 #include "lmc/kernels/target.h"
-#include "render/integrator.h"
-#include "render/path.h"
+#include "render/integrators/integrator.h"
+#include "render/integrators/path.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/settings.h"
@@ -75,7 +75,7 @@ int mc_states_hessian(const path_eval *pe, int nd, const int *coord, const doubl
                       double scale, int *OUT_hn, int *OUT_hidx, double *OUT_hess);
 
 /* A sampler in front of a target's own that hands the path evaluators of
- * render/path.h the film numbers they expect: they read the raster
+ * render/integrators/path.h the film numbers they expect: they read the raster
  * position as u W, the spaces' states as -r + u (W + 2r) over the film
  * grown by the filter radius r, so the first two camera numbers become
  * (-r + u (W + 2r)) / W (and H's). Optionally the first `skip` numbers of

@@ -40,17 +40,17 @@
 #include <math.h>
 #include <stddef.h>
 
-#include "render/bsdf_ad_internal.h"
-#include "render/bsdf_internal.h"
-#include "render/microfacet.h"
-#include "render/microfacet_ad.h"
+#include "render/bsdf/bsdf_ad_internal.h"
+#include "render/bsdf/bsdf_internal.h"
+#include "render/bsdf/microfacet.h"
+#include "render/bsdf/microfacet_ad.h"
 
 /* The models in doubles (bsdf_internal.h), then in duals
  * (bsdf_ad_internal.h), from one source. */
 #define R_DUAL 0
 #include "render/real.h"
-#include "render/bsdf_rough_generic.h"
+#include "render/bsdf/bsdf_rough_generic.h"
 #undef R_DUAL
 #define R_DUAL 1
 #include "render/real.h"
-#include "render/bsdf_rough_generic.h"
+#include "render/bsdf/bsdf_rough_generic.h"

@@ -27,14 +27,14 @@
  *   F = (R_s + R_p) / 2.
  * With eta = 0, k = 1 ("none") this is exactly 1: a perfect mirror.
  */
-#include "render/bsdf.h"
+#include "render/bsdf/bsdf.h"
 
 #include <ctype.h>
 #include <math.h>
 #include <string.h>
 
-#include "render/bsdf_ad_internal.h"
-#include "render/bsdf_internal.h"
+#include "render/bsdf/bsdf_ad_internal.h"
+#include "render/bsdf/bsdf_internal.h"
 
 /* ---- Fresnel (value-only parts) --------------------------------------- */
 
@@ -278,8 +278,8 @@ static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
 
 #define R_DUAL 0
 #include "render/real.h"
-#include "render/bsdf_generic.h"
+#include "render/bsdf/bsdf_generic.h"
 #undef R_DUAL
 #define R_DUAL 1
 #include "render/real.h"
-#include "render/bsdf_generic.h"
+#include "render/bsdf/bsdf_generic.h"

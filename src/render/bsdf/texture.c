@@ -32,8 +32,8 @@
  * Lookups are pure and thread safe; the bitmap mean is cached in the texture
  * value by tex_bitmap / tex_update_mean (the scene is immutable afterwards).
  */
-#include "render/texture.h"
-#include "render/bsdf_ad.h"
+#include "render/bsdf/texture.h"
+#include "render/bsdf/bsdf_ad.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -90,11 +90,11 @@ static rgb tex__checkerboard(const texture *t, double u, double v) {
  * from one source. */
 #define R_DUAL 0
 #include "render/real.h"
-#include "render/texture_generic.h"
+#include "render/bsdf/texture_generic.h"
 #undef R_DUAL
 #define R_DUAL 1
 #include "render/real.h"
-#include "render/texture_generic.h"
+#include "render/bsdf/texture_generic.h"
 
 texture tex_bitmap(const lmc_image *img) {
   texture t = {0};

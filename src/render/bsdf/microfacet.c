@@ -13,8 +13,8 @@
  * sampling therefore stretches v to the alpha = 1 configuration, samples
  * slopes there, and unstretches.
  */
-#include "render/microfacet.h"
-#include "render/microfacet_ad.h"
+#include "render/bsdf/microfacet.h"
+#include "render/bsdf/microfacet_ad.h"
 
 #include <math.h>
 
@@ -79,8 +79,8 @@ static double mf__beckmann_slope_x(double cos_t, double sin_t, double u1) {
  * (microfacet_ad.h), from one source. */
 #define R_DUAL 0
 #include "render/real.h"
-#include "render/microfacet_generic.h"
+#include "render/bsdf/microfacet_generic.h"
 #undef R_DUAL
 #define R_DUAL 1
 #include "render/real.h"
-#include "render/microfacet_generic.h"
+#include "render/bsdf/microfacet_generic.h"

@@ -12,7 +12,7 @@
 #ifndef LMC_RENDER_BSDF_INTERNAL_H
 #define LMC_RENDER_BSDF_INTERNAL_H
 
-#include "render/bsdf.h"
+#include "render/bsdf/bsdf.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846

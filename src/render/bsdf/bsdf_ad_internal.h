@@ -8,8 +8,8 @@
 #ifndef LMC_RENDER_BSDF_AD_INTERNAL_H
 #define LMC_RENDER_BSDF_AD_INTERNAL_H
 
-#include "render/bsdf_ad.h"
-#include "render/bsdf_internal.h"
+#include "render/bsdf/bsdf_ad.h"
+#include "render/bsdf/bsdf_internal.h"
 
 /* Dual of bsdf__finish: fills *out (weight = f |cos wi| / pdf) and returns
  * 0 when the weight is black, not finite or pdf <= 0. */

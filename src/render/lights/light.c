@@ -59,7 +59,7 @@
  * escapes the scene sees (scene->infinite_lights). Directional lights are
  * delta lights with dist = INFINITY, but no ray can hit them.
  */
-#include "render/light.h"
+#include "render/lights/light.h"
 
 #include <float.h>
 #include <math.h>

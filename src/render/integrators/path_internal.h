@@ -20,8 +20,8 @@
 #include "ad/dual.h"
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
-#include "render/bsdf_ad.h"
-#include "render/path.h"
+#include "render/bsdf/bsdf_ad.h"
+#include "render/integrators/path.h"
 
 /* A surface vertex re-evaluated in duals on its recorded triangle. */
 typedef struct path__hit {

@@ -54,7 +54,7 @@
  */
 #include <string.h>
 
-#include "render/path_internal.h"
+#include "render/integrators/path_internal.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -307,7 +307,7 @@ static ad pbd__pdf_le_dir(path__ctx *c, const light *l, adv3 p, vec3 n, adv3 w) 
 #define BDPT_CAM_PDF_DIR(w) pbd__cam_pdf_dir(c, (w))
 #define BDPT_PDF_LE_DIR(l, p, n, w) pbd__pdf_le_dir(c, (l), (p), (n), (w))
 #define BDPT_PDF_LI(l, ref, w, p, n) path__pdf_li(c, (l), (ref), (w), (p), (n))
-#include "render/bdpt_generic.h"
+#include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
  * Random walks (bdpt__walk).

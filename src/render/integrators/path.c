@@ -45,12 +45,12 @@
  * bounce needs (radiance, throughput, previous density and position, the
  * ray), so memory is bounded by one bounce and stays in cache.
  */
-#include "render/path.h"
+#include "render/integrators/path.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/path_internal.h"
+#include "render/integrators/path_internal.h"
 #include "render/warp.h"
 
 #ifndef M_PI

@@ -63,7 +63,7 @@
  * light subpath it is the product of the BSDF weights only (the emitted
  * power is not a probability).
  */
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 
 #include <string.h>
 
@@ -93,7 +93,7 @@ static double bdpt__pdf_le_dir(const scene *sc, const light *l, vec3 p, vec3 n, 
 #define BDPT_CAM_PDF_DIR(w) camera_pdf_dir(&scene_->cam, (w))
 #define BDPT_PDF_LE_DIR(l, p, n, w) bdpt__pdf_le_dir(scene_, (l), (p), (n), (w))
 #define BDPT_PDF_LI(l, ref, w, p, n) light_pdf_li((l), scene_, (ref), (w), (p), (n))
-#include "render/bdpt_generic.h"
+#include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
  * The sphere map of absolute directions (bdpt_param).

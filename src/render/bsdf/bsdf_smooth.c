@@ -44,8 +44,8 @@
 #include <math.h>
 #include <stddef.h>
 
-#include "render/bsdf_ad_internal.h"
-#include "render/bsdf_internal.h"
+#include "render/bsdf/bsdf_ad_internal.h"
+#include "render/bsdf/bsdf_internal.h"
 #include "render/frame.h"
 #include "render/warp.h"
 
@@ -53,8 +53,8 @@
  * (bsdf_ad_internal.h), from one source. */
 #define R_DUAL 0
 #include "render/real.h"
-#include "render/bsdf_smooth_generic.h"
+#include "render/bsdf/bsdf_smooth_generic.h"
 #undef R_DUAL
 #define R_DUAL 1
 #include "render/real.h"
-#include "render/bsdf_smooth_generic.h"
+#include "render/bsdf/bsdf_smooth_generic.h"

@@ -26,7 +26,7 @@
  * is still a correct image of the samples it has.
  */
 #define _POSIX_C_SOURCE 200809L
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 
 #include <float.h>
 #include <math.h>

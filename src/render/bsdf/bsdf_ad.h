@@ -1,6 +1,6 @@
 /*
  * bsdf_ad.h: the BSDFs, textures and Fresnel terms in dual arithmetic, for
- * the differentiable path sampler (render/path.h).
+ * the differentiable path sampler (render/integrators/path.h).
  *
  * Every function here is the same formula as its plain counterpart in
  * bsdf.h / texture.h / microfacet.h, written once over dual numbers
@@ -22,8 +22,8 @@
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
 #include "render/rgb_ad.h"
-#include "render/bsdf.h"
-#include "render/texture.h"
+#include "render/bsdf/bsdf.h"
+#include "render/bsdf/texture.h"
 
 /* A BSDF sample in duals (see bsdf_sample in bsdf.h). */
 typedef struct bsdf_sample_ad {

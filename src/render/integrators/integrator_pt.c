@@ -11,7 +11,7 @@
  *
  * The random numbers follow the fixed layout of integrator.h.
  */
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 
 static int pt__counts(const render_settings *rs, int length) {
   return rs->mindepth <= 0 || length >= rs->mindepth;

@@ -18,8 +18,8 @@
 #ifndef LMC_RENDER_MICROFACET_AD_H
 #define LMC_RENDER_MICROFACET_AD_H
 
-#include "render/bsdf_ad.h"
-#include "render/microfacet.h"
+#include "render/bsdf/bsdf_ad.h"
+#include "render/bsdf/microfacet.h"
 
 /* D(m), the dual mf_D. */
 ad mf_D_ad(ad_arena *A, mf_dist dist, ad alpha, adv3 m);

@@ -20,7 +20,7 @@
 #ifndef LMC_RENDER_MICROFACET_H
 #define LMC_RENDER_MICROFACET_H
 
-#include "render/bsdf.h"
+#include "render/bsdf/bsdf.h"
 #include "render/vec3.h"
 
 /* D(m): microfacet normal density per unit solid angle, normalised so that

@@ -30,7 +30,7 @@
 #ifndef LMC_RENDER_BSDF_H
 #define LMC_RENDER_BSDF_H
 
-#include "render/texture.h"
+#include "render/bsdf/texture.h"
 #include "render/vec3.h"
 
 typedef enum bsdf_type {

@@ -53,7 +53,7 @@
 #define LMC_RENDER_PATH_H
 
 #include "render/error.h"
-#include "render/integrator.h"
+#include "render/integrators/integrator.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/settings.h"
