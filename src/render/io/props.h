@@ -88,4 +88,16 @@ void pset_free(pset *p);
 /* Name of a prop kind for messages ("float", "string", ...). */
 const char *prop_kind_name(prop_kind k);
 
+/* Value text (props.c). A strict number: the whole string (blanks around
+ * allowed) must be a finite number; returns 1 and *out, or 0. */
+int props_number(const char *s, double *out);
+/* A strict integer, the same way. */
+int props_integer(const char *s, long long *out);
+/* s split at commas and/or blanks into at most max strict numbers: their
+ * count, or -1 on a bad token or too many values. */
+int props_list(const char *s, double *vals, int max);
+/* "w1:v1, w2:v2, ..." (wavelengths ascending) to RGB by band averages
+ * (B 400-500, G 500-600, R 600-700 nm); returns 0 on a syntax error. */
+int props_spectrum_pairs(const char *s, rgb *out);
+
 #endif

@@ -39,6 +39,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/image.h"
 #include "render/io/props.h"
 
 #define PARSE_MAX_DEPTH 128
@@ -76,22 +77,6 @@ typedef struct parse_ctx {
   int n_attrs;
 } parse_ctx;
 
-const char *prop_kind_name(prop_kind k) {
-  switch (k) {
-    case PROP_INT: return "integer";
-    case PROP_FLOAT: return "float";
-    case PROP_BOOL: return "boolean";
-    case PROP_STRING: return "string";
-    case PROP_RGB: return "color";
-    case PROP_POINT: return "point";
-    case PROP_VECTOR: return "vector";
-    case PROP_TRANSFORM: return "transform";
-    case PROP_OBJECT: return "object";
-    case PROP_REF: return "reference";
-  }
-  return "?";
-}
-
 static char *parse__strdup(const char *s) {
   size_t n = strlen(s) + 1;
   char *d = malloc(n);
@@ -100,24 +85,6 @@ static char *parse__strdup(const char *s) {
 }
 
 /* ---- Memory of the property tree. -------------------------------------- */
-
-void pset_free(pset *p) {
-  if (!p) return;
-  for (int i = 0; i < p->n_props; i++) {
-    free(p->props[i].s);
-    pset_free(p->props[i].obj);
-  }
-  free(p->props);
-  free(p);
-}
-
-void pdoc_free(pdoc *doc) {
-  if (!doc) return;
-  pset_free(doc->root);
-  for (int i = 0; i < doc->n_files; i++) free(doc->files[i]);
-  free(doc->files);
-  memset(doc, 0, sizeof *doc);
-}
 
 static const char *parse__intern(pdoc *doc, const char *file) {
   for (int i = 0; i < doc->n_files; i++)
@@ -307,114 +274,6 @@ static const char *parse__need_attr(parse_ctx *c, const char *tag, const char *n
 
 /* ---- Values. ------------------------------------------------------------ */
 
-/* Strict number: the whole string (blanks around allowed) must be a finite
- * number. */
-static int parse__number(const char *s, double *out) {
-  while (isspace((unsigned char)*s)) s++;
-  if (!*s) return 0;
-  char *end;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (end == s) return 0;
-  while (isspace((unsigned char)*end)) end++;
-  if (*end || !isfinite(v)) return 0;
-  *out = v;
-  return 1;
-}
-
-static int parse__integer(const char *s, long long *out) {
-  while (isspace((unsigned char)*s)) s++;
-  if (!*s) return 0;
-  char *end;
-  errno = 0;
-  long long v = strtoll(s, &end, 10);
-  if (end == s || errno == ERANGE) return 0;
-  while (isspace((unsigned char)*end)) end++;
-  if (*end) return 0;
-  *out = v;
-  return 1;
-}
-
-/* Splits s at commas and/or blanks into at most `max` strict numbers.
- * Returns the count, or -1 on a bad token or too many values. */
-static int parse__list(const char *s, double *vals, int max) {
-  int n = 0;
-  const char *p = s;
-  for (;;) {
-    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
-    if (!*p) break;
-    const char *q = p;
-    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
-    char tok[128];
-    size_t len = (size_t)(q - p);
-    if (len >= sizeof tok || n == max) return -1;
-    memcpy(tok, p, len);
-    tok[len] = '\0';
-    if (!parse__number(tok, &vals[n])) return -1;
-    n++;
-    p = q;
-  }
-  return n;
-}
-
-static double parse__srgb_decode(double v) {
-  /* sRGB EOTF: v / 12.92 below 0.04045, else ((v + 0.055) / 1.055)^2.4 */
-  if (v <= 0.04045) return v / 12.92;
-  return pow((v + 0.055) / 1.055, 2.4);
-}
-
-/* Piecewise-linear interpolation of a sampled spectrum (wavelengths sorted
- * ascending), clamped to the end values outside the sampled range. */
-static double parse__spectrum_at(const double *wl, const double *val, int n, double x) {
-  if (x <= wl[0]) return val[0];
-  if (x >= wl[n - 1]) return val[n - 1];
-  for (int i = 0; i + 1 < n; i++) {
-    if (x <= wl[i + 1]) {
-      double span = wl[i + 1] - wl[i];
-      double t = span > 0.0 ? (x - wl[i]) / span : 0.0;
-      return val[i] + t * (val[i + 1] - val[i]);
-    }
-  }
-  return val[n - 1];
-}
-
-/* "w1:v1, w2:v2, ..." -> RGB by band averages (B 400-500, G 500-600,
- * R 600-700 nm), each the mean of 20 evenly spaced samples of the
- * interpolated spectrum. Returns 0 on a syntax error. */
-static int parse__spectrum_pairs(const char *s, rgb *out) {
-  enum { MAXP = 512 };
-  double wl[MAXP], val[MAXP];
-  int n = 0;
-  const char *p = s;
-  for (;;) {
-    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
-    if (!*p) break;
-    const char *q = p;
-    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
-    char tok[128];
-    size_t len = (size_t)(q - p);
-    if (len >= sizeof tok || n == MAXP) return 0;
-    memcpy(tok, p, len);
-    tok[len] = '\0';
-    char *colon = strchr(tok, ':');
-    if (!colon) return 0;
-    *colon = '\0';
-    if (!parse__number(tok, &wl[n]) || !parse__number(colon + 1, &val[n])) return 0;
-    if (n > 0 && !(wl[n] > wl[n - 1])) return 0;
-    n++;
-    p = q;
-  }
-  if (n == 0) return 0;
-  double band[3];
-  for (int b = 0; b < 3; b++) {
-    double lo = 600.0 - 100.0 * b, acc = 0.0;
-    for (int k = 0; k < 20; k++) acc += parse__spectrum_at(wl, val, n, lo + 5.0 * (k + 0.5));
-    band[b] = acc / 20.0;
-  }
-  *out = rgb_make(band[0], band[1], band[2]);
-  return 1;
-}
-
 /* A colour element (rgb, srgb, spectrum, blackbody) into linear RGB. */
 static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
   const char *value = parse__attr(c, "value");
@@ -423,7 +282,7 @@ static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
     /* Not modelled: white scaled by `scale`. */
     double scale = 1.0;
     const char *sc = parse__attr(c, "scale");
-    if (sc && !parse__number(sc, &scale)) {
+    if (sc && !props_number(sc, &scale)) {
       parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", sc, tag);
       return 0;
     }
@@ -450,12 +309,12 @@ static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
       parse__fail(c, LMC_EPARSE, "bad colour '%s' in <%s>", value, tag);
       return 0;
     }
-    *out = rgb_make(parse__srgb_decode(r / 255.0), parse__srgb_decode(g / 255.0),
-                    parse__srgb_decode(b / 255.0));
+    *out = rgb_make(srgb_to_linear(r / 255.0), srgb_to_linear(g / 255.0),
+                    srgb_to_linear(b / 255.0));
     return 1;
   }
   if (strcmp(tag, "spectrum") == 0 && strchr(value, ':')) {
-    if (!parse__spectrum_pairs(value, out)) {
+    if (!props_spectrum_pairs(value, out)) {
       parse__fail(c, LMC_EPARSE, "bad spectrum '%s' (expected wavelength:value pairs)",
                   value);
       return 0;
@@ -464,14 +323,14 @@ static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
              "sampled <spectrum> converted roughly to RGB by 100 nm band averages");
     return 1;
   }
-  int n = parse__list(value, v, 3);
+  int n = props_list(value, v, 3);
   if (n != 1 && n != 3) {
     parse__fail(c, LMC_EPARSE, "bad colour '%s' in <%s> (expected 1 or 3 numbers)", value, tag);
     return 0;
   }
   if (n == 1) v[1] = v[2] = v[0];
   if (strcmp(tag, "srgb") == 0)
-    for (int i = 0; i < 3; i++) v[i] = parse__srgb_decode(v[i]);
+    for (int i = 0; i < 3; i++) v[i] = srgb_to_linear(v[i]);
   *out = rgb_make(v[0], v[1], v[2]);
   return 1;
 }
@@ -481,7 +340,7 @@ static int parse__xyz(parse_ctx *c, const char *tag, double def, vec3 *out) {
   const char *value = parse__attr(c, "value");
   double v[3] = {def, def, def};
   if (value) {
-    int n = parse__list(value, v, 3);
+    int n = props_list(value, v, 3);
     if (n != 3) {
       parse__fail(c, LMC_EPARSE, "bad value '%s' in <%s> (expected 3 numbers)", value, tag);
       return 0;
@@ -490,7 +349,7 @@ static int parse__xyz(parse_ctx *c, const char *tag, double def, vec3 *out) {
     const char *names[3] = {"x", "y", "z"};
     for (int i = 0; i < 3; i++) {
       const char *a = parse__attr(c, names[i]);
-      if (a && !parse__number(a, &v[i])) {
+      if (a && !props_number(a, &v[i])) {
         parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", a, tag);
         return 0;
       }
@@ -505,7 +364,7 @@ static int parse__vec_attr(parse_ctx *c, const char *tag, const char *name, vec3
   const char *a = parse__need_attr(c, tag, name);
   if (!a) return 0;
   double v[3];
-  if (parse__list(a, v, 3) != 3) {
+  if (props_list(a, v, 3) != 3) {
     parse__fail(c, LMC_EPARSE, "bad vector '%s' in <%s> (expected 3 numbers)", a, tag);
     return 0;
   }
@@ -574,11 +433,11 @@ static void parse__property(parse_ctx *c, pset *obj, const char *tag) {
   }
   switch (kind) {
     case PROP_INT:
-      if (!parse__integer(value, &q->i))
+      if (!props_integer(value, &q->i))
         parse__fail(c, LMC_EPARSE, "bad integer '%s' for '%s'", value, q->name);
       break;
     case PROP_FLOAT:
-      if (!parse__number(value, &q->f))
+      if (!props_number(value, &q->f))
         parse__fail(c, LMC_EPARSE, "bad number '%s' for '%s'", value, q->name);
       break;
     case PROP_BOOL: {
@@ -617,7 +476,7 @@ static void parse__transform_op(parse_ctx *c, prop *xf, const char *tag) {
     const char *value = parse__attr(c, "value");
     if (value) {
       double v[3];
-      int n = parse__list(value, v, 3);
+      int n = props_list(value, v, 3);
       if (n == 1) s = v3(v[0], v[0], v[0]);
       else if (n == 3) s = v3(v[0], v[1], v[2]);
       else {
@@ -638,7 +497,7 @@ static void parse__transform_op(parse_ctx *c, prop *xf, const char *tag) {
     if (!parse__xyz(c, tag, 0.0, &axis)) return;
     const char *a = parse__need_attr(c, tag, "angle");
     if (!a) return;
-    if (!parse__number(a, &angle)) {
+    if (!props_number(a, &angle)) {
       parse__fail(c, LMC_EPARSE, "bad number '%s' for the angle of <%s>", a, tag);
       return;
     }
@@ -666,7 +525,7 @@ static void parse__transform_op(parse_ctx *c, prop *xf, const char *tag) {
     const char *value = parse__need_attr(c, tag, "value");
     if (!value) return;
     double v[16];
-    if (parse__list(value, v, 16) != 16) {
+    if (props_list(value, v, 16) != 16) {
       parse__fail(c, LMC_EPARSE, "<matrix> needs 16 numbers, got '%s'", value);
       return;
     }
