@@ -75,24 +75,31 @@ int props_integer(const char *s, long long *out) {
 
 /* Splits s at commas and/or blanks into at most `max` strict numbers.
  * Returns the count, or -1 on a bad token or too many values. */
+/* The next token of a list separated by commas and/or blanks, from *p into
+ * tok (room for size): 1, or 0 at the end of the string, or -1 when the
+ * token does not fit. */
+static int props__token(const char **p, char *tok, size_t size) {
+  const char *a = *p;
+  while (*a && (isspace((unsigned char)*a) || *a == ',')) a++;
+  if (!*a) return 0;
+  const char *q = a;
+  while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
+  size_t len = (size_t)(q - a);
+  if (len >= size) return -1;
+  memcpy(tok, a, len);
+  tok[len] = '\0';
+  *p = q;
+  return 1;
+}
+
 int props_list(const char *s, double *vals, int max) {
-  int n = 0;
-  const char *p = s;
-  for (;;) {
-    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
-    if (!*p) break;
-    const char *q = p;
-    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
-    char tok[128];
-    size_t len = (size_t)(q - p);
-    if (len >= sizeof tok || n == max) return -1;
-    memcpy(tok, p, len);
-    tok[len] = '\0';
-    if (!props_number(tok, &vals[n])) return -1;
+  int n = 0, r;
+  char tok[128];
+  while ((r = props__token(&s, tok, sizeof tok)) > 0) {
+    if (n == max || !props_number(tok, &vals[n])) return -1;
     n++;
-    p = q;
   }
-  return n;
+  return r < 0 ? -1 : n;
 }
 
 /* Piecewise-linear interpolation of a sampled spectrum (wavelengths sorted
@@ -116,26 +123,18 @@ static double props__spectrum_at(const double *wl, const double *val, int n, dou
 int props_spectrum_pairs(const char *s, rgb *out) {
   enum { MAXP = 512 };
   double wl[MAXP], val[MAXP];
-  int n = 0;
-  const char *p = s;
-  for (;;) {
-    while (*p && (isspace((unsigned char)*p) || *p == ',')) p++;
-    if (!*p) break;
-    const char *q = p;
-    while (*q && !isspace((unsigned char)*q) && *q != ',') q++;
-    char tok[128];
-    size_t len = (size_t)(q - p);
-    if (len >= sizeof tok || n == MAXP) return 0;
-    memcpy(tok, p, len);
-    tok[len] = '\0';
+  int n = 0, r;
+  char tok[128];
+  while ((r = props__token(&s, tok, sizeof tok)) > 0) {
+    if (n == MAXP) return 0;
     char *colon = strchr(tok, ':');
     if (!colon) return 0;
     *colon = '\0';
     if (!props_number(tok, &wl[n]) || !props_number(colon + 1, &val[n])) return 0;
     if (n > 0 && !(wl[n] > wl[n - 1])) return 0;
     n++;
-    p = q;
   }
+  if (r < 0) return 0;
   if (n == 0) return 0;
   double band[3];
   for (int b = 0; b < 3; b++) {

@@ -225,6 +225,23 @@ static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
   return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
 }
 
+/* eta = intIOR / extIOR of a dielectric interface (Mitsuba's defaults:
+ * the named material int_default inside, air outside); eta = 1 warns,
+ * saying what it means for this model. */
+static lmc_status xml__eta(builder *B, pset *o, const char *int_default, const char *at_one,
+                           double *OUT_eta) {
+  lmc_status st;
+  double int_ior, ext_ior, def_int = 1.5, air = 1.000277;
+  ior_lookup(int_default, &def_int);
+  ior_lookup("air", &air);
+  if ((st = xml__ior(B, o, "intIOR", def_int, &int_ior)) != LMC_OK) return st;
+  if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
+  *OUT_eta = int_ior / ext_ior;
+  if (*OUT_eta == 1.0)
+    lmc_warn(o->file, o->line, "%s with intIOR = extIOR (eta = 1): %s", o->type, at_one);
+  return LMC_OK;
+}
+
 /* Fills *b from a bsdf object; img[3] get image indices of the diffuse,
  * specular and transmittance textures (-1: none). Does not add to the scene. */
 static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int depth) {
@@ -297,15 +314,8 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if (t[0] == 't')
       lmc_warn(o->file, o->line, "thindielectric is not supported: using dielectric");
     bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
-    double int_ior, ext_ior, bk7 = 1.5046, air = 1.000277;
-    ior_lookup("bk7", &bk7);
-    ior_lookup("air", &air);
-    if ((st = xml__ior(B, o, "intIOR", bk7, &int_ior)) != LMC_OK) return st;
-    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
-    b->eta = int_ior / ext_ior;
-    if (b->eta == 1.0)
-      lmc_warn(o->file, o->line,
-               "%s with intIOR = extIOR (eta = 1): an index-matched interface, invisible", t);
+    if ((st = xml__eta(B, o, "bk7", "an index-matched interface, invisible", &b->eta)) != LMC_OK)
+      return st;
     if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
                            &img[1])) != LMC_OK)
       return st;
@@ -320,15 +330,9 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
       xml__accept(o, rough_names);
     }
     bsdf_init_defaults(b, BSDF_PLASTIC);
-    double int_ior, ext_ior, pp = 1.49, air = 1.000277;
-    ior_lookup("polypropylene", &pp);
-    ior_lookup("air", &air);
-    if ((st = xml__ior(B, o, "intIOR", pp, &int_ior)) != LMC_OK) return st;
-    if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
-    b->eta = int_ior / ext_ior;
-    if (b->eta == 1.0)
-      lmc_warn(o->file, o->line,
-               "%s with intIOR = extIOR (eta = 1): no specular coating, only the diffuse base", t);
+    if ((st = xml__eta(B, o, "polypropylene", "no specular coating, only the diffuse base",
+                       &b->eta)) != LMC_OK)
+      return st;
     if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
                            &img[0])) != LMC_OK)
       return st;
