@@ -36,6 +36,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* The largest double below 1: remapped samples must stay in [0,1). */
 #define DISTRIB_ONE_MINUS_EPS (1.0 - DBL_EPSILON / 2.0)
@@ -66,18 +67,14 @@ lmc_status distrib1d_init(distrib1d *d, const double *f, int n, lmc_error *err) 
       return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                            "distribution value %d is %g (must be finite and non-negative)", i,
                            f[i]);
-  d->func = malloc((size_t)n * sizeof(double));
-  d->cdf = malloc(((size_t)n + 1) * sizeof(double));
-  d->guide = malloc((size_t)n * sizeof(int));
-  if (!d->func || !d->cdf || !d->guide) {
-    free(d->func);
-    free(d->cdf);
-    free(d->guide);
-    d->func = d->cdf = NULL;
-    d->guide = NULL;
+  /* One block: func (n), cdf (n + 1), guide (n ints). */
+  double *blk = malloc((2 * (size_t)n + 1) * sizeof(double) + (size_t)n * sizeof(int));
+  if (!blk)
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for a distribution of %d cells",
                          n);
-  }
+  d->func = blk;
+  d->cdf = blk + n;
+  d->guide = (int *)(blk + 2 * (size_t)n + 1);
   d->n = n;
 
   /* Running sum of f / n gives the unnormalised CDF. */
@@ -112,14 +109,8 @@ lmc_status distrib1d_init(distrib1d *d, const double *f, int n, lmc_error *err) 
 
 void distrib1d_free(distrib1d *d) {
   if (!d) return;
-  free(d->func);
-  free(d->cdf);
-  free(d->guide);
-  d->func = NULL;
-  d->cdf = NULL;
-  d->guide = NULL;
-  d->n = 0;
-  d->integral = 0.0;
+  free(d->func); /* the block */
+  memset(d, 0, sizeof *d);
 }
 
 /* The cell i in [0, n-1] with cdf[i] <= u < cdf[i+1] (the largest i with

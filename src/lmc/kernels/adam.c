@@ -11,26 +11,22 @@ lmc_status adam_init(adam_stats *a, int cap, lmc_error *err) {
   memset(a, 0, sizeof *a);
   if (cap < 1) return lmc_error_set(err, LMC_EINVAL, NULL, 0, "adam: %d coordinates", cap);
   a->cap = cap;
-  a->adam_m1 = calloc((size_t)cap, sizeof(double));
-  a->adam_m2 = calloc((size_t)cap, sizeof(double));
-  a->count = calloc((size_t)cap, sizeof(int64_t));
-  a->beta1_t = malloc((size_t)cap * sizeof(double));
-  a->beta2_t = malloc((size_t)cap * sizeof(double));
-  if (!a->adam_m1 || !a->adam_m2 || !a->count || !a->beta1_t || !a->beta2_t) {
-    adam_free(a);
-    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "adam: out of memory");
-  }
+  /* One block: m1, m2, beta1_t, beta2_t and count (8-byte entries each). */
+  size_t n = (size_t)cap;
+  double *blk = calloc(5 * n, sizeof(double));
+  if (!blk) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "adam: out of memory");
+  a->adam_m1 = blk;
+  a->adam_m2 = blk + n;
+  a->beta1_t = blk + 2 * n;
+  a->beta2_t = blk + 3 * n;
+  a->count = (int64_t *)(blk + 4 * n);
   for (int i = 0; i < cap; i++) a->beta1_t[i] = a->beta2_t[i] = 1.0;
   return LMC_OK;
 }
 
 void adam_free(adam_stats *a) {
   if (!a) return;
-  free(a->adam_m1);
-  free(a->adam_m2);
-  free(a->count);
-  free(a->beta1_t);
-  free(a->beta2_t);
+  free(a->adam_m1); /* the block */
   memset(a, 0, sizeof *a);
 }
 

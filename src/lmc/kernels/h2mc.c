@@ -107,11 +107,12 @@ void h2mc_gauss_sample(const h2mc_gauss *G, const double *z, double sigma, doubl
 
 /* ---- The kernel ------------------------------------------------------------ */
 
-static lmc_status h2mc__alloc_gauss(h2mc_gauss *G, int n) {
-  G->V = malloc((size_t)n * (size_t)n * sizeof(double));
-  G->P = malloc((size_t)n * sizeof(double));
-  G->m = malloc((size_t)n * sizeof(double));
-  return G->V && G->P && G->m ? LMC_OK : LMC_ENOMEM;
+/* Carves a Gaussian's arrays out of *blk (n x n, then n and n doubles). */
+static void h2mc__carve_gauss(h2mc_gauss *G, double **blk, size_t n) {
+  G->V = *blk;
+  G->P = G->V + n * n;
+  G->m = G->P + n;
+  *blk = G->m + n;
 }
 
 lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_params *p,
@@ -125,30 +126,25 @@ lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_
   int n = MC_HESS_MAX > target->dim ? target->dim : MC_HESS_MAX;
   if (n < 1) n = 1;
   k->lwork = h2mc_lwork(n);
-  k->idx = malloc((size_t)target->dim * sizeof(int));
-  k->g = malloc((size_t)n * sizeof(double));
-  k->H = malloc((size_t)n * (size_t)n * sizeof(double));
-  k->work = malloc((size_t)k->lwork * sizeof(double));
-  k->z = malloc((size_t)n * sizeof(double));
-  k->d = malloc((size_t)n * sizeof(double));
-  if (!k->idx || !k->g || !k->H || !k->work || !k->z || !k->d ||
-      h2mc__alloc_gauss(&k->gx, n) != LMC_OK || h2mc__alloc_gauss(&k->gy, n) != LMC_OK) {
-    h2mc_kernel_free(k);
-    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the h2mc kernel");
-  }
+  /* One block: g, H, work, z, d, the two Gaussians (doubles), then idx. */
+  size_t m = (size_t)n, doubles = m + m * m + (size_t)k->lwork + 2 * m + 2 * (m * m + 2 * m);
+  double *blk = malloc(doubles * sizeof(double) + (size_t)target->dim * sizeof(int));
+  if (!blk) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the h2mc kernel");
+  k->g = blk;
+  k->H = k->g + m;
+  k->work = k->H + m * m;
+  k->z = k->work + k->lwork;
+  k->d = k->z + m;
+  double *rest = k->d + m;
+  h2mc__carve_gauss(&k->gx, &rest, m);
+  h2mc__carve_gauss(&k->gy, &rest, m);
+  k->idx = (int *)rest;
   return LMC_OK;
 }
 
 void h2mc_kernel_free(h2mc_kernel *k) {
   if (!k) return;
-  free(k->idx);
-  free(k->g);
-  free(k->H);
-  free(k->work);
-  free(k->z);
-  free(k->d);
-  free(k->gx.V), free(k->gx.P), free(k->gx.m);
-  free(k->gy.V), free(k->gy.P), free(k->gy.m);
+  free(k->g); /* the block */
   memset(k, 0, sizeof *k);
 }
 

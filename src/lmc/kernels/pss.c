@@ -169,30 +169,23 @@ void mc_pss_materialise(mc_pss *p, double *OUT_u) {
 }
 
 mc_pss *mc_pss_create(int dim) {
-  mc_pss *p = calloc(1, sizeof *p);
+  if (dim < 0) return NULL;
+  /* One block: the struct, then val, bak, mod, mod_bak (8-byte entries)
+   * and touched. */
+  size_t n = (size_t)dim;
+  mc_pss *p = calloc(1, sizeof *p + 4 * n * sizeof(double) + n * sizeof(int));
   if (!p) return NULL;
-  p->val = calloc((size_t)dim, sizeof(double));
-  p->bak = calloc((size_t)dim, sizeof(double));
-  p->mod = calloc((size_t)dim, sizeof(int64_t));
-  p->mod_bak = calloc((size_t)dim, sizeof(int64_t));
-  p->touched = calloc((size_t)dim, sizeof(int));
-  if (!p->val || !p->bak || !p->mod || !p->mod_bak || !p->touched) {
-    mc_pss_destroy(p);
-    return NULL;
-  }
+  double *blk = (double *)(p + 1);
+  p->val = blk;
+  p->bak = blk + n;
+  p->mod = (int64_t *)(blk + 2 * n);
+  p->mod_bak = (int64_t *)(blk + 3 * n);
+  p->touched = (int *)(blk + 4 * n);
   p->dim = dim;
   return p;
 }
 
-void mc_pss_destroy(mc_pss *p) {
-  if (!p) return;
-  free(p->val);
-  free(p->bak);
-  free(p->mod);
-  free(p->mod_bak);
-  free(p->touched);
-  free(p);
-}
+void mc_pss_destroy(mc_pss *p) { free(p); }
 
 void mc_pss_init(mc_pss *p, const mc_target *target, double s1, double s2, rng *r,
                  int64_t *overflow) {

@@ -304,9 +304,11 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   /* The labels: length k has t = 1 .. k + 1, s = k + 1 - t, without
    * (1, 1); length 1 has (0, 2) alone (bdpt_connect's rules). */
   int stride = kmax + 2;
-  ctx->strat = malloc((size_t)stride * (size_t)stride * sizeof *ctx->strat);
-  ctx->label_of = malloc((size_t)stride * (size_t)stride * sizeof *ctx->label_of);
-  if (!ctx->strat || !ctx->label_of) {
+  /* One block: strat, then label_of (shorts after the 4-byte-aligned pairs). */
+  size_t cells = (size_t)stride * (size_t)stride;
+  ctx->strat = malloc(cells * (sizeof *ctx->strat + sizeof *ctx->label_of));
+  ctx->label_of = ctx->strat ? (short *)(ctx->strat + cells) : NULL;
+  if (!ctx->strat) {
     mc_bdpt_states_free(ctx);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the strategies");
   }
@@ -354,8 +356,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
 
 void mc_bdpt_states_free(mc_bdpt_states *ctx) {
   if (!ctx) return;
-  free(ctx->strat);
-  free(ctx->label_of);
+  free(ctx->strat); /* with label_of */
   free(ctx->step_scale);
   ctx->strat = NULL;
   ctx->label_of = NULL;

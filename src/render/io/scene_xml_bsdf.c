@@ -225,6 +225,23 @@ static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
   return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
 }
 
+enum { BSDF_TEX_DIFFUSE = 1, BSDF_TEX_SPECULAR = 2, BSDF_TEX_TRANSMITTANCE = 4 };
+
+/* The textures `which` of a BSDF, each defaulting to the model's own
+ * value: diffuseReflectance, specularReflectance, specularTransmittance
+ * (image indices into img[0], img[1], img[2]). */
+static lmc_status xml__bsdf_textures(builder *B, pset *o, bsdf *b, int which, int img[3]) {
+  static const char *const names[3] = {"diffuseReflectance", "specularReflectance",
+                                       "specularTransmittance"};
+  texture *tex[3] = {&b->diffuse, &b->specular, &b->transmittance};
+  for (int i = 0; i < 3; i++) {
+    if (!(which & (1 << i))) continue;
+    lmc_status st = xml__texture(B, o, names[i], tex_mean(tex[i]), tex[i], &img[i]);
+    if (st != LMC_OK) return st;
+  }
+  return LMC_OK;
+}
+
 /* eta = intIOR / extIOR of a dielectric interface (Mitsuba's defaults:
  * the named material int_default inside, air outside); eta = 1 warns,
  * saying what it means for this model. */
@@ -283,11 +300,7 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
   } else if (strcmp(t, "phong") == 0) {
     bsdf_init_defaults(b, BSDF_PHONG);
     if ((st = xml__float(B, o, "exponent", b->exponent, &b->exponent, NULL)) != LMC_OK) return st;
-    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
-                           &img[0])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
+    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
       return st;
   } else if (strcmp(t, "conductor") == 0 || strcmp(t, "roughconductor") == 0) {
     int rough = t[0] == 'r';
@@ -304,9 +317,7 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if ((st = xml__ior(B, o, "extEta", 1.0, &ext)) != LMC_OK) return st;
     b->cond_eta = rgb_scale(eta, 1.0 / ext);
     b->cond_k = rgb_scale(k, 1.0 / ext);
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
+    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_SPECULAR, img)) != LMC_OK) return st;
     if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
   } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
              strcmp(t, "thindielectric") == 0) {
@@ -316,11 +327,8 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
     if ((st = xml__eta(B, o, "bk7", "an index-matched interface, invisible", &b->eta)) != LMC_OK)
       return st;
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularTransmittance", tex_mean(&b->transmittance),
-                           &b->transmittance, &img[2])) != LMC_OK)
+    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_SPECULAR | BSDF_TEX_TRANSMITTANCE, img)) !=
+        LMC_OK)
       return st;
     if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
   } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
@@ -333,11 +341,7 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if ((st = xml__eta(B, o, "polypropylene", "no specular coating, only the diffuse base",
                        &b->eta)) != LMC_OK)
       return st;
-    if ((st = xml__texture(B, o, "diffuseReflectance", tex_mean(&b->diffuse), &b->diffuse,
-                           &img[0])) != LMC_OK)
-      return st;
-    if ((st = xml__texture(B, o, "specularReflectance", tex_mean(&b->specular), &b->specular,
-                           &img[1])) != LMC_OK)
+    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
       return st;
     if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
       return st;
