@@ -302,10 +302,6 @@ void path__camera_ray(path__ctx *c, ad u0, ad u1, ad *OUT_rx, ad *OUT_ry, adv3 *
  * The unidirectional estimator: pt_li (integrator_pt.c), step for step.
  */
 
-static int path__pt_counts(const render_settings *rs, int length) {
-  return rs->mindepth <= 0 || length >= rs->mindepth;
-}
-
 /* Adds beta * c to L and notes what contributed. */
 static void path__add(path__ctx *c, adrgb *L, adrgb beta, adrgb contrib, unsigned emit,
                       unsigned lobes, int length) {
@@ -315,145 +311,49 @@ static void path__add(path__ctx *c, adrgb *L, adrgb beta, adrgb contrib, unsigne
   if (length > c->length) c->length = length;
 }
 
-static void path__pt(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
-  ad_arena *A = c->A;
-  const scene *s = c->sc;
-  const render_settings *rs = c->rs;
+/* An infinite light's radiance along dir (its envmap pixel is part of the
+ * topology). */
+static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
+  rgb le = light_le_infinite(l, path__val(dir));
+  if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(le))); /* the pixel */
+  return le;
+}
 
-  /* The film position and the camera ray. */
+#define R_DUAL 1
+#include "render/real.h"
+#define PT_CTX path__ctx *c
+#define PT_SCENE (c->sc)
+#define PT_RS (c->rs)
+#define PT_ARENA ad_arena *A = c->A;
+#define PT_HIT path__hit
+#define PT_LI path__li
+#define PT_INTERSECT(org, dir, tmin, h) path__intersect(c, (org), (dir), (tmin), (h))
+#define PT_BLOCKED(p, wi, lp, dist) \
+  path__blocked(c, path__val(p), path__val(wi), (lp), isinf(dist))
+#define PT_DRAW(diff) path__draw(c, (diff))
+#define PT_TOPO(x) path__topo(c, (x))
+#define PT_LE_INFINITE(l, dir, pdf) path__le_infinite(c, (l), (dir))
+#define PT_PDF_INFINITE(l, dir, ref, pdf) \
+  ((void)(pdf), path__pdf_li(c, (l), (ref), (dir), (ref), v3(0.0, 0.0, 0.0)))
+#define PT_PDF_LI(l, ref, w, p, n) path__pdf_li(c, (l), (ref), (w), (p), (n))
+#define PT_SAMPLE_LI(l, ref, u1, u2, ls) path__sample_li(c, (l), (ref), (u1), (u2), (ls))
+#define PT_MIS(a, b) path__mis(A, (a), (b))
+#define PT_SCALE_C(col, w) path__rgb_scale_c(A, (col), (w))
+#define PT_ADD(L, beta, contrib, emit, lobes, length) \
+  path__add(c, &(L), (beta), (contrib), (emit), (lobes), (length))
+#define PT_RR_Q(beta, eta) \
+  ad_fmin(A, ad_const(A, 0.95), ad_mul_s(A, ad_fmax(A, (beta).r, ad_fmax(A, (beta).g, (beta).b)), (eta)))
+#define PT_LOBE(flags) path__lobe_flag(flags)
+#include "render/integrators/pt_generic.h"
+
+/* The unidirectional estimator: the film position and the camera ray, then
+ * pt_li's walk (pt_generic.h) in duals. */
+static void path__pt(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   path__use_stream(c, LMC_STREAM_CAMERA);
   ad u0 = path__draw(c, 1), u1 = path__draw(c, 1);
   adv3 org, dir;
   path__camera_ray(c, u0, u1, OUT_rx, OUT_ry, &org, &dir);
-
-  adrgb L = adrgb_const(A, rgb_zero()), beta = adrgb_const(A, rgb_gray(1.0));
-  int prev_delta = 1;
-  ad prev_pdf = ad_const(A, 0.0);
-  adv3 prev_p = org;
-  double tmin = 0.0, eta_scale = 1.0;
-  unsigned lobes = 0; /* lobes sampled so far */
-  size_t mark = ad_arena_mark(A);
-
-  for (int depth = 1;; depth++) {
-    /* Find the next vertex; on a miss, add the infinite lights. */
-    path__hit h;
-    if (!path__intersect(c, org, dir, tmin, &h)) {
-      if (!path__pt_counts(rs, depth)) break;
-      for (int k = 0; k < s->n_infinite; k++) {
-        int li = s->infinite_lights[k];
-        const light *l = &s->lights[li];
-        rgb le = light_le_infinite(l, path__val(dir));
-        if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(le))); /* the pixel */
-        if (rgb_is_black(le)) continue;
-        ad w = ad_const(A, 1.0);
-        if (!prev_delta) {
-          ad pdf_l = ad_mul_s(A, path__pdf_li(c, l, prev_p, dir, prev_p, v3(0, 0, 0)),
-                              scene_light_pmf(s, li));
-          w = path__mis(A, prev_pdf, pdf_l);
-        }
-        path__add(c, &L, beta, path__rgb_scale_c(A, le, w), path__emit_flag(l), lobes, depth);
-      }
-      break;
-    }
-    adv3 wo = adv3_neg(A, dir);
-
-    /* Emission of an area light that the path hit. */
-    if (h.light >= 0 && path__pt_counts(rs, depth)) {
-      const light *l = &s->lights[h.light];
-      rgb le = light_le_area(l, h.ng, path__val(wo));
-      if (!rgb_is_black(le)) {
-        ad w = ad_const(A, 1.0);
-        if (!prev_delta) {
-          ad pdf_l = ad_mul_s(A, path__pdf_li(c, l, prev_p, dir, h.p, h.ng),
-                              scene_light_pmf(s, h.light));
-          w = path__mis(A, prev_pdf, pdf_l);
-        }
-        path__add(c, &L, beta, path__rgb_scale_c(A, le, w), PATH_EMIT_AREA, lobes, depth);
-      }
-    }
-
-    /* Take this bounce's numbers (fixed layout), then stop if too long. */
-    ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
-    ad u_lobe = path__draw(c, 0), ub1 = path__draw(c, 1), ub2 = path__draw(c, 1);
-    ad u_rr = path__draw(c, 0);
-    if (rs->maxdepth >= 0 && depth >= rs->maxdepth) break;
-
-    const bsdf *b = h.bsdf;
-    adv3 wo_l = adv3_to_local(A, &h.sh, wo);
-    int wo_ok = v3_dot(path__val(wo), h.ng) * wo_l.z.v > 0.0;
-    path__topo(c, wo_ok);
-    if (!wo_ok) break;
-
-    /* Next-event estimation: sample a light, weight by MIS. `nee` counts
-     * how far it got (part of the topology: each step is a branch of f). */
-    int nee = 0;
-    if (!bsdf_is_delta(b) && s->n_lights > 0 && path__pt_counts(rs, depth + 1)) {
-      double pmf, u_rem;
-      int li = scene_sample_light(s, u_light.v, &pmf, &u_rem);
-      path__topo(c, li);
-      path__li ls;
-      if (li >= 0 && pmf > 0.0 && path__sample_li(c, &s->lights[li], h.p, ul1, ul2, &ls) &&
-          ls.pdf.v > 0.0 && !path__rgb_black(ls.li)) {
-        nee = 1;
-        adv3 wi_l = adv3_to_local(A, &h.sh, ls.wi);
-        if (v3_dot(path__val(ls.wi), h.ng) * wi_l.z.v > 0.0) {
-          nee = 2;
-          adrgb f = bsdf_eval_ad(A, b, h.tu, h.tv, wo_l, wi_l, TRANSPORT_RADIANCE);
-          if (!path__rgb_black(f)) {
-            nee = 3;
-            vec3 pv = path__val(h.p);
-            if (!path__blocked(c, pv, path__val(ls.wi), ls.p, isinf(ls.dist))) {
-              ad pdf_l = ad_mul_s(A, ls.pdf, pmf);
-              ad w = ls.delta ? ad_const(A, 1.0)
-                              : path__mis(A, pdf_l, bsdf_pdf_ad(A, b, h.tu, h.tv, wo_l, wi_l));
-              ad sc = ad_div(A, ad_mul(A, ad_fabs(A, wi_l.z), w), pdf_l);
-              adrgb contrib = adrgb_scale(A, adrgb_mul(A, f, ls.li), sc);
-              path__add(c, &L, beta, contrib, path__emit_flag(&s->lights[li]),
-                        lobes | path__lobe_flag(bsdf_flags(b) & ~BSDF_DELTA), depth + 1);
-            }
-          }
-        }
-      }
-    }
-
-    path__topo(c, nee);
-
-    /* Sample the BSDF for the next direction. */
-    bsdf_sample_ad bs;
-    int sampled = bsdf_sample_f_ad(A, b, h.tu, h.tv, wo_l, u_lobe, ub1, ub2, TRANSPORT_RADIANCE, &bs);
-    path__topo(c, sampled ? bs.flags : -1);
-    if (!sampled) break;
-    adv3 wi = adv3_to_world(A, &h.sh, bs.wi);
-    int side_ok = v3_dot(path__val(wi), h.ng) * bs.wi.z.v > 0.0;
-    path__topo(c, side_ok);
-    if (!side_ok) break;
-    beta = adrgb_mul(A, beta, bs.weight);
-    if (path__rgb_black(beta)) break;
-    lobes |= path__lobe_flag(bs.flags);
-    prev_delta = (bs.flags & BSDF_DELTA) != 0;
-    prev_pdf = bs.pdf;
-    prev_p = h.p;
-    if (bs.flags & BSDF_TRANSMISSION) eta_scale *= bs.eta * bs.eta;
-
-    /* Russian roulette; q is a dual since the estimator divides by it. */
-    if (depth >= rs->rrdepth) {
-      ad mx = ad_fmax(A, beta.r, ad_fmax(A, beta.g, beta.b));
-      ad q = ad_fmin(A, ad_const(A, 0.95), ad_mul_s(A, mx, eta_scale));
-      path__topo(c, u_rr.v < q.v);
-      if (!(u_rr.v < q.v)) break;
-      beta = adrgb_scale(A, beta, ad_inv(A, q));
-    }
-    org = h.p;
-    dir = wi;
-    tmin = scene_ray_eps(s, path__val(h.p));
-
-    /* Keep what the next bounce needs and drop the rest of this one. */
-    ad *keep[] = {&L.r,      &L.g,      &L.b,      &beta.r,   &beta.g, &beta.b,
-                  &prev_pdf, &prev_p.x, &prev_p.y, &prev_p.z, &org.x,  &org.y,
-                  &org.z,    &dir.x,    &dir.y,    &dir.z,    OUT_rx,  OUT_ry};
-    path__keep(c, mark, keep, (int)(sizeof keep / sizeof keep[0]));
-  }
-  *OUT_L = L;
+  *OUT_L = pt__walk(c, org, dir, OUT_rx, OUT_ry);
 }
 
 /* ---------------------------------------------------------------------------
