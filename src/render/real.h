@@ -113,6 +113,7 @@
 #undef RRGB_SCALE_S
 #undef RRGB_LUMINANCE
 #undef RRGB_IS_BLACK
+#undef RRGB_IS_FINITE
 
 /* Plain helpers that would evaluate an argument twice as macros. */
 #ifndef LMC_RENDER_REAL_PLAIN_HELPERS
@@ -197,6 +198,7 @@ static inline ad r__dot_c(ad_arena *A, vec3 e, adv3 a) {
 #define RRGB_SCALE_S(a, s) adrgb_scale_s(A, (a), (s))
 #define RRGB_LUMINANCE(c) adrgb_luminance(A, (c))
 #define RRGB_IS_BLACK(c) rgb_is_black(adrgb_value(c))
+#define RRGB_IS_FINITE(c) rgb_isfinite(adrgb_value(c))
 
 #else
 
@@ -261,5 +263,6 @@ static inline ad r__dot_c(ad_arena *A, vec3 e, adv3 a) {
 #define RRGB_SCALE_S(a, s) rgb_scale((a), (s))
 #define RRGB_LUMINANCE(c) rgb_luminance(c)
 #define RRGB_IS_BLACK(c) rgb_is_black(c)
+#define RRGB_IS_FINITE(c) rgb_isfinite(c)
 
 #endif

@@ -231,3 +231,170 @@ static REAL bdpt__mis_weight(BDPT_CTX, const BDPT_VERTEX *cam, int t, const BDPT
   }
   return R_S_DIV(1.0, R_ADD_S(sum, 1.0));
 }
+
+/* ---- The random walk ------------------------------------------------------------ */
+
+/* Extends path (n vertices) from org along dir, bdpt's walk for both
+ * subpaths: pdf_dir is the density of dir at the last vertex (solid angle,
+ * or planar for lights at infinity); each surface vertex takes its four
+ * numbers (lobe, direction, roulette), samples the BSDF (or reads an
+ * absolute direction at a rough vertex, integrator.h's bdpt_param), keeps
+ * its forward density and its predecessor's reverse one, and survives
+ * Russian roulette from rrdepth segments on (on light subpaths relative to
+ * the throughput at y_1). Returns the new vertex count.
+ *
+ * The includer defines, for the walk: BDPT_WALK_CTX (its walker parameter,
+ * named w, with the fields sc and rs) and BDPT_WALK_PROLOGUE (what names
+ * BDPT_C and the arena A from it), BDPT_W_INTERSECT(org, dir, tmin, hit),
+ * BDPT_W_DRAW(diff), BDPT_W_TOPO(x), BDPT_W_FAR_POINT(org, dir) (the
+ * vertex of an escaped ray), BDPT_W_ROUGH(h) and BDPT_W_ABSOLUTE(rough, n)
+ * (whether the direction at vertex n - 1 is absolute), BDPT_W_SPHERE_DIR(u1,
+ * u2, J), BDPT_W_PDF_REV(bs, h, wo_l) (the reverse density of a BSDF
+ * sample), BDPT_W_RR_Q(mode, beta, beta1, eta) and BDPT_W_SET_LOBE(v,
+ * flags). */
+static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, double tmin,
+                      RRGB beta, REAL pdf_dir, int planar, BDPT_VERTEX *path, int n,
+                      int max_vertices) {
+  BDPT_WALK_PROLOGUE
+  const scene *sc = w->sc;
+  double eta_scale = 1.0; /* radiance compression undone for Russian roulette */
+  while (n < max_vertices) {
+    BDPT_VERTEX *prev = &path[n - 1];
+    BDPT_VERTEX *v = &path[n];
+#if R_DUAL
+    size_t mark = ad_arena_mark(A);
+#endif
+    memset(v, 0, sizeof *v);
+    v->beta = beta;
+    v->pdf_rev = R_C(0.0);
+    v->jac = R_C(1.0);
+
+    /* Find the next vertex; a camera ray that escapes ends on the
+     * infinite lights. */
+    if (!BDPT_W_INTERSECT(org, dir, tmin, &v->hit)) {
+      if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
+        v->type = BDPT_VERTEX_LIGHT;
+        v->light = -1;
+        v->dir = R3_NEG(dir);
+        v->p = BDPT_W_FAR_POINT(org, dir);
+        v->pdf_fwd = pdf_dir; /* solid angle: the vertex is at infinity */
+        n++;
+      }
+      break;
+    }
+    v->type = BDPT_VERTEX_SURFACE;
+    v->light = v->hit.light;
+    v->p = v->hit.p;
+    v->n = v->hit.ng;
+    v->wo = R3_NEG(dir);
+    if (planar)
+      v->pdf_fwd = R_MUL(pdf_dir, R_FABS(R3_DOT_C(v->n, dir)));
+    else
+      v->pdf_fwd = bdpt__convert(BDPT_C, pdf_dir, prev, v);
+    n++;
+
+    /* This vertex's numbers (always taken), then stop if long enough. */
+    REAL u_lobe = BDPT_W_DRAW(0), u1 = BDPT_W_DRAW(1), u2 = BDPT_W_DRAW(1);
+    REAL u_rr = BDPT_W_DRAW(0);
+    if (n >= max_vertices) break;
+
+    /* Sample the BSDF for the next direction, or read it (absolute). */
+    const BDPT_HIT *h = &v->hit;
+    REAL3 wo_l, wi_l;
+    int ok = bdpt__side_ok(R_ARG h, v->wo, &wo_l);
+    BDPT_W_TOPO(ok);
+    if (!ok) break;
+    int rough = BDPT_W_ROUGH(h);
+#if !R_DUAL
+    v->rough = rough;
+#endif
+    R_FN(bsdf_sample) bs;
+    REAL3 wi;
+    if (BDPT_W_ABSOLUTE(rough, n)) {
+      /* The direction's spherical coordinates; the BSDF's value and
+       * density there make the same sample weight f cos / pdf. */
+      REAL J;
+      wi = BDPT_W_SPHERE_DIR(u1, u2, &J);
+      ok = bdpt__side_ok(R_ARG h, wi, &wi_l);
+      BDPT_W_TOPO(ok);
+      if (!ok) break;
+      REAL pdf;
+      RRGB f = R_FN(bsdf_eval_pdf)(R_ARG h->bsdf, h->tu, h->tv, wo_l, wi_l, mode, &pdf);
+      int trans = R_V(wi_l.z) * R_V(wo_l.z) < 0.0;
+      ok = R_V(pdf) > 0.0 && isfinite(R_V(pdf));
+      RRGB weight = ok ? RRGB_SCALE(f, R_DIV(R_FABS(wi_l.z), pdf)) : RRGB_ZERO();
+      ok = ok && RRGB_IS_FINITE(weight) && !RRGB_IS_BLACK(weight);
+      BDPT_W_TOPO(ok ? 1 + trans : -1);
+      if (!ok) break;
+      bs.wi = wi_l, bs.f = f, bs.pdf = pdf, bs.weight = weight;
+      bs.eta = !trans ? 1.0 : R_V(wi_l.z) < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
+      bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
+#if !R_DUAL
+      bs.has_pdf_rev = 0;
+      v->sph[0] = u1, v->sph[1] = u2;
+#endif
+      v->jac = R_MUL(pdf, J);
+      (void)u_lobe;
+    } else {
+      ok = R_FN(bsdf_sample_f)(R_ARG h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs);
+      BDPT_W_TOPO(ok ? bs.flags : -1);
+      if (!ok) break;
+      wi = R3_TO_WORLD(&h->sh, bs.wi);
+      ok = bdpt__side_ok(R_ARG h, wi, &wi_l);
+      BDPT_W_TOPO(ok);
+      if (!ok) break;
+#if !R_DUAL
+      if (rough) {
+        /* Where this direction lies in the absolute parametrization. */
+        double J;
+        bdpt_sphere_coords(wi, &v->sph[0], &v->sph[1], &J);
+        v->jac = bsdf_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l) * J;
+      }
+#endif
+    }
+    REAL pdf_fwd_sa = bs.pdf;
+    REAL pdf_rev_sa = BDPT_W_PDF_REV(bs, h, wo_l);
+    BDPT_W_SET_LOBE(v, bs.flags);
+    if (bs.flags & BSDF_DELTA) {
+      /* Delta lobes: densities read as one in the MIS walk (remap0). */
+      v->delta = 1;
+      pdf_fwd_sa = pdf_rev_sa = R_C(0.0);
+    }
+    RRGB weight = bs.weight;
+    if (mode == TRANSPORT_IMPORTANCE)
+      weight = RRGB_SCALE(weight, bdpt__shading_correction(R_ARG h, v->wo, wi));
+    beta = RRGB_MUL(beta, weight);
+    if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
+    prev->pdf_rev = bdpt__convert(BDPT_C, pdf_rev_sa, v, prev);
+    if (RRGB_IS_BLACK(beta)) break;
+
+    /* Russian roulette on the scattering throughput (n - 1 segments so
+     * far); on light subpaths relative to the throughput at y_1. In duals
+     * the divisor q carries its derivatives. */
+    if (n - 1 >= w->rs->rrdepth) {
+      REAL q = BDPT_W_RR_Q(mode, beta, path[1].beta, eta_scale);
+      BDPT_W_TOPO(R_V(u_rr) < R_V(q));
+      if (!(R_V(u_rr) < R_V(q))) break;
+      beta = RRGB_SCALE(beta, R_INV(q));
+    }
+    dir = wi;
+    tmin = scene_ray_eps(sc, R3_V(v->p));
+    pdf_dir = pdf_fwd_sa;
+    planar = 0;
+#if R_DUAL
+    /* Keep this vertex and what the next step needs; drop the rest. */
+    BDPT_HIT *vh = &v->hit;
+    ad *keep[] = {&v->beta.r,   &v->beta.g,   &v->beta.b,     &v->pdf_fwd, &v->p.x,
+                  &v->p.y,      &v->p.z,      &v->wo.x,       &v->wo.y,    &v->wo.z,
+                  &vh->sh.s.x,  &vh->sh.s.y,  &vh->sh.s.z,    &vh->sh.t.x, &vh->sh.t.y,
+                  &vh->sh.t.z,  &vh->sh.n.x,  &vh->sh.n.y,    &vh->sh.n.z, &vh->tu,
+                  &vh->tv,      &prev->pdf_rev, &beta.r,      &beta.g,     &beta.b,
+                  &dir.x,       &dir.y,       &dir.z,         &pdf_dir,    &v->jac};
+    path__keep(w, mark, keep, (int)(sizeof keep / sizeof keep[0]));
+    vh->p = v->p;
+    v->pdf_rev = ad_const(A, 0.0);
+#endif
+    org = v->p;
+  }
+  return n;
+}

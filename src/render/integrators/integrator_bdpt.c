@@ -93,6 +93,44 @@ static double bdpt__pdf_le_dir(const scene *sc, const light *l, vec3 p, vec3 n, 
 #define BDPT_CAM_PDF_DIR(w) camera_pdf_dir(&scene_->cam, (w))
 #define BDPT_PDF_LE_DIR(l, p, n, w) bdpt__pdf_le_dir(scene_, (l), (p), (n), (w))
 #define BDPT_PDF_LI(l, ref, w, p, n) light_pdf_li((l), scene_, (ref), (w), (p), (n))
+/* What the walk reads: the scene, the settings, the sampler, the absolute
+ * directions' rule (NULL: none) and the counters. */
+typedef struct bdpt__walker {
+  const scene *sc;
+  const render_settings *rs;
+  lmc_sampler *smp;
+  const bdpt_param *par;
+  render_counters *cnt;
+} bdpt__walker;
+
+static int bdpt__intersect(bdpt__walker *w, vec3 org, vec3 dir, double tmin, surface_hit *h) {
+  w->cnt->rays++;
+  return scene_intersect(w->sc, org, dir, tmin, INFINITY, h);
+}
+
+/* The point standing for an escaped ray's vertex: beyond the scene. */
+static vec3 bdpt__far_point(const scene *sc, vec3 org, vec3 dir) {
+  return v3_fma(org, dir, 2.0 * sc->radius + v3_len(v3_sub(org, sc->center)));
+}
+
+static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_scale) {
+  double thr = mode == TRANSPORT_RADIANCE ? rgb_max(beta) * eta_scale : rgb_max(rgb_div(beta, beta1));
+  return fmin(0.95, thr);
+}
+
+#define BDPT_WALK_CTX bdpt__walker *w
+#define BDPT_WALK_PROLOGUE const scene *scene_ = w->sc;
+#define BDPT_W_INTERSECT(org, dir, tmin, hit) bdpt__intersect(w, (org), (dir), (tmin), (hit))
+#define BDPT_W_DRAW(diff) sampler_next(w->smp)
+#define BDPT_W_TOPO(x) ((void)0)
+#define BDPT_W_FAR_POINT(org, dir) bdpt__far_point(w->sc, (org), (dir))
+#define BDPT_W_ROUGH(h) (w->par && bsdf_is_rough((h)->bsdf, w->par->rough_min))
+#define BDPT_W_ABSOLUTE(rough, n) ((rough) && (n) - 1 < w->par->abs_until)
+#define BDPT_W_SPHERE_DIR(u1, u2, J) bdpt_sphere_dir((u1), (u2), (J))
+#define BDPT_W_PDF_REV(bs, h, wo_l) \
+  ((bs).has_pdf_rev ? (bs).pdf_rev : bsdf_pdf((h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l)))
+#define BDPT_W_RR_Q(mode, beta, beta1, eta) bdpt__rr_q((mode), (beta), (beta1), (eta))
+#define BDPT_W_SET_LOBE(v, flags) ((void)0)
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
@@ -121,121 +159,6 @@ void bdpt_sphere_coords(vec3 w, double *OUT_v1, double *OUT_v2, double *OUT_jac)
  * Random walks.
  */
 
-/* Extends path (n vertices so far) from org along dir. pdf_dir is the
- * density of dir at the last vertex: solid angle, or (planar) the disk
- * density of an infinite/directional light. beta includes that density.
- * Returns the new vertex count. */
-static int bdpt__walk(const scene *sc, const render_settings *rs, lmc_sampler *smp,
-                      transport_mode mode, vec3 org, vec3 dir, double tmin, rgb beta,
-                      double pdf_dir, int planar, bdpt_vertex *path, int n, int max_vertices,
-                      const bdpt_param *par, render_counters *cnt) {
-  double eta_scale = 1.0; /* radiance compression undone for Russian roulette */
-  while (n < max_vertices) {
-    bdpt_vertex *prev = &path[n - 1];
-    bdpt_vertex *v = &path[n];
-    memset(v, 0, sizeof *v);
-    v->beta = beta;
-    v->jac = 1.0;
-
-    /* Find the next vertex; a camera ray that escapes ends on the
-     * infinite lights. */
-    cnt->rays++;
-    if (!scene_intersect(sc, org, dir, tmin, INFINITY, &v->hit)) {
-      if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
-        v->type = BDPT_VERTEX_LIGHT;
-        v->light = -1;
-        v->dir = v3_neg(dir);
-        v->p = v3_fma(org, dir, 2.0 * sc->radius + v3_len(v3_sub(org, sc->center)));
-        v->pdf_fwd = pdf_dir; /* solid angle: the vertex is at infinity */
-        n++;
-      }
-      break;
-    }
-    v->type = BDPT_VERTEX_SURFACE;
-    v->light = v->hit.light;
-    v->p = v->hit.p;
-    v->n = v->hit.ng;
-    v->wo = v3_neg(dir);
-    if (planar) {
-      v->pdf_fwd = pdf_dir * fabs(v3_dot(v->n, dir));
-    } else {
-      v->pdf_fwd = bdpt__convert(sc, pdf_dir, prev, v);
-    }
-    n++;
-
-    /* This vertex's numbers (always taken), then stop if long enough. */
-    double u_lobe = sampler_next(smp), u1 = sampler_next(smp), u2 = sampler_next(smp);
-    double u_rr = sampler_next(smp);
-    if (n >= max_vertices) break;
-
-    /* Sample the BSDF for the next direction, or read it (absolute). */
-    const surface_hit *h = &v->hit;
-    vec3 wo_l, wi_l;
-    if (!bdpt__side_ok(h, v->wo, &wo_l)) break;
-    v->rough = par && bsdf_is_rough(h->bsdf, par->rough_min);
-    bsdf_sample bs;
-    vec3 wi;
-    if (v->rough && n - 1 < par->abs_until) {
-      /* The direction's spherical coordinates; the BSDF's value and
-       * density there make the same sample weight f cos / pdf. */
-      double J;
-      wi = bdpt_sphere_dir(u1, u2, &J);
-      if (!bdpt__side_ok(h, wi, &wi_l)) break;
-      double pdf;
-      rgb f = bsdf_eval_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l, mode, &pdf);
-      int trans = wi_l.z * wo_l.z < 0.0;
-      double eta = !trans ? 1.0 : wi_l.z < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
-      if (!(pdf > 0.0) || !isfinite(pdf)) break;
-      bs.wi = wi_l, bs.f = f, bs.pdf = pdf, bs.eta = eta, bs.has_pdf_rev = 0;
-      bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
-      bs.weight = rgb_scale(f, fabs(wi_l.z) / pdf);
-      if (!rgb_isfinite(bs.weight) || rgb_is_black(bs.weight)) break;
-      v->sph[0] = u1, v->sph[1] = u2;
-      v->jac = pdf * J;
-      (void)u_lobe;
-    } else {
-      if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) break;
-      wi = frame_to_world(&h->sh, bs.wi);
-      if (!bdpt__side_ok(h, wi, &wi_l)) break;
-      if (v->rough) {
-        /* Where this direction lies in the absolute parametrization. */
-        double J;
-        bdpt_sphere_coords(wi, &v->sph[0], &v->sph[1], &J);
-        v->jac = bsdf_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l) * J;
-      }
-    }
-    double pdf_fwd_sa = bs.pdf;
-    double pdf_rev_sa = bs.has_pdf_rev ? bs.pdf_rev : bsdf_pdf(h->bsdf, h->tu, h->tv, bs.wi, wo_l);
-    if (bs.flags & BSDF_DELTA) {
-      /* Delta lobes: densities read as one in the MIS walk (remap0). */
-      v->delta = 1;
-      pdf_fwd_sa = pdf_rev_sa = 0.0;
-    }
-    rgb weight = bs.weight;
-    if (mode == TRANSPORT_IMPORTANCE) weight = rgb_scale(weight, bdpt__shading_correction(h, v->wo, wi));
-    beta = rgb_mul(beta, weight);
-    if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
-    prev->pdf_rev = bdpt__convert(sc, pdf_rev_sa, v, prev);
-    if (rgb_is_black(beta)) break;
-
-    /* Russian roulette on the scattering throughput (n - 1 segments so
-     * far); on light subpaths relative to the throughput at y_1. */
-    if (n - 1 >= rs->rrdepth) {
-      double thr = mode == TRANSPORT_RADIANCE ? rgb_max(beta) * eta_scale
-                                              : rgb_max(rgb_div(beta, path[1].beta));
-      double q = fmin(0.95, thr);
-      if (!(u_rr < q)) break;
-      beta = rgb_scale(beta, 1.0 / q);
-    }
-    org = v->p;
-    dir = wi;
-    tmin = scene_ray_eps(sc, v->p);
-    pdf_dir = pdf_fwd_sa;
-    planar = 0;
-  }
-  return n;
-}
-
 void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OUT_max_light) {
   int maxdepth = BDPT_MAX_VERTICES - 1;
   if (rs->maxdepth >= 0 && rs->maxdepth < maxdepth) maxdepth = rs->maxdepth;
@@ -263,8 +186,9 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
   vec3 org, dir;
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
   double pdf_dir = camera_pdf_dir(&sc->cam, dir);
-  return bdpt__walk(sc, rs, smp, TRANSPORT_RADIANCE, org, dir, 0.0, rgb_gray(1.0), pdf_dir, 0,
-                    OUT_path, 1, max_vertices, par, cnt);
+  bdpt__walker w = {sc, rs, smp, par, cnt};
+  return bdpt__walk(&w, TRANSPORT_RADIANCE, org, dir, 0.0, rgb_gray(1.0), pdf_dir, 0, OUT_path, 1,
+                    max_vertices);
 }
 
 int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
@@ -321,8 +245,9 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
     pdf_next = les.pdf_dir;
   }
   double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, les.p) : 0.0;
-  return bdpt__walk(sc, rs, smp, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far,
-                    OUT_path, 1, max_vertices, par, cnt);
+  bdpt__walker w = {sc, rs, smp, par, cnt};
+  return bdpt__walk(&w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, OUT_path,
+                    1, max_vertices);
 }
 
 /* ---------------------------------------------------------------------------

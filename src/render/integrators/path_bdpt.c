@@ -307,153 +307,50 @@ static ad pbd__pdf_le_dir(path__ctx *c, const light *l, adv3 p, vec3 n, adv3 w) 
 #define BDPT_CAM_PDF_DIR(w) pbd__cam_pdf_dir(c, (w))
 #define BDPT_PDF_LE_DIR(l, p, n, w) pbd__pdf_le_dir(c, (l), (p), (n), (w))
 #define BDPT_PDF_LI(l, ref, w, p, n) path__pdf_li(c, (l), (ref), (w), (p), (n))
+/* Russian roulette's q in duals: rgb_max of the throughput (times the
+ * radiance compression), or of its ratio to y_1's (rgb_div: a zero
+ * denominator gives 0). */
+static ad pbd__rr_q(ad_arena *A, transport_mode mode, adrgb beta, adrgb b1, double eta_scale) {
+  ad thr;
+  if (mode == TRANSPORT_RADIANCE) {
+    thr = ad_mul_s(A, ad_fmax(A, beta.r, ad_fmax(A, beta.g, beta.b)), eta_scale);
+  } else {
+    ad r = b1.r.v != 0.0 ? ad_div(A, beta.r, b1.r) : ad_const(A, 0.0);
+    ad g = b1.g.v != 0.0 ? ad_div(A, beta.g, b1.g) : ad_const(A, 0.0);
+    ad b = b1.b.v != 0.0 ? ad_div(A, beta.b, b1.b) : ad_const(A, 0.0);
+    thr = ad_fmax(A, r, ad_fmax(A, g, b));
+  }
+  return ad_fmin(A, ad_const(A, 0.95), thr);
+}
+
+/* The vertex of an escaped ray: beyond the scene (a constant). */
+static adv3 pbd__far_point(path__ctx *c, adv3 org, adv3 dir) {
+  vec3 o = path__val(org);
+  const scene *sc = c->sc;
+  return path__cv(c->A, v3_fma(o, path__val(dir), 2.0 * sc->radius + v3_len(v3_sub(o, sc->center))));
+}
+
+#define BDPT_WALK_CTX path__ctx *w
+#define BDPT_WALK_PROLOGUE \
+  path__ctx *c = w;        \
+  ad_arena *A = c->A;
+#define BDPT_W_INTERSECT(org, dir, tmin, hit) path__intersect(w, (org), (dir), (tmin), (hit))
+#define BDPT_W_DRAW(diff) path__draw(w, (diff))
+#define BDPT_W_TOPO(x) path__topo(w, (x))
+#define BDPT_W_FAR_POINT(org, dir) pbd__far_point(w, (org), (dir))
+#define BDPT_W_ROUGH(h)                                                  \
+  (((const pbd__strategy *)w->arg)->rough_min < 1.0 &&                  \
+   bsdf_is_rough((h)->bsdf, ((const pbd__strategy *)w->arg)->rough_min))
+#define BDPT_W_ABSOLUTE(rough, n) (rough)
+#define BDPT_W_SPHERE_DIR(u1, u2, J) pbd__sphere_dir(A, (u1), (u2), (J))
+#define BDPT_W_PDF_REV(bs, h, wo_l) bsdf_pdf_ad(A, (h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l))
+#define BDPT_W_RR_Q(mode, beta, beta1, eta) pbd__rr_q(A, (mode), (beta), (beta1), (eta))
+#define BDPT_W_SET_LOBE(v, flags) ((v)->lobe = path__lobe_flag(flags))
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
  * Random walks (bdpt__walk).
  */
-
-/* Extends path (n vertices) from org along dir; pdf_dir is the density of
- * dir at the last vertex (solid angle, or planar for lights at infinity).
- * Returns the new vertex count. */
-static int pbd__walk(path__ctx *c, transport_mode mode, adv3 org, adv3 dir, double tmin,
-                     adrgb beta, ad pdf_dir, int planar, path__bdv *path, int n,
-                     int max_vertices) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  double eta_scale = 1.0;
-  while (n < max_vertices) {
-    path__bdv *prev = &path[n - 1];
-    path__bdv *v = &path[n];
-    size_t mark = ad_arena_mark(A);
-    memset(v, 0, sizeof *v);
-    v->beta = beta;
-    v->pdf_rev = ad_const(A, 0.0);
-    v->jac = ad_const(A, 1.0);
-
-    /* Find the next vertex; a camera ray that escapes ends on the
-     * infinite lights. */
-    if (!path__intersect(c, org, dir, tmin, &v->hit)) {
-      if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
-        v->type = BDPT_VERTEX_LIGHT;
-        v->light = -1;
-        v->dir = adv3_neg(A, dir);
-        vec3 o = path__val(org);
-        v->p = path__cv(A, v3_fma(o, path__val(dir), 2.0 * sc->radius + v3_len(v3_sub(o, sc->center))));
-        v->pdf_fwd = pdf_dir;
-        n++;
-      }
-      break;
-    }
-    v->type = BDPT_VERTEX_SURFACE;
-    v->light = v->hit.light;
-    v->p = v->hit.p;
-    v->n = v->hit.ng;
-    v->wo = adv3_neg(A, dir);
-    if (planar)
-      v->pdf_fwd = ad_mul(A, pdf_dir, ad_fabs(A, path__dot_c(A, v->n, dir)));
-    else
-      v->pdf_fwd = bdpt__convert(c, pdf_dir, prev, v);
-    n++;
-
-    /* This vertex's numbers (always taken), then stop if long enough. */
-    ad u_lobe = path__draw(c, 0), u1 = path__draw(c, 1), u2 = path__draw(c, 1);
-    ad u_rr = path__draw(c, 0);
-    if (n >= max_vertices) break;
-
-    /* Sample the BSDF for the next direction, or read it (absolute). */
-    const path__hit *h = &v->hit;
-    adv3 wo_l, wi_l;
-    int ok = bdpt__side_ok(A, h, v->wo, &wo_l);
-    path__topo(c, ok);
-    if (!ok) break;
-    bsdf_sample_ad bs;
-    adv3 wi;
-    const pbd__strategy *strat = c->arg;
-    if (strat->rough_min < 1.0 && bsdf_is_rough(h->bsdf, strat->rough_min)) {
-      /* The direction's spherical coordinates (integrator_bdpt.c's walk). */
-      ad J;
-      wi = pbd__sphere_dir(A, u1, u2, &J);
-      ok = bdpt__side_ok(A, h, wi, &wi_l);
-      path__topo(c, ok);
-      if (!ok) break;
-      adrgb f = bsdf_eval_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l, mode);
-      ad pdf = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, wo_l, wi_l);
-      int trans = wi_l.z.v * wo_l.z.v < 0.0;
-      ok = pdf.v > 0.0 && isfinite(pdf.v) && !path__rgb_black(f);
-      path__topo(c, ok ? 1 + trans : -1);
-      if (!ok) break;
-      bs.wi = wi_l;
-      bs.pdf = pdf;
-      bs.weight = adrgb_scale(A, f, ad_div(A, ad_fabs(A, wi_l.z), pdf));
-      bs.eta = !trans ? 1.0 : wi_l.z.v < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
-      bs.flags = (trans ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
-      v->jac = ad_mul(A, pdf, J);
-      (void)u_lobe;
-    } else {
-      ok = bsdf_sample_f_ad(A, h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs);
-      path__topo(c, ok ? bs.flags : -1);
-      if (!ok) break;
-      wi = adv3_to_world(A, &h->sh, bs.wi);
-      ok = bdpt__side_ok(A, h, wi, &wi_l);
-      path__topo(c, ok);
-      if (!ok) break;
-    }
-    ad pdf_fwd_sa = bs.pdf;
-    ad pdf_rev_sa = bsdf_pdf_ad(A, h->bsdf, h->tu, h->tv, bs.wi, wo_l);
-    v->lobe = path__lobe_flag(bs.flags);
-    if (bs.flags & BSDF_DELTA) {
-      /* Delta lobes: densities read as one in the MIS walk (remap0). */
-      v->delta = 1;
-      pdf_fwd_sa = pdf_rev_sa = ad_const(A, 0.0);
-    }
-    adrgb weight = bs.weight;
-    if (mode == TRANSPORT_IMPORTANCE)
-      weight = adrgb_scale(A, weight, bdpt__shading_correction(A, h, v->wo, wi));
-    beta = adrgb_mul(A, beta, weight);
-    if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
-    prev->pdf_rev = bdpt__convert(c, pdf_rev_sa, v, prev);
-    if (path__rgb_black(beta)) break;
-
-    /* Russian roulette on the scattering throughput; on light subpaths
-     * relative to the throughput at y_1. The divisor q is a dual. */
-    if (n - 1 >= c->rs->rrdepth) {
-      ad thr;
-      if (mode == TRANSPORT_RADIANCE) {
-        thr = ad_mul_s(A, ad_fmax(A, beta.r, ad_fmax(A, beta.g, beta.b)), eta_scale);
-      } else {
-        /* rgb_div: a zero denominator gives 0 */
-        const adrgb *b1 = &path[1].beta;
-        ad r = b1->r.v != 0.0 ? ad_div(A, beta.r, b1->r) : ad_const(A, 0.0);
-        ad g = b1->g.v != 0.0 ? ad_div(A, beta.g, b1->g) : ad_const(A, 0.0);
-        ad b = b1->b.v != 0.0 ? ad_div(A, beta.b, b1->b) : ad_const(A, 0.0);
-        thr = ad_fmax(A, r, ad_fmax(A, g, b));
-      }
-      ad q = ad_fmin(A, ad_const(A, 0.95), thr);
-      path__topo(c, u_rr.v < q.v);
-      if (!(u_rr.v < q.v)) break;
-      beta = adrgb_scale(A, beta, ad_inv(A, q));
-    }
-    dir = wi;
-    tmin = scene_ray_eps(sc, path__val(v->p));
-    pdf_dir = pdf_fwd_sa;
-    planar = 0;
-
-    /* Keep this vertex and what the next step needs; drop the rest. */
-    path__hit *vh = &v->hit;
-    ad *keep[] = {&v->beta.r,   &v->beta.g,   &v->beta.b,   &v->pdf_fwd,  &v->p.x,
-                  &v->p.y,      &v->p.z,      &v->wo.x,     &v->wo.y,     &v->wo.z,
-                  &vh->sh.s.x,  &vh->sh.s.y,  &vh->sh.s.z,  &vh->sh.t.x,  &vh->sh.t.y,
-                  &vh->sh.t.z,  &vh->sh.n.x,  &vh->sh.n.y,  &vh->sh.n.z,  &vh->tu,
-                  &vh->tv,      &prev->pdf_rev, &beta.r,    &beta.g,      &beta.b,
-                  &dir.x,       &dir.y,       &dir.z,       &pdf_dir,     &v->jac};
-    path__keep(c, mark, keep, (int)(sizeof keep / sizeof keep[0]));
-    vh->p = v->p;
-    v->pdf_rev = ad_const(A, 0.0);
-    org = v->p;
-  }
-  return n;
-}
 
 /* The camera subpath (bdpt_camera_subpath) from the film position (u0, u1). */
 static int pbd__camera_subpath(path__ctx *c, ad u0, ad u1, int max_vertices, path__bdv *path,
@@ -472,7 +369,7 @@ static int pbd__camera_subpath(path__ctx *c, ad u0, ad u1, int max_vertices, pat
   adv3 org, dir;
   path__camera_ray(c, u0, u1, OUT_rx, OUT_ry, &org, &dir);
   ad pdf_dir = pbd__cam_pdf_dir(c, dir);
-  return pbd__walk(c, TRANSPORT_RADIANCE, org, dir, 0.0, adrgb_const(A, rgb_gray(1.0)), pdf_dir,
+  return bdpt__walk(c, TRANSPORT_RADIANCE, org, dir, 0.0, adrgb_const(A, rgb_gray(1.0)), pdf_dir,
                    0, path, 1, max_vertices);
 }
 
@@ -531,7 +428,7 @@ static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
     pdf_next = les.pdf_dir;
   }
   double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, path__val(les.p)) : 0.0;
-  return pbd__walk(c, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
+  return bdpt__walk(c, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
                    max_vertices);
 }
 
