@@ -398,3 +398,161 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
   }
   return n;
 }
+
+/* ---- The connections ------------------------------------------------------------- */
+
+/* What a connection found: its contribution before the MIS weight, how far
+ * it got (part of the dual path's topology), the emitter and the connection
+ * vertices' lobes (the dual path's flags), and for s = 1 the light vertex it
+ * sampled.
+ *
+ * The includer defines, for the joins: BDPT_JOIN_CTX (its parameter, named
+ * j, with the field sc) and BDPT_JOIN_PROLOGUE (what names BDPT_C and the
+ * arena A from it), BDPT_J_SEGMENT_BLOCKED(a, dir, b) and BDPT_J_BLOCKED(p,
+ * wi, lp, dist) (the shadow rays), BDPT_J_CAMERA_WE(dir, rx, ry),
+ * BDPT_J_NUMBERS(t, u) (the s = 1 connection's three numbers into u[3];
+ * 0 when there are none), BDPT_J_SAMPLE_LI(l, ref, u1, u2, ls) with its
+ * type BDPT_J_LI and BDPT_J_LI_POINT(ls) (the sampled point), BDPT_J_TOPO(x),
+ * BDPT_J_EMIT(l), BDPT_J_EMIT_AREA and BDPT_J_LOBES(v) (the dual path's
+ * flags). */
+typedef struct bdpt__join {
+  RRGB L;
+  int stage;
+  unsigned emit, lobes;
+  BDPT_VERTEX sampled;
+  int has_sampled;
+} bdpt__join;
+
+/* s = 0: the camera subpath ends on an emitter. */
+static void bdpt__join_emitter(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt__join *J) {
+  BDPT_JOIN_PROLOGUE
+  const scene *sc = j->sc;
+  const BDPT_VERTEX *pt = &cam[t - 1];
+  if (pt->type == BDPT_VERTEX_SURFACE) {
+    if (pt->light >= 0) {
+      rgb le = light_le_area(&sc->lights[pt->light], pt->n, R3_V(pt->wo));
+      J->stage = 1 + !rgb_is_black(le);
+      J->L = RRGB_MUL(pt->beta, RRGB_CONST(le));
+      J->emit = BDPT_J_EMIT_AREA;
+    }
+  } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
+    vec3 w_env = v3_neg(R3_V(pt->dir));
+    rgb le = rgb_zero();
+    for (int k = 0; k < sc->n_infinite; k++) {
+      const light *l = &sc->lights[sc->infinite_lights[k]];
+      rgb lk = light_le_infinite(l, w_env);
+      if (l->type == LIGHT_ENVMAP) BDPT_J_TOPO((int64_t)(1e6 * rgb_luminance(lk))); /* the pixel */
+      if (!rgb_is_black(lk)) J->emit |= BDPT_J_EMIT(l);
+      le = rgb_add(le, lk);
+    }
+    J->stage = 3;
+    J->L = RRGB_MUL(pt->beta, RRGB_CONST(le));
+  }
+}
+
+/* t = 1: light tracing, y_{s-1} joined to the pinhole and splatted at its
+ * raster point (*OUT_rx, *OUT_ry; may be NULL). */
+static void bdpt__join_camera(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, const BDPT_VERTEX *lp, int s,
+                              bdpt__join *J, REAL *OUT_rx, REAL *OUT_ry) {
+  BDPT_JOIN_PROLOGUE
+  const scene *sc = j->sc;
+  const BDPT_VERTEX *qs = &lp[s - 1];
+  if (!bdpt__connectible(qs)) return;
+  J->stage = 1;
+  REAL3 d = R3_SUB(qs->p, cam[0].p);
+  REAL d2 = R3_LEN2(d);
+  if (!(R_V(d2) > 0.0)) return;
+  REAL3 dir = R3_SCALE(d, R_INV(R_SQRT(d2)));
+  REAL rx = R_C(0.0), ry = R_C(0.0);
+  REAL we = BDPT_J_CAMERA_WE(dir, &rx, &ry);
+  if (!(R_V(we) > 0.0)) return;
+  J->stage = 2;
+  REAL cos_cam = R3_DOT_C(sc->cam.forward, dir);
+  RRGB f = bdpt__f_cos(R_ARG qs, R3_NEG(dir), TRANSPORT_IMPORTANCE);
+  /* qs.beta f We cos_cam / d^2 */
+  J->L = RRGB_SCALE(RRGB_MUL(qs->beta, f), R_DIV(R_MUL(we, cos_cam), d2));
+  if (RRGB_IS_BLACK(J->L)) return;
+  J->stage = 3;
+  if (BDPT_J_SEGMENT_BLOCKED(cam[0].p, dir, qs->p)) {
+    J->L = RRGB_ZERO();
+    return;
+  }
+  J->stage = 4;
+  if (OUT_rx) *OUT_rx = rx;
+  if (OUT_ry) *OUT_ry = ry;
+  J->emit = BDPT_J_EMIT(&sc->lights[lp[0].light]);
+  J->lobes |= BDPT_J_LOBES(qs);
+}
+
+/* s = 1: next-event estimation from z_{t-1} with a fresh light sample. */
+static void bdpt__join_light(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt__join *J) {
+  BDPT_JOIN_PROLOGUE
+  const scene *sc = j->sc;
+  const BDPT_VERTEX *pt = &cam[t - 1];
+  REAL u[3];
+  int have = BDPT_J_NUMBERS(t, u);
+  if (!bdpt__connectible(pt) || !have || sc->n_lights == 0) return;
+  double pmf, u_remap;
+  int li = scene_sample_light(sc, R_V(u[0]), &pmf, &u_remap);
+  BDPT_J_TOPO(li);
+  BDPT_J_LI ls;
+  J->stage = 1;
+  if (!(li >= 0 && pmf > 0.0 && BDPT_J_SAMPLE_LI(&sc->lights[li], pt->p, u[1], u[2], &ls) &&
+        R_V(ls.pdf) > 0.0 && !RRGB_IS_BLACK(ls.li)))
+    return;
+  J->stage = 2;
+  const light *l = &sc->lights[li];
+  RRGB f = bdpt__f_cos(R_ARG pt, ls.wi, TRANSPORT_RADIANCE);
+  /* pt.beta f Li / (pmf pdf) */
+  REAL inv_pdf = R_INV(R_MUL_S(ls.pdf, pmf));
+  J->L = RRGB_SCALE(RRGB_MUL(pt->beta, RRGB_MUL(f, ls.li)), inv_pdf);
+  if (RRGB_IS_BLACK(J->L)) return;
+  J->stage = 3;
+  if (BDPT_J_BLOCKED(pt->p, ls.wi, ls.p, ls.dist)) {
+    J->L = RRGB_ZERO();
+    return;
+  }
+  J->stage = 4;
+  BDPT_VERTEX *v = &J->sampled;
+  memset(v, 0, sizeof *v);
+  v->type = BDPT_VERTEX_LIGHT;
+  v->light = li;
+  v->p = BDPT_J_LI_POINT(ls);
+  v->n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+  v->dir = R3_NEG(ls.wi);
+  v->beta = RRGB_SCALE(ls.li, inv_pdf);
+  v->pdf_rev = R_C(0.0);
+  v->pdf_fwd = bdpt__pdf_light_origin(BDPT_C, v, pt);
+  J->has_sampled = 1;
+  J->emit = BDPT_J_EMIT(l);
+  J->lobes |= BDPT_J_LOBES(pt);
+}
+
+/* s, t >= 2: y_{s-1} and z_{t-1} joined by a shadow ray. */
+static void bdpt__join_vertices(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t,
+                                const BDPT_VERTEX *lp, int s, bdpt__join *J) {
+  BDPT_JOIN_PROLOGUE
+  const scene *sc = j->sc;
+  (void)sc; /* (the plain side notes no emitter) */
+  const BDPT_VERTEX *qs = &lp[s - 1], *pt = &cam[t - 1];
+  if (!bdpt__connectible(qs) || !bdpt__connectible(pt)) return;
+  J->stage = 1;
+  REAL3 d = R3_SUB(pt->p, qs->p);
+  REAL d2 = R3_LEN2(d);
+  if (!(R_V(d2) > 0.0)) return;
+  J->stage = 2;
+  REAL3 w = R3_SCALE(d, R_INV(R_SQRT(d2)));
+  RRGB fq = bdpt__f_cos(R_ARG qs, w, TRANSPORT_IMPORTANCE);
+  RRGB fp = bdpt__f_cos(R_ARG pt, R3_NEG(w), TRANSPORT_RADIANCE);
+  /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
+  J->L = RRGB_SCALE(RRGB_MUL(RRGB_MUL(qs->beta, fq), RRGB_MUL(fp, pt->beta)), R_INV(d2));
+  if (RRGB_IS_BLACK(J->L)) return;
+  J->stage = 3;
+  if (BDPT_J_SEGMENT_BLOCKED(qs->p, w, pt->p)) {
+    J->L = RRGB_ZERO();
+    return;
+  }
+  J->stage = 4;
+  J->emit = BDPT_J_EMIT(&sc->lights[lp[0].light]);
+  J->lobes |= BDPT_J_LOBES(qs) | BDPT_J_LOBES(pt);
+}

@@ -131,6 +131,45 @@ static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_sc
   ((bs).has_pdf_rev ? (bs).pdf_rev : bsdf_pdf((h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l)))
 #define BDPT_W_RR_Q(mode, beta, beta1, eta) bdpt__rr_q((mode), (beta), (beta1), (eta))
 #define BDPT_W_SET_LOBE(v, flags) ((void)0)
+/* What the connections read: the scene, the counters and the s = 1
+ * connection's numbers (NULL: none). */
+typedef struct bdpt__joiner {
+  const scene *sc;
+  render_counters *cnt;
+  const double *u_connect;
+} bdpt__joiner;
+
+static int bdpt__segment_blocked(bdpt__joiner *j, vec3 a, vec3 b) {
+  j->cnt->rays++;
+  return scene_occluded_segment(j->sc, a, b);
+}
+
+static int bdpt__light_blocked(bdpt__joiner *j, vec3 p, vec3 wi, vec3 lp, double dist) {
+  j->cnt->rays++;
+  return isinf(dist) ? scene_occluded_ray(j->sc, p, wi) : scene_occluded_segment(j->sc, p, lp);
+}
+
+static int bdpt__numbers(const bdpt__joiner *j, double u[3]) {
+  if (!j->u_connect) return 0;
+  for (int k = 0; k < 3; k++) u[k] = j->u_connect[k];
+  return 1;
+}
+
+#define BDPT_JOIN_CTX bdpt__joiner *j
+#define BDPT_JOIN_PROLOGUE      \
+  const scene *scene_ = j->sc; \
+  (void)scene_;
+#define BDPT_J_SEGMENT_BLOCKED(a, dir, b) bdpt__segment_blocked(j, (a), (b))
+#define BDPT_J_BLOCKED(p, wi, lp, dist) bdpt__light_blocked(j, (p), (wi), (lp), (dist))
+#define BDPT_J_CAMERA_WE(dir, rx, ry) camera_we(&j->sc->cam, (dir), (rx), (ry))
+#define BDPT_J_NUMBERS(t, u) bdpt__numbers(j, (u))
+#define BDPT_J_LI light_li_sample
+#define BDPT_J_SAMPLE_LI(l, ref, u1, u2, ls) light_sample_li((l), j->sc, (ref), (u1), (u2), (ls))
+#define BDPT_J_LI_POINT(ls) ((ls).p)
+#define BDPT_J_TOPO(x) ((void)0)
+#define BDPT_J_EMIT(l) 0u
+#define BDPT_J_EMIT_AREA 0u
+#define BDPT_J_LOBES(v) 0u
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
@@ -304,93 +343,24 @@ rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vert
   if (t < 1 || s + t < 2 || (s == 1 && t == 1)) return rgb_zero();
   /* An escaped camera ray is only an emitter (s = 0). */
   if (t > 1 && s != 0 && cam[t - 1].type == BDPT_VERTEX_LIGHT) return rgb_zero();
-  rgb L = rgb_zero();
-  bdpt_vertex sampled;
-  const bdpt_vertex *samp = NULL;
-
-  if (s == 0) {
-    /* The camera subpath ends on an emitter. */
-    const bdpt_vertex *pt = &cam[t - 1];
-    if (pt->type == BDPT_VERTEX_SURFACE) {
-      if (pt->light < 0) return rgb_zero();
-      L = rgb_mul(pt->beta, light_le_area(&sc->lights[pt->light], pt->n, pt->wo));
-    } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
-      vec3 w_env = v3_neg(pt->dir);
-      rgb le = rgb_zero();
-      for (int k = 0; k < sc->n_infinite; k++)
-        le = rgb_add(le, light_le_infinite(&sc->lights[sc->infinite_lights[k]], w_env));
-      L = rgb_mul(pt->beta, le);
-    } else {
-      return rgb_zero();
-    }
-  } else if (t == 1) {
-    /* Light tracing: join y_{s-1} to the pinhole, splat at its raster point. */
-    const bdpt_vertex *qs = &lp[s - 1];
-    if (!bdpt__connectible(qs)) return rgb_zero();
-    vec3 d = v3_sub(qs->p, sc->cam.pos);
-    double d2 = v3_len2(d);
-    if (!(d2 > 0.0)) return rgb_zero();
-    vec3 dir = v3_scale(d, 1.0 / sqrt(d2));
-    double rx, ry;
-    double we = camera_we(&sc->cam, dir, &rx, &ry);
-    if (!(we > 0.0)) return rgb_zero();
-    double cos_cam = v3_dot(dir, sc->cam.forward);
-    rgb f = bdpt__f_cos(qs, v3_neg(dir), TRANSPORT_IMPORTANCE);
-    /* qs.beta f We cos_cam / d^2 */
-    L = rgb_scale(rgb_mul(qs->beta, f), we * cos_cam / d2);
-    if (rgb_is_black(L)) return rgb_zero();
-    cnt->rays++;
-    if (scene_occluded_segment(sc, sc->cam.pos, qs->p)) return rgb_zero();
-    if (OUT_rx) *OUT_rx = rx;
-    if (OUT_ry) *OUT_ry = ry;
-  } else if (s == 1) {
-    /* Next-event estimation from z_{t-1} with a fresh light sample. */
-    const bdpt_vertex *pt = &cam[t - 1];
-    if (!bdpt__connectible(pt) || !u_connect || sc->n_lights == 0) return rgb_zero();
-    double pmf, u_remap;
-    int li = scene_sample_light(sc, u_connect[0], &pmf, &u_remap);
-    if (li < 0 || !(pmf > 0.0)) return rgb_zero();
-    const light *l = &sc->lights[li];
-    light_li_sample ls;
-    if (!light_sample_li(l, sc, pt->p, u_connect[1], u_connect[2], &ls)) return rgb_zero();
-    if (!(ls.pdf > 0.0) || rgb_is_black(ls.li)) return rgb_zero();
-    rgb f = bdpt__f_cos(pt, ls.wi, TRANSPORT_RADIANCE);
-    /* pt.beta f Li / (pmf pdf) */
-    L = rgb_scale(rgb_mul(pt->beta, rgb_mul(f, ls.li)), 1.0 / (pmf * ls.pdf));
-    if (rgb_is_black(L)) return rgb_zero();
-    cnt->rays++;
-    int blocked = isinf(ls.dist) ? scene_occluded_ray(sc, pt->p, ls.wi)
-                                 : scene_occluded_segment(sc, pt->p, ls.p);
-    if (blocked) return rgb_zero();
-    memset(&sampled, 0, sizeof sampled);
-    sampled.type = BDPT_VERTEX_LIGHT;
-    sampled.light = li;
-    sampled.p = ls.p;
-    sampled.n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
-    sampled.dir = v3_neg(ls.wi);
-    sampled.beta = rgb_scale(ls.li, 1.0 / (pmf * ls.pdf));
-    sampled.pdf_fwd = bdpt__pdf_light_origin(sc, &sampled, pt);
-    samp = &sampled;
-  } else {
-    /* Join y_{s-1} and z_{t-1} with a shadow ray. */
-    const bdpt_vertex *qs = &lp[s - 1], *pt = &cam[t - 1];
-    if (!bdpt__connectible(qs) || !bdpt__connectible(pt)) return rgb_zero();
-    vec3 d = v3_sub(pt->p, qs->p);
-    double d2 = v3_len2(d);
-    if (!(d2 > 0.0)) return rgb_zero();
-    vec3 w = v3_scale(d, 1.0 / sqrt(d2));
-    rgb fq = bdpt__f_cos(qs, w, TRANSPORT_IMPORTANCE);
-    rgb fp = bdpt__f_cos(pt, v3_neg(w), TRANSPORT_RADIANCE);
-    /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
-    L = rgb_scale(rgb_mul(rgb_mul(qs->beta, fq), rgb_mul(fp, pt->beta)), 1.0 / d2);
-    if (rgb_is_black(L)) return rgb_zero();
-    cnt->rays++;
-    if (scene_occluded_segment(sc, qs->p, pt->p)) return rgb_zero();
-  }
-  if (rgb_is_black(L)) return rgb_zero();
-  double w = bdpt_mis_weight(sc, cam, t, lp, s, samp);
+  bdpt__joiner jn = {sc, cnt, u_connect};
+  bdpt__join J;
+  J.L = rgb_zero();
+  J.stage = 0;
+  J.emit = J.lobes = 0;
+  J.has_sampled = 0;
+  if (s == 0)
+    bdpt__join_emitter(&jn, cam, t, &J);
+  else if (t == 1)
+    bdpt__join_camera(&jn, cam, lp, s, &J, OUT_rx, OUT_ry);
+  else if (s == 1)
+    bdpt__join_light(&jn, cam, t, &J);
+  else
+    bdpt__join_vertices(&jn, cam, t, lp, s, &J);
+  if (rgb_is_black(J.L)) return rgb_zero();
+  double w = bdpt_mis_weight(sc, cam, t, lp, s, J.has_sampled ? &J.sampled : NULL);
   if (OUT_weight) *OUT_weight = w;
-  return rgb_scale(L, w);
+  return rgb_scale(J.L, w);
 }
 
 /* ---------------------------------------------------------------------------

@@ -346,6 +346,38 @@ static adv3 pbd__far_point(path__ctx *c, adv3 org, adv3 dir) {
 #define BDPT_W_PDF_REV(bs, h, wo_l) bsdf_pdf_ad(A, (h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l))
 #define BDPT_W_RR_Q(mode, beta, beta1, eta) pbd__rr_q(A, (mode), (beta), (beta1), (eta))
 #define BDPT_W_SET_LOBE(v, flags) ((v)->lobe = path__lobe_flag(flags))
+/* The s = 1 connection's three numbers: the connect triple of this t
+ * (the ones of smaller t are drawn too, unused). */
+static int pbd__numbers(path__ctx *c, int t, ad u[3]) {
+  path__use_stream(c, LMC_STREAM_CONNECT);
+  for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) path__draw(c, 0);
+  u[0] = path__draw(c, 0), u[1] = path__draw(c, 1), u[2] = path__draw(c, 1);
+  return 1;
+}
+
+/* Lobes of the non-delta part of a connection vertex's BSDF. */
+static unsigned pbd__connect_lobes(const path__bdv *v) {
+  return path__lobe_flag(bsdf_flags(v->hit.bsdf) & ~BSDF_DELTA);
+}
+
+#define BDPT_JOIN_CTX path__ctx *j
+#define BDPT_JOIN_PROLOGUE \
+  path__ctx *c = j;        \
+  ad_arena *A = c->A;      \
+  (void)c;
+#define BDPT_J_SEGMENT_BLOCKED(a, dir, b) \
+  path__blocked(j, path__val(a), path__val(dir), path__val(b), 0)
+#define BDPT_J_BLOCKED(p, wi, lp, dist) \
+  path__blocked(j, path__val(p), path__val(wi), (lp), isinf(dist))
+#define BDPT_J_CAMERA_WE(dir, rx, ry) pbd__cam_we(j, (dir), (rx), (ry))
+#define BDPT_J_NUMBERS(t, u) pbd__numbers(j, (t), (u))
+#define BDPT_J_LI path__li
+#define BDPT_J_SAMPLE_LI(l, ref, u1, u2, ls) path__sample_li(j, (l), (ref), (u1), (u2), (ls))
+#define BDPT_J_LI_POINT(ls) ((ls).pd)
+#define BDPT_J_TOPO(x) path__topo(j, (x))
+#define BDPT_J_EMIT(l) path__emit_flag(l)
+#define BDPT_J_EMIT_AREA PATH_EMIT_AREA
+#define BDPT_J_LOBES(v) pbd__connect_lobes(v)
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
@@ -436,156 +468,6 @@ static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
  * One strategy (bdpt_connect).
  */
 
-/* Lobes of the non-delta part of a connection vertex's BSDF. */
-static unsigned pbd__connect_lobes(const path__bdv *v) {
-  return path__lobe_flag(bsdf_flags(v->hit.bsdf) & ~BSDF_DELTA);
-}
-
-/* What a connection found: its contribution before the MIS weight, how far
- * it got (part of the topology), the emitter and the connection vertices'
- * lobes, and for s = 1 the light vertex it sampled. */
-typedef struct pbd__join {
-  adrgb L;
-  int stage;
-  unsigned emit, lobes;
-  path__bdv sampled;
-  int has_sampled;
-} pbd__join;
-
-/* s = 0: the camera subpath ends on an emitter. */
-static void pbd__join_emitter(path__ctx *c, const path__bdv *cam, int t, pbd__join *J) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  const path__bdv *pt = &cam[t - 1];
-  if (pt->type == BDPT_VERTEX_SURFACE) {
-    if (pt->light >= 0) {
-      rgb le = light_le_area(&sc->lights[pt->light], pt->n, path__val(pt->wo));
-      J->stage = 1 + !rgb_is_black(le);
-      J->L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
-      J->emit = PATH_EMIT_AREA;
-    }
-  } else if (pt->type == BDPT_VERTEX_LIGHT && pt->light < 0) {
-    vec3 w_env = v3_neg(path__val(pt->dir));
-    rgb le = rgb_zero();
-    for (int k = 0; k < sc->n_infinite; k++) {
-      const light *l = &sc->lights[sc->infinite_lights[k]];
-      rgb lk = light_le_infinite(l, w_env);
-      if (l->type == LIGHT_ENVMAP) path__topo(c, (int64_t)(1e6 * rgb_luminance(lk))); /* the pixel */
-      if (!rgb_is_black(lk)) J->emit |= path__emit_flag(l);
-      le = rgb_add(le, lk);
-    }
-    J->stage = 3;
-    J->L = adrgb_mul(A, pt->beta, adrgb_const(A, le));
-  }
-}
-
-/* t = 1: light tracing, y_{s-1} joined to the pinhole and splatted at its
- * raster point (*OUT_rx, *OUT_ry). */
-static void pbd__join_camera(path__ctx *c, const path__bdv *cam, const path__bdv *lp, int s,
-                             pbd__join *J, ad *OUT_rx, ad *OUT_ry) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  const path__bdv *qs = &lp[s - 1];
-  if (!bdpt__connectible(qs)) return;
-  J->stage = 1;
-  adv3 d = adv3_sub(A, qs->p, cam[0].p);
-  ad d2 = adv3_len2(A, d);
-  if (!(d2.v > 0.0)) return;
-  adv3 dir = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
-  ad rx = ad_const(A, 0.0), ry = ad_const(A, 0.0);
-  ad we = pbd__cam_we(c, dir, &rx, &ry);
-  if (!(we.v > 0.0)) return;
-  J->stage = 2;
-  ad cos_cam = path__dot_c(A, sc->cam.forward, dir);
-  adrgb f = bdpt__f_cos(A, qs, adv3_neg(A, dir), TRANSPORT_IMPORTANCE);
-  /* qs.beta f We cos_cam / d^2 */
-  J->L = adrgb_scale(A, adrgb_mul(A, qs->beta, f), ad_div(A, ad_mul(A, we, cos_cam), d2));
-  if (path__rgb_black(J->L)) return;
-  J->stage = 3;
-  if (path__blocked(c, sc->cam.pos, path__val(dir), path__val(qs->p), 0)) {
-    J->L = adrgb_const(A, rgb_zero());
-    return;
-  }
-  J->stage = 4;
-  *OUT_rx = rx;
-  *OUT_ry = ry;
-  J->emit = path__emit_flag(&sc->lights[lp[0].light]);
-  J->lobes |= pbd__connect_lobes(qs);
-}
-
-/* s = 1: next-event estimation from z_{t-1} with a fresh light sample, the
- * connect triple of this t (the ones of smaller t are drawn, unused). */
-static void pbd__join_light(path__ctx *c, const path__bdv *cam, int t, pbd__join *J) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  const path__bdv *pt = &cam[t - 1];
-  path__use_stream(c, LMC_STREAM_CONNECT);
-  for (int k = 0; k < BDPT_DIMS_CONNECT * (t - 2); k++) path__draw(c, 0);
-  ad u_light = path__draw(c, 0), ul1 = path__draw(c, 1), ul2 = path__draw(c, 1);
-  if (!bdpt__connectible(pt) || sc->n_lights == 0) return;
-  double pmf, u_remap;
-  int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
-  path__topo(c, li);
-  path__li ls;
-  J->stage = 1;
-  if (!(li >= 0 && pmf > 0.0 && path__sample_li(c, &sc->lights[li], pt->p, ul1, ul2, &ls) &&
-        ls.pdf.v > 0.0 && !path__rgb_black(ls.li)))
-    return;
-  J->stage = 2;
-  const light *l = &sc->lights[li];
-  adrgb f = bdpt__f_cos(A, pt, ls.wi, TRANSPORT_RADIANCE);
-  /* pt.beta f Li / (pmf pdf) */
-  J->L = adrgb_scale(A, adrgb_mul(A, pt->beta, adrgb_mul(A, f, ls.li)),
-                     ad_inv(A, ad_mul_s(A, ls.pdf, pmf)));
-  if (path__rgb_black(J->L)) return;
-  J->stage = 3;
-  if (path__blocked(c, path__val(pt->p), path__val(ls.wi), ls.p, isinf(ls.dist))) {
-    J->L = adrgb_const(A, rgb_zero());
-    return;
-  }
-  J->stage = 4;
-  path__bdv *v = &J->sampled;
-  memset(v, 0, sizeof *v);
-  v->type = BDPT_VERTEX_LIGHT;
-  v->light = li;
-  v->p = ls.pd;
-  v->n = l->type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
-  v->dir = adv3_neg(A, ls.wi);
-  v->pdf_rev = ad_const(A, 0.0);
-  v->pdf_fwd = bdpt__pdf_light_origin(c, v, pt);
-  J->has_sampled = 1;
-  J->emit = path__emit_flag(l);
-  J->lobes |= pbd__connect_lobes(pt);
-}
-
-/* s, t >= 2: y_{s-1} and z_{t-1} joined by a shadow ray. */
-static void pbd__join_vertices(path__ctx *c, const path__bdv *cam, int t, const path__bdv *lp,
-                               int s, pbd__join *J) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  const path__bdv *qs = &lp[s - 1], *pt = &cam[t - 1];
-  if (!bdpt__connectible(qs) || !bdpt__connectible(pt)) return;
-  J->stage = 1;
-  adv3 d = adv3_sub(A, pt->p, qs->p);
-  ad d2 = adv3_len2(A, d);
-  if (!(d2.v > 0.0)) return;
-  J->stage = 2;
-  adv3 w = adv3_scale(A, d, ad_inv(A, ad_sqrt(A, d2)));
-  adrgb fq = bdpt__f_cos(A, qs, w, TRANSPORT_IMPORTANCE);
-  adrgb fp = bdpt__f_cos(A, pt, adv3_neg(A, w), TRANSPORT_RADIANCE);
-  /* beta_y f_y f_z beta_z / d^2 (the cosines are inside f_cos) */
-  J->L = adrgb_scale(A, adrgb_mul(A, adrgb_mul(A, qs->beta, fq), adrgb_mul(A, fp, pt->beta)),
-                     ad_inv(A, d2));
-  if (path__rgb_black(J->L)) return;
-  J->stage = 3;
-  if (path__blocked(c, path__val(qs->p), path__val(w), path__val(pt->p), 0)) {
-    J->L = adrgb_const(A, rgb_zero());
-    return;
-  }
-  J->stage = 4;
-  J->emit = path__emit_flag(&sc->lights[lp[0].light]);
-  J->lobes |= pbd__connect_lobes(qs) | pbd__connect_lobes(pt);
-}
 
 /* Traces the strategy's two subpaths; returns 0 when they are not whole
  * (the strategy contributes nothing). */
@@ -637,7 +519,7 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
 
   /* The lobes sampled inside both subpaths (the connection vertices' own
    * lobes are added by the join). */
-  pbd__join J;
+  bdpt__join J;
   J.L = zero;
   J.stage = 0;
   J.emit = J.lobes = 0;
@@ -645,13 +527,13 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
   for (int i = 1; i < t - 1; i++) J.lobes |= cam[i].lobe;
   for (int i = 1; i < s - 1; i++) J.lobes |= lp[i].lobe;
   if (s == 0)
-    pbd__join_emitter(c, cam, t, &J);
+    bdpt__join_emitter(c, cam, t, &J);
   else if (t == 1)
-    pbd__join_camera(c, cam, lp, s, &J, OUT_rx, OUT_ry);
+    bdpt__join_camera(c, cam, lp, s, &J, OUT_rx, OUT_ry);
   else if (s == 1)
-    pbd__join_light(c, cam, t, &J);
+    bdpt__join_light(c, cam, t, &J);
   else
-    pbd__join_vertices(c, cam, t, lp, s, &J);
+    bdpt__join_vertices(c, cam, t, lp, s, &J);
   path__topo(c, J.stage);
   if (path__rgb_black(J.L)) {
     *OUT_L = zero;
