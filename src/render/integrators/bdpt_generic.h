@@ -556,3 +556,66 @@ static void bdpt__join_vertices(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t,
   J->emit = BDPT_J_EMIT(&sc->lights[lp[0].light]);
   J->lobes |= BDPT_J_LOBES(qs) | BDPT_J_LOBES(pt);
 }
+
+/* ---- The light subpath ---------------------------------------------------------- */
+
+/* The light subpath y_0 .. y_{n-1} (at most max_vertices): the emitter's
+ * five numbers (always taken: light choice, position, direction), the light
+ * endpoint with its density (selection times position for area lights,
+ * selection alone for delta positions and directional lights, the summed
+ * solid-angle density for infinite lights), then the walk from y_1 on, per
+ * solid angle or with the planar disk density for lights at infinity. The
+ * includer defines BDPT_W_LE, its emission-sample type, and
+ * BDPT_W_SAMPLE_LE(l, u1, u2, u3, u4, les). Returns the vertex count. */
+static int bdpt__light_walk(BDPT_WALK_CTX, int max_vertices, BDPT_VERTEX *path) {
+  BDPT_WALK_PROLOGUE
+  const scene *sc = w->sc;
+  REAL u_light = BDPT_W_DRAW(0);
+  REAL u1 = BDPT_W_DRAW(1), u2 = BDPT_W_DRAW(1), u3 = BDPT_W_DRAW(1), u4 = BDPT_W_DRAW(1);
+  if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
+  if (max_vertices < 1 || sc->n_lights == 0) return 0;
+
+  /* Choose a light and an emitted ray. */
+  double pmf, u_remap;
+  int li = scene_sample_light(sc, R_V(u_light), &pmf, &u_remap);
+  BDPT_W_TOPO(li);
+  if (li < 0 || !(pmf > 0.0)) return 0;
+  const light *l = &sc->lights[li];
+  BDPT_W_LE les;
+  int ok = BDPT_W_SAMPLE_LE(l, u1, u2, u3, u4, &les) && les.pdf_pos > 0.0 &&
+           R_V(les.pdf_dir) > 0.0 && !RRGB_IS_BLACK(les.le);
+  BDPT_W_TOPO(ok);
+  if (!ok) return 0;
+
+  /* The light endpoint y_0. */
+  BDPT_VERTEX *y0 = &path[0];
+  memset(y0, 0, sizeof *y0);
+  y0->type = BDPT_VERTEX_LIGHT;
+  y0->light = li;
+  y0->p = les.p;
+  int far = light_is_infinite(l) || l->type == LIGHT_DIRECTIONAL;
+  y0->n = l->type == LIGHT_AREA ? les.n : v3(0.0, 0.0, 0.0);
+  y0->dir = les.dir;
+  y0->wo = R3_CONST(0.0, 0.0, 0.0);
+  y0->beta = RRGB_SCALE_S(les.le, 1.0 / (pmf * les.pdf_pos));
+  y0->pdf_rev = R_C(0.0);
+
+  /* beta = Le cos0 / (pmf pdf_pos pdf_dir). */
+  REAL cos0 = l->type == LIGHT_AREA ? R_FABS(R3_DOT_C(les.n, les.dir)) : R_C(1.0);
+  RRGB beta = RRGB_SCALE(les.le, R_DIV(cos0, R_MUL_S(les.pdf_dir, pmf * les.pdf_pos)));
+  REAL pdf_next;
+  if (far) {
+    BDPT_VERTEX tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.type = BDPT_VERTEX_SURFACE;
+    tmp.p = R3_ADD(les.p, les.dir);
+    y0->pdf_fwd = light_is_infinite(l) ? bdpt__pdf_light_origin(BDPT_C, y0, &tmp) : R_C(pmf);
+    pdf_next = R_C(les.pdf_pos);
+  } else {
+    y0->pdf_fwd = R_C(light_is_delta(l) ? pmf : pmf * les.pdf_pos);
+    pdf_next = les.pdf_dir;
+  }
+  double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, R3_V(les.p)) : 0.0;
+  return bdpt__walk(w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
+                    max_vertices);
+}

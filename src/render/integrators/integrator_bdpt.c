@@ -131,6 +131,9 @@ static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_sc
   ((bs).has_pdf_rev ? (bs).pdf_rev : bsdf_pdf((h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l)))
 #define BDPT_W_RR_Q(mode, beta, beta1, eta) bdpt__rr_q((mode), (beta), (beta1), (eta))
 #define BDPT_W_SET_LOBE(v, flags) ((void)0)
+#define BDPT_W_LE light_le_sample
+#define BDPT_W_SAMPLE_LE(l, u1, u2, u3, u4, les) \
+  light_sample_le((l), w->sc, (u1), (u2), (u3), (u4), (les))
 /* What the connections read: the scene, the counters and the s = 1
  * connection's numbers (NULL: none). */
 typedef struct bdpt__joiner {
@@ -238,55 +241,8 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
 int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                          int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
                          render_counters *cnt) {
-  /* The emitter's numbers (always taken). */
-  double u_light = sampler_next(smp);
-  double u1 = sampler_next(smp), u2 = sampler_next(smp);
-  double u3 = sampler_next(smp), u4 = sampler_next(smp);
-  if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
-  if (max_vertices < 1 || sc->n_lights == 0) return 0;
-
-  /* Choose a light and an emitted ray. */
-  double pmf, u_remap;
-  int li = scene_sample_light(sc, u_light, &pmf, &u_remap);
-  if (li < 0 || !(pmf > 0.0)) return 0;
-  const light *l = &sc->lights[li];
-  light_le_sample les;
-  if (!light_sample_le(l, sc, u1, u2, u3, u4, &les)) return 0;
-  if (!(les.pdf_pos > 0.0) || !(les.pdf_dir > 0.0) || rgb_is_black(les.le)) return 0;
-
-  /* The light endpoint y_0. */
-  bdpt_vertex *y0 = &OUT_path[0];
-  memset(y0, 0, sizeof *y0);
-  y0->type = BDPT_VERTEX_LIGHT;
-  y0->light = li;
-  y0->p = les.p;
-  int far = light_is_infinite(l) || l->type == LIGHT_DIRECTIONAL;
-  y0->n = (l->type == LIGHT_AREA) ? les.n : v3(0.0, 0.0, 0.0);
-  y0->dir = les.dir;
-  y0->beta = rgb_scale(les.le, 1.0 / (pmf * les.pdf_pos));
-
-  /* y_0's density: selection times position (area lights), selection alone
-   * (delta positions, directional), or the summed solid-angle density of
-   * the direction (infinite lights). y_1 is then sampled per solid angle,
-   * or with the planar disk density for lights at infinity. */
-  double cos0 = l->type == LIGHT_AREA ? fabs(v3_dot(les.n, les.dir)) : 1.0;
-  rgb beta = rgb_scale(les.le, cos0 / (pmf * les.pdf_pos * les.pdf_dir));
-  double pdf_next;
-  if (far) {
-    bdpt_vertex tmp;
-    memset(&tmp, 0, sizeof tmp);
-    tmp.type = BDPT_VERTEX_SURFACE;
-    tmp.p = v3_fma(les.p, les.dir, 1.0);
-    y0->pdf_fwd = light_is_infinite(l) ? bdpt__pdf_light_origin(sc, y0, &tmp) : pmf;
-    pdf_next = les.pdf_pos;
-  } else {
-    y0->pdf_fwd = light_is_delta(l) ? pmf : pmf * les.pdf_pos;
-    pdf_next = les.pdf_dir;
-  }
-  double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, les.p) : 0.0;
   bdpt__walker w = {sc, rs, smp, par, cnt};
-  return bdpt__walk(&w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, OUT_path,
-                    1, max_vertices);
+  return bdpt__light_walk(&w, max_vertices, OUT_path);
 }
 
 /* ---------------------------------------------------------------------------

@@ -346,6 +346,8 @@ static adv3 pbd__far_point(path__ctx *c, adv3 org, adv3 dir) {
 #define BDPT_W_PDF_REV(bs, h, wo_l) bsdf_pdf_ad(A, (h)->bsdf, (h)->tu, (h)->tv, (bs).wi, (wo_l))
 #define BDPT_W_RR_Q(mode, beta, beta1, eta) pbd__rr_q(A, (mode), (beta), (beta1), (eta))
 #define BDPT_W_SET_LOBE(v, flags) ((v)->lobe = path__lobe_flag(flags))
+#define BDPT_W_LE pbd__le
+#define BDPT_W_SAMPLE_LE(l, u1, u2, u3, u4, les) pbd__sample_le(w, (l), (u1), (u2), (u3), (u4), (les))
 /* The s = 1 connection's three numbers: the connect triple of this t
  * (the ones of smaller t are drawn too, unused). */
 static int pbd__numbers(path__ctx *c, int t, ad u[3]) {
@@ -405,64 +407,6 @@ static int pbd__camera_subpath(path__ctx *c, ad u0, ad u1, int max_vertices, pat
                    0, path, 1, max_vertices);
 }
 
-/* The light subpath (bdpt_light_subpath): draws its 5 emitter numbers. */
-static int pbd__light_subpath(path__ctx *c, int max_vertices, path__bdv *path) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  /* The emitter's numbers (always taken). */
-  ad u_light = path__draw(c, 0);
-  ad u1 = path__draw(c, 1), u2 = path__draw(c, 1);
-  ad u3 = path__draw(c, 1), u4 = path__draw(c, 1);
-  if (max_vertices < 1 || sc->n_lights == 0) return 0;
-
-  /* Choose a light and an emitted ray. */
-  double pmf, u_remap;
-  int li = scene_sample_light(sc, u_light.v, &pmf, &u_remap);
-  path__topo(c, li);
-  if (li < 0 || !(pmf > 0.0)) return 0;
-  const light *l = &sc->lights[li];
-  pbd__le les;
-  int ok = pbd__sample_le(c, l, u1, u2, u3, u4, &les) && les.pdf_pos > 0.0 &&
-           les.pdf_dir.v > 0.0 && !path__rgb_black(les.le);
-  path__topo(c, ok);
-  if (!ok) return 0;
-
-  /* The light endpoint y_0. */
-  path__bdv *y0 = &path[0];
-  memset(y0, 0, sizeof *y0);
-  y0->type = BDPT_VERTEX_LIGHT;
-  y0->light = li;
-  y0->p = les.p;
-  int far = light_is_infinite(l) || l->type == LIGHT_DIRECTIONAL;
-  y0->n = l->type == LIGHT_AREA ? les.n : v3(0.0, 0.0, 0.0);
-  y0->dir = les.dir;
-  y0->wo = path__cv(A, v3(0.0, 0.0, 0.0));
-  y0->beta = adrgb_scale(A, les.le, ad_const(A, 1.0 / (pmf * les.pdf_pos)));
-  y0->pdf_rev = ad_const(A, 0.0);
-
-  /* beta = Le cos0 / (pmf pdf_pos pdf_dir); y_0's density: selection
-   * times position, selection alone (delta positions, directional), or the
-   * summed solid-angle density (infinite lights); y_1 per solid angle, or
-   * with the planar disk density for lights at infinity. */
-  ad cos0 = l->type == LIGHT_AREA ? ad_fabs(A, path__dot_c(A, les.n, les.dir)) : ad_const(A, 1.0);
-  ad sc0 = ad_div(A, cos0, ad_mul_s(A, les.pdf_dir, pmf * les.pdf_pos));
-  adrgb beta = adrgb_scale(A, les.le, sc0);
-  ad pdf_next;
-  if (far) {
-    path__bdv tmp;
-    memset(&tmp, 0, sizeof tmp);
-    tmp.type = BDPT_VERTEX_SURFACE;
-    tmp.p = adv3_add(A, les.p, les.dir);
-    y0->pdf_fwd = light_is_infinite(l) ? bdpt__pdf_light_origin(c, y0, &tmp) : ad_const(A, pmf);
-    pdf_next = ad_const(A, les.pdf_pos);
-  } else {
-    y0->pdf_fwd = ad_const(A, light_is_delta(l) ? pmf : pmf * les.pdf_pos);
-    pdf_next = les.pdf_dir;
-  }
-  double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, path__val(les.p)) : 0.0;
-  return bdpt__walk(c, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
-                   max_vertices);
-}
 
 /* ---------------------------------------------------------------------------
  * One strategy (bdpt_connect).
@@ -488,7 +432,7 @@ static int pbd__subpaths(path__ctx *c, int s, int t, path__bdv *cam, path__bdv *
   /* The light subpath: s vertices (s <= 1 needs none). */
   if (s >= 2) {
     path__use_stream(c, LMC_STREAM_LIGHT);
-    int nl = pbd__light_subpath(c, s, lp);
+    int nl = bdpt__light_walk(c, s, lp);
     path__topo(c, nl);
     if (nl < s) return 0;
   }
