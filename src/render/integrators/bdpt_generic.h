@@ -619,3 +619,27 @@ static int bdpt__light_walk(BDPT_WALK_CTX, int max_vertices, BDPT_VERTEX *path) 
   return bdpt__walk(w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
                     max_vertices);
 }
+
+/* ---- The camera subpath ---------------------------------------------------------- */
+
+/* The camera endpoint z_0: the pinhole, throughput 1, density 1. */
+static void bdpt__camera_vertex(BDPT_WALK_CTX, BDPT_VERTEX *z0) {
+  BDPT_WALK_PROLOGUE
+  memset(z0, 0, sizeof *z0);
+  z0->type = BDPT_VERTEX_CAMERA;
+  z0->light = -1;
+  z0->p = R3_CONST(w->sc->cam.pos.x, w->sc->cam.pos.y, w->sc->cam.pos.z);
+  z0->beta = RRGB_CONST(rgb_gray(1.0));
+  z0->pdf_fwd = R_C(1.0);
+  z0->pdf_rev = R_C(0.0);
+  z0->dir = z0->wo = R3_CONST(0.0, 0.0, 0.0);
+}
+
+/* The camera subpath from z_0 along the camera ray (org, dir). */
+static int bdpt__camera_walk(BDPT_WALK_CTX, REAL3 org, REAL3 dir, int max_vertices,
+                             BDPT_VERTEX *path) {
+  BDPT_WALK_PROLOGUE
+  REAL pdf_dir = BDPT_CAM_PDF_DIR(dir);
+  return bdpt__walk(w, TRANSPORT_RADIANCE, org, dir, 0.0, RRGB_CONST(rgb_gray(1.0)), pdf_dir, 0,
+                    path, 1, max_vertices);
+}

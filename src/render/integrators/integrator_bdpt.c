@@ -119,7 +119,9 @@ static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_sc
 }
 
 #define BDPT_WALK_CTX bdpt__walker *w
-#define BDPT_WALK_PROLOGUE const scene *scene_ = w->sc;
+#define BDPT_WALK_PROLOGUE      \
+  const scene *scene_ = w->sc; \
+  (void)scene_;
 #define BDPT_W_INTERSECT(org, dir, tmin, hit) bdpt__intersect(w, (org), (dir), (tmin), (hit))
 #define BDPT_W_DRAW(diff) sampler_next(w->smp)
 #define BDPT_W_TOPO(x) ((void)0)
@@ -218,19 +220,11 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
                           bdpt_vertex *OUT_path, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (max_vertices < 1) return 0;
-  bdpt_vertex *z0 = &OUT_path[0];
-  memset(z0, 0, sizeof *z0);
-  z0->type = BDPT_VERTEX_CAMERA;
-  z0->light = -1;
-  z0->p = sc->cam.pos;
-  z0->beta = rgb_gray(1.0);
-  z0->pdf_fwd = 1.0;
+  bdpt__walker w = {sc, rs, smp, par, cnt};
+  bdpt__camera_vertex(&w, &OUT_path[0]);
   vec3 org, dir;
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
-  double pdf_dir = camera_pdf_dir(&sc->cam, dir);
-  bdpt__walker w = {sc, rs, smp, par, cnt};
-  return bdpt__walk(&w, TRANSPORT_RADIANCE, org, dir, 0.0, rgb_gray(1.0), pdf_dir, 0, OUT_path, 1,
-                    max_vertices);
+  return bdpt__camera_walk(&w, org, dir, max_vertices, OUT_path);
 }
 
 int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,

@@ -333,7 +333,8 @@ static adv3 pbd__far_point(path__ctx *c, adv3 org, adv3 dir) {
 #define BDPT_WALK_CTX path__ctx *w
 #define BDPT_WALK_PROLOGUE \
   path__ctx *c = w;        \
-  ad_arena *A = c->A;
+  ad_arena *A = c->A;      \
+  (void)c, (void)A;
 #define BDPT_W_INTERSECT(org, dir, tmin, hit) path__intersect(w, (org), (dir), (tmin), (hit))
 #define BDPT_W_DRAW(diff) path__draw(w, (diff))
 #define BDPT_W_TOPO(x) path__topo(w, (x))
@@ -389,22 +390,11 @@ static unsigned pbd__connect_lobes(const path__bdv *v) {
 /* The camera subpath (bdpt_camera_subpath) from the film position (u0, u1). */
 static int pbd__camera_subpath(path__ctx *c, ad u0, ad u1, int max_vertices, path__bdv *path,
                                ad *OUT_rx, ad *OUT_ry) {
-  ad_arena *A = c->A;
-  path__bdv *z0 = &path[0];
-  memset(z0, 0, sizeof *z0);
-  z0->type = BDPT_VERTEX_CAMERA;
-  z0->light = -1;
-  z0->p = path__cv(A, c->sc->cam.pos);
-  z0->beta = adrgb_const(A, rgb_gray(1.0));
-  z0->pdf_fwd = ad_const(A, 1.0);
-  z0->pdf_rev = ad_const(A, 0.0);
-  z0->dir = z0->wo = path__cv(A, v3(0.0, 0.0, 0.0));
+  bdpt__camera_vertex(c, &path[0]);
   if (max_vertices < 2) return 1;
   adv3 org, dir;
   path__camera_ray(c, u0, u1, OUT_rx, OUT_ry, &org, &dir);
-  ad pdf_dir = pbd__cam_pdf_dir(c, dir);
-  return bdpt__walk(c, TRANSPORT_RADIANCE, org, dir, 0.0, adrgb_const(A, rgb_gray(1.0)), pdf_dir,
-                   0, path, 1, max_vertices);
+  return bdpt__camera_walk(c, org, dir, max_vertices, path);
 }
 
 
