@@ -7,11 +7,12 @@
  * 2020).
  *
  * This is integrator_bdpt.c's bdpt_camera_subpath, bdpt_light_subpath,
- * bdpt_connect and bdpt_mis_weight, step for step, over duals; the steps
- * that do not draw numbers or trace rays (vertex queries, f cos, the
- * densities of the MIS walk, the MIS weight) are one source with it
- * (bdpt_generic.h). For the same numbers the value is bdpt_connect's
- * (tests/test_path_grad*.c check it to 1e-9 relative). It runs on the machinery of path.c (path_internal.h):
+ * bdpt_connect and bdpt_mis_weight over duals, from the same source
+ * (bdpt_generic.h: the walks, the densities, the MIS weight and the
+ * connections); this file gives that source its dual hooks (numbers drawn
+ * and recorded, rays replayed, the emitters' and the camera's densities in
+ * duals) and runs one strategy. For the same numbers the value is
+ * bdpt_connect's (tests/test_path_grad*.c check it to 1e-9 relative). It runs on the machinery of path.c (path_internal.h):
  * numbers are drawn and recorded by path__draw, closest hits and shadow
  * rays are traced in pass 1 and replayed in pass 2 (path__intersect,
  * path__blocked), each vertex is re-evaluated on its recorded triangle
