@@ -299,7 +299,7 @@ void path__camera_ray(path__ctx *c, ad u0, ad u1, ad *OUT_rx, ad *OUT_ry, adv3 *
 }
 
 /* ---------------------------------------------------------------------------
- * The unidirectional estimator: pt_li (integrator_pt.c), step for step.
+ * The unidirectional estimator: pt_li's walk (pt_generic.h) with its dual hooks.
  */
 
 /* Adds beta * c to L and notes what contributed. */
