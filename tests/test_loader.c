@@ -317,6 +317,31 @@ static void test_direct_samples(void **state) {
   assert_int_equal(checked, 5);
 }
 
+/* <lookAt>, Mitsuba 0.6's other spelling of <lookat>: the same camera,
+ * its pinhole at the origin given and the matrix the same to the bit. */
+static void test_lookat_spelling(void **state) {
+  (void)state;
+  static const char *const tags[2] = {"lookat", "lookAt"};
+  scene *s[2];
+  for (int k = 0; k < 2; k++) {
+    char xml[1024];
+    snprintf(xml, sizeof xml,
+             HEAD "  <sensor type=\"perspective\">\n  <float name=\"fov\" value=\"40\"/>\n"
+                  "  <transform name=\"toWorld\"><%s origin=\"1, 2, 3\" target=\"0, 0, 0\" "
+                  "up=\"0, 1, 0\"/></transform>\n  </sensor>\n"
+                  "  <shape type=\"cube\"/>\n</scene>\n",
+             tags[k]);
+    int warnings;
+    s[k] = load_case_ok("/tmp/lmc_loader_lookat.xml", xml, (size_t)k, &warnings);
+    assert_int_equal(warnings, 0);
+    assert_true(near(s[k]->cam.pos.x, 1.0, 1e-12) && near(s[k]->cam.pos.y, 2.0, 1e-12) &&
+                near(s[k]->cam.pos.z, 3.0, 1e-12));
+  }
+  assert_memory_equal(&s[0]->cam.to_world, &s[1]->cam.to_world, sizeof s[0]->cam.to_world);
+  scene_destroy(s[0]);
+  scene_destroy(s[1]);
+}
+
 /* <sampler type>: independent and Mitsuba's ldsampler/sobol map without a
  * word, the other stratifying samplers to sobol with a warning, an unknown
  * one to independent with a warning; no <sampler>: independent. */
@@ -583,6 +608,7 @@ int main(void) {
       cmocka_unit_test(test_warnings),        cmocka_unit_test(test_happy),
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
       cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
+      cmocka_unit_test(test_lookat_spelling),
       cmocka_unit_test(test_sampler_type),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);

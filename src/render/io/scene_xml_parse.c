@@ -8,8 +8,9 @@
  *     children are properties, nested objects, <ref>s, <default>s and
  *     <include>s;
  *   - a <transform>: its children are the elementary transforms translate,
- *     rotate, scale, lookat and matrix, composed in document order as Mitsuba
- *     does (each one is applied after the ones before: M = M_new * M_old);
+ *     rotate, scale, lookat (or lookAt) and matrix, composed in document
+ *     order as Mitsuba does (each one is applied after the ones before:
+ *     M = M_new * M_old);
  *   - a leaf property, which may not have children.
  *
  * Attribute values go through parameter substitution first: `$name` is
@@ -506,7 +507,8 @@ static void parse__transform_op(parse_ctx *c, prop *xf, const char *tag) {
       return;
     }
     op = xform_rotate(axis, angle);
-  } else if (strcmp(tag, "lookat") == 0) {
+  } else if (strcmp(tag, "lookat") == 0 || strcmp(tag, "lookAt") == 0) {
+    /* (Mitsuba 0.6's parser takes both spellings.) */
     vec3 o, t, up;
     if (!parse__vec_attr(c, tag, "origin", &o) || !parse__vec_attr(c, tag, "target", &t)) return;
     if (parse__attr(c, "up")) {
