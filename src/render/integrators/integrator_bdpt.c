@@ -200,7 +200,7 @@ void bdpt_sphere_coords(vec3 w, double *OUT_v1, double *OUT_v2, double *OUT_jac)
 }
 
 /* ---------------------------------------------------------------------------
- * Random walks.
+ * The subpaths (their walk, bdpt__walk, is bdpt_generic.h's).
  */
 
 void bdpt_subpath_limits(const render_settings *rs, int *OUT_max_camera, int *OUT_max_light) {

@@ -385,7 +385,7 @@ static unsigned pbd__connect_lobes(const path__bdv *v) {
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
- * Random walks (bdpt__walk).
+ * The camera subpath (the walk and the light subpath are bdpt_generic.h's).
  */
 
 /* The camera subpath (bdpt_camera_subpath) from the film position (u0, u1). */
