@@ -4,7 +4,8 @@
  * Runs the built binary (LMC_BINARY) on the small analytic scene and checks
  * exit statuses, messages, flag syntax (--flag value and --flag=value),
  * determinism for a fixed seed and thread count, --resolution, `compare`
- * against metrics computed here, and that SIGINT still leaves a valid image.
+ * against metrics computed here, that SIGINT still leaves a valid image,
+ * and that black scenes are said to be black (exit 2 under --strict).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
@@ -121,6 +122,73 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
     n++;
   }
   assert_int_equal(n, 18);
+}
+
+/* Occurrences of needle in hay. */
+static int count_of(const char *hay, const char *needle) {
+  int n = 0;
+  for (const char *p = hay; (p = strstr(p, needle)) != NULL; p += strlen(needle)) n++;
+  return n;
+}
+
+/* An image that cannot be right says so, in every integrator: a scene
+ * without an emitter and one whose only emitter lmc lacks each get the
+ * warning once, naming the scene, and render (exit 0, an image written);
+ * under --strict they exit 2 before rendering (no image). A lit scene
+ * whose camera sees nothing lit renders black with a warning (MCMC: b = 0
+ * after the bootstrap) and exits 2 under --strict; a scene without
+ * warnings renders under --strict as without it. */
+static void test_black_scenes_warn(void **state) {
+  (void)state;
+  static const char *const integrators[] = {"pt", "bdpt", "pssmlt", "mmlt", "lmc", "h2mc"};
+  static const struct {
+    const char *scene, *needle;
+  } cases[] = {
+      {"data/warn/no_emitter.xml", "the scene has no emitter: the image will be black"},
+      {"data/warn/unsupported_emitter.xml", "no emitter left: the scene's 1 emitter was ignored"},
+  };
+  int checks = 0;
+  for (size_t i = 0; i < sizeof integrators / sizeof integrators[0]; i++) {
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+      char args[1024];
+      remove(TMP "/black.exr");
+      snprintf(args, sizeof args, "render %s --integrator %s --spp 2 -q -o " TMP "/black.exr",
+               cases[k].scene, integrators[i]);
+      int rc = run_lmc(args);
+      struct stat sb;
+      if (rc != 0 || count_of(err_text, cases[k].needle) != 1 ||
+          !strstr(err_text, cases[k].scene) || stat(TMP "/black.exr", &sb) != 0)
+        fail_msg("lmc %s: exit %d, expected 0, the warning once and an image; stderr: %s", args,
+                 rc, err_text);
+      remove(TMP "/black.exr");
+      strncat(args, " --strict", sizeof args - strlen(args) - 1);
+      rc = run_lmc(args);
+      if (rc != 2 || count_of(err_text, cases[k].needle) != 1 || !strstr(err_text, "--strict") ||
+          stat(TMP "/black.exr", &sb) == 0)
+        fail_msg("lmc %s: exit %d, expected 2, the warning once and no image; stderr: %s", args,
+                 rc, err_text);
+      checks += 2;
+    }
+    /* Lit, but the camera sees nothing lit. */
+    char args[1024];
+    snprintf(args, sizeof args,
+             "render data/warn/dark_view.xml --integrator %s --spp 2 -q -o " TMP "/black.exr",
+             integrators[i]);
+    int rc = run_lmc(args);
+    const char *said = i < 2 ? "the image is black" : "b = 0";
+    if (rc != 0 || !strstr(err_text, said))
+      fail_msg("lmc %s: exit %d, expected 0 and '%s'; stderr: %s", args, rc, said, err_text);
+    strncat(args, " --strict", sizeof args - strlen(args) - 1);
+    rc = run_lmc(args);
+    if (rc != 2 || !strstr(err_text, "--strict"))
+      fail_msg("lmc %s: exit %d, expected 2; stderr: %s", args, rc, err_text);
+    checks += 2;
+  }
+  /* No warning: --strict changes nothing. */
+  assert_int_equal(run_lmc("render " SCENE " --spp 2 -q --strict -o " TMP "/black.exr"), 0);
+  assert_int_equal(count_of(err_text, "warning"), 0);
+  checks++;
+  assert_int_equal(checks, 6 * 6 + 1);
 }
 
 /* Reads an EXR written by the CLI; fails the test when it cannot. */
@@ -503,6 +571,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_help_lists_every_flag),
       cmocka_unit_test(test_bad_flags_exit_2_naming_the_flag),
+      cmocka_unit_test(test_black_scenes_warn),
       cmocka_unit_test(test_malformed_scene_names_file_and_line),
       cmocka_unit_test(test_flag_syntax_and_determinism),
       cmocka_unit_test(test_resolution_override),

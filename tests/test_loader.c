@@ -76,6 +76,8 @@ typedef struct bad_case {
 #define SENSOR                                                         \
   "  <sensor type=\"perspective\">\n  <float name=\"fov\" value=\"40\"/>\n" \
   "  </sensor>\n" /* 3 lines */
+/* A light, so that a scene is not warned about as black. */
+#define LIGHT "  <emitter type=\"constant\"/>\n"
 
 static const bad_case bad_cases[] = {
     {"unclosed", HEAD "  <sensor type=\"perspective\">\n"  /* 3 */
@@ -300,7 +302,7 @@ static void test_direct_samples(void **state) {
     char xml[1024];
     snprintf(xml, sizeof xml,
              HEAD "  <integrator type=\"pssmlt\">%s</integrator>\n" SENSOR
-             "  <shape type=\"cube\"/>\n</scene>\n",
+             "  <shape type=\"cube\"/>\n" LIGHT "</scene>\n",
              cases[i].prop);
     int warnings;
     scene *s = load_case_ok("/tmp/lmc_loader_direct.xml", xml, i, &warnings);
@@ -317,6 +319,94 @@ static void test_direct_samples(void **state) {
   assert_int_equal(checked, 5);
 }
 
+/* ---- Mitsuba's defaults. ------------------------------------------------ */
+
+/* The mean x of a mesh's vertices. */
+static double mesh_mean_x(const mesh *m) {
+  double sum = 0.0;
+  for (int64_t i = 0; i < m->n_vertices; i++) sum += m->p[3 * i];
+  return sum / (double)m->n_vertices;
+}
+
+/* A shape that emits and names no BSDF is black (Mitsuba: diffuse of
+ * reflectance 0), one that does not emit is diffuse 0.5; a shape that is
+ * only a medium boundary is Mitsuba's null interface, which without media
+ * is no surface at all (left out, with a warning), one with a BSDF keeps
+ * it (the medium warned about); an <animation> renders its first keyframe
+ * (a warning), and an empty or malformed one is an error at its line. */
+static void test_mitsuba_defaults(void **state) {
+  (void)state;
+  int checks = 0;
+  write_text("/tmp/lmc_loader_defaults.xml",
+             HEAD SENSOR
+             "  <shape type=\"sphere\" id=\"lamp\">\n"                              /* 6 */
+             "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"
+             "  </shape>\n"
+             "  <shape type=\"cube\" id=\"plain\"/>\n"                              /* 9 */
+             "  <medium type=\"homogeneous\" id=\"fog\"/>\n"                        /* 10: w1 */
+             "  <shape type=\"cube\" id=\"boundary\">\n"                            /* 11 */
+             "    <ref name=\"interior\" id=\"fog\"/>\n"                            /* 12: w2 */
+             "  </shape>\n"
+             "  <shape type=\"cube\" id=\"glassy\">\n"
+             "    <bsdf type=\"dielectric\"/>\n"
+             "    <medium type=\"homogeneous\" name=\"interior\"/>\n"               /* 16: w3 */
+             "  </shape>\n"
+             "  <shape type=\"cube\" id=\"moving\">\n"
+             "    <animation name=\"toWorld\">\n"                                   /* 19: w4 */
+             "      <transform time=\"0\"><translate x=\"3\"/></transform>\n"
+             "      <transform time=\"1\"><translate x=\"7\"/></transform>\n"
+             "    </animation>\n"
+             "  </shape>\n"
+             "</scene>\n");
+  scene *s;
+  int warnings;
+  assert_int_equal(load_quiet("/tmp/lmc_loader_defaults.xml", &s, &warnings), LMC_OK);
+  assert_int_equal(warnings, 4);
+  /* lamp, plain, glassy, moving; the boundary left out. */
+  assert_int_equal(s->n_meshes, 4);
+  static const char *const names[4] = {"lamp", "plain", "glassy", "moving"};
+  for (int i = 0; i < 4; i++, checks++) assert_string_equal(s->meshes[i].name, names[i]);
+  const bsdf *lamp = &s->bsdfs[s->meshes[0].bsdf], *plain = &s->bsdfs[s->meshes[1].bsdf];
+  assert_int_equal(lamp->type, BSDF_DIFFUSE);
+  assert_true(rgb_is_black(lamp->diffuse.value) && lamp->diffuse.image == NULL);
+  assert_int_equal(plain->type, BSDF_DIFFUSE);
+  assert_true(near(plain->diffuse.value.r, 0.5, 0.0) && near(plain->diffuse.value.b, 0.5, 0.0));
+  assert_int_equal(s->bsdfs[s->meshes[2].bsdf].type, BSDF_DIELECTRIC);
+  checks += 5;
+  /* The unit cube moved by the first keyframe (x + 3), not the second. */
+  assert_true(near(mesh_mean_x(&s->meshes[3]), 3.0, 1e-6));
+  assert_true(near(mesh_mean_x(&s->meshes[1]), 0.0, 1e-6));
+  checks += 2;
+  scene_destroy(s);
+
+  /* Malformed animations: an error at the element's line. */
+  static const struct {
+    const char *body, *needle;
+  } bad[] = {
+      {"  <shape type=\"cube\">\n    <animation name=\"toWorld\">\n"
+       "    </animation>\n  </shape>\n", "without a keyframe"},
+      {"  <shape type=\"cube\">\n    <animation name=\"toWorld\">\n"
+       "      <float name=\"x\" value=\"1\"/>\n    </animation>\n  </shape>\n", "inside <animation>"},
+      {"  <shape type=\"cube\">\n    <animation>\n"
+       "    </animation>\n  </shape>\n", "'name'"},
+  };
+  static const int bad_line[] = {8, 8, 7};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++, checks++) {
+    char xml[2048];
+    snprintf(xml, sizeof xml, HEAD SENSOR "%s</scene>\n", bad[i].body);
+    write_text("/tmp/lmc_loader_anim.xml", xml);
+    lmc_error err;
+    lmc_error_clear(&err);
+    lmc_warn_set_quiet(1);
+    lmc_status st = scene_load_xml("/tmp/lmc_loader_anim.xml", NULL, 0, &s, &err);
+    lmc_warn_set_quiet(0);
+    if (st != LMC_EPARSE || err.line != bad_line[i] || !strstr(err.msg, bad[i].needle))
+      fail_msg("animation case %zu: status %d, line %d (expected %d), message '%s'", i, (int)st,
+               err.line, bad_line[i], err.msg);
+  }
+  assert_int_equal(checks, 14);
+}
+
 /* <lookAt>, Mitsuba 0.6's other spelling of <lookat>: the same camera,
  * its pinhole at the origin given and the matrix the same to the bit. */
 static void test_lookat_spelling(void **state) {
@@ -329,7 +419,7 @@ static void test_lookat_spelling(void **state) {
              HEAD "  <sensor type=\"perspective\">\n  <float name=\"fov\" value=\"40\"/>\n"
                   "  <transform name=\"toWorld\"><%s origin=\"1, 2, 3\" target=\"0, 0, 0\" "
                   "up=\"0, 1, 0\"/></transform>\n  </sensor>\n"
-                  "  <shape type=\"cube\"/>\n</scene>\n",
+                  "  <shape type=\"cube\"/>\n" LIGHT "</scene>\n",
              tags[k]);
     int warnings;
     s[k] = load_case_ok("/tmp/lmc_loader_lookat.xml", xml, (size_t)k, &warnings);
@@ -365,7 +455,7 @@ static void test_sampler_type(void **state) {
                cases[i].type);
     snprintf(xml, sizeof xml,
              HEAD "  <sensor type=\"perspective\">%s</sensor>\n"
-                  "  <shape type=\"cube\"/>\n</scene>\n",
+                  "  <shape type=\"cube\"/>\n" LIGHT "</scene>\n",
              smp);
     int warnings;
     scene *s = load_case_ok("/tmp/lmc_loader_sampler.xml", xml, i, &warnings);
@@ -609,7 +699,7 @@ int main(void) {
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
       cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
       cmocka_unit_test(test_lookat_spelling),
-      cmocka_unit_test(test_sampler_type),
+      cmocka_unit_test(test_sampler_type),    cmocka_unit_test(test_mitsuba_defaults),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

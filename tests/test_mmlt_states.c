@@ -53,6 +53,7 @@ static const char *scene_xml =
     "    <transform name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/><scale x=\"0.5\" y=\"1\" z=\"0.5\"/>"
     "<translate x=\"0.3\" y=\"3\" z=\"0.5\"/></transform>\n"
     "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"20, 18, 15\"/></emitter>\n"
+    "    <bsdf type=\"diffuse\"/>\n" /* (an emitter's default BSDF is black) */
     "  </shape>\n"
     "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.2, 0.25, 0.3\"/></emitter>\n"
     "</scene>\n";

@@ -28,6 +28,9 @@ static const char *lmc_render_usage =
     "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
     "                           99th percentile of luminance maps to white\n"
     "  -q, --quiet              no progress bar\n"
+    "  --strict                 exit 2 instead of rendering when the scene loads with a\n"
+    "                           warning (a plugin lmc lacks, no emitter, ...) or an MCMC\n"
+    "                           bootstrap finds no light; exit 2 after a black image\n"
     "  -h, --help               this text\n"
     "  --help-markdown          the flags below as Markdown tables (the README's)\n"
     "\n";
@@ -93,9 +96,11 @@ static void lmc_default_output(const char *scene_path, char *out, size_t size) {
   snprintf(out, size, "%s.exr", stem);
 }
 
-/* Exposure of the preview: the 99th percentile of luminance maps to 1. */
+/* Writes the EXR and its PNG preview; *OUT_black tells whether every
+ * pixel is 0 (with warn_black, also said as a warning naming the scene). */
 static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size,
-                             const lmc_exposure *exposure) {
+                             const lmc_exposure *exposure, const char *scene_path,
+                             int warn_black, int *OUT_black) {
   lmc_error err;
   lmc_error_clear(&err);
   lmc_image img = {0};
@@ -116,6 +121,10 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
     image_free(&img);
     return 0;
   }
+  size_t n = (size_t)img.width * img.height * img.channels, nonzero = 0;
+  for (size_t i = 0; i < n; i++) nonzero += img.data[i] != 0.0f;
+  *OUT_black = n > 0 && nonzero == 0;
+  if (*OUT_black && warn_black) lmc_warn(scene_path, 0, "the image is black: nothing lit was seen");
   image_free(&img);
   return 1;
 }
@@ -173,6 +182,7 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
   }
   if ((cli->set & SET_TIME) && !(cli->set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
   rs.quiet = cli->quiet;
+  rs.strict = cli->strict;
   if (!lmc_integrator_known(rs.integrator)) {
     lmc_warn(scene_path, 0,
              "the scene asks for integrator '%s', which lmc does not have; "
@@ -211,9 +221,11 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
-    return EXIT_FAIL;
+    return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
   }
-  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure);
+  int black = 0;
+  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure, scene_path,
+                             s->n_lights > 0, &black);
   fprintf(stderr,
           "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
           "%.3g Mrays/s%s%s\n",
@@ -226,6 +238,10 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   film_free(&f);
   if (!ok) return EXIT_FAIL;
   if (st.interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
+  if (black && rs->strict) {
+    fprintf(stderr, "lmc: --strict: the image is black\n");
+    return EXIT_BADINPUT;
+  }
   return EXIT_OK;
 }
 
@@ -294,6 +310,8 @@ int lmc_cmd_render(int argc, char **argv) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) goto bad;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
       cli.quiet = 1;
+    } else if (lmc_flag_is(&a, "--strict")) {
+      cli.strict = 1;
     } else if (!strncmp(arg, "--", 2)) {
       /* A flag of the tables: --name value or --name=value. */
       char name[64];
@@ -355,6 +373,14 @@ int lmc_cmd_render(int argc, char **argv) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
+    scene_destroy(s);
+    return EXIT_BADINPUT;
+  }
+  /* --strict: every warning so far (a plugin lmc lacks or replaced, a
+   * scene without light, ...) means the image would not be the scene's. */
+  if (rs.strict && lmc_warning_count() > 0) {
+    fprintf(stderr, "lmc: --strict: %s loaded with %d warning%s (above): not rendering\n",
+            scene_path, lmc_warning_count(), lmc_warning_count() == 1 ? "" : "s");
     scene_destroy(s);
     return EXIT_BADINPUT;
   }

@@ -19,7 +19,8 @@
   X(ENOMEM, -3, "out of memory")                            \
   X(EUNSUPPORTED, -4, "unsupported feature")                \
   X(EINVAL, -5, "invalid argument")                         \
-  X(EINTERRUPTED, -6, "interrupted")
+  X(EINTERRUPTED, -6, "interrupted")                       \
+  X(ESTRICT, -7, "refused under --strict")
 
 typedef enum lmc_status {
 #define LMC__STATUS_ENUM(name, value, text) LMC_##name = value,

@@ -49,6 +49,7 @@ typedef struct render_settings {
   lmc_param params[LMC_MAX_PARAMS];
   int n_params;
   int quiet;             /* no progress bar */
+  int strict;            /* --strict: what would render wrong stops the render (LMC_ESTRICT) */
 } render_settings;
 
 static inline render_settings render_settings_default(void) {

@@ -673,14 +673,21 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   if (!status) status = mcmc__bootstrap(&R, err);
   if (!status) mcmc__allocate(&R);
   if (!status && R.n_slots == 0) {
-    /* No bootstrap path carried light: the chains' part of the image is
-     * black (all of it, or all but pt's direct light). */
-    if (!rs->quiet)
-      fprintf(stderr, "lmc: %s's bootstrap found no light on paths of %d or more segments (%lld "
-              "paths): %s\n", rs->integrator, R.crs.mindepth > 1 ? R.crs.mindepth : 1,
-              (long long)st->mcmc_boot_paths,
-              R.ms.direct_separate ? "the image is --direct separate's path-traced pass alone"
-                                  : "the image is black");
+    /* No bootstrap path carried light (b = 0): the chains' part of the
+     * image is black (all of it, or all but pt's direct light). Said
+     * whatever --quiet (unless the loader said the scene has no emitter);
+     * under --strict the render stops here. */
+    if (s->n_lights > 0)
+      lmc_warn(s->path, 0,
+               "%s's bootstrap found no light on paths of %d or more segments (%lld paths, "
+               "b = 0): %s", rs->integrator, R.crs.mindepth > 1 ? R.crs.mindepth : 1,
+               (long long)st->mcmc_boot_paths,
+               R.ms.direct_separate ? "the image is --direct separate's path-traced pass alone"
+                                    : "the image is black");
+    if (rs->strict)
+      status = lmc_error_set(err, LMC_ESTRICT, s->path, 0,
+                             "--strict: %s found nothing to explore (b = 0); not rendering",
+                             rs->integrator);
   } else if (!status) {
     status = mcmc__start_chains(&R, err);
     if (!status) status = mcmc__rounds(&R, err);

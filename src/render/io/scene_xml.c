@@ -13,11 +13,17 @@
  *               defaults; see bsdf.h);
  *   texture     bitmap and checkerboard, built when a BSDF refers to them;
  *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
- *               cylinder, with an optional nested area emitter;
+ *               cylinder, with an optional nested area emitter; without a
+ *               BSDF, Mitsuba's default: black when it emits, else diffuse
+ *               0.5; a shape that is only a medium boundary (a medium, no
+ *               BSDF, no emitter) is Mitsuba's index-matched null
+ *               interface, which without media changes no ray: left out;
  *   emitter     point, spot, directional, constant, envmap;
  *   integrator  and the <dpt> block of the LMC/H2MC reference scenes, into
  *               scene->settings;
- * and finally calls scene_finalize.
+ * and finally calls scene_finalize, then says (a warning naming the scene)
+ * when no emitter gives light: none in the file, every one ignored, or
+ * all black.
  *
  * Conventions:
  *   - Relative file names resolve against the folder of the XML file that
@@ -110,17 +116,27 @@ static lmc_status xml__shape_mesh(builder *B, pset *o, mesh *m, const char **OUT
     return shape_cylinder(p0, p1, r, m, B->err);
   }
   lmc_warn(o->file, o->line, "unsupported shape type \"%s\": ignored", t);
-  for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+  for (int i = 0; i < o->n_props; i++) {
+    o->props[i].used = 1;
+    if (o->props[i].kind == PROP_OBJECT && strcmp(o->props[i].obj->tag, "emitter") == 0)
+      B->emitters_ignored++;
+  }
   *OUT_skip = 1;
   return LMC_OK;
 }
 
-/* The shape's BSDF (its first, else the default) into *OUT_bsdf and its
- * area emitter (the first, or NULL) into *OUT_emitter. */
-static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset **OUT_emitter) {
+/* The shape's BSDF (its first, else Mitsuba's default) into *OUT_bsdf and
+ * its area emitter (the first, or NULL) into *OUT_emitter. Media are not
+ * rendered: a shape that is only a medium boundary (no BSDF, no emitter)
+ * is Mitsuba's index-matched null interface, which without its medium
+ * changes no ray; *OUT_skip says to leave it out. */
+static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset **OUT_emitter,
+                                      int *OUT_skip) {
   lmc_status st;
   int bsdf_index = -1;
   pset *emitter = NULL;
+  const prop *medium = NULL;
+  *OUT_skip = 0;
   for (int i = 0; i < o->n_props; i++) {
     prop *p = &o->props[i];
     pset *c = NULL;
@@ -143,20 +159,38 @@ static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset *
         lmc_warn(c->file, c->line, "emitter \"%s\" inside a shape is not supported: ignored",
                  c->type);
         for (int k = 0; k < c->n_props; k++) c->props[k].used = 1;
+        B->emitters_ignored++;
         continue;
       }
       if (emitter) {
         lmc_warn(c->file, c->line, "shape has more than one area emitter: using the first");
+        B->emitters_ignored++;
         continue;
       }
       emitter = c;
+    } else if (strcmp(c->tag, "medium") == 0) {
+      p->used = 1;
+      for (int k = 0; p->kind == PROP_OBJECT && k < c->n_props; k++) c->props[k].used = 1;
+      if (!medium) medium = p;
     } else if (p->kind == PROP_REF) {
       return xml__fail(B, LMC_EPARSE, p->file, p->line,
-                       "<ref id=\"%s\"> inside a shape must name a BSDF, not a <%s>", p->ref,
-                       c->tag);
+                       "<ref id=\"%s\"> inside a shape must name a BSDF or a medium, not a <%s>",
+                       p->ref, c->tag);
     }
   }
-  if (bsdf_index < 0 && (st = xml__default_bsdf(B, &bsdf_index)) != LMC_OK) return st;
+  if (medium && bsdf_index < 0 && !emitter) {
+    lmc_warn(medium->file, medium->line,
+             "participating media are not supported: medium ignored, and its boundary shape "
+             "(no BSDF: an index-matched null interface) left out");
+    *OUT_skip = 1;
+    return LMC_OK;
+  }
+  if (medium)
+    lmc_warn(medium->file, medium->line,
+             "participating media are not supported: medium ignored (light crosses the shape's "
+             "interior unattenuated)");
+  if (bsdf_index < 0 && (st = xml__default_bsdf(B, emitter != NULL, &bsdf_index)) != LMC_OK)
+    return st;
   *OUT_bsdf = bsdf_index;
   *OUT_emitter = emitter;
   return LMC_OK;
@@ -184,8 +218,10 @@ static lmc_status xml__shape_add(builder *B, mesh *m, pset *emitter, rgb radianc
   /* An empty mesh (mesh_validate has warned) is left out, with its emitter:
    * a light of zero area could only produce 0/0 when sampled. */
   if (m->n_triangles == 0) {
-    if (emitter)
+    if (emitter) {
       lmc_warn(emitter->file, emitter->line, "area emitter on an empty mesh: ignored");
+      B->emitters_ignored++;
+    }
     mesh_free(m);
     return LMC_OK;
   }
@@ -222,7 +258,12 @@ static lmc_status xml__shape(builder *B, pset *o) {
   pset *emitter = NULL;
   rgb radiance = rgb_gray(1.0);
   if ((st = xml__shape_place(B, o, label, &m)) != LMC_OK) goto fail;
-  if ((st = xml__shape_children(B, o, &bsdf_index, &emitter)) != LMC_OK) goto fail;
+  if ((st = xml__shape_children(B, o, &bsdf_index, &emitter, &skip)) != LMC_OK) goto fail;
+  if (skip) {
+    for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    mesh_free(&m);
+    return LMC_OK;
+  }
   m.bsdf = bsdf_index;
   if (emitter) {
     int found;
@@ -328,10 +369,12 @@ static lmc_status xml__emitter(builder *B, pset *o) {
   } else if (strcmp(t, "area") == 0) {
     lmc_warn(o->file, o->line, "an area emitter must be nested in a shape: ignored");
     for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    B->emitters_ignored++;
     return LMC_OK;
   } else {
     lmc_warn(o->file, o->line, "unsupported emitter type \"%s\": ignored", t);
     for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+    B->emitters_ignored++;
     return LMC_OK;
   }
   xml__warn_unused(o);
@@ -700,6 +743,24 @@ static lmc_status xml__dpt(builder *B, pset *o) {
 
 /* ---- The scene. --------------------------------------------------------- */
 
+/* An image that cannot be right says so before it is rendered: a scene
+ * left without an emitter that gives light (none in the file, all of them
+ * ignored, or all black) renders black in every integrator. */
+static void xml__check_light(builder *B, const pset *root) {
+  const scene *s = B->s;
+  int lit = 0;
+  for (int i = 0; i < s->n_lights; i++) lit += light_power(&s->lights[i], s) > 0.0;
+  if (lit > 0) return;
+  if (B->emitters_ignored > 0)
+    lmc_warn(root->file, 0,
+             "no emitter left: the scene's %d emitter%s ignored (see above); the image will be "
+             "black", B->emitters_ignored, B->emitters_ignored == 1 ? " was" : "s were all");
+  else if (s->n_lights > 0)
+    lmc_warn(root->file, 0, "every emitter of the scene is black: the image will be black");
+  else
+    lmc_warn(root->file, 0, "the scene has no emitter: the image will be black");
+}
+
 static lmc_status xml__build(builder *B, pset *root) {
   lmc_status st;
   if ((st = xml__register_ids(B, root)) != LMC_OK) return st;
@@ -739,7 +800,9 @@ static lmc_status xml__build(builder *B, pset *root) {
     t->image = &B->s->images[f->image];
     tex_update_mean(t); /* BSDFs choose lobes by the mean; cache it once */
   }
-  return scene_finalize(B->s, B->err);
+  if ((st = scene_finalize(B->s, B->err)) != LMC_OK) return st;
+  xml__check_light(B, root);
+  return LMC_OK;
 }
 
 lmc_status scene_load_xml(const char *path, const char *const *defines, int n_defines,
@@ -760,7 +823,7 @@ lmc_status scene_load_xml(const char *path, const char *const *defines, int n_de
   B.s = s;
   B.err = err;
   B.doc = &doc;
-  B.default_bsdf = -1;
+  B.default_bsdf[0] = B.default_bsdf[1] = -1;
   st = xml__build(&B, doc.root);
   free(B.ids);
   free(B.fix);

@@ -376,18 +376,18 @@ lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
   return LMC_OK;
 }
 
-lmc_status xml__default_bsdf(builder *B, int *out_index) {
-  if (B->default_bsdf < 0) {
+lmc_status xml__default_bsdf(builder *B, int black, int *out_index) {
+  if (B->default_bsdf[black] < 0) {
     bsdf b;
     memset(&b, 0, sizeof b);
     bsdf_init_defaults(&b, BSDF_DIFFUSE);
-    b.diffuse = tex_constant(rgb_gray(0.5));
-    snprintf(b.id, sizeof b.id, "(default diffuse)");
+    b.diffuse = tex_constant(rgb_gray(black ? 0.0 : 0.5));
+    snprintf(b.id, sizeof b.id, "%s", black ? "(default black)" : "(default diffuse)");
     int idx = scene_add_bsdf(B->s, &b, B->err);
     if (idx < 0) return (lmc_status)idx;
-    B->default_bsdf = idx;
+    B->default_bsdf[black] = idx;
   }
-  *out_index = B->default_bsdf;
+  *out_index = B->default_bsdf[black];
   return LMC_OK;
 }
 

@@ -29,7 +29,8 @@ typedef struct builder {
   int n_ids, cap_ids;
   tex_fixup *fix;
   int n_fix, cap_fix;
-  int default_bsdf; /* shared diffuse 0.5, or -1 */
+  int default_bsdf[2]; /* shared default BSDFs: [0] diffuse 0.5, [1] black; -1 until made */
+  int emitters_ignored; /* emitters left out (unsupported, misplaced): for the summary */
   int have_sensor;
   int spp_from_dpt;
 } builder;
@@ -118,6 +119,8 @@ int64_t xml__bad_texels(lmc_image *img, int repair);
 /* Builds a bsdf object into the scene once; returns its index. */
 lmc_status xml__bsdf(builder *B, pset *o, int *out_index);
 
-lmc_status xml__default_bsdf(builder *B, int *out_index);
+/* The BSDF of a shape that names none, as Mitsuba gives it: black when
+ * the shape emits (black = 1), else diffuse 0.5; shared, made once. */
+lmc_status xml__default_bsdf(builder *B, int black, int *out_index);
 
 #endif

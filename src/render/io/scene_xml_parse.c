@@ -11,6 +11,9 @@
  *     rotate, scale, lookat (or lookAt) and matrix, composed in document
  *     order as Mitsuba does (each one is applied after the ones before:
  *     M = M_new * M_old);
+ *   - an <animation name> (Mitsuba's keyframed transform): its first
+ *     <transform> keyframe becomes the transform `name`, the others are
+ *     skipped, with a warning (no motion blur);
  *   - a leaf property, which may not have children.
  *
  * Attribute values go through parameter substitution first: `$name` is
@@ -48,12 +51,13 @@
 #define PARSE_MAX_INCLUDE 16
 #define PARSE_VALUE_MAX 8192
 
-typedef enum frame_kind { FR_OBJECT = 0, FR_TRANSFORM, FR_LEAF, FR_SKIP } frame_kind;
+typedef enum frame_kind { FR_OBJECT = 0, FR_TRANSFORM, FR_ANIMATION, FR_LEAF, FR_SKIP } frame_kind;
 
 typedef struct parse_frame {
   frame_kind kind;
-  pset *obj;     /* FR_OBJECT: the object; FR_TRANSFORM: its owner */
-  int prop;      /* FR_TRANSFORM: index of the transform prop in obj */
+  pset *obj;     /* FR_OBJECT: the object; FR_TRANSFORM, FR_ANIMATION: its owner */
+  int prop;      /* FR_TRANSFORM, FR_ANIMATION: index of the transform prop in obj */
+  int keyframes; /* FR_ANIMATION: the <transform>s seen so far */
 } parse_frame;
 
 typedef struct param {
@@ -391,6 +395,7 @@ static void parse__push(parse_ctx *c, frame_kind k, pset *obj, int prop_index) {
   c->stack[c->depth].kind = k;
   c->stack[c->depth].obj = obj;
   c->stack[c->depth].prop = prop_index;
+  c->stack[c->depth].keyframes = 0;
   c->depth++;
 }
 
@@ -600,6 +605,15 @@ static void XMLCALL parse__start(void *user, const XML_Char *tag, const XML_Char
     parse__push(c, FR_LEAF, NULL, -1);
     return;
   }
+  if (top->kind == FR_ANIMATION) {
+    /* Its keyframes: the first is the transform, the others are skipped. */
+    if (strcmp(tag, "transform") != 0) {
+      parse__fail(c, LMC_EPARSE, "unexpected <%s> inside <animation> (only <transform>)", tag);
+      return;
+    }
+    parse__push(c, top->keyframes++ == 0 ? FR_TRANSFORM : FR_SKIP, top->obj, top->prop);
+    return;
+  }
 
   /* Inside an object. */
   pset *obj = top->obj;
@@ -661,7 +675,17 @@ static void XMLCALL parse__start(void *user, const XML_Char *tag, const XML_Char
       return;
     }
     parse__push(c, FR_LEAF, NULL, -1);
-  } else if (strcmp(tag, "alias") == 0 || strcmp(tag, "animation") == 0) {
+  } else if (strcmp(tag, "animation") == 0) {
+    /* Motion (Mitsuba's keyframed transform): the shutter opens at the
+     * first keyframe, which is what lmc renders. */
+    prop *q = parse__new_prop(c, obj, tag, PROP_TRANSFORM, 1);
+    if (!q) return;
+    q->t = xform_identity();
+    lmc_warn(c->file, q->line,
+             "<animation name=\"%s\">: motion blur is not supported; rendered at its first "
+             "keyframe", q->name);
+    parse__push(c, FR_ANIMATION, obj, obj->n_props - 1);
+  } else if (strcmp(tag, "alias") == 0) {
     lmc_warn(c->file, parse__line(c), "<%s> is not supported: ignored", tag);
     parse__push(c, FR_SKIP, NULL, -1);
   } else {
@@ -693,6 +717,11 @@ static void XMLCALL parse__end(void *user, const XML_Char *tag) {
   parse_ctx *c = user;
   (void)tag;
   if (c->status != LMC_OK) return;
+  if (c->depth > 0 && c->stack[c->depth - 1].kind == FR_ANIMATION &&
+      c->stack[c->depth - 1].keyframes == 0) {
+    parse__fail(c, LMC_EPARSE, "<animation> without a keyframe (<transform>)");
+    return;
+  }
   if (c->depth > 0) c->depth--;
 }
 
