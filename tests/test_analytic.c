@@ -8,6 +8,9 @@
  *  diffuse_sphere.xml  a convex diffuse sphere of albedo 0.5 in a constant
  *                      environment L = (1, 2, 4): covered pixels have the
  *                      expectation 0.5 L, background pixels L.
+ *  mask.xml            Mitsuba's mask: a lone masked square (see through
+ *                      it: exactly a 0.5 L + (1 - a) L) and a lossless
+ *                      masked sphere (exactly L) in the same environment.
  *
  * Pixels are grouped by what their four corners and centre see (found with
  * the scene's own ray queries, independent of shading): one object, or the
@@ -162,11 +165,26 @@ static void test_diffuse_sphere(void **state) {
                var[LMC_SAMPLER_INDEPENDENT][it][c]);
 }
 
+static void test_mask(void **state) {
+  (void)state;
+  rgb ex[MAX_GROUPS];
+  for (int g = 0; g < MAX_GROUPS; g++) ex[g] = rgb_make(1.0, 2.0, 4.0);
+  ex[0] = rgb_make(0.25 * 0.5 * 1.0 + 0.75 * 1.0, 0.5 * 0.5 * 2.0 + 0.5 * 2.0,
+                   0.75 * 0.5 * 4.0 + 0.25 * 4.0); /* the square, mesh 0 */
+  int checks = 0;
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++) {
+    checks += check_scene("data/analytic/mask.xml", "pt", smp, 32, ex, 3, NULL);
+    checks += check_scene("data/analytic/mask.xml", "bdpt", smp, 32, ex, 3, NULL);
+  }
+  assert_int_equal(checks, 2 * 2 * 3 * 3);
+}
+
 int main(void) {
   lmc_warn_set_quiet(1);
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_furnace),
       cmocka_unit_test(test_diffuse_sphere),
+      cmocka_unit_test(test_mask),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -25,7 +25,9 @@
  *   - delta lobes: dielectric reflect + refract probabilities sum to 1 and
  *     equal F, Snell's law, total internal reflection, radiance scaling;
  *   - one-sidedness and the twosided flip; Fresnel identities; tables and
- *     defaults.
+ *     defaults;
+ *   - the mask: f, pdf and samples against the wrapped model's, its
+ *     pass-through lobe, and energy conservation of a white diffuse mask.
  * Each test counts its checks and asserts the count.
  */
 #include <setjmp.h>
@@ -70,7 +72,7 @@ typedef struct config {
   int n_theta, n_phi; /* chi-square grid (finer for the sharpest lobes) */
 } config;
 
-#define MAX_CONFIGS 96
+#define MAX_CONFIGS 128
 
 /* Every non-delta configuration of the chi-square and consistency tests. */
 static int make_configs(config *c) {
@@ -165,6 +167,19 @@ static int make_configs(config *c) {
   c[n].b.dist = MF_GGX;
   c[n].wo = dir(-0.5, phi0);
   snprintf(c[n].name, sizeof c[n].name, "twosided roughconductor ggx a=0.3 wo.z=-0.50");
+  n++;
+  /* Masks (their pass-through counts as rejected): on diffuse, and on the
+   * twosided rough conductor seen from below. */
+  bsdf_init_defaults(&c[n].b, BSDF_DIFFUSE);
+  c[n].b.masked = 1;
+  c[n].b.opacity = tex_constant(rgb_make(0.3, 0.6, 0.9));
+  c[n].wo = dir(0.7, phi0);
+  snprintf(c[n].name, sizeof c[n].name, "mask diffuse wo.z=0.70");
+  n++;
+  c[n] = c[n - 2];
+  c[n].b.masked = 1;
+  c[n].b.opacity = tex_constant(rgb_gray(0.5));
+  snprintf(c[n].name, sizeof c[n].name, "mask twosided roughconductor ggx a=0.3 wo.z=-0.50");
   n++;
   for (int i = 0; i < n; i++)
     if (!c[i].n_theta) {
@@ -325,6 +340,97 @@ static void test_sample_consistency(void **state) {
   assert_true(checked > 100000);
   assert_true(checked_rev > 20000); /* the rough models compute it */
   assert_int_equal(bad, 0);
+}
+
+/* ---- mask ------------------------------------------------------------------ */
+
+/* Mitsuba's mask around a model, from both sides and in both modes: f and
+ * the density are the model's times the opacity and its luminance P; u_lobe
+ * at or above P passes straight through (wi = -wo, delta transmission,
+ * eta 1, density 1 - P, weight (1 - opacity) / (1 - P)); below P the
+ * model's own sample at u_lobe / P, f times the opacity, density times P.
+ * A white diffuse mask conserves energy: opacity reflected plus
+ * 1 - opacity passed is 1 in every channel (Monte Carlo, 5 sigma). */
+static void test_mask(void **state) {
+  (void)state;
+  int checks = 0;
+  const rgb alpha = rgb_make(0.2, 0.5, 0.9);
+  const double prob = rgb_luminance(alpha);
+  bsdf models[3];
+  bsdf_init_defaults(&models[0], BSDF_DIFFUSE);
+  bsdf_init_defaults(&models[1], BSDF_ROUGHCONDUCTOR);
+  models[1].twosided = 1;
+  models[1].alpha = 0.3;
+  bsdf_init_defaults(&models[2], BSDF_DIELECTRIC);
+  rng r;
+  rng_seed(&r, 99, 5);
+  for (int m = 0; m < 3; m++) {
+    bsdf masked = models[m];
+    masked.masked = 1;
+    masked.opacity = tex_constant(alpha);
+    for (int k = 0; k < 200; k++) {
+      vec3 wo = dir(2.0 * rng_uniform(&r) - 1.0, 2.0 * M_PI * rng_uniform(&r));
+      vec3 wi = dir(2.0 * rng_uniform(&r) - 1.0, 2.0 * M_PI * rng_uniform(&r));
+      transport_mode mode = (transport_mode)(k & 1);
+      /* eval and pdf. */
+      rgb f0 = bsdf_eval(&models[m], 0.5, 0.5, wo, wi, mode);
+      rgb f1 = bsdf_eval(&masked, 0.5, 0.5, wo, wi, mode);
+      double p0 = bsdf_pdf(&models[m], 0.5, 0.5, wo, wi), p1 = bsdf_pdf(&masked, 0.5, 0.5, wo, wi);
+      double pe;
+      rgb fe = bsdf_eval_pdf(&masked, 0.5, 0.5, wo, wi, mode, &pe);
+      assert_true(rgb_rel_err(f1, rgb_mul(f0, alpha)) <= 1e-15 || rgb_is_black(f0));
+      assert_true(rel_err(p1, p0 * prob) <= 1e-15 || p0 == 0.0);
+      assert_true(memcmp(&fe, &f1, sizeof fe) == 0 && pe == p1);
+      /* The pass-through. */
+      bsdf_sample s;
+      double ul = prob + (1.0 - prob) * rng_uniform(&r);
+      assert_true(bsdf_sample_f(&masked, 0.5, 0.5, wo, ul, 0.3, 0.6, mode, &s));
+      assert_int_equal(s.flags, BSDF_TRANSMISSION | BSDF_DELTA);
+      assert_true(s.wi.x == -wo.x && s.wi.y == -wo.y && s.wi.z == -wo.z && s.eta == 1.0);
+      assert_true(rel_err(s.pdf, 1.0 - prob) < 1e-15 && s.has_pdf_rev && s.pdf_rev == s.pdf);
+      rgb w = rgb_scale(rgb_sub(rgb_gray(1.0), alpha), 1.0 / (1.0 - prob));
+      assert_true(rgb_rel_err(s.weight, w) < 1e-14);
+      /* The model's lobes. */
+      double ul2 = prob * rng_uniform(&r), u1 = rng_uniform(&r), u2 = rng_uniform(&r);
+      bsdf_sample s0, s1;
+      int ok0 = bsdf_sample_f(&models[m], 0.5, 0.5, wo, ul2 / prob, u1, u2, mode, &s0);
+      int ok1 = bsdf_sample_f(&masked, 0.5, 0.5, wo, ul2, u1, u2, mode, &s1);
+      assert_int_equal(ok0, ok1);
+      if (ok0) {
+        assert_true(s1.wi.x == s0.wi.x && s1.wi.y == s0.wi.y && s1.wi.z == s0.wi.z);
+        assert_int_equal(s1.flags, s0.flags);
+        assert_true(rgb_rel_err(s1.f, rgb_mul(s0.f, alpha)) < 1e-14);
+        assert_true(rel_err(s1.pdf, s0.pdf * prob) < 1e-14);
+        assert_true(rgb_rel_err(s1.weight, rgb_scale(rgb_mul(s0.weight, alpha), 1.0 / prob)) <
+                    1e-14);
+        if (s0.has_pdf_rev) assert_true(rel_err(s1.pdf_rev, s0.pdf_rev * prob) < 1e-14);
+      }
+      checks++;
+    }
+  }
+  /* Energy of a white diffuse mask, per channel. */
+  bsdf white;
+  bsdf_init_defaults(&white, BSDF_DIFFUSE);
+  white.diffuse = tex_constant(rgb_gray(1.0));
+  white.masked = 1;
+  white.opacity = tex_constant(alpha);
+  const int n = 200000;
+  double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++) {
+    bsdf_sample s;
+    double ul = rng_uniform(&r), u1 = rng_uniform(&r), u2 = rng_uniform(&r);
+    double w[3] = {0, 0, 0};
+    if (bsdf_sample_f(&white, 0.5, 0.5, dir(0.6, 0.4), ul, u1, u2, TRANSPORT_RADIANCE, &s))
+      w[0] = s.weight.r, w[1] = s.weight.g, w[2] = s.weight.b;
+    for (int c = 0; c < 3; c++) sum[c] += w[c], sum2[c] += w[c] * w[c];
+  }
+  for (int c = 0; c < 3; c++) {
+    double mean = sum[c] / n, se = sqrt((sum2[c] / n - mean * mean) / n);
+    if (fabs(mean - 1.0) > 5.0 * se + 1e-12)
+      fail_msg("white mask channel %d: energy %.6f +- %.6f, expected 1", c, mean, se);
+    checks++;
+  }
+  assert_int_equal(checks, 3 * 200 + 3);
 }
 
 /* ---- energy ---------------------------------------------------------------- */
@@ -843,6 +949,7 @@ int main(void) {
       cmocka_unit_test(test_dielectric_delta),  cmocka_unit_test(test_reciprocity),
       cmocka_unit_test(test_sample_consistency), cmocka_unit_test(test_energy),
       cmocka_unit_test(test_chi2_microfacet),   cmocka_unit_test(test_chi2_sampling),
+      cmocka_unit_test(test_mask),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

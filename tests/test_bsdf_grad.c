@@ -22,7 +22,9 @@
  *       derivative then has to match the Richardson value (4 D_h/2 - D_h)/3
  *       to relative 1e-5, or absolute 1e-8 of the magnitude (max(|f|, 1)).
  *       Per model, at least 99.9% of the checked components must pass and
- *       the count must exceed a stated minimum.
+ *       the count must exceed a stated minimum. Masks (a textured opacity
+ *       on diffuse, constant ones on a twosided rough conductor and the
+ *       smooth dielectric) are a model of their own here.
  * Fixed seeds; the sampled points are a deterministic function of them.
  */
 #include <setjmp.h>
@@ -70,9 +72,10 @@ static void init_image(void) {
 
 /* ---- The models under test. ------------------------------------------------- */
 
-enum { M_DIFFUSE, M_PHONG, M_CONDUCTOR, M_ROUGHCOND, M_DIELECTRIC, M_ROUGHDIEL, M_PLASTIC, M_TWOSIDED, M_COUNT };
+enum { M_DIFFUSE, M_PHONG, M_CONDUCTOR, M_ROUGHCOND, M_DIELECTRIC, M_ROUGHDIEL, M_PLASTIC, M_TWOSIDED, M_MASK, M_COUNT };
 static const char *const g_model_names[M_COUNT] = {
-    "diffuse", "phong", "conductor", "roughconductor", "dielectric", "roughdielectric", "plastic", "twosided"};
+    "diffuse", "phong", "conductor", "roughconductor", "dielectric", "roughdielectric", "plastic", "twosided",
+    "mask"};
 
 typedef struct config {
   char name[64];
@@ -173,13 +176,32 @@ static int make_configs(config *c) {
   bsdf_init_defaults(&b, BSDF_PLASTIC);
   b.twosided = 1;
   c[n++] = (config){"twosided plastic", M_TWOSIDED, b};
+
+  /* Mask: a textured opacity on diffuse (derivatives in tu, tv through
+   * the lobe probability), a constant one on a twosided rough conductor
+   * and on the smooth dielectric. */
+  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  b.masked = 1;
+  b.opacity = make_bitmap(1.0, 0.3);
+  c[n++] = (config){"mask diffuse", M_MASK, b};
+  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  b.twosided = 1;
+  b.dist = MF_GGX;
+  b.alpha = 0.3;
+  b.masked = 1;
+  b.opacity = tex_constant(rgb_make(0.2, 0.5, 0.9));
+  c[n++] = (config){"mask twosided roughconductor", M_MASK, b};
+  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  b.masked = 1;
+  b.opacity = tex_constant(rgb_make(0.7, 0.6, 0.5));
+  c[n++] = (config){"mask dielectric", M_MASK, b};
   assert_true(n <= MAX_CONFIGS);
   return n;
 }
 
 /* 1 when the model answers queries from below the surface. */
 static int both_sides(const bsdf *b) {
-  return b->twosided || b->type == BSDF_DIELECTRIC || b->type == BSDF_ROUGHDIELECTRIC;
+  return b->twosided || b->masked || b->type == BSDF_DIELECTRIC || b->type == BSDF_ROUGHDIELECTRIC;
 }
 
 /* ---- Evaluation of everything at one point x[NVAR]. ----------------------- */

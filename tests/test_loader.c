@@ -407,6 +407,91 @@ static void test_mitsuba_defaults(void **state) {
   assert_int_equal(checks, 14);
 }
 
+/* Mitsuba's mask: the wrapped BSDF with the flag and its opacity (0.5 by
+ * default, a colour, or a bitmap's channel: "g" of the test texture is its
+ * green channel repeated); an opacity outside [0, 1], an unknown channel,
+ * alpha from a file without one, and a mask in a mask are errors at their
+ * line. */
+static void test_mask_loader(void **state) {
+  (void)state;
+  int checks = 0;
+  char xml[4096];
+  snprintf(xml, sizeof xml,
+           HEAD SENSOR LIGHT
+           "  <bsdf type=\"mask\" id=\"half\">\n"
+           "    <bsdf type=\"twosided\"><bsdf type=\"roughconductor\"/></bsdf>\n"
+           "  </bsdf>\n"
+           "  <bsdf type=\"mask\" id=\"tinted\">\n"
+           "    <rgb name=\"opacity\" value=\"0.1, 0.2, 0.3\"/>\n"
+           "    <bsdf type=\"diffuse\"/>\n"
+           "  </bsdf>\n"
+           "  <bsdf type=\"mask\" id=\"leaf\">\n"
+           "    <texture type=\"bitmap\" name=\"opacity\">\n"
+           "      <string name=\"filename\" value=\"" TEXFILE "\"/>\n"
+           "      <string name=\"channel\" value=\"g\"/>\n"
+           "    </texture>\n"
+           "    <bsdf type=\"diffuse\"/>\n"
+           "  </bsdf>\n"
+           "  <shape type=\"cube\"><ref id=\"leaf\"/></shape>\n"
+           "</scene>\n");
+  int warnings;
+  scene *s = load_case_ok("/tmp/lmc_loader_mask.xml", xml, 0, &warnings);
+  assert_int_equal(warnings, 0);
+  const bsdf *half = find_bsdf(s, "half"), *tinted = find_bsdf(s, "tinted");
+  const bsdf *leaf = find_bsdf(s, "leaf");
+  assert_true(half->masked && half->twosided && half->type == BSDF_ROUGHCONDUCTOR);
+  assert_true(half->opacity.type == TEX_CONSTANT && half->opacity.value.g == 0.5);
+  assert_true(tinted->masked && tinted->type == BSDF_DIFFUSE);
+  assert_true(tinted->opacity.value.r == 0.1 && tinted->opacity.value.b == 0.3);
+  checks += 4;
+  /* The leaf's opacity: the texture file's green channel, in all three. */
+  assert_true(leaf->masked && leaf->opacity.type == TEX_BITMAP && leaf->opacity.image);
+  lmc_image ref = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  assert_int_equal(image_read(TEXFILE, 1, &ref, &err), LMC_OK);
+  assert_int_equal(image_to_rgb(&ref, &err), LMC_OK);
+  const lmc_image *op = leaf->opacity.image;
+  assert_true(op->width == ref.width && op->height == ref.height && op->channels == 3);
+  int texels = 0;
+  for (int i = 0; i < ref.width * ref.height; i++, texels++)
+    for (int c = 0; c < 3; c++) assert_true(op->data[3 * i + c] == ref.data[3 * i + 1]);
+  assert_int_equal(texels, 16);
+  image_free(&ref);
+  scene_destroy(s);
+  checks++;
+
+  static const struct {
+    const char *body, *needle;
+    int line;
+  } bad[] = {
+      {"  <bsdf type=\"mask\">\n    <float name=\"opacity\" value=\"1.5\"/>\n"
+       "    <bsdf type=\"diffuse\"/>\n  </bsdf>\n", "in [0, 1]", 7},
+      {"  <bsdf type=\"mask\">\n    <texture type=\"bitmap\" name=\"opacity\">\n"
+       "      <string name=\"filename\" value=\"" TEXFILE "\"/>\n"
+       "      <string name=\"channel\" value=\"q\"/>\n    </texture>\n"
+       "    <bsdf type=\"diffuse\"/>\n  </bsdf>\n", "channel", 9},
+      {"  <bsdf type=\"mask\">\n    <texture type=\"bitmap\" name=\"opacity\">\n"
+       "      <string name=\"filename\" value=\"" TEXFILE "\"/>\n"
+       "      <string name=\"channel\" value=\"a\"/>\n    </texture>\n"
+       "    <bsdf type=\"diffuse\"/>\n  </bsdf>\n", "no alpha", 8},
+      {"  <bsdf type=\"mask\">\n    <bsdf type=\"mask\">\n"
+       "      <bsdf type=\"diffuse\"/>\n    </bsdf>\n  </bsdf>\n", "mask inside a mask", 6},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++, checks++) {
+    snprintf(xml, sizeof xml, HEAD SENSOR "%s</scene>\n", bad[i].body);
+    write_text("/tmp/lmc_loader_mask_bad.xml", xml);
+    lmc_error_clear(&err);
+    lmc_warn_set_quiet(1);
+    lmc_status st = scene_load_xml("/tmp/lmc_loader_mask_bad.xml", NULL, 0, &s, &err);
+    lmc_warn_set_quiet(0);
+    if (st == LMC_OK || err.line != bad[i].line || !strstr(err.msg, bad[i].needle))
+      fail_msg("mask case %zu: status %d, line %d (expected %d), message '%s'", i, (int)st,
+               err.line, bad[i].line, err.msg);
+  }
+  assert_int_equal(checks, 5 + 4);
+}
+
 /* <lookAt>, Mitsuba 0.6's other spelling of <lookat>: the same camera,
  * its pinhole at the origin given and the matrix the same to the bit. */
 static void test_lookat_spelling(void **state) {
@@ -700,6 +785,7 @@ int main(void) {
       cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
       cmocka_unit_test(test_lookat_spelling),
       cmocka_unit_test(test_sampler_type),    cmocka_unit_test(test_mitsuba_defaults),
+      cmocka_unit_test(test_mask_loader),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

@@ -5,7 +5,10 @@
  *
  *  furnace.xml         every pixel has expectation exactly 1;
  *  diffuse_sphere.xml  covered pixels 0.5 L, background pixels L,
- *                      L = (1, 2, 4).
+ *                      L = (1, 2, 4);
+ *  mask.xml            a masked square (0.875, 1.5, 2.5), a lossless
+ *                      masked sphere and the background L, in pssmlt,
+ *                      mmlt, lmc and h2mc.
  *
  * An MCMC image's pixels are correlated (chains wander over the film, and
  * the bootstrap's b scales the whole image), so the spread of pixels does
@@ -95,8 +98,8 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   return rs;
 }
 
-/* Group of pixel (x, y): 0 environment, 1 an object, -1 mixed (probes at
- * the corners and centre disagree). */
+/* Group of pixel (x, y): 0 environment, 1 + the mesh index of an object,
+ * -1 mixed (probes at the corners and centre disagree). */
 static int pixel_group(const scene *s, int x, int y) {
   static const double off[5][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}, {0.5, 0.5}};
   int g = -2;
@@ -104,7 +107,7 @@ static int pixel_group(const scene *s, int x, int y) {
     vec3 o, d;
     camera_generate_ray(&s->cam, x + off[k][0], y + off[k][1], &o, &d);
     surface_hit h;
-    int gk = scene_intersect(s, o, d, 0.0, INFINITY, &h) ? 1 : 0;
+    int gk = scene_intersect(s, o, d, 0.0, INFINITY, &h) ? 1 + h.mesh : 0;
     if (g == -2) g = gk;
     else if (g != gk) return -1;
   }
@@ -113,10 +116,12 @@ static int pixel_group(const scene *s, int x, int y) {
 
 /* Renders R seeds and checks the per-group channel means against expect
  * (NULL entries: group not checked). */
+#define MAX_GROUPS 3
 static void check_scene(const char *file, const char *integrator, int64_t spp, const rgb *expect,
                         int n_groups, double extra_tol) {
   scene *s = load(file);
-  double sum[2][3] = {{0}}, sum2[2][3] = {{0}};
+  assert_true(n_groups <= MAX_GROUPS);
+  double sum[MAX_GROUPS][3] = {{0}}, sum2[MAX_GROUPS][3] = {{0}};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = settings(s, integrator, spp, 100 + (uint64_t)r, 2);
     film f;
@@ -138,12 +143,12 @@ static void check_scene(const char *file, const char *integrator, int64_t spp, c
     }
     lmc_image img;
     assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
-    double gs[2][3] = {{0}};
-    int gn[2] = {0, 0};
+    double gs[MAX_GROUPS][3] = {{0}};
+    int gn[MAX_GROUPS] = {0};
     for (int y = 0; y < img.height; y++)
       for (int x = 0; x < img.width; x++) {
         int g = n_groups == 1 ? 0 : pixel_group(s, x, y);
-        if (g < 0) continue;
+        if (g < 0 || g >= n_groups) continue;
         const float *p = img.data + 3 * ((size_t)y * img.width + x);
         for (int c = 0; c < 3; c++) gs[g][c] += p[c];
         gn[g]++;
@@ -205,6 +210,16 @@ static void test_h2mc(void **state) {
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.003);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
   g_states = NULL;
+}
+
+/* Mitsuba's mask (mask.xml: the environment, a masked square seen
+ * through, a lossless masked sphere) in every MCMC integrator: the
+ * pass-through lobe, in the plain and (lmc, h2mc) dual paths. */
+static void test_mask(void **state) {
+  (void)state;
+  rgb e[3] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.875, 1.5, 2.5), rgb_make(1.0, 2.0, 4.0)};
+  static const char *const integrators[] = {"pssmlt", "mmlt", "lmc", "h2mc"};
+  for (int i = 0; i < 4; i++) check_scene("mask.xml", integrators[i], 16, e, 3, 0.0);
 }
 
 static void test_diffuse_sphere(void **state) {
@@ -343,11 +358,11 @@ static void test_determinism(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, h2mc furnace and
-   * sphere 2 groups on two state spaces, then separate: furnace 2, sphere
-   * 3 x 2 groups; 3 channels each; and the refined b. */
-  assert_int_equal(g_checks,
-                   3 + 3 + 3 + 2 * 2 * 3 + 2 * (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
+  /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, mask 4 x 3 groups,
+   * h2mc furnace and sphere 2 groups on two state spaces, then separate:
+   * furnace 2, sphere 3 x 2 groups; 3 channels each; and the refined b. */
+  assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + 4 * 3 * 3 + 2 * (1 + 2) * 3 +
+                                 (2 + 3 * 2) * 3 + 2 * RUNS);
 }
 
 static int reset_direct(void **state) {
@@ -363,6 +378,7 @@ int main(void) {
       cmocka_unit_test(test_furnace_pssmlt),
       cmocka_unit_test(test_furnace_mmlt),
       cmocka_unit_test(test_diffuse_sphere),
+      cmocka_unit_test(test_mask),
       cmocka_unit_test(test_h2mc),
       cmocka_unit_test_teardown(test_direct_separate, reset_direct),
       cmocka_unit_test(test_refined_b),

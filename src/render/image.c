@@ -66,6 +66,23 @@ lmc_status image_to_rgb(lmc_image *img, lmc_error *err) {
   return LMC_OK;
 }
 
+lmc_status image_select_channel(lmc_image *img, int channel, lmc_error *err) {
+  int c = img->channels;
+  int has_alpha = c == 2 || c == 4;
+  if (channel == 3 && !has_alpha)
+    return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0, "the image has no alpha channel");
+  /* The source channel: alpha is the last; grey images have one colour. */
+  int src = channel == 3 ? c - 1 : c < 3 ? 0 : channel;
+  size_t n = (size_t)img->width * (size_t)img->height;
+  float *d = malloc(n * 3 * sizeof(float) + 1);
+  if (!d) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory converting an image");
+  for (size_t i = 0; i < n; i++) d[3 * i] = d[3 * i + 1] = d[3 * i + 2] = img->data[c * i + src];
+  free(img->data);
+  img->data = d;
+  img->channels = 3;
+  return LMC_OK;
+}
+
 lmc_status image_check_size(const char *path, const char *format, long long width,
                             long long height, lmc_error *err) {
   if (width <= IMAGE_MAX_SIDE && height <= IMAGE_MAX_SIDE && width * height <= IMAGE_MAX_PIXELS)

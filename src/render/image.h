@@ -29,6 +29,10 @@ lmc_status image_init(lmc_image *img, int width, int height, int channels, lmc_e
 void image_free(lmc_image *img);
 /* Converts in place to 3 channels (grey is replicated, alpha dropped). */
 lmc_status image_to_rgb(lmc_image *img, lmc_error *err);
+/* Replaces img by channel `channel` (0 r, 1 g, 2 b, 3 alpha) repeated in 3
+ * channels; a grey image's colour channels are its grey. An alpha asked of
+ * an image without one is an error (LMC_EUNSUPPORTED). */
+lmc_status image_select_channel(lmc_image *img, int channel, lmc_error *err);
 
 /* The largest image the readers accept: IMAGE_MAX_SIDE pixels a side (16K,
  * the texture limit of current GPUs) and IMAGE_MAX_PIXELS in all (2^27: a

@@ -205,7 +205,8 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
   }
 }
 
-int bsdf_flags(const bsdf *b) {
+/* The lobes of the model itself (without its mask). */
+static int bsdf__model_flags(const bsdf *b) {
   switch (b->type) {
   case BSDF_DIFFUSE:
     return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE;
@@ -227,9 +228,16 @@ int bsdf_flags(const bsdf *b) {
   return 0;
 }
 
+int bsdf_flags(const bsdf *b) {
+  /* A mask adds its pass-through: a delta transmission. */
+  return bsdf__model_flags(b) | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
+}
+
+/* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
 int bsdf_is_delta(const bsdf *b) { return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC; }
 
 int bsdf_is_rough(const bsdf *b, double rough_min) {
+  if (b->masked) return 0; /* the pass-through is a delta lobe */
   switch (b->type) {
   case BSDF_DIFFUSE:
     return 1.0 > rough_min;

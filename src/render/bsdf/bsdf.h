@@ -11,6 +11,15 @@
  *   roughdielectric microfacet glass (Walter et al. 2007): distribution, alpha
  *   plastic         smooth dielectric coating on a diffuse base (Mitsuba's plastic)
  *   twosided        the flag `twosided` on the wrapped model
+ *   mask            the flag `masked` and the texture `opacity` on the wrapped
+ *                   model (Mitsuba's mask): f = opacity f_wrapped, plus a
+ *                   pass-through delta lobe (wi = -wo, weight (1 - opacity)
+ *                   / (1 - P)) chosen with probability 1 - P, P the
+ *                   luminance of the opacity; the wrapped model's lobes get
+ *                   P. Both sides pass. The pass-through is a vertex like a
+ *                   refraction of eta 1: a shadow ray is blocked by a mask
+ *                   as by any surface, and the light behind it is found by
+ *                   the pass-through lobe (as Mitsuba's path tracer does).
  *
  * Conventions: all directions are in the local shading frame (z-up), unit,
  * pointing away from the surface. bsdf_eval returns f without the cosine
@@ -70,6 +79,8 @@ typedef struct bsdf {
   double eta;            /* dielectrics, plastic: intIOR / extIOR */
   rgb cond_eta, cond_k;  /* conductors: complex index of refraction relative to extIOR */
   int nonlinear;         /* plastic: Mitsuba's `nonlinear` */
+  int masked;            /* mask: the model is wrapped in Mitsuba's mask */
+  texture opacity;       /* mask: per-channel opacity in [0, 1] (1: opaque) */
   char id[64];           /* the XML id, for messages */
 } bsdf;
 

@@ -93,6 +93,33 @@ int R_FN(bsdf__finish)(R_CTX R_FN(bsdf_sample) *out, REAL3 wi, RRGB f, REAL pdf,
   return 1;
 }
 
+/* ---- Mask ------------------------------------------------------------------- */
+
+/* The mask's opacity at (tu, tv) into *OUT_alpha and the probability of
+ * choosing the wrapped model's lobes, P = luminance(opacity). */
+static REAL R_FN(bsdf__mask_prob)(R_CTX const bsdf *b, REAL tu, REAL tv, RRGB *OUT_alpha) {
+  *OUT_alpha = R_FN(tex_eval)(R_ARG &b->opacity, tu, tv);
+  return RRGB_LUMINANCE(*OUT_alpha);
+}
+
+/* The pass-through lobe: wi = -wo with probability 1 - P, weight
+ * (1 - opacity) / (1 - P), f = (1 - opacity) / |cos wi| by the delta
+ * convention; no change of index (eta 1), the same from either side. */
+static int R_FN(bsdf__mask_pass)(R_CTX REAL3 wo, RRGB alpha, REAL prob,
+                                 R_FN(bsdf_sample) *out) {
+  REAL3 wi = R3_NEG(wo);
+  if (R_V(wi.z) == 0.0) return 0;
+  RRGB t = RRGB_MAKE(R_S_SUB(1.0, alpha.r), R_S_SUB(1.0, alpha.g), R_S_SUB(1.0, alpha.b));
+  REAL pdf = R_S_SUB(1.0, prob);
+  RRGB f = RRGB_SCALE(t, R_DIV(R_C(1.0), R_FABS(wi.z)));
+  int ok = R_FN(bsdf__finish)(R_ARG out, wi, f, pdf, 1.0, BSDF_TRANSMISSION | BSDF_DELTA);
+#if !R_DUAL
+  out->has_pdf_rev = 1;
+  out->pdf_rev = pdf;
+#endif
+  return ok;
+}
+
 /* ---- Dispatch --------------------------------------------------------------- */
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */
@@ -126,6 +153,7 @@ RRGB R_FN(bsdf_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
     f = RRGB_ZERO();
     break;
   }
+  if (b->masked) f = RRGB_MUL(f, R_FN(tex_eval)(R_ARG &b->opacity, tu, tv));
 #if R_DUAL
   ad *keep[3] = {&f.r, &f.g, &f.b};
   bsdf__ad_keep(A, mark, keep, 3);
@@ -150,6 +178,10 @@ REAL R_FN(bsdf_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
     p = R_C(0.0);
     break;
   }
+  if (b->masked) {
+    RRGB alpha;
+    p = R_MUL(p, R_FN(bsdf__mask_prob)(R_ARG b, tu, tv, &alpha));
+  }
 #if R_DUAL
   ad *keep[1] = {&p};
   bsdf__ad_keep(A, mark, keep, 1);
@@ -173,9 +205,15 @@ RRGB R_FN(bsdf_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 
     f = R_FN(bsdf__roughdielectric_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
     break;
   default:
-    /* Nothing to share: the two dispatchers (each applies the flip itself). */
+    /* Nothing to share: the two dispatchers (each applies the flip and
+     * the mask itself). */
     *OUT_pdf = R_FN(bsdf_pdf)(R_ARG b, tu, tv, wo, wi);
     return R_FN(bsdf_eval)(R_ARG b, tu, tv, wo, wi, mode);
+  }
+  if (b->masked) {
+    RRGB alpha;
+    *OUT_pdf = R_MUL(*OUT_pdf, R_FN(bsdf__mask_prob)(R_ARG b, tu, tv, &alpha));
+    f = RRGB_MUL(f, alpha);
   }
   return f;
 }
@@ -185,8 +223,6 @@ int R_FN(bsdf_sample_f)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_
 #if R_DUAL
   size_t mark = ad_arena_mark(A);
 #endif
-  int flip = R_FN(bsdf__flip)(b, wo);
-  if (flip) wo.z = R_NEG(wo.z);
 #if R_DUAL
   out->wi = R3_CONST(0.0, 0.0, 0.0);
   out->f = RRGB_ZERO();
@@ -197,7 +233,21 @@ int R_FN(bsdf_sample_f)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_
 #else
   memset(out, 0, sizeof *out);
 #endif
+  /* A mask passes with probability 1 - P, else its lobes take u_lobe
+   * rescaled to [0, 1). */
+  RRGB alpha = RRGB_ZERO();
+  REAL prob = R_C(1.0);
   int ok = 0;
+  if (b->masked) {
+    prob = R_FN(bsdf__mask_prob)(R_ARG b, tu, tv, &alpha);
+    if (!(R_V(u_lobe) < R_V(prob))) {
+      ok = R_FN(bsdf__mask_pass)(R_ARG wo, alpha, prob, out);
+      goto done;
+    }
+    u_lobe = R_DIV(u_lobe, prob);
+  }
+  int flip = R_FN(bsdf__flip)(b, wo);
+  if (flip) wo.z = R_NEG(wo.z);
   switch (b->type) {
 #define BSDF__CASE(TYPE, NAME)                                                                     \
   case TYPE:                                                                                       \
@@ -209,6 +259,17 @@ int R_FN(bsdf_sample_f)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_
     break;
   }
   if (flip) out->wi.z = R_NEG(out->wi.z);
+  if (b->masked && ok) {
+    /* The wrapped lobe's f times the opacity, its density times P. */
+    out->f = RRGB_MUL(out->f, alpha);
+    out->pdf = R_MUL(out->pdf, prob);
+    out->weight = RRGB_MUL(out->weight, RRGB_SCALE(alpha, R_DIV(R_C(1.0), prob)));
+#if !R_DUAL
+    if (out->has_pdf_rev) out->pdf_rev *= prob;
+#endif
+    ok = !RRGB_IS_BLACK(out->weight) && RRGB_IS_FINITE(out->weight);
+  }
+done:;
 #if R_DUAL
   ad *keep[10] = {&out->wi.x, &out->wi.y, &out->wi.z, &out->f.r,      &out->f.g,
                   &out->f.b,  &out->pdf,  &out->weight.r, &out->weight.g, &out->weight.b};

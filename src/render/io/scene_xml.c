@@ -9,8 +9,8 @@
  * then walks the children of <scene> in document order:
  *   sensor      perspective pinhole with its film and reconstruction filter;
  *   bsdf        diffuse, phong, conductor, roughconductor, dielectric,
- *               roughdielectric, plastic, twosided (Mitsuba's names and
- *               defaults; see bsdf.h);
+ *               roughdielectric, plastic, twosided, mask (Mitsuba's names
+ *               and defaults; see bsdf.h);
  *   texture     bitmap and checkerboard, built when a BSDF refers to them;
  *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
  *               cylinder, with an optional nested area emitter; without a
@@ -796,7 +796,7 @@ static lmc_status xml__build(builder *B, pset *root) {
   for (int i = 0; i < B->n_fix; i++) {
     const tex_fixup *f = &B->fix[i];
     bsdf *b = &B->s->bsdfs[f->bsdf];
-    texture *t = f->which == 0 ? &b->diffuse : f->which == 1 ? &b->specular : &b->transmittance;
+    texture *t = xml__tex_slot(b, f->which);
     t->image = &B->s->images[f->image];
     tex_update_mean(t); /* BSDFs choose lobes by the mean; cache it once */
   }

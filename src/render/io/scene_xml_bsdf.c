@@ -44,9 +44,24 @@ static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
   if (has_gamma && gamma == 1.0) srgb = 0;
   else if (has_gamma && gamma != -1.0)
     lmc_warn(o->file, o->line, "bitmap gamma %g is approximated by the sRGB curve", gamma);
+  /* channel: one channel of the file as a grey texture (a mask's opacity
+   * from the alpha channel); r, g, b or a, as Mitsuba names them. */
+  const char *ch;
+  prop *cp;
+  if ((st = xml__string(B, o, "channel", NULL, &ch, &cp)) != LMC_OK) return st;
+  int channel = -1;
+  if (ch) {
+    static const char *const names[4] = {"r", "g", "b", "a"};
+    for (int k = 0; k < 4; k++)
+      if (strcmp(ch, names[k]) == 0) channel = k;
+    if (channel < 0)
+      return xml__fail(B, LMC_EPARSE, cp->file, cp->line,
+                       "bitmap channel \"%s\" is not supported (r, g, b or a)", ch);
+  }
   lmc_image img = {0};
   st = image_read(path, srgb, &img, B->err);
-  if (st == LMC_OK) st = image_to_rgb(&img, B->err);
+  if (st == LMC_OK)
+    st = channel >= 0 ? image_select_channel(&img, channel, B->err) : image_to_rgb(&img, B->err);
   if (st != LMC_OK) {
     image_free(&img);
     return xml__relabel(B, st, fp, "texture image");
@@ -259,18 +274,53 @@ static lmc_status xml__eta(builder *B, pset *o, const char *int_default, const c
   return LMC_OK;
 }
 
-/* Fills *b from a bsdf object; img[3] get image indices of the diffuse,
- * specular and transmittance textures (-1: none). Does not add to the scene. */
-static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int depth) {
+texture *xml__tex_slot(bsdf *b, int which) {
+  texture *slots[XML__TEX_SLOTS] = {&b->diffuse, &b->specular, &b->transmittance, &b->opacity};
+  return slots[which];
+}
+
+/* A mask's opacity (Mitsuba's default 0.5): a colour or a texture, whose
+ * values must lie in [0, 1] (an opacity above 1 would make the
+ * pass-through's weight negative). */
+static lmc_status xml__opacity(builder *B, pset *o, bsdf *b, int *img) {
+  lmc_status st = xml__texture(B, o, "opacity", rgb_gray(0.5), &b->opacity, img);
+  if (st != LMC_OK) return st;
+  b->masked = 1;
+  float lo = 0.0f, hi = 1.0f;
+  if (b->opacity.type == TEX_CONSTANT) {
+    rgb c = b->opacity.value;
+    lo = (float)fmin(c.r, fmin(c.g, c.b));
+    hi = (float)fmax(c.r, fmax(c.g, c.b));
+  } else if (b->opacity.type == TEX_CHECKERBOARD) {
+    rgb c0 = b->opacity.color0, c1 = b->opacity.color1;
+    lo = (float)fmin(fmin(c0.r, fmin(c0.g, c0.b)), fmin(c1.r, fmin(c1.g, c1.b)));
+    hi = (float)fmax(fmax(c0.r, fmax(c0.g, c0.b)), fmax(c1.r, fmax(c1.g, c1.b)));
+  } else if (*img >= 0) {
+    const lmc_image *im = &B->s->images[*img];
+    size_t n = (size_t)im->width * im->height * im->channels;
+    for (size_t i = 0; i < n; i++) lo = fminf(lo, im->data[i]), hi = fmaxf(hi, im->data[i]);
+  }
+  if (!(lo >= 0.0f && hi <= 1.0f)) {
+    prop *p = xml__find(o, "opacity");
+    return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                     "mask opacity must lie in [0, 1] (its values span %g to %g)", lo, hi);
+  }
+  return LMC_OK;
+}
+
+/* Fills *b from a bsdf object; img[XML__TEX_SLOTS] get image indices of
+ * the textures of xml__tex_slot (-1: none). Does not add to the scene. */
+static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_SLOTS],
+                                 int depth) {
   lmc_status st;
-  img[0] = img[1] = img[2] = -1;
+  for (int k = 0; k < XML__TEX_SLOTS; k++) img[k] = -1;
   if (depth > 8)
     return xml__fail(B, LMC_EPARSE, o->file, o->line, "BSDFs nested too deeply (a cycle?)");
   const char *t = o->type;
   if (strcmp(t, "twosided") == 0 || strcmp(t, "bumpmap") == 0 || strcmp(t, "normalmap") == 0 ||
       strcmp(t, "mask") == 0 || strcmp(t, "coating") == 0 || strcmp(t, "roughcoating") == 0) {
-    /* Wrappers: twosided sets the flag, the others are not modelled and
-     * fall back to the wrapped BSDF. */
+    /* Wrappers: twosided sets the flag, mask the flag and its opacity;
+     * the others are not modelled and fall back to the wrapped BSDF. */
     pset *inner;
     if ((st = xml__inner_bsdf(B, o, &inner)) != LMC_OK) return st;
     if (!inner) {
@@ -284,6 +334,12 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[3], int d
     if ((st = xml__make_bsdf(B, inner, b, img, depth + 1)) != LMC_OK) return st;
     if (strcmp(t, "twosided") == 0) {
       b->twosided = 1;
+      xml__warn_unused(o);
+    } else if (strcmp(t, "mask") == 0) {
+      if (b->masked)
+        return xml__fail(B, LMC_EPARSE, o->file, o->line,
+                         "a mask inside a mask is not supported (multiply the opacities)");
+      if ((st = xml__opacity(B, o, b, &img[3])) != LMC_OK) return st;
       xml__warn_unused(o);
     } else {
       lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported: using the BSDF it wraps", t);
@@ -363,12 +419,12 @@ lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
   }
   bsdf b;
   memset(&b, 0, sizeof b);
-  int img[3];
+  int img[XML__TEX_SLOTS];
   lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
   if (st != LMC_OK) return st;
   int idx = scene_add_bsdf(B->s, &b, B->err);
   if (idx < 0) return (lmc_status)idx;
-  for (int k = 0; k < 3; k++)
+  for (int k = 0; k < XML__TEX_SLOTS; k++)
     if ((st = xml__add_fixup(B, idx, k, img[k])) != LMC_OK) return st;
   o->built = 1;
   o->index = idx;
