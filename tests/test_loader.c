@@ -492,6 +492,64 @@ static void test_mask_loader(void **state) {
   assert_int_equal(checks, 5 + 4);
 }
 
+/* Mitsuba's bumpmap: the wrapped BSDF with the flag and its displacement
+ * (here a `scale` texture of 10 around a linear bitmap: the bitmap's
+ * values times 10); on a shape without texture coordinates (the PLY quad)
+ * it is ignored with a warning, as Mitsuba does; a bumpmap without a
+ * texture is an error at its line. */
+static void test_bump_loader(void **state) {
+  (void)state;
+  char xml[4096];
+  snprintf(xml, sizeof xml,
+           HEAD SENSOR LIGHT
+           "  <bsdf type=\"bumpmap\" id=\"bumpy\">\n"
+           "    <texture type=\"scale\">\n"
+           "      <float name=\"scale\" value=\"10\"/>\n"
+           "      <texture type=\"bitmap\">\n"
+           "        <string name=\"filename\" value=\"" TEXFILE "\"/>\n"
+           "        <float name=\"gamma\" value=\"1\"/>\n"
+           "      </texture>\n"
+           "    </texture>\n"
+           "    <bsdf type=\"roughconductor\"/>\n"
+           "  </bsdf>\n"
+           "  <shape type=\"rectangle\"><ref id=\"bumpy\"/></shape>\n"
+           "  <shape type=\"ply\">\n" /* line 18: no uv */
+           "    <string name=\"filename\" value=\"" LMC_SOURCE_DIR "/tests/data/loader/quad.ply\"/>\n"
+           "    <ref id=\"bumpy\"/>\n"
+           "  </shape>\n"
+           "</scene>\n");
+  write_text("/tmp/lmc_loader_bump.xml", xml);
+  scene *s;
+  int warnings;
+  assert_int_equal(load_quiet("/tmp/lmc_loader_bump.xml", &s, &warnings), LMC_OK);
+  assert_int_equal(warnings, 1); /* the PLY quad */
+  const bsdf *b = find_bsdf(s, "bumpy");
+  assert_true(b->bumped && b->type == BSDF_ROUGHCONDUCTOR && b->bump.type == TEX_BITMAP);
+  lmc_image ref = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  assert_int_equal(image_read(TEXFILE, 0, &ref, &err), LMC_OK);
+  assert_int_equal(image_to_rgb(&ref, &err), LMC_OK);
+  const lmc_image *im = b->bump.image;
+  assert_true(im && im->width == ref.width && im->height == ref.height);
+  int texels = 0;
+  for (int i = 0; i < 3 * ref.width * ref.height; i++, texels++)
+    assert_true(fabsf(im->data[i] - 10.0f * ref.data[i]) <= 1e-6f * fmaxf(1.0f, im->data[i]));
+  assert_int_equal(texels, 48);
+  image_free(&ref);
+  scene_destroy(s);
+  /* No displacement texture. */
+  snprintf(xml, sizeof xml,
+           HEAD SENSOR "  <bsdf type=\"bumpmap\">\n    <bsdf type=\"diffuse\"/>\n  </bsdf>\n</scene>\n");
+  write_text("/tmp/lmc_loader_bump.xml", xml);
+  lmc_warn_set_quiet(1);
+  lmc_status st = scene_load_xml("/tmp/lmc_loader_bump.xml", NULL, 0, &s, &err);
+  lmc_warn_set_quiet(0);
+  assert_int_equal(st, LMC_EPARSE);
+  assert_int_equal(err.line, 6);
+  assert_non_null(strstr(err.msg, "displacement"));
+}
+
 /* <lookAt>, Mitsuba 0.6's other spelling of <lookat>: the same camera,
  * its pinhole at the origin given and the matrix the same to the bit. */
 static void test_lookat_spelling(void **state) {
@@ -786,6 +844,7 @@ int main(void) {
       cmocka_unit_test(test_lookat_spelling),
       cmocka_unit_test(test_sampler_type),    cmocka_unit_test(test_mitsuba_defaults),
       cmocka_unit_test(test_mask_loader),
+      cmocka_unit_test(test_bump_loader),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

@@ -24,6 +24,7 @@
  * mesh ends with zero triangles so the loader can skip it.
  */
 #include "render/mesh.h"
+#include "render/frame.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -109,6 +110,29 @@ vec3 mesh_face_normal(const mesh *m, int64_t tri) {
 }
 
 double mesh_triangle_area(const mesh *m, int64_t tri) { return 0.5 * v3_len(mesh__cross(m, tri)); }
+
+int mesh_uv_tangents(const mesh *m, int64_t tri, vec3 p0, vec3 p1, vec3 p2, vec3 *OUT_dpdu,
+                     vec3 *OUT_dpdv) {
+  if (!m->uv) return 0;
+  const uint32_t *idx = m->idx + 3 * tri;
+  const float *uv = m->uv;
+  double u0 = uv[2 * idx[0]], v0 = uv[2 * idx[0] + 1];
+  double du1 = uv[2 * idx[1]] - u0, dv1 = uv[2 * idx[1] + 1] - v0;
+  double du2 = uv[2 * idx[2]] - u0, dv2 = uv[2 * idx[2] + 1] - v0;
+  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+  double det = du1 * dv2 - dv1 * du2;
+  if (det == 0.0 || !isfinite(det)) {
+    frame f = frame_from_z(v3_normalize(v3_cross(e1, e2)));
+    *OUT_dpdu = f.s;
+    *OUT_dpdv = f.t;
+    return 1;
+  }
+  /* [e1 e2] = [dpdu dpdv] [du1 du2; dv1 dv2], inverted. */
+  double inv = 1.0 / det;
+  *OUT_dpdu = v3_scale(v3_sub(v3_scale(e1, dv2), v3_scale(e2, dv1)), inv);
+  *OUT_dpdv = v3_scale(v3_sub(v3_scale(e2, du1), v3_scale(e1, du2)), inv);
+  return 1;
+}
 
 int mesh_intersect_triangle(const mesh *m, int64_t tri, vec3 org, vec3 dir, double *OUT_t,
                             double *OUT_b1, double *OUT_b2) {

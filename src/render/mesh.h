@@ -57,6 +57,13 @@ static inline vec3 mesh_corners_normal(const mesh *m, vec3 p0, vec3 p1, vec3 p2)
   return m->flip_normals ? v3_neg(n) : n;
 }
 double mesh_triangle_area(const mesh *m, int64_t tri);
+/* The uv tangents of triangle `tri` (corners p0, p1, p2): dpdu and dpdv
+ * with p - p0 = dpdu (u - u0) + dpdv (v - v0) over the triangle (Mitsuba's
+ * TriMesh::computeUVTangents); where the uv triangle is degenerate, two
+ * unit tangents orthogonal to the face. Returns 0 when the mesh has no
+ * texture coordinates (bump maps need them, as Mitsuba's). */
+int mesh_uv_tangents(const mesh *m, int64_t tri, vec3 p0, vec3 p1, vec3 p2, vec3 *OUT_dpdu,
+                     vec3 *OUT_dpdv);
 /* Ray-triangle intersection in double (Moller and Trumbore 1997) with
  * triangle `tri`, no bounds on t or the barycentrics: the hit Embree found
  * in float, recomputed to double precision. With e1 = p1 - p0,

@@ -11,6 +11,11 @@
  *   roughdielectric microfacet glass (Walter et al. 2007): distribution, alpha
  *   plastic         smooth dielectric coating on a diffuse base (Mitsuba's plastic)
  *   twosided        the flag `twosided` on the wrapped model
+ *   bumpmap         the flag `bumped` and the displacement texture `bump` on
+ *                   the wrapped model (Mitsuba's bumpmap): the surface's
+ *                   shading frame is tilted by the displacement's slope
+ *                   (bsdf_bump_frame, applied where hits are made); the
+ *                   model itself is unchanged
  *   mask            the flag `masked` and the texture `opacity` on the wrapped
  *                   model (Mitsuba's mask): f = opacity f_wrapped, plus a
  *                   pass-through delta lobe (wi = -wo, weight (1 - opacity)
@@ -40,6 +45,7 @@
 #define LMC_RENDER_BSDF_H
 
 #include "render/bsdf/texture.h"
+#include "render/frame.h"
 #include "render/vec3.h"
 
 typedef enum bsdf_type {
@@ -79,6 +85,8 @@ typedef struct bsdf {
   double eta;            /* dielectrics, plastic: intIOR / extIOR */
   rgb cond_eta, cond_k;  /* conductors: complex index of refraction relative to extIOR */
   int nonlinear;         /* plastic: Mitsuba's `nonlinear` */
+  int bumped;            /* bumpmap: the model is wrapped in Mitsuba's bumpmap */
+  texture bump;          /* bumpmap: the displacement (its luminance's slope tilts the frame) */
   int masked;            /* mask: the model is wrapped in Mitsuba's mask */
   texture opacity;       /* mask: per-channel opacity in [0, 1] (1: opaque) */
   char id[64];           /* the XML id, for messages */
@@ -124,6 +132,15 @@ int bsdf_is_delta(const bsdf *b);
  * sampled directions may then be parametrized absolutely (integrator.h,
  * bdpt_param), as the LMC paper's implementation does above 0.05. */
 int bsdf_is_rough(const bsdf *b, double rough_min);
+
+/* Mitsuba's bump map: the shading frame at a point whose shading normal is
+ * n, geometric normal ng and uv tangents dpdu, dpdv (mesh_uv_tangents), for
+ * a model with `bumped`: with the displacement's slope (du, dv) =
+ * tex_lum_gradient(bump), dpdu' = dpdu + n (du - n.dpdu) and likewise
+ * dpdv', the normal normalize(dpdu' x dpdv') turned to ng's side (its
+ * azimuth: frame_from_z). Unbumped models, or degenerate tangents: the frame
+ * of n. */
+frame bsdf_bump_frame(const bsdf *b, double tu, double tv, vec3 dpdu, vec3 dpdv, vec3 n, vec3 ng);
 
 /* Fresnel reflectance of a dielectric interface; cos_i may be negative
  * (coming from inside); eta = int/ext. *cos_t gets the signed cosine of the

@@ -37,6 +37,8 @@ typedef struct bsdf_sample_ad {
 
 /* Texture value at (u, v), bilinear for bitmaps (differentiable in u, v). */
 adrgb tex_eval_ad(ad_arena *A, const texture *t, ad u, ad v);
+/* tex_lum_gradient (texture.h) in duals. */
+void tex_lum_gradient_ad(ad_arena *A, const texture *t, ad u, ad v, ad *OUT_du, ad *OUT_dv);
 
 /* bsdf_eval, bsdf_pdf, bsdf_eval_pdf and bsdf_sample_f of bsdf.h in duals,
  * from the same source (bsdf_generic.h). (The sampler is bsdf_sample_f_ad,
@@ -48,6 +50,9 @@ adrgb bsdf_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
 ad bsdf_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi);
 adrgb bsdf_eval_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
                        transport_mode mode, ad *OUT_pdf);
+/* bsdf_bump_frame (bsdf.h) in duals. */
+ad_frame bsdf_bump_frame_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, vec3 dpdu, vec3 dpdv, adv3 n,
+                            vec3 ng);
 /* Fresnel reflectance of a dielectric and of a conductor (bsdf.h) in duals. */
 ad fresnel_dielectric_ad(ad_arena *A, ad cos_i, double eta, ad *OUT_cos_t);
 adrgb fresnel_conductor_ad(ad_arena *A, ad cos_i, rgb eta, rgb k);

@@ -120,6 +120,24 @@ static int R_FN(bsdf__mask_pass)(R_CTX REAL3 wo, RRGB alpha, REAL prob,
   return ok;
 }
 
+/* ---- Bump map --------------------------------------------------------------- */
+
+RFRAME R_FN(bsdf_bump_frame)(R_CTX const bsdf *b, REAL tu, REAL tv, vec3 dpdu, vec3 dpdv, REAL3 n,
+                             vec3 ng) {
+  if (!b->bumped) return R3_FRAME_FROM_Z(n);
+  REAL du, dv;
+  R_FN(tex_lum_gradient)(R_ARG &b->bump, tu, tv, &du, &dv);
+  /* dpdu' = dpdu + n (du - n.dpdu), dpdv' = dpdv + n (dv - n.dpdv) */
+  REAL3 a = R3_ADD(R3_CONST(dpdu.x, dpdu.y, dpdu.z), R3_SCALE(n, R_SUB(du, R3_DOT_C(dpdu, n))));
+  REAL3 c = R3_ADD(R3_CONST(dpdv.x, dpdv.y, dpdv.z), R3_SCALE(n, R_SUB(dv, R3_DOT_C(dpdv, n))));
+  REAL3 m = R3_CROSS(a, c);
+  double len2 = v3_len2(R3_V(m));
+  if (!(len2 > 0.0) || !isfinite(len2)) return R3_FRAME_FROM_Z(n);
+  m = R3_NORMALIZE(m);
+  if (v3_dot(R3_V(m), ng) < 0.0) m = R3_NEG(m);
+  return R3_FRAME_FROM_Z(m);
+}
+
 /* ---- Dispatch --------------------------------------------------------------- */
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */

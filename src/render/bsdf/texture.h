@@ -44,6 +44,9 @@ void tex_update_mean(texture *t);
 
 /* Value at texture coordinates (u, v). */
 rgb tex_eval(const texture *t, double u, double v);
+/* The gradient (d/du, d/dv) of the texture's luminance at (u, v): a bump
+ * map's slope (texture.c); 0 for constant and checkerboard textures. */
+void tex_lum_gradient(const texture *t, double u, double v, double *OUT_du, double *OUT_dv);
 /* The mean value over the texture (used for sampling weights, e.g. plastic). */
 rgb tex_mean(const texture *t);
 int tex_is_constant(const texture *t);

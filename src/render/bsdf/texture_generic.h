@@ -64,3 +64,37 @@ RRGB R_FN(tex_eval)(R_CTX const texture *t, REAL u, REAL v) {
   }
   return RRGB_ZERO();
 }
+
+/* The gradient (d/du, d/dv) of the luminance of the texture at (u, v), as
+ * Mitsuba's bump map reads its displacement: for a bitmap the derivative of
+ * the bilinear interpolation above (Mitsuba's evalGradientBilinear at level
+ * 0, times uscale and vscale); constant and checkerboard: 0 (Mitsuba's
+ * finite difference of a piecewise constant). */
+void R_FN(tex_lum_gradient)(R_CTX const texture *t, REAL u, REAL v, REAL *OUT_du, REAL *OUT_dv) {
+  *OUT_du = *OUT_dv = R_C(0.0);
+  const lmc_image *img = t->image;
+  if (t->type != TEX_BITMAP || !img || !img->data || img->width <= 0 || img->height <= 0)
+    return;
+  /* The texel cell and fractions of tex__bilinear. */
+  REAL uu = R_ADD_S(R_MUL_S(u, t->uscale), t->uoffset);
+  REAL vv = R_ADD_S(R_MUL_S(v, t->vscale), t->voffset);
+  if (!isfinite(R_V(uu)) || !isfinite(R_V(vv))) return;
+  uu = R_SUB_S(uu, floor(R_V(uu)));
+  vv = R_SUB_S(vv, floor(R_V(vv)));
+  REAL x = R_SUB_S(R_MUL_S(uu, (double)img->width), 0.5);
+  REAL y = R_SUB_S(R_MUL_S(vv, (double)img->height), 0.5);
+  double fx = floor(R_V(x)), fy = floor(R_V(y));
+  int x0 = (int)fx, y0 = (int)fy;
+  REAL dx = R_SUB_S(x, fx), dy = R_SUB_S(y, fy);
+  double l00 = rgb_luminance(tex__texel(img, x0, y0));
+  double l10 = rgb_luminance(tex__texel(img, x0 + 1, y0));
+  double l01 = rgb_luminance(tex__texel(img, x0, y0 + 1));
+  double l11 = rgb_luminance(tex__texel(img, x0 + 1, y0 + 1));
+  /* dl/dx = (1 - dy)(l10 - l00) + dy (l11 - l01), dl/dy likewise; then
+   * dx/du = width uscale, dy/dv = height vscale. */
+  REAL gx = R_ADD_S(R_MUL_S(dy, (l11 - l01) - (l10 - l00)), l10 - l00);
+  REAL gy = R_ADD_S(R_MUL_S(dx, (l11 - l10) - (l01 - l00)), l01 - l00);
+  *OUT_du = R_MUL_S(gx, img->width * t->uscale);
+  *OUT_dv = R_MUL_S(gy, img->height * t->vscale);
+}
+

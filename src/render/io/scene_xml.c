@@ -9,9 +9,10 @@
  * then walks the children of <scene> in document order:
  *   sensor      perspective pinhole with its film and reconstruction filter;
  *   bsdf        diffuse, phong, conductor, roughconductor, dielectric,
- *               roughdielectric, plastic, twosided, mask (Mitsuba's names
- *               and defaults; see bsdf.h);
- *   texture     bitmap and checkerboard, built when a BSDF refers to them;
+ *               roughdielectric, plastic, twosided, mask, bumpmap
+ *               (Mitsuba's names and defaults; see bsdf.h);
+ *   texture     bitmap, checkerboard and scale, built when a BSDF refers to
+ *               them;
  *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
  *               cylinder, with an optional nested area emitter; without a
  *               BSDF, Mitsuba's default: black when it emits, else diffuse
@@ -265,6 +266,9 @@ static lmc_status xml__shape(builder *B, pset *o) {
     return LMC_OK;
   }
   m.bsdf = bsdf_index;
+  if (B->s->bsdfs[bsdf_index].bumped && !m.uv)
+    lmc_warn(o->file, o->line,
+             "a bump map on a shape without texture coordinates is ignored (as in Mitsuba)");
   if (emitter) {
     int found;
     if ((st = xml__rgb(B, emitter, "radiance", rgb_gray(1.0), &radiance, &found)) != LMC_OK)

@@ -97,6 +97,49 @@ static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
   return xml__float(B, o, "voffset", 0.0, &t->voffset, NULL);
 }
 
+static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image);
+
+/* Mitsuba's `scale` texture: its nested texture times `scale` (a number
+ * or a colour, default 1). A bitmap gets a scaled copy of its image. */
+static lmc_status xml__scale_texture(builder *B, pset *o, rgb def, texture *out, int *image) {
+  lmc_status st;
+  rgb k;
+  if ((st = xml__rgb(B, o, "scale", rgb_gray(1.0), &k, NULL)) != LMC_OK) return st;
+  pset *inner = NULL;
+  for (int i = 0; i < o->n_props && !inner; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    if (p->kind == PROP_OBJECT) c = p->obj;
+    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &c)) != LMC_OK) return st;
+    if (c && strcmp(c->tag, "texture") == 0) {
+      p->used = 1;
+      inner = c;
+    }
+  }
+  if (!inner)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "<texture type=\"scale\"> needs a nested texture");
+  if ((st = xml__texture_object(B, inner, def, out, image)) != LMC_OK) return st;
+  xml__warn_unused(o);
+  out->value = rgb_mul(out->value, k);
+  out->color0 = rgb_mul(out->color0, k);
+  out->color1 = rgb_mul(out->color1, k);
+  if (*image < 0) return LMC_OK;
+  const lmc_image *src = &B->s->images[*image];
+  lmc_image img = {0};
+  if ((st = image_init(&img, src->width, src->height, 3, B->err)) != LMC_OK) return st;
+  const double kc[3] = {k.r, k.g, k.b};
+  size_t n = (size_t)src->width * src->height;
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) img.data[3 * i + c] = (float)(src->data[3 * i + c] * kc[c]);
+  int idx = scene_add_image(B->s, &img, B->err);
+  if (idx < 0) {
+    image_free(&img);
+    return (lmc_status)idx;
+  }
+  *image = idx;
+  return LMC_OK;
+}
+
 /* Builds a texture object; *image gets the image index (-1: none). An
  * unsupported texture type warns and gives the constant `def`. */
 static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image) {
@@ -120,6 +163,8 @@ static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out
     }
     static const char *const silent[] = {"cache", "maxAnisotropy", NULL};
     xml__accept(o, silent);
+  } else if (strcmp(o->type, "scale") == 0) {
+    return xml__scale_texture(B, o, def, out, image);
   } else if (strcmp(o->type, "checkerboard") == 0) {
     out->type = TEX_CHECKERBOARD;
     if ((st = xml__rgb(B, o, "color0", rgb_gray(0.4), &out->color0, NULL)) != LMC_OK) return st;
@@ -275,7 +320,8 @@ static lmc_status xml__eta(builder *B, pset *o, const char *int_default, const c
 }
 
 texture *xml__tex_slot(bsdf *b, int which) {
-  texture *slots[XML__TEX_SLOTS] = {&b->diffuse, &b->specular, &b->transmittance, &b->opacity};
+  texture *slots[XML__TEX_SLOTS] = {&b->diffuse, &b->specular, &b->transmittance, &b->opacity,
+                                    &b->bump};
   return slots[which];
 }
 
@@ -308,6 +354,30 @@ static lmc_status xml__opacity(builder *B, pset *o, bsdf *b, int *img) {
   return LMC_OK;
 }
 
+/* A bump map's displacement: its one <texture> (nested or a <ref>), whose
+ * luminance's slope tilts the shading frame (bsdf.h). */
+static lmc_status xml__bump(builder *B, pset *o, bsdf *b, int *img) {
+  if (b->bumped)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "a bumpmap inside a bumpmap is not supported");
+  pset *tex = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    lmc_status st;
+    if (p->kind == PROP_OBJECT) c = p->obj;
+    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &c)) != LMC_OK) return st;
+    if (!c || strcmp(c->tag, "texture") != 0) continue;
+    p->used = 1;
+    if (tex)
+      return xml__fail(B, LMC_EPARSE, p->file, p->line, "a bumpmap takes one displacement texture");
+    tex = c;
+  }
+  if (!tex)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "a bumpmap needs a displacement <texture>");
+  b->bumped = 1;
+  return xml__texture_object(B, tex, rgb_gray(0.0), &b->bump, img);
+}
+
 /* Fills *b from a bsdf object; img[XML__TEX_SLOTS] get image indices of
  * the textures of xml__tex_slot (-1: none). Does not add to the scene. */
 static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_SLOTS],
@@ -319,8 +389,9 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
   const char *t = o->type;
   if (strcmp(t, "twosided") == 0 || strcmp(t, "bumpmap") == 0 || strcmp(t, "normalmap") == 0 ||
       strcmp(t, "mask") == 0 || strcmp(t, "coating") == 0 || strcmp(t, "roughcoating") == 0) {
-    /* Wrappers: twosided sets the flag, mask the flag and its opacity;
-     * the others are not modelled and fall back to the wrapped BSDF. */
+    /* Wrappers: twosided sets the flag, mask the flag and its opacity,
+     * bumpmap the flag and its displacement; the others are not modelled
+     * and fall back to the wrapped BSDF. */
     pset *inner;
     if ((st = xml__inner_bsdf(B, o, &inner)) != LMC_OK) return st;
     if (!inner) {
@@ -334,6 +405,9 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
     if ((st = xml__make_bsdf(B, inner, b, img, depth + 1)) != LMC_OK) return st;
     if (strcmp(t, "twosided") == 0) {
       b->twosided = 1;
+      xml__warn_unused(o);
+    } else if (strcmp(t, "bumpmap") == 0) {
+      if ((st = xml__bump(B, o, b, &img[4])) != LMC_OK) return st;
       xml__warn_unused(o);
     } else if (strcmp(t, "mask") == 0) {
       if (b->masked)

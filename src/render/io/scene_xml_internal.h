@@ -17,12 +17,12 @@
 
 typedef struct tex_fixup {
   int bsdf;  /* index into scene->bsdfs */
-  int which; /* 0 diffuse, 1 specular, 2 transmittance, 3 opacity (XML__TEX_SLOTS) */
+  int which; /* 0 diffuse, 1 specular, 2 transmittance, 3 opacity, 4 bump (XML__TEX_SLOTS) */
   int image; /* index into scene->images */
 } tex_fixup;
 
 /* The texture slots of a bsdf that may hold a bitmap (tex_fixup.which). */
-#define XML__TEX_SLOTS 4
+#define XML__TEX_SLOTS 5
 texture *xml__tex_slot(bsdf *b, int which);
 
 typedef struct builder {
