@@ -7,8 +7,10 @@
  *     (diffuse, phong at three exponents, roughconductor and
  *     roughdielectric for both distributions, two roughnesses, visible
  *     normals on and off, normal / oblique / grazing wo, both sides for the
- *     dielectric, the diffuse part of plastic), each at the Sidak level of
- *     an overall 1% (fixed seeds), plus the visible-normal sampler alone;
+ *     dielectric, the diffuse part of plastic, roughdiffuse full and fast
+ *     at two roughnesses, ward's three variants isotropic and anisotropic),
+ *     each at the Sidak level of an overall 1% (fixed seeds), plus the
+ *     visible-normal sampler alone;
  *   - the pdf integrates to the fraction of samples the sampler accepts
  *     (the total probability of its non-delta lobes), and to 1 - P(specular)
  *     for plastic; D(m) cos(theta_m) and the visible-normal density
@@ -19,7 +21,18 @@
  *   - energy: diffuse albedo = reflectance, plastic albedo in closed form
  *     (F_i + (1 - F_i) kd, linear mode), phong and rough models at most 1,
  *     a perfect mirror ("none") reflects exactly 1;
- *   - reciprocity of the reflection models, and for rough refraction the
+ *   - roughdiffuse: alpha = 0 is Lambertian bit for bit (both variants);
+ *     f equals a transcription of Oren and Nayar's formulas in angles;
+ *     albedo (R = 1) in closed form at the normal (A; C1 + C4) and, for the
+ *     fast model, at grazing (A + B/2, above 1 for alpha < 0.46); albedo
+ *     <= 1 for wo.z >= 0.8 and <= 1.05 at all angles;
+ *   - ward: f at the mirror direction against the closed form; the
+ *     anisotropy along the frame's x and y (swapping alphaU, alphaV = a
+ *     90 degree turn), isotropy under any turn; albedo <= 1 (ks + kd <= 1)
+ *     for balanced and ward at all angles and ward-duer away from grazing,
+ *     and ward-duer above 1 at grazing (Mitsuba's documentation);
+ *   - reciprocity of the reflection models (roughdiffuse and the three
+ *     ward variants included), and for rough refraction the
  *     generalised reciprocity f_rad(a, b) eta_b^2 = f_rad(b, a) eta_a^2 and
  *     the adjoint f_imp(a, b) = f_rad(b, a);
  *   - delta lobes: dielectric reflect + refract probabilities sum to 1 and
@@ -160,6 +173,41 @@ static int make_configs(config *c) {
     snprintf(c[n].name, sizeof c[n].name, "plastic nonlinear=%d wo.z=%.2f", i, pl_z[i]);
     n++;
   }
+  /* Rough diffuse (Oren-Nayar): two roughnesses, the full model and the
+   * fast approximation, normal / oblique / grazing wo (the sampler is the
+   * cosine one; f enters through the consistency test). */
+  const double rdf_alpha[] = {0.3, 1.0};
+  for (int a = 0; a < 2; a++)
+    for (int fa = 0; fa < 2; fa++)
+      for (int i = 0; i < 3; i++) {
+        bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIFFUSE);
+        c[n].b.alpha = rdf_alpha[a];
+        c[n].b.fast_approx = fa;
+        c[n].wo = dir(diff_z[i], phi0);
+        snprintf(c[n].name, sizeof c[n].name, "roughdiffuse a=%g fast=%d wo.z=%.2f", rdf_alpha[a], fa,
+                 diff_z[i]);
+        n++;
+      }
+  /* Ward: the three variants, isotropic (0.2) and anisotropic (0.1, 0.3),
+   * normal / oblique / grazing wo; the anisotropic lobe on the finer grid. */
+  static const char *const ward_names[3] = {"ward", "ward-duer", "balanced"};
+  const double ward_z[] = {1.0, 0.6, 0.1};
+  for (int v = 0; v < 3; v++)
+    for (int an = 0; an < 2; an++)
+      for (int i = 0; i < 3; i++) {
+        bsdf_init_defaults(&c[n].b, BSDF_WARD);
+        c[n].b.variant = (ward_variant)v;
+        c[n].b.alpha_u = an ? 0.1 : 0.2;
+        c[n].b.alpha_v = an ? 0.3 : 0.2;
+        c[n].wo = dir(ward_z[i], phi0);
+        if (an) {
+          c[n].n_theta = 150;
+          c[n].n_phi = 300;
+        }
+        snprintf(c[n].name, sizeof c[n].name, "ward %s au=%g av=%g wo.z=%.2f", ward_names[v],
+                 c[n].b.alpha_u, c[n].b.alpha_v, ward_z[i]);
+        n++;
+      }
   /* A twosided rough conductor seen from below. */
   bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
   c[n].b.twosided = 1;
@@ -571,6 +619,251 @@ static void test_energy(void **state) {
   assert_int_equal(checks, 3 * 3 + 2 + 6 * 5 + 9 * 2 + 4 * 6);
 }
 
+/* ---- roughdiffuse and ward: independent expectations ------------------------ */
+
+/* Oren and Nayar 1994 (their eqs. for L1 and L2, E0 = 1, divided by
+ * cos(theta_i)), transcribed in angles: theta from acos, phi from atan2, as
+ * Mitsuba's roughdiffuse.cpp states it with sigma = alpha / sqrt(2); `fast`:
+ * the qualitative A + B model. An independent form of the model. */
+static rgb oren_nayar_ref(rgb rho, double alpha_rms, int fast, vec3 wo, vec3 wi) {
+  double sigma = alpha_rms / sqrt(2.0), s2 = sigma * sigma;
+  double th_o = acos(wo.z), th_i = acos(wi.z);
+  double cdphi = cos(atan2(wo.y, wo.x) - atan2(wi.y, wi.x));
+  double al = fmax(th_o, th_i), be = fmin(th_o, th_i);
+  double g[3] = {rho.r, rho.g, rho.b}, out[3];
+  for (int k = 0; k < 3; k++) {
+    double r = g[k];
+    if (fast) {
+      double A = 1.0 - 0.5 * s2 / (s2 + 0.33), B = 0.45 * s2 / (s2 + 0.09);
+      out[k] = r / M_PI * (A + B * fmax(0.0, cdphi) * sin(al) * tan(be));
+      continue;
+    }
+    double c1 = 1.0 - 0.5 * s2 / (s2 + 0.33);
+    double c2 = cdphi >= 0.0 ? 0.45 * s2 / (s2 + 0.09) * sin(al)
+                             : 0.45 * s2 / (s2 + 0.09) * (sin(al) - pow(2.0 * be / M_PI, 3.0));
+    double c3 = 0.125 * s2 / (s2 + 0.09) * pow(4.0 * al * be / (M_PI * M_PI), 2.0);
+    double l1 = r / M_PI * (c1 + cdphi * c2 * tan(be) + (1.0 - fabs(cdphi)) * c3 * tan(0.5 * (al + be)));
+    double l2 = 0.17 * r * r / M_PI * s2 / (s2 + 0.13) * (1.0 - cdphi * pow(2.0 * be / M_PI, 2.0));
+    out[k] = l1 + l2;
+  }
+  return rgb_make(out[0], out[1], out[2]);
+}
+
+static void test_roughdiffuse(void **state) {
+  (void)state;
+  int checks = 0;
+  rng r;
+  rng_seed(&r, 314, 9);
+  bsdf b;
+  const rgb rho = rgb_make(0.2, 0.5, 0.9);
+  /* alpha = 0 is Lambertian exactly (sigma = 0: A = C1 = 1, the other
+   * coefficients 0), in both variants, at random pairs and at the normal. */
+  bsdf lam;
+  bsdf_init_defaults(&lam, BSDF_DIFFUSE);
+  lam.diffuse = tex_constant(rho);
+  int exact = 0;
+  for (int fa = 0; fa < 2; fa++) {
+    bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+    b.diffuse = tex_constant(rho);
+    b.alpha = 0.0;
+    b.fast_approx = fa;
+    for (int k = 0; k < 500; k++) {
+      vec3 wo = k == 0 ? v3(0, 0, 1) : warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      vec3 wi = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      rgb f = bsdf_eval(&b, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      rgb fl = bsdf_eval(&lam, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      exact += f.r == fl.r && f.g == fl.g && f.b == fl.b;
+      checks++;
+    }
+  }
+  assert_int_equal(exact, 1000);
+
+  /* Against the transcription in angles, at random pairs away from the
+   * normal (where the angle form needs atan2 of two zeros), f >= 0. */
+  int agree = 0, n_cmp = 0;
+  const double alphas[] = {0.1, 0.4, 1.0};
+  for (int fa = 0; fa < 2; fa++)
+    for (int a = 0; a < 3; a++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      b.diffuse = tex_constant(rho);
+      b.alpha = alphas[a];
+      b.fast_approx = fa;
+      for (int k = 0; k < 400; k++) {
+        vec3 wo = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+        vec3 wi = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+        if (wo.z > 1.0 - 1e-6 || wi.z > 1.0 - 1e-6) continue;
+        rgb f = bsdf_eval(&b, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+        rgb e = oren_nayar_ref(rho, alphas[a], fa, wo, wi);
+        n_cmp++;
+        if (rgb_rel_err(f, e) < 1e-9 && f.r >= 0.0)
+          agree++;
+        else if (n_cmp - agree < 5)
+          print_error("roughdiffuse a=%g fast=%d: f %.17g ref %.17g\n", alphas[a], fa, f.r, e.r);
+      }
+    }
+  assert_int_equal(agree, n_cmp);
+  assert_true(n_cmp > 2000);
+  checks += 2;
+
+  /* Albedo with R = 1. At the normal f is constant in wi, so the midpoint
+   * rule in cos is exact: A (fast), C1 + C4 (full). The fast model's albedo
+   * tends at grazing wo to A + B/2 (sin(alpha) -> 1, tan(beta) cos(theta_i)
+   * = sin(theta_i), int sin max(0, cos dphi) dw = pi / 2), which exceeds 1
+   * for alpha < 0.46: the model loses energy at the normal and gains a
+   * little at grazing angles. */
+  for (int a = 0; a < 3; a++) {
+    double s2 = 0.5 * alphas[a] * alphas[a];
+    double A = 1.0 - 0.5 * s2 / (s2 + 0.33), B = 0.45 * s2 / (s2 + 0.09), c4 = 0.17 * s2 / (s2 + 0.13);
+    for (int fa = 0; fa < 2; fa++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      b.diffuse = tex_constant(rgb_gray(1.0));
+      b.alpha = alphas[a];
+      b.fast_approx = fa;
+      rgb n0 = integrate_f_cos(&b, v3(0, 0, 1), TRANSPORT_RADIANCE, 200, 16);
+      assert_near(n0.g, fa ? A : A + c4, 1e-12);
+      assert_true(n0.g < 1.0);
+      checks += 2;
+    }
+    b.fast_approx = 1;
+    rgb gz = integrate_f_cos(&b, dir(1e-7, 0.3), TRANSPORT_RADIANCE, 4000, 512);
+    assert_near(gz.g, A + 0.5 * B, 1e-4);
+    checks++;
+    if (alphas[a] < 0.46) {
+      assert_true(gz.g > 1.0);
+      checks++;
+    }
+  }
+  /* Albedo <= 1 for wo within 37 degrees of the normal (wo.z >= 0.8), every
+   * roughness and both variants; at grazing angles the model (Mitsuba's
+   * too) exceeds 1 by up to 4.7% (full, alpha 0.4, wo.z = 0.01), bounded
+   * here by 1.05. Grid error of these smooth integrands: below 1e-4. */
+  int le1 = 0, le105 = 0, n_alb = 0;
+  for (int fa = 0; fa < 2; fa++)
+    for (int a = 1; a <= 10; a++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      b.diffuse = tex_constant(rgb_gray(1.0));
+      b.alpha = 0.1 * a;
+      b.fast_approx = fa;
+      const double zs[] = {0.95, 0.8, 0.5, 0.2, 0.05, 0.01};
+      for (int i = 0; i < 6; i++) {
+        double al = integrate_f_cos(&b, dir(zs[i], 0.3), TRANSPORT_RADIANCE, 400, 200).g;
+        n_alb++;
+        le105 += al <= 1.05;
+        if (zs[i] >= 0.8) le1 += al <= 1.0 + 1e-4;
+      }
+    }
+  assert_int_equal(n_alb, 120);
+  assert_int_equal(le105, 120);
+  assert_int_equal(le1, 40);
+  checks += 3;
+  assert_int_equal(checks, 1000 + 2 + 3 * 5 + 2 + 3);
+}
+
+/* The Ward lobe's normalisation by variant, by hand, at the mirror
+ * direction of wo (h = (0, 0, 2 cos), exponent 0):
+ *   ward       1 / (4 pi au av cos),
+ *   ward-duer  1 / (4 pi au av cos^2),
+ *   balanced   (4 cos^2) / (pi au av 16 cos^4) = 1 / (4 pi au av cos^2). */
+static double ward_mirror_expect(int variant, double au, double av, double c, double ks,
+                                 double kd) {
+  double lobe = variant == 0 ? 1.0 / (4.0 * M_PI * au * av * c)
+                             : 1.0 / (4.0 * M_PI * au * av * c * c);
+  return kd / M_PI + ks * lobe;
+}
+
+static void test_ward(void **state) {
+  (void)state;
+  int checks = 0;
+  bsdf b;
+  rng r;
+  rng_seed(&r, 2718, 11);
+  /* The mirror direction: isotropic and anisotropic, three variants. */
+  const double au_[] = {0.2, 0.1}, av_[] = {0.2, 0.3};
+  for (int v = 0; v < 3; v++)
+    for (int an = 0; an < 2; an++) {
+      bsdf_init_defaults(&b, BSDF_WARD);
+      b.variant = (ward_variant)v;
+      b.alpha_u = au_[an];
+      b.alpha_v = av_[an];
+      vec3 wo = dir(0.6, 0.4), wi = v3(-wo.x, -wo.y, wo.z);
+      rgb f = bsdf_eval(&b, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      assert_near(f.g, ward_mirror_expect(v, au_[an], av_[an], wo.z, 0.2, 0.5), 1e-12 * f.g);
+      checks++;
+    }
+  /* Anisotropy lies along the frame's axes: swapping alphaU and alphaV is
+   * the same as turning both directions by 90 degrees about the normal;
+   * an isotropic lobe is invariant under any turn. */
+  int rot_ok = 0;
+  for (int v = 0; v < 3; v++)
+    for (int k = 0; k < 200; k++) {
+      vec3 wo = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      vec3 wi = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
+      if (k & 1) wi = v3_normalize(v3(-wo.x + 0.1 * wi.x, -wo.y + 0.1 * wi.y, wo.z)); /* near the peak */
+      vec3 wo90 = v3(-wo.y, wo.x, wo.z), wi90 = v3(-wi.y, wi.x, wi.z);
+      bsdf_init_defaults(&b, BSDF_WARD);
+      b.variant = (ward_variant)v;
+      b.alpha_u = 0.1;
+      b.alpha_v = 0.35;
+      rgb f1 = bsdf_eval(&b, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      double p1 = bsdf_pdf(&b, 0, 0, wo, wi);
+      b.alpha_u = 0.35;
+      b.alpha_v = 0.1;
+      rgb f2 = bsdf_eval(&b, 0, 0, wo90, wi90, TRANSPORT_RADIANCE);
+      double p2 = bsdf_pdf(&b, 0, 0, wo90, wi90);
+      double t = 6.28 * rng_uniform(&r), ct = cos(t), st = sin(t);
+      b.alpha_u = b.alpha_v = 0.25;
+      rgb f3 = bsdf_eval(&b, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      rgb f4 = bsdf_eval(&b, 0, 0, v3(ct * wo.x - st * wo.y, st * wo.x + ct * wo.y, wo.z),
+                         v3(ct * wi.x - st * wi.y, st * wi.x + ct * wi.y, wi.z), TRANSPORT_RADIANCE);
+      rot_ok += rgb_rel_err(f1, f2) < 1e-9 && rel_err(p1, p2) < 1e-9 && rgb_rel_err(f3, f4) < 1e-9;
+      checks++;
+    }
+  assert_int_equal(rot_ok, 600);
+
+  /* Energy (Mitsuba's ward.cpp documentation: "ward" loses energy at
+   * grazing angles, "ward-duer" does not always conserve energy,
+   * "balanced" keeps it at all angles). With ks + kd <= 1: balanced and
+   * ward at most 1 at every angle, ward-duer away from grazing; ward-duer
+   * exceeds 1 at grazing (3.5 for alphas 0.3, 0.6 at wo.z = 0.02). Monte
+   * Carlo with importance sampling; tolerance 4 standard errors. */
+  const double alb_au[] = {0.1, 0.3, 0.7}, alb_av[] = {0.1, 0.6, 0.7};
+  const double kss[] = {1.0, 0.3}, kds[] = {0.0, 0.7};
+  const double zs[] = {0.95, 0.5, 0.1, 0.02};
+  int bounded = 0, n_alb = 0;
+  for (int v = 0; v < 3; v++)
+    for (int a = 0; a < 3; a++)
+      for (int m = 0; m < 2; m++)
+        for (int i = 0; i < 4; i++) {
+          if (v == WARD_DUER && zs[i] < 0.4) continue;
+          bsdf_init_defaults(&b, BSDF_WARD);
+          b.variant = (ward_variant)v;
+          b.alpha_u = alb_au[a];
+          b.alpha_v = alb_av[a];
+          b.specular = tex_constant(rgb_gray(kss[m]));
+          b.diffuse = tex_constant(rgb_gray(kds[m]));
+          double se;
+          double alb = mc_albedo(&b, dir(zs[i], 0.2), TRANSPORT_RADIANCE, 20000,
+                                 700 + (uint64_t)n_alb, &se);
+          n_alb++;
+          if (alb <= 1.0 + 4.0 * se + 1e-9)
+            bounded++;
+          else
+            print_error("ward variant %d a=(%g %g) ks %g wo.z %g: albedo %g +- %g\n", v, alb_au[a],
+                        alb_av[a], kss[m], zs[i], alb, se);
+        }
+  assert_int_equal(n_alb, 2 * 3 * 2 * 4 + 3 * 2 * 2);
+  assert_int_equal(bounded, n_alb);
+  bsdf_init_defaults(&b, BSDF_WARD);
+  b.variant = WARD_DUER;
+  b.alpha_u = 0.3;
+  b.alpha_v = 0.6;
+  b.specular = tex_constant(rgb_gray(1.0));
+  b.diffuse = tex_constant(rgb_gray(0.0));
+  assert_true(integrate_f_cos(&b, dir(0.02, 0.3), TRANSPORT_RADIANCE, 800, 400).g > 1.5);
+  checks += 2;
+  assert_int_equal(checks, 6 + 600 + 2);
+}
+
 /* ---- reciprocity --------------------------------------------------------- */
 
 static void test_reciprocity(void **state) {
@@ -579,14 +872,25 @@ static void test_reciprocity(void **state) {
   rng_seed(&r, 99, 5);
   int checks = 0, bad = 0;
   /* Reflection models: f(a, b) = f(b, a). */
-  for (int t = 0; t < 6; t++) {
+  /* The last five: roughdiffuse full and fast, ward's three variants
+   * (anisotropic); all five are reciprocal formulas. */
+  const int n_types = 11;
+  for (int t = 0; t < n_types; t++) {
     bsdf b;
-    const bsdf_type types[] = {BSDF_DIFFUSE, BSDF_PHONG, BSDF_ROUGHCONDUCTOR,
-                               BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC, BSDF_ROUGHDIELECTRIC};
+    const bsdf_type types[] = {BSDF_DIFFUSE,      BSDF_PHONG,        BSDF_ROUGHCONDUCTOR,
+                               BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC,    BSDF_ROUGHDIELECTRIC,
+                               BSDF_ROUGHDIFFUSE, BSDF_ROUGHDIFFUSE, BSDF_WARD,
+                               BSDF_WARD,         BSDF_WARD};
     bsdf_init_defaults(&b, types[t]);
     if (t == 3) b.dist = MF_GGX;
     b.alpha = 0.4;
     b.exponent = 12.0;
+    b.fast_approx = t == 7;
+    if (t >= 8) {
+      b.variant = (ward_variant)(t - 8);
+      b.alpha_u = 0.15;
+      b.alpha_v = 0.4;
+    }
     for (int k = 0; k < 300; k++) {
       vec3 a = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
       vec3 c = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
@@ -597,7 +901,7 @@ static void test_reciprocity(void **state) {
       rgb f1 = bsdf_eval(&b, 0, 0, a, c, TRANSPORT_RADIANCE);
       rgb f2 = bsdf_eval(&b, 0, 0, c, a, TRANSPORT_RADIANCE);
       if (!(rgb_rel_err(f1, f2) < 1e-9) && !(rgb_is_black(f1) && rgb_is_black(f2))) bad++;
-      if (rgb_is_black(f1) && (t == 0 || t == 4)) bad++; /* nonzero everywhere above */
+      if (rgb_is_black(f1) && (t == 0 || t == 4 || t >= 6)) bad++; /* nonzero everywhere above */
       checks++;
     }
   }
@@ -637,7 +941,7 @@ static void test_reciprocity(void **state) {
     checks++;
   }
   assert_int_equal(bad, 0);
-  assert_int_equal(checks, 6 * 300 + 2 * 301);
+  assert_int_equal(checks, n_types * 300 + 2 * 301);
 }
 
 /* ---- delta lobes ----------------------------------------------------------- */
@@ -839,7 +1143,25 @@ static void test_tables_defaults(void **state) {
   bsdf_init_defaults(&b, BSDF_CONDUCTOR);
   assert_true(bsdf_is_delta(&b));
   checks += 21;
-  assert_int_equal(checks, 23 + 3 + 6 + 3 + 21);
+  /* roughdiffuse.cpp: reflectance 0.5, alpha 0.2, useFastApprox false, a
+   * glossy lobe; ward.cpp: variant balanced, alpha 0.1, specular 0.2,
+   * diffuse 0.5. */
+  bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+  assert_near(b.diffuse.value.g, 0.5, 0);
+  assert_near(b.alpha, 0.2, 0);
+  assert_int_equal(b.fast_approx, 0);
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_GLOSSY);
+  assert_true(bsdf_is_rough(&b, 0.05));
+  bsdf_init_defaults(&b, BSDF_WARD);
+  assert_int_equal(b.variant, WARD_BALANCED);
+  assert_near(b.alpha_u, 0.1, 0);
+  assert_near(b.alpha_v, 0.1, 0);
+  assert_near(b.specular.value.r, 0.2, 0);
+  assert_near(b.diffuse.value.r, 0.5, 0);
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY);
+  assert_false(bsdf_is_delta(&b));
+  checks += 13;
+  assert_int_equal(checks, 23 + 3 + 6 + 3 + 21 + 13);
 }
 
 /* ---- one-sidedness and twosided ------------------------------------------- */
@@ -847,10 +1169,10 @@ static void test_tables_defaults(void **state) {
 static void test_sidedness(void **state) {
   (void)state;
   int checks = 0;
-  const bsdf_type one_sided[] = {BSDF_DIFFUSE, BSDF_PHONG, BSDF_CONDUCTOR, BSDF_ROUGHCONDUCTOR,
-                                 BSDF_PLASTIC};
+  const bsdf_type one_sided[] = {BSDF_DIFFUSE, BSDF_PHONG,        BSDF_CONDUCTOR, BSDF_ROUGHCONDUCTOR,
+                                 BSDF_PLASTIC, BSDF_ROUGHDIFFUSE, BSDF_WARD};
   vec3 up = dir(0.6, 0.5), up2 = dir(0.7, 2.5), down = dir(-0.6, 0.5), down2 = dir(-0.7, 2.5);
-  for (int t = 0; t < 5; t++) {
+  for (int t = 0; t < 7; t++) {
     bsdf b;
     bsdf_init_defaults(&b, one_sided[t]);
     b.alpha = 0.5;
@@ -890,7 +1212,7 @@ static void test_sidedness(void **state) {
   rgb f1 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);
   assert_true(rgb_rel_err(f0, f1) == 0.0);
   checks++;
-  assert_int_equal(checks, 5 * 13 + 1);
+  assert_int_equal(checks, 7 * 13 + 1);
 }
 
 /* ---- microfacet internals ---------------------------------------------------- */
@@ -950,6 +1272,7 @@ int main(void) {
       cmocka_unit_test(test_sample_consistency), cmocka_unit_test(test_energy),
       cmocka_unit_test(test_chi2_microfacet),   cmocka_unit_test(test_chi2_sampling),
       cmocka_unit_test(test_mask),
+      cmocka_unit_test(test_roughdiffuse),      cmocka_unit_test(test_ward),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -24,7 +24,13 @@
  *       Per model, at least 99.9% of the checked components must pass and
  *       the count must exceed a stated minimum. Masks (a textured opacity
  *       on diffuse, constant ones on a twosided rough conductor and the
- *       smooth dielectric) are a model of their own here.
+ *       smooth dielectric) are a model of their own here;
+ *   (c) roughdiffuse at normal incidence (wo, wi or both at the pole, where
+ *       the azimuth is undefined): finite dual values equal to the plain
+ *       ones, finite tangents, and every derivative as in (b) with none
+ *       skipped, but for the fast model's kink in the theta of the direction
+ *       at the normal, where the derivative must be one of the one-sided
+ *       ones.
  * Fixed seeds; the sampled points are a deterministic function of them.
  */
 #include <setjmp.h>
@@ -72,10 +78,23 @@ static void init_image(void) {
 
 /* ---- The models under test. ------------------------------------------------- */
 
-enum { M_DIFFUSE, M_PHONG, M_CONDUCTOR, M_ROUGHCOND, M_DIELECTRIC, M_ROUGHDIEL, M_PLASTIC, M_TWOSIDED, M_MASK, M_COUNT };
+enum {
+  M_DIFFUSE,
+  M_PHONG,
+  M_CONDUCTOR,
+  M_ROUGHCOND,
+  M_DIELECTRIC,
+  M_ROUGHDIEL,
+  M_PLASTIC,
+  M_TWOSIDED,
+  M_MASK,
+  M_ROUGHDIFFUSE,
+  M_WARD,
+  M_COUNT
+};
 static const char *const g_model_names[M_COUNT] = {
-    "diffuse", "phong", "conductor", "roughconductor", "dielectric", "roughdielectric", "plastic", "twosided",
-    "mask"};
+    "diffuse",  "phong", "conductor",    "roughconductor", "dielectric", "roughdielectric",
+    "plastic", "twosided", "mask", "roughdiffuse", "ward"};
 
 typedef struct config {
   char name[64];
@@ -83,7 +102,7 @@ typedef struct config {
   bsdf b;
 } config;
 
-#define MAX_CONFIGS 40
+#define MAX_CONFIGS 64
 
 static int make_configs(config *c) {
   int n = 0;
@@ -195,6 +214,33 @@ static int make_configs(config *c) {
   b.masked = 1;
   b.opacity = tex_constant(rgb_make(0.7, 0.6, 0.5));
   c[n++] = (config){"mask dielectric", M_MASK, b};
+  /* Rough diffuse: the full model and the fast approximation, two
+   * roughnesses, textured reflectance. */
+  const double rd_alphas[] = {0.3, 0.8};
+  for (int fa = 0; fa < 2; fa++)
+    for (int a = 0; a < 2; a++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      b.fast_approx = fa;
+      b.alpha = rd_alphas[a];
+      b.diffuse = make_bitmap(1.0, 0.3);
+      c[n] = (config){"", M_ROUGHDIFFUSE, b};
+      snprintf(c[n].name, sizeof c[n].name, "roughdiffuse fast=%d a=%g", fa, rd_alphas[a]);
+      n++;
+    }
+
+  /* Ward: the three variants anisotropic, balanced isotropic; textured. */
+  for (int v = 0; v < 4; v++) {
+    bsdf_init_defaults(&b, BSDF_WARD);
+    b.variant = v < 3 ? (ward_variant)v : WARD_BALANCED;
+    b.alpha_u = v < 3 ? 0.15 : 0.3;
+    b.alpha_v = v < 3 ? 0.4 : 0.3;
+    b.diffuse = make_bitmap(1.0, 0.1);
+    b.specular = make_bitmap(2.0, 0.7);
+    c[n] = (config){"", M_WARD, b};
+    snprintf(c[n].name, sizeof c[n].name, "ward variant=%d au=%g av=%g", (int)b.variant, b.alpha_u,
+             b.alpha_v);
+    n++;
+  }
   assert_true(n <= MAX_CONFIGS);
   return n;
 }
@@ -414,6 +460,79 @@ typedef struct grad_stats {
   double worst;
 } grad_stats;
 
+/* Compares every AD derivative of the outputs at x with central
+ * differences of the plain functions (the rules of the opening comment),
+ * adding to *s; prints the first mismatches. The variable skip_var (-1:
+ * none) is left out. */
+static void grad_check_point(ad_arena *A, const config *cf, transport_mode mode, const double *x,
+                             int skip_var, grad_stats *s, int *printed) {
+  const double h = 1e-6;
+  outputs d;
+  eval_dual(A, &cf->b, mode, x, &d);
+  assert_true(ad_arena_ok(A));
+  /* Central differences with steps h and h/2 in every variable. */
+  double fd1[NVAR][NOUT], fd2[NVAR][NOUT];
+  int same[NVAR][2];
+  for (int j = 0; j < NVAR; j++) {
+    outputs o[4];
+    const double steps[4] = {h, -h, 0.5 * h, -0.5 * h};
+    for (int k = 0; k < 4; k++) {
+      double xp[NVAR];
+      memcpy(xp, x, sizeof xp);
+      xp[j] += steps[k];
+      eval_plain(&cf->b, mode, xp, &o[k]);
+    }
+    same[j][0] = same[j][1] = 1;
+    for (int k = 0; k < 4; k++) {
+      same[j][0] &= o[k].ok == d.ok && o[k].flags == d.flags;
+      same[j][1] &= o[k].eval_key == d.eval_key;
+    }
+    for (int out = 0; out < NOUT; out++) {
+      fd1[j][out] = (o[0].v[out] - o[1].v[out]) / (2.0 * h);
+      fd2[j][out] = (o[2].v[out] - o[3].v[out]) / h;
+    }
+  }
+  for (int out = 0; out < NOUT; out++) {
+    int is_sample = out < NSAMPLE_OUT;
+    if (is_sample && !d.ok) continue;
+    /* The magnitude: max(|f|, |grad f|) with the finite-difference
+     * gradient over the variables where the branch holds. */
+    double g2 = 0.0;
+    for (int j = 0; j < NVAR; j++)
+      if (same[j][is_sample ? 0 : 1]) g2 += fd1[j][out] * fd1[j][out];
+    double mag = fmax(fabs(d.v[out]), sqrt(g2));
+    double tol_abs = 1e-8 * mag;
+    for (int j = 0; j < NVAR; j++) {
+      double ad_d = d.d[out][j];
+      if (j == skip_var) continue;
+      if (d.v[out] == 0.0 && ad_d == 0.0 && fd1[j][out] == 0.0 && fd2[j][out] == 0.0)
+        continue; /* identically zero here: nothing to check */
+      if (!same[j][is_sample ? 0 : 1]) {
+        s->skipped_branch++;
+        continue;
+      }
+      double a1 = fd1[j][out], a2 = fd2[j][out];
+      if (fabs(a1 - a2) > fmax(1e-5 * fmax(fabs(a1), fabs(a2)), tol_abs)) {
+        s->skipped_kink++;
+        continue;
+      }
+      double err = fabs(ad_d - a1);
+      s->checked++;
+      if (err <= 1e-5 * fmax(fabs(ad_d), fabs(a1)) || err <= tol_abs) {
+        s->passed++;
+      } else {
+        s->worst = fmax(s->worst, err / fmax(fabs(a1), tol_abs));
+        if (*printed < 12) {
+          print_message("  mismatch %s mode %d out %d var %d: ad %.12g fd %.12g (fd_h/2 %.12g) "
+                        "value %.6g mag %.3g\n",
+                        cf->name, (int)mode, out, j, ad_d, a1, a2, d.v[out], mag);
+          (*printed)++;
+        }
+      }
+    }
+  }
+}
+
 static void test_gradients(void **state) {
   (void)state;
   init_image();
@@ -423,80 +542,16 @@ static void test_gradients(void **state) {
   assert_int_equal(ad_arena_init(&A, g_buf9, sizeof g_buf9 / sizeof g_buf9[0], NVAR), 0);
   grad_stats st[M_COUNT];
   memset(st, 0, sizeof st);
-  const double h = 1e-6;
   const int points = 300;
   int printed = 0;
   for (int c = 0; c < nc; c++) {
-    grad_stats *s = &st[cfg[c].model];
     rng r;
     rng_seed(&r, 5000 + (uint64_t)c, 7);
     for (int mode = 0; mode < 2; mode++)
       for (int i = 0; i < points; i++) {
         double x[NVAR];
         random_point(&r, &cfg[c].b, (transport_mode)mode, 0, x);
-        outputs d;
-        eval_dual(&A, &cfg[c].b, (transport_mode)mode, x, &d);
-        assert_true(ad_arena_ok(&A));
-        /* Central differences with steps h and h/2 in every variable. */
-        double fd1[NVAR][NOUT], fd2[NVAR][NOUT];
-        int same[NVAR][2];
-        for (int j = 0; j < NVAR; j++) {
-          outputs o[4];
-          const double steps[4] = {h, -h, 0.5 * h, -0.5 * h};
-          for (int k = 0; k < 4; k++) {
-            double xp[NVAR];
-            memcpy(xp, x, sizeof xp);
-            xp[j] += steps[k];
-            eval_plain(&cfg[c].b, (transport_mode)mode, xp, &o[k]);
-          }
-          same[j][0] = same[j][1] = 1;
-          for (int k = 0; k < 4; k++) {
-            same[j][0] &= o[k].ok == d.ok && o[k].flags == d.flags;
-            same[j][1] &= o[k].eval_key == d.eval_key;
-          }
-          for (int out = 0; out < NOUT; out++) {
-            fd1[j][out] = (o[0].v[out] - o[1].v[out]) / (2.0 * h);
-            fd2[j][out] = (o[2].v[out] - o[3].v[out]) / h;
-          }
-        }
-        for (int out = 0; out < NOUT; out++) {
-          int is_sample = out < NSAMPLE_OUT;
-          if (is_sample && !d.ok) continue;
-          /* The magnitude: max(|f|, |grad f|) with the finite-difference
-           * gradient over the variables where the branch holds. */
-          double g2 = 0.0;
-          for (int j = 0; j < NVAR; j++)
-            if (same[j][is_sample ? 0 : 1]) g2 += fd1[j][out] * fd1[j][out];
-          double mag = fmax(fabs(d.v[out]), sqrt(g2));
-          double tol_abs = 1e-8 * mag;
-          for (int j = 0; j < NVAR; j++) {
-            double ad_d = d.d[out][j];
-            if (d.v[out] == 0.0 && ad_d == 0.0 && fd1[j][out] == 0.0 && fd2[j][out] == 0.0)
-              continue; /* identically zero here: nothing to check */
-            if (!same[j][is_sample ? 0 : 1]) {
-              s->skipped_branch++;
-              continue;
-            }
-            double a1 = fd1[j][out], a2 = fd2[j][out];
-            if (fabs(a1 - a2) > fmax(1e-5 * fmax(fabs(a1), fabs(a2)), tol_abs)) {
-              s->skipped_kink++;
-              continue;
-            }
-            double err = fabs(ad_d - a1);
-            s->checked++;
-            if (err <= 1e-5 * fmax(fabs(ad_d), fabs(a1)) || err <= tol_abs) {
-              s->passed++;
-            } else {
-              s->worst = fmax(s->worst, err / fmax(fabs(a1), tol_abs));
-              if (printed < 12) {
-                print_message("  mismatch %s mode %d out %d var %d: ad %.12g fd %.12g (fd_h/2 %.12g) "
-                              "value %.6g mag %.3g\n",
-                              cfg[c].name, mode, out, j, ad_d, a1, a2, d.v[out], mag);
-                printed++;
-              }
-            }
-          }
-        }
+        grad_check_point(&A, &cfg[c], (transport_mode)mode, x, -1, &st[cfg[c].model], &printed);
       }
   }
   for (int m = 0; m < M_COUNT; m++) {
@@ -511,11 +566,96 @@ static void test_gradients(void **state) {
   }
 }
 
+/* Rough diffuse at normal incidence, where sin(theta) = 0 and the azimuth
+ * is undefined: wo at the normal, wi at the normal, and both. The dual
+ * values equal the plain ones and every tangent is finite. The full model
+ * is differentiable there: its derivatives in theta (a step of -h crosses
+ * the pole to azimuth phi + pi, a smooth path through it) and phi match
+ * central differences, with no point skipped as a kink. The fast model has
+ * max(0, cos dphi) sin(alpha) tan(beta), a kink in the theta of the
+ * direction at the normal when the other is oblique (the sampled wi is):
+ * there the derivative of f must be one of the two one-sided ones
+ * (second-order one-sided differences), the other variables are checked as
+ * for the full model. */
+static void test_normal_incidence(void **state) {
+  (void)state;
+  init_image();
+  ad_arena A;
+  assert_int_equal(ad_arena_init(&A, g_buf9, sizeof g_buf9 / sizeof g_buf9[0], NVAR), 0);
+  grad_stats st;
+  memset(&st, 0, sizeof st);
+  int printed = 0, points = 0, one_sided = 0, one_sided_ok = 0;
+  long finite = 0, values = 0;
+  for (int fa = 0; fa < 2; fa++) {
+    config cf;
+    bsdf_init_defaults(&cf.b, BSDF_ROUGHDIFFUSE);
+    cf.b.fast_approx = fa;
+    cf.b.alpha = 0.5;
+    cf.b.diffuse = tex_constant(rgb_make(0.3, 0.6, 0.9));
+    cf.model = M_ROUGHDIFFUSE;
+    snprintf(cf.name, sizeof cf.name, "roughdiffuse normal incidence fast=%d", fa);
+    rng r;
+    rng_seed(&r, 77 + (uint64_t)fa, 9);
+    for (int which = 0; which < 3; which++)
+      for (int i = 0; i < 40; i++) {
+        double x[NVAR];
+        random_point(&r, &cf.b, TRANSPORT_RADIANCE, 0, x);
+        x[V_THI] = 0.1 + 1.3 * rng_uniform(&r); /* wi above the surface */
+        if (which != 1) x[V_THO] = 0.0;
+        if (which != 0) x[V_THI] = 0.0;
+        outputs p, d;
+        eval_plain(&cf.b, TRANSPORT_RADIANCE, x, &p);
+        eval_dual(&A, &cf.b, TRANSPORT_RADIANCE, x, &d);
+        for (int o = p.ok ? 0 : NSAMPLE_OUT; o < NOUT; o++) {
+          values++;
+          int fin = isfinite(d.v[o]) && rel_err(p.v[o], d.v[o]) <= 1e-12;
+          for (int j = 0; j < NVAR; j++) fin = fin && isfinite(d.d[o][j]);
+          finite += fin;
+        }
+        int kink_var = !fa ? -1 : which == 1 ? V_THI : V_THO;
+        grad_check_point(&A, &cf, TRANSPORT_RADIANCE, x, kink_var, &st, &printed);
+        points++;
+        if (kink_var < 0) continue;
+        /* f (outputs 10-12) at theta = 0, +-h, +-2h: D+ = (-3 f0 + 4 f1 - f2) / 2h. */
+        const double h = 1e-5;
+        outputs o[5];
+        for (int k = 0; k < 5; k++) {
+          double xp[NVAR];
+          memcpy(xp, x, sizeof xp);
+          xp[kink_var] += (k - 2) * h;
+          eval_plain(&cf.b, TRANSPORT_RADIANCE, xp, &o[k]);
+        }
+        for (int out = 3; out < 13; out++) {
+          /* The sample's f (its wi does not move with wo) and eval's f. */
+          if (out >= 6 && out < 10) continue;
+          if (out < 6 && (!p.ok || kink_var != V_THO)) continue;
+          double dp = (-3.0 * o[2].v[out] + 4.0 * o[3].v[out] - o[4].v[out]) / (2.0 * h);
+          double dm = (3.0 * o[2].v[out] - 4.0 * o[1].v[out] + o[0].v[out]) / (2.0 * h);
+          double ad_d = d.d[out][kink_var], tol = 1e-6 * fmax(1.0, fabs(d.v[out]));
+          one_sided++;
+          one_sided_ok += fabs(ad_d - dp) <= tol || fabs(ad_d - dm) <= tol;
+        }
+      }
+  }
+  print_message("normal incidence: %ld values finite and equal of %ld; derivatives checked %ld "
+                "passed %ld (skipped: branch %ld, kink %ld); one-sided %d of %d\n",
+                finite, values, st.checked, st.passed, st.skipped_branch, st.skipped_kink,
+                one_sided_ok, one_sided);
+  assert_int_equal(points, 2 * 3 * 40);
+  assert_int_equal(finite, values);
+  assert_int_equal(st.skipped_kink, 0);
+  assert_true(st.checked >= 2000);
+  assert_int_equal(st.passed, st.checked);
+  assert_true(one_sided >= 3 * 40 * 3);
+  assert_int_equal(one_sided_ok, one_sided);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_texture_values),
       cmocka_unit_test(test_values),
       cmocka_unit_test(test_gradients),
+      cmocka_unit_test(test_normal_incidence),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

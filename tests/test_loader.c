@@ -5,6 +5,9 @@
  *    which must fail with the right status, naming the right file and line;
  *  - warnings: unsupported things load, but each produces one warning
  *    (counted with lmc_warning_count);
+ *  - roughdiffuse and ward: Mitsuba's names, variants and defaults load
+ *    without a warning; a textured roughness warns; a bad variant or a
+ *    negative alpha is an error with file and line;
  *  - the happy path: tests/data/loader/happy.xml has every shape type,
  *    every BSDF, textures, an <include>, <default>s and emitters; its counts
  *    and values are checked, with and without a -D override;
@@ -143,6 +146,14 @@ static const bad_case bad_cases[] = {
      LMC_EPARSE, "lmc_loader_badmatrix.xml", 8, "16 numbers"},
     {"badroot", "<?xml version=\"1.0\"?>\n<scenery/>\n", LMC_EPARSE, "lmc_loader_badroot.xml", 2,
      "scene"},
+    {"wardvariant", HEAD SENSOR "  <bsdf type=\"ward\">\n"                  /* 6 */
+                                "    <string name=\"variant\" value=\"phong\"/>\n" /* 7 */
+                                "  </bsdf>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_wardvariant.xml", 7, "ward-duer"},
+    {"rdalpha", HEAD SENSOR "  <bsdf type=\"roughdiffuse\">\n"            /* 6 */
+                            "    <float name=\"alpha\" value=\"-0.1\"/>\n" /* 7 */
+                            "  </bsdf>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_rdalpha.xml", 6, "alpha"},
     {"refnottex", HEAD SENSOR "  <bsdf type=\"diffuse\" id=\"b\"/>\n" /* 6 */
                               "  <bsdf type=\"diffuse\">\n"          /* 7 */
                               "    <ref name=\"reflectance\" id=\"b\"/>\n" /* 8 */
@@ -575,6 +586,79 @@ static void test_lookat_spelling(void **state) {
   scene_destroy(s[1]);
 }
 
+/* roughdiffuse and ward with Mitsuba's names and defaults, without a
+ * warning: roughdiffuse's own reflectance, alpha, useFastApprox and its
+ * other name diffuseReflectance; ward's variants (any case), alphaU/alphaV
+ * and alpha, its two reflectances. A textured roughness warns once and
+ * takes the default. */
+static void test_roughdiffuse_ward(void **state) {
+  (void)state;
+  static const char *const xml =
+      HEAD SENSOR LIGHT
+      "  <shape type=\"cube\"><bsdf type=\"roughdiffuse\" id=\"rd\">\n"
+      "    <spectrum name=\"reflectance\" value=\"0.3\"/>\n"
+      "    <float name=\"alpha\" value=\"0.4\"/>\n"
+      "  </bsdf></shape>\n"
+      "  <shape type=\"cube\"><bsdf type=\"roughdiffuse\" id=\"rd2\">\n"
+      "    <rgb name=\"diffuseReflectance\" value=\"0.1, 0.2, 0.7\"/>\n"
+      "    <boolean name=\"useFastApprox\" value=\"true\"/>\n"
+      "  </bsdf></shape>\n"
+      "  <shape type=\"cube\"><bsdf type=\"ward\" id=\"wd\">\n"
+      "    <string name=\"variant\" value=\"ward-duer\"/>\n"
+      "    <float name=\"alphaU\" value=\"0.1\"/>\n"
+      "    <float name=\"alphaV\" value=\"0.3\"/>\n"
+      "    <spectrum name=\"specularReflectance\" value=\"0.25\"/>\n"
+      "    <spectrum name=\"diffuseReflectance\" value=\"0.6\"/>\n"
+      "  </bsdf></shape>\n"
+      "  <shape type=\"cube\"><bsdf type=\"ward\" id=\"wd2\">\n"
+      "    <string name=\"variant\" value=\"Ward\"/>\n"
+      "    <float name=\"alpha\" value=\"0.2\"/>\n"
+      "  </bsdf></shape>\n"
+      "  <shape type=\"cube\"><bsdf type=\"ward\" id=\"wd3\"/></shape>\n"
+      "</scene>\n";
+  int warnings;
+  scene *s = load_case_ok("/tmp/lmc_loader_rdward.xml", xml, 0, &warnings);
+  assert_int_equal(warnings, 0);
+  const bsdf *rd = find_bsdf(s, "rd");
+  assert_int_equal(rd->type, BSDF_ROUGHDIFFUSE);
+  assert_int_equal(rd->diffuse.type, TEX_CONSTANT);
+  assert_true(near(rd->diffuse.value.r, 0.3, 1e-15) && near(rd->diffuse.value.b, 0.3, 1e-15));
+  assert_true(near(rd->alpha, 0.4, 0));
+  assert_int_equal(rd->fast_approx, 0);
+  const bsdf *rd2 = find_bsdf(s, "rd2");
+  assert_int_equal(rd2->type, BSDF_ROUGHDIFFUSE);
+  assert_true(near(rd2->diffuse.value.b, 0.7, 1e-15) && near(rd2->diffuse.value.r, 0.1, 1e-15));
+  assert_true(near(rd2->alpha, 0.2, 0)); /* Mitsuba's default */
+  assert_int_equal(rd2->fast_approx, 1);
+  const bsdf *wd = find_bsdf(s, "wd");
+  assert_int_equal(wd->type, BSDF_WARD);
+  assert_int_equal(wd->variant, WARD_DUER);
+  assert_true(near(wd->alpha_u, 0.1, 0) && near(wd->alpha_v, 0.3, 0));
+  assert_true(near(wd->specular.value.g, 0.25, 1e-15) && near(wd->diffuse.value.g, 0.6, 1e-15));
+  const bsdf *wd2 = find_bsdf(s, "wd2");
+  assert_int_equal(wd2->variant, WARD_ORIGINAL);
+  assert_true(near(wd2->alpha_u, 0.2, 0) && near(wd2->alpha_v, 0.2, 0));
+  const bsdf *wd3 = find_bsdf(s, "wd3");
+  assert_int_equal(wd3->variant, WARD_BALANCED);
+  assert_true(near(wd3->alpha_u, 0.1, 0) && near(wd3->alpha_v, 0.1, 0));
+  assert_true(near(wd3->specular.value.r, 0.2, 1e-15) && near(wd3->diffuse.value.r, 0.5, 1e-15));
+  scene_destroy(s);
+
+  /* A textured alpha: one warning, the default roughness. */
+  static const char *const xml_tex =
+      HEAD SENSOR LIGHT
+      "  <shape type=\"cube\"><bsdf type=\"roughdiffuse\" id=\"rt\">\n"
+      "    <texture type=\"checkerboard\" name=\"alpha\"/>\n"
+      "  </bsdf></shape>\n"
+      "</scene>\n";
+  s = load_case_ok("/tmp/lmc_loader_rdtex.xml", xml_tex, 1, &warnings);
+  assert_int_equal(warnings, 1);
+  const bsdf *rt = find_bsdf(s, "rt");
+  assert_int_equal(rt->type, BSDF_ROUGHDIFFUSE);
+  assert_true(near(rt->alpha, 0.2, 0));
+  scene_destroy(s);
+}
+
 /* <sampler type>: independent and Mitsuba's ldsampler/sobol map without a
  * word, the other stratifying samplers to sobol with a warning, an unknown
  * one to independent with a warning; no <sampler>: independent. */
@@ -845,6 +929,7 @@ int main(void) {
       cmocka_unit_test(test_sampler_type),    cmocka_unit_test(test_mitsuba_defaults),
       cmocka_unit_test(test_mask_loader),
       cmocka_unit_test(test_bump_loader),
+      cmocka_unit_test(test_roughdiffuse_ward),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

@@ -181,6 +181,9 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
   b->alpha = 0.1;
   b->sample_visible = 1;
   b->nonlinear = 0;
+  b->fast_approx = 0;
+  b->alpha_u = b->alpha_v = 0.1;
+  b->variant = WARD_BALANCED;
   /* Conductors: Cu against air (Mitsuba divides eta and k by extEta). */
   const double air = 1.000277;
   rgb ce, ck;
@@ -198,6 +201,14 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
     break;
   case BSDF_PLASTIC:
     b->eta = 1.49 / air; /* polypropylene / air */
+    break;
+  case BSDF_ROUGHDIFFUSE:
+    b->alpha = 0.2;
+    b->eta = 1.0;
+    break;
+  case BSDF_WARD:
+    b->specular = tex_constant(rgb_gray(0.2));
+    b->eta = 1.0;
     break;
   default:
     b->eta = 1.0;
@@ -222,6 +233,10 @@ static int bsdf__model_flags(const bsdf *b) {
     return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY;
   case BSDF_PLASTIC:
     return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_DELTA;
+  case BSDF_ROUGHDIFFUSE:
+    return BSDF_REFLECTION | BSDF_GLOSSY; /* Mitsuba's flag: f is not constant */
+  case BSDF_WARD:
+    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY;
   case BSDF_TYPE_COUNT:
     break;
   }
@@ -240,6 +255,7 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
   if (b->masked) return 0; /* the pass-through is a delta lobe */
   switch (b->type) {
   case BSDF_DIFFUSE:
+  case BSDF_ROUGHDIFFUSE:
     return 1.0 > rough_min;
   case BSDF_PHONG:
     /* A diffuse part makes it rough; a pure lobe of exponent n is as wide
@@ -249,6 +265,10 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
   case BSDF_ROUGHCONDUCTOR:
   case BSDF_ROUGHDIELECTRIC:
     return b->alpha > rough_min;
+  case BSDF_WARD:
+    /* As phong; the lobe's roughness is Mitsuba's (alphaU + alphaV) / 2. */
+    if (rgb_luminance(tex_mean(&b->diffuse)) > 0.0) return 1.0 > rough_min;
+    return 0.5 * (b->alpha_u + b->alpha_v) > rough_min;
   default:
     return 0; /* delta lobes: smooth conductor and dielectric, plastic's coating */
   }

@@ -2,7 +2,7 @@
  * bsdf_internal.h: what the BSDF files share (not API). bsdf.c dispatches
  * on the model and holds Fresnel, the IOR tables and the defaults;
  * bsdf_smooth.c has diffuse, phong, the smooth conductor, the smooth
- * dielectric and plastic; bsdf_rough.c the microfacet models. Each
+ * dielectric, plastic, roughdiffuse (Oren-Nayar) and ward; bsdf_rough.c the microfacet models. Each
  * compiles its *_generic.h body twice: in doubles (declared here) and in
  * duals (bsdf_ad_internal.h).
  *
@@ -48,6 +48,8 @@ BSDF__MODEL(roughconductor)
 BSDF__MODEL(dielectric)
 BSDF__MODEL(roughdielectric)
 BSDF__MODEL(plastic)
+BSDF__MODEL(roughdiffuse)
+BSDF__MODEL(ward)
 BSDF__MODEL_EVAL_PDF(phong)
 BSDF__MODEL_EVAL_PDF(roughconductor)
 BSDF__MODEL_EVAL_PDF(roughdielectric)
@@ -64,6 +66,8 @@ BSDF__MODEL_EVAL_PDF(roughdielectric)
   BSDF__CASE(BSDF_ROUGHCONDUCTOR, roughconductor)                                                \
   BSDF__CASE(BSDF_DIELECTRIC, dielectric)                                                        \
   BSDF__CASE(BSDF_ROUGHDIELECTRIC, roughdielectric)                                              \
-  BSDF__CASE(BSDF_PLASTIC, plastic)
+  BSDF__CASE(BSDF_PLASTIC, plastic)                                                              \
+  BSDF__CASE(BSDF_ROUGHDIFFUSE, roughdiffuse)                                                    \
+  BSDF__CASE(BSDF_WARD, ward)
 
 #endif

@@ -3,6 +3,7 @@
  * and BSDFs (Mitsuba's names and defaults, bsdf.h), for
  * scene_xml_internal.h.
  */
+#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -285,6 +286,29 @@ static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
   return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
 }
 
+/* 1 when o has a property `name` (without marking it read). */
+static int xml__has(const pset *o, const char *name) {
+  for (int i = 0; i < o->n_props; i++)
+    if (strcmp(o->props[i].name, name) == 0) return 1;
+  return 0;
+}
+
+/* A roughness that Mitsuba also takes as a texture (roughdiffuse's alpha,
+ * ward's alphaU and alphaV): a <float>, or a texture, which warns and
+ * gives `def` (the models take one roughness per BSDF). *found as
+ * xml__float's. */
+static lmc_status xml__roughness(builder *B, pset *o, const char *name, double def, double *out,
+                                 int *found) {
+  prop *p = xml__find(o, name);
+  if (p && (p->kind == PROP_OBJECT || p->kind == PROP_REF)) {
+    if (found) *found = 1;
+    lmc_warn(p->file, p->line, "a textured '%s' is not supported: using %g", name, def);
+    *out = def;
+    return LMC_OK;
+  }
+  return xml__float(B, o, name, def, out, found);
+}
+
 enum { BSDF_TEX_DIFFUSE = 1, BSDF_TEX_SPECULAR = 2, BSDF_TEX_TRANSMITTANCE = 4 };
 
 /* The textures `which` of a BSDF, each defaulting to the model's own
@@ -474,6 +498,40 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
     if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
       return st;
     if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
+      return st;
+  } else if (strcmp(t, "roughdiffuse") == 0) {
+    /* Mitsuba reads `reflectance`, or `diffuseReflectance` when there is no
+     * `reflectance`. */
+    bsdf_init_defaults(b, BSDF_ROUGHDIFFUSE);
+    const char *rname = xml__has(o, "reflectance") ? "reflectance" : "diffuseReflectance";
+    if ((st = xml__texture(B, o, rname, rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK) return st;
+    if ((st = xml__roughness(B, o, "alpha", b->alpha, &b->alpha, NULL)) != LMC_OK) return st;
+    if (!(b->alpha >= 0.0))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughdiffuse alpha must be >= 0");
+    if ((st = xml__bool(B, o, "useFastApprox", 0, &b->fast_approx, NULL)) != LMC_OK) return st;
+  } else if (strcmp(t, "ward") == 0) {
+    bsdf_init_defaults(b, BSDF_WARD);
+    const char *v;
+    prop *vp;
+    if ((st = xml__string(B, o, "variant", "balanced", &v, &vp)) != LMC_OK) return st;
+    /* Mitsuba lower-cases the name. */
+    char lower[16];
+    size_t n = 0;
+    for (; v[n] && n + 1 < sizeof lower; n++) lower[n] = (char)tolower((unsigned char)v[n]);
+    lower[n] = '\0';
+    if (strcmp(lower, "ward") == 0) b->variant = WARD_ORIGINAL;
+    else if (strcmp(lower, "ward-duer") == 0) b->variant = WARD_DUER;
+    else if (strcmp(lower, "balanced") == 0) b->variant = WARD_BALANCED;
+    else
+      return xml__fail(B, LMC_EPARSE, vp->file, vp->line,
+                       "ward variant \"%s\" must be \"ward\", \"ward-duer\" or \"balanced\"", v);
+    double alpha;
+    if ((st = xml__roughness(B, o, "alpha", 0.1, &alpha, NULL)) != LMC_OK) return st;
+    if ((st = xml__roughness(B, o, "alphaU", alpha, &b->alpha_u, NULL)) != LMC_OK) return st;
+    if ((st = xml__roughness(B, o, "alphaV", alpha, &b->alpha_v, NULL)) != LMC_OK) return st;
+    if (!(b->alpha_u > 0.0) || !(b->alpha_v > 0.0))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "ward alphaU and alphaV must be positive");
+    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
       return st;
   } else {
     lmc_warn(o->file, o->line, "unknown BSDF type \"%s\": using diffuse with reflectance 0.5", t);
