@@ -35,6 +35,7 @@
 
 #include "render/bsdf/bsdf_ad_internal.h"
 #include "render/bsdf/bsdf_internal.h"
+#include "render/warp.h"
 
 /* ---- Fresnel (value-only parts) --------------------------------------- */
 
@@ -194,9 +195,11 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
     break;
   case BSDF_DIELECTRIC:
   case BSDF_ROUGHDIELECTRIC:
+  case BSDF_THINDIELECTRIC:
     b->eta = 1.5046 / air; /* bk7 / air */
     break;
   case BSDF_PLASTIC:
+  case BSDF_ROUGHPLASTIC:
     b->eta = 1.49 / air; /* polypropylene / air */
     break;
   default:
@@ -221,13 +224,27 @@ int bsdf_flags(const bsdf *b) {
     return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY;
   case BSDF_PLASTIC:
     return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_DELTA;
+  case BSDF_ROUGHPLASTIC:
+    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY;
+  case BSDF_THINDIELECTRIC:
+    return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA;
   case BSDF_TYPE_COUNT:
     break;
   }
   return 0;
 }
 
-int bsdf_is_delta(const bsdf *b) { return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC; }
+int bsdf_is_delta(const bsdf *b) {
+  return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC ||
+         b->type == BSDF_THINDIELECTRIC;
+}
+
+void bsdf_prepare(bsdf *b) {
+  if (b->type != BSDF_ROUGHPLASTIC) return;
+  bsdf_rtrans *rt = &b->rtrans;
+  if (rt->ready && rt->dist == b->dist && rt->alpha == b->alpha && rt->eta == b->eta) return;
+  bsdf__rtrans_fill(rt, b->dist, b->alpha, b->eta);
+}
 
 int bsdf_is_rough(const bsdf *b, double rough_min) {
   switch (b->type) {
@@ -240,9 +257,12 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
     return sqrt(2.0 / (b->exponent + 2.0)) > rough_min;
   case BSDF_ROUGHCONDUCTOR:
   case BSDF_ROUGHDIELECTRIC:
+  case BSDF_ROUGHPLASTIC:
+    /* roughplastic by its coating alone, as roughconductor: a narrow
+     * glossy lobe over the diffuse base keeps relative parametrization. */
     return b->alpha > rough_min;
   default:
-    return 0; /* delta lobes: smooth conductor and dielectric, plastic's coating */
+    return 0; /* delta lobes: smooth conductor and dielectrics, plastic's coating */
   }
 }
 
