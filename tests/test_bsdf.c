@@ -8,9 +8,11 @@
  *     roughdielectric for both distributions, two roughnesses, visible
  *     normals on and off, normal / oblique / grazing wo, both sides for the
  *     dielectric, the diffuse part of plastic, roughdiffuse full and fast
- *     at two roughnesses, ward's three variants isotropic and anisotropic),
- *     each at the Sidak level of an overall 1% (fixed seeds), plus the
- *     visible-normal sampler alone;
+ *     at two roughnesses, ward's three variants isotropic and anisotropic,
+ *     roughplastic for both distributions at alpha 0.1 and 0.5, normal /
+ *     oblique / grazing wo, linear and nonlinear, masks), each at the Sidak
+ *     level of an overall 1% (fixed seeds), plus the visible-normal sampler
+ *     alone;
  *   - the pdf integrates to the fraction of samples the sampler accepts
  *     (the total probability of its non-delta lobes), and to 1 - P(specular)
  *     for plastic; D(m) cos(theta_m) and the visible-normal density
@@ -19,8 +21,13 @@
  *     bsdf_pdf at that direction, weight = f |cos| / pdf, and a reverse
  *     density the sampler computed equals bsdf_pdf(wi, wo);
  *   - energy: diffuse albedo = reflectance, plastic albedo in closed form
- *     (F_i + (1 - F_i) kd, linear mode), phong and rough models at most 1,
- *     a perfect mirror ("none") reflects exactly 1;
+ *     (F_i + (1 - F_i) kd, linear mode), phong and rough models at most 1
+ *     (roughplastic with white base and coating, both distributions, alpha
+ *     0.05, 0.3, 1, four angles), a perfect mirror ("none") reflects
+ *     exactly 1; roughplastic at alpha = 0.001 against smooth plastic: its
+ *     rough F_dr against the smooth one, its diffuse value away from the
+ *     mirror direction (relative 2e-3), its albedo against plastic's closed
+ *     form (4 standard errors + 2e-3);
  *   - roughdiffuse: alpha = 0 is Lambertian bit for bit (both variants);
  *     f equals a transcription of Oren and Nayar's formulas in angles;
  *     albedo (R = 1) in closed form at the normal (A; C1 + C4) and, for the
@@ -31,14 +38,19 @@
  *     90 degree turn), isotropy under any turn; albedo <= 1 (ks + kd <= 1)
  *     for balanced and ward at all angles and ward-duer away from grazing,
  *     and ward-duer above 1 at grazing (Mitsuba's documentation);
- *   - reciprocity of the reflection models (roughdiffuse and the three
- *     ward variants included), and for rough refraction the
+ *   - reciprocity of the reflection models (roughdiffuse, the three ward
+ *     variants and roughplastic included: their f are symmetric), and for
+ *     rough refraction the
  *     generalised reciprocity f_rad(a, b) eta_b^2 = f_rad(b, a) eta_a^2 and
  *     the adjoint f_imp(a, b) = f_rad(b, a);
  *   - delta lobes: dielectric reflect + refract probabilities sum to 1 and
  *     equal F, Snell's law, total internal reflection, radiance scaling;
+ *     thindielectric's reflect probability equals the series of the slab's
+ *     passes R + sum (1 - R)^2 R^(2k+1), reflect + transmit = 1, the
+ *     transmitted direction is exactly -wo with weight 1 in both modes and
+ *     eta 1, both sides alike, eta = 1 always transmits;
  *   - one-sidedness and the twosided flip; Fresnel identities; tables and
- *     defaults;
+ *     defaults (the new models' defaults, flags, bsdf_is_rough, bsdf_prepare);
  *   - the mask: f, pdf and samples against the wrapped model's, its
  *     pass-through lobe, and energy conservation of a white diffuse mask.
  * Each test counts its checks and asserts the count.
@@ -206,6 +218,30 @@ static int make_configs(config *c) {
         }
         snprintf(c[n].name, sizeof c[n].name, "ward %s au=%g av=%g wo.z=%.2f", ward_names[v],
                  c[n].b.alpha_u, c[n].b.alpha_v, ward_z[i]);
+        n++;
+      }
+  /* Rough plastic: distribution x alpha x wo (normal, oblique, grazing);
+   * visible normals with the sharper lobe, all normals with the wider,
+   * nonlinear on GGX. alpha = 0.1 on the finer grid. */
+  const double rp_alpha[] = {0.1, 0.5};
+  const double rp_z[] = {1.0, 0.5, 0.08};
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 2; a++)
+      for (int i = 0; i < 3; i++) {
+        bsdf_init_defaults(&c[n].b, BSDF_ROUGHPLASTIC);
+        c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
+        c[n].b.alpha = rp_alpha[a];
+        c[n].b.sample_visible = !a;
+        c[n].b.nonlinear = d;
+        c[n].b.diffuse = tex_constant(rgb_make(0.3, 0.5, 0.7));
+        bsdf_prepare(&c[n].b);
+        c[n].wo = dir(rp_z[i], phi0);
+        if (!a) {
+          c[n].n_theta = 150;
+          c[n].n_phi = 300;
+        }
+        snprintf(c[n].name, sizeof c[n].name, "roughplastic %s a=%g vis=%d wo.z=%.2f",
+                 d ? "ggx" : "beckmann", rp_alpha[a], !a, rp_z[i]);
         n++;
       }
   /* A twosided rough conductor seen from below. */
@@ -616,7 +652,82 @@ static void test_energy(void **state) {
         checks += 2;
       }
     }
-  assert_int_equal(checks, 3 * 3 + 2 + 6 * 5 + 9 * 2 + 4 * 6);
+
+  /* Rough plastic, white base and coating (ks = kd = 1): albedo at most 1
+   * at every angle, both distributions, three roughnesses, linear and
+   * nonlinear (the same at kd = 1). Tolerance: 4 standard errors. */
+  const double rp_alpha[] = {0.05, 0.3, 1.0};
+  const double rp_z[] = {0.98, 0.6, 0.25, 0.05};
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 3; a++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+      b.dist = dists[d];
+      b.alpha = rp_alpha[a];
+      b.nonlinear = a == 1;
+      b.diffuse = tex_constant(rgb_gray(1.0));
+      bsdf_prepare(&b);
+      for (int i = 0; i < 4; i++) {
+        double se;
+        double alb = mc_albedo(&b, dir(rp_z[i], 0.4), TRANSPORT_RADIANCE, 40000, 31 + 4 * a + d, &se);
+        if (!(alb <= 1.0 + 4.0 * se + 1e-9))
+          print_error("roughplastic %d a=%g wo.z=%g: albedo %g +- %g\n", d, rp_alpha[a], rp_z[i],
+                      alb, se);
+        assert_le(alb, 1.0 + 4.0 * se + 1e-9);
+        /* Only Smith's masking at the coating loses energy (single
+         * scattering): near 1 unless grazing or rough (GGX at alpha = 1
+         * loses 11% at normal incidence, 27% at wo.z = 0.6). */
+        double low = a < 2 ? 0.9 : 0.6;
+        if (i < 2 && !(alb > low))
+          print_error("low albedo %d a=%g wo.z=%g: %g\n", d, rp_alpha[a], rp_z[i], alb);
+        if (i < 2) assert_true(alb > low);
+        checks += 2;
+      }
+    }
+  /* Rough plastic as alpha -> 0 is smooth plastic: the diffuse term equals
+   * plastic's (T -> 1 - F, the rough F_dr -> F_dr) away from the mirror
+   * direction, and the albedo is plastic's closed form
+   * F_i ks + (1 - F_i) kd (linear mode), up to the coating's masking. */
+  for (int d = 0; d < 2; d++) {
+    bsdf rp, pl;
+    bsdf_init_defaults(&rp, BSDF_ROUGHPLASTIC);
+    rp.dist = dists[d];
+    rp.alpha = 0.001;
+    rp.diffuse = tex_constant(rgb_gray(0.8));
+    bsdf_prepare(&rp);
+    bsdf_init_defaults(&pl, BSDF_PLASTIC);
+    pl.diffuse = rp.diffuse;
+    double fdr_int = 0.0; /* the smooth F_dr(1 / eta), midpoint rule */
+    for (int k = 0; k < 200000; k++) {
+      double c = (k + 0.5) / 200000;
+      fdr_int += fresnel_dielectric(c, 1.0 / pl.eta, NULL) * 2.0 * c / 200000;
+    }
+    assert_near(rp.rtrans.fdr_int, fdr_int, 2e-4);
+    checks++;
+    for (int k = 0; k < 20; k++) {
+      /* (Not at grazing angles, where GGX's long tails still show at this
+       * alpha: 4e-3 at cos 0.03.) */
+      vec3 wo = dir(0.1 + 0.04 * k, 0.3), wi = dir(0.9 - 0.04 * k, 2.0 + 0.1 * k);
+      rgb f1 = bsdf_eval(&rp, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      rgb f2 = bsdf_eval(&pl, 0, 0, wo, wi, TRANSPORT_RADIANCE);
+      if (!(rel_err(f1.r, f2.r) < 2e-3))
+        print_error("roughplastic %d a=0.001 vs plastic, wo.z %g wi.z %g: %g vs %g\n", d, wo.z,
+                    wi.z, f1.r, f2.r);
+      assert_true(rel_err(f1.r, f2.r) < 2e-3);
+      checks++;
+    }
+    for (int i = 0; i < 3; i++) {
+      vec3 wo = dir(0.9 - 0.35 * i, 1.0);
+      double fi = fresnel_dielectric(wo.z, rp.eta, NULL), se;
+      double alb = mc_albedo(&rp, wo, TRANSPORT_RADIANCE, 40000, 61 + 3 * d + i, &se);
+      double expect = fi + (1.0 - fi) * 0.8;
+      if (!(fabs(alb - expect) <= 4.0 * se + 2e-3))
+        print_error("roughplastic a=0.001 albedo at wo.z %g: %g +- %g, smooth %g\n", wo.z, alb, se,
+                    expect);
+      assert_true(fabs(alb - expect) <= 4.0 * se + 2e-3);
+      checks++;
+    }
+  }
+  assert_int_equal(checks, 3 * 3 + 2 + 6 * 5 + 9 * 2 + 4 * 6 + 6 * 4 * 2 + 2 * (1 + 20 + 3));
 }
 
 /* ---- roughdiffuse and ward: independent expectations ------------------------ */
@@ -872,21 +983,24 @@ static void test_reciprocity(void **state) {
   rng_seed(&r, 99, 5);
   int checks = 0, bad = 0;
   /* Reflection models: f(a, b) = f(b, a). */
-  /* The last five: roughdiffuse full and fast, ward's three variants
-   * (anisotropic); all five are reciprocal formulas. */
-  const int n_types = 11;
+  /* 6-10: roughdiffuse full and fast, ward's three variants (anisotropic);
+   * 11-12: roughplastic (Beckmann linear, GGX nonlinear); all reciprocal
+   * formulas. */
+  const int n_types = 13;
   for (int t = 0; t < n_types; t++) {
     bsdf b;
     const bsdf_type types[] = {BSDF_DIFFUSE,      BSDF_PHONG,        BSDF_ROUGHCONDUCTOR,
                                BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC,    BSDF_ROUGHDIELECTRIC,
                                BSDF_ROUGHDIFFUSE, BSDF_ROUGHDIFFUSE, BSDF_WARD,
-                               BSDF_WARD,         BSDF_WARD};
+                               BSDF_WARD,         BSDF_WARD,         BSDF_ROUGHPLASTIC,
+                               BSDF_ROUGHPLASTIC};
     bsdf_init_defaults(&b, types[t]);
-    if (t == 3) b.dist = MF_GGX;
+    if (t == 3 || t == 12) b.dist = MF_GGX;
+    b.nonlinear = t == 12;
     b.alpha = 0.4;
     b.exponent = 12.0;
     b.fast_approx = t == 7;
-    if (t >= 8) {
+    if (t >= 8 && t <= 10) {
       b.variant = (ward_variant)(t - 8);
       b.alpha_u = 0.15;
       b.alpha_v = 0.4;
@@ -1030,6 +1144,80 @@ static void test_dielectric_delta(void **state) {
   assert_int_equal(checks, 1 + 9 * 5 + 2 * 2 + 7 * 12 + 3 + 4 + 15);
 }
 
+/* The thin slab: R' = R + (1 - R)^2 R / (1 - R^2) against the series of
+ * its passes, R + sum_k (1 - R)^2 R^(2k+1); lobe probabilities and
+ * weights; straight-through transmission; both sides alike. */
+static void test_thindielectric(void **state) {
+  (void)state;
+  int checks = 0;
+  bsdf b;
+  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  const double zs[] = {1.0, 0.7, 0.2, 0.01, -1.0, -0.5, -0.05};
+  for (int i = 0; i < 7; i++) {
+    vec3 wo = dir(zs[i], 0.4 + i);
+    double r = fresnel_dielectric(fabs(wo.z), b.eta, NULL), t = 1.0 - r;
+    double series = r, r_odd = r; /* r_odd = R^(2k+1) */
+    for (int k = 0; k < 4000; k++, r_odd *= r * r) series += t * t * r_odd;
+    for (int tm = 0; tm < 2; tm++) {
+      transport_mode mode = tm ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE;
+      bsdf_sample sr, st;
+      assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.0, 0.5, 0.5, mode, &sr));
+      assert_true(bsdf_sample_f(&b, 0, 0, wo, 1.0 - 1e-12, 0.5, 0.5, mode, &st));
+      /* Reflection: mirror direction on wo's side, probability R', weight 1. */
+      assert_int_equal(sr.flags, BSDF_REFLECTION | BSDF_DELTA);
+      assert_near(sr.pdf, series, 1e-12);
+      assert_true(sr.wi.x == -wo.x && sr.wi.y == -wo.y && sr.wi.z == wo.z);
+      assert_near(sr.weight.r, 1.0, 1e-12);
+      /* Transmission: exactly -wo, probability 1 - R' = (1 - R) / (1 + R),
+       * weight 1 in both modes, eta 1. */
+      assert_int_equal(st.flags, BSDF_TRANSMISSION | BSDF_DELTA);
+      assert_true(st.wi.x == -wo.x && st.wi.y == -wo.y && st.wi.z == -wo.z);
+      assert_near(st.pdf, (1.0 - r) / (1.0 + r), 1e-12);
+      assert_near(sr.pdf + st.pdf, 1.0, 1e-15);
+      assert_near(st.weight.r, 1.0, 1e-12);
+      assert_true(sr.eta == 1.0 && st.eta == 1.0);
+      /* Energy with white reflectances: R' + T' = 1; weight = f |cos| / pdf. */
+      assert_near(sr.pdf * sr.weight.g + st.pdf * st.weight.g, 1.0, 1e-12);
+      assert_near(st.f.b * fabs(st.wi.z) / st.pdf, st.weight.b, 1e-12);
+      checks += 13;
+    }
+  }
+  /* The lobe choice follows u_lobe: the fraction of reflections is R'. */
+  vec3 wo = dir(0.3, 0.0);
+  bsdf_sample s;
+  assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.0, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+  double rp = s.pdf;
+  int refl = 0;
+  for (int k = 0; k < 10000; k++) {
+    assert_true(bsdf_sample_f(&b, 0, 0, wo, (k + 0.5) / 10000.0, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+    refl += (s.flags & BSDF_REFLECTION) != 0;
+  }
+  assert_near(refl / 10000.0, rp, 1.5e-4);
+  /* Coloured reflectances are the weights; eval and pdf are zero; the
+   * twosided flag changes nothing. */
+  b.specular = tex_constant(rgb_make(0.9, 0.5, 0.1));
+  b.transmittance = tex_constant(rgb_make(0.2, 0.4, 0.6));
+  bsdf_sample s2;
+  assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.0, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+  assert_true(rgb_rel_err(s.weight, rgb_make(0.9, 0.5, 0.1)) < 1e-12);
+  assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.99, 0.5, 0.5, TRANSPORT_IMPORTANCE, &s));
+  assert_true(rgb_rel_err(s.weight, rgb_make(0.2, 0.4, 0.6)) < 1e-12);
+  assert_true(rgb_is_black(bsdf_eval(&b, 0, 0, wo, v3_neg(wo), TRANSPORT_RADIANCE)));
+  assert_true(bsdf_pdf(&b, 0, 0, wo, v3_neg(wo)) == 0.0);
+  vec3 down = dir(-0.3, 0.0);
+  assert_true(bsdf_sample_f(&b, 0, 0, down, 0.99, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+  b.twosided = 1;
+  assert_true(bsdf_sample_f(&b, 0, 0, down, 0.99, 0.5, 0.5, TRANSPORT_RADIANCE, &s2));
+  assert_true(s.wi.z == s2.wi.z && s.pdf == s2.pdf && s2.wi.z == 0.3);
+  /* eta = 1: an invisible slab, always transmits. */
+  b.eta = 1.0;
+  assert_true(bsdf_sample_f(&b, 0, 0, wo, 1e-9, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
+  assert_true(s.flags & BSDF_TRANSMISSION);
+  assert_near(s.pdf, 1.0, 0);
+  checks += 2 + 10001 + 12;
+  assert_int_equal(checks, 7 * 2 * 13 + 2 + 10001 + 12);
+}
+
 /* ---- Fresnel, tables, defaults -------------------------------------------- */
 
 static void test_fresnel(void **state) {
@@ -1161,7 +1349,32 @@ static void test_tables_defaults(void **state) {
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY);
   assert_false(bsdf_is_delta(&b));
   checks += 13;
-  assert_int_equal(checks, 23 + 3 + 6 + 3 + 21 + 13);
+  bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+  assert_near(b.eta, 1.49 / 1.000277, 1e-15);
+  assert_near(b.alpha, 0.1, 0);
+  assert_int_equal(b.dist, MF_BECKMANN);
+  assert_int_equal(b.sample_visible, 1);
+  assert_int_equal(b.nonlinear, 0);
+  assert_near(b.diffuse.value.r, 0.5, 0);
+  assert_near(b.specular.value.r, 1.0, 0);
+  assert_false(bsdf_is_delta(&b));
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY);
+  /* Rough by its coating's alpha (as roughconductor). */
+  assert_true(bsdf_is_rough(&b, 0.05));
+  assert_false(bsdf_is_rough(&b, 0.2));
+  /* bsdf_prepare fills the table for the current parameters only. */
+  assert_false(b.rtrans.ready);
+  bsdf_prepare(&b);
+  assert_true(b.rtrans.ready && b.rtrans.alpha == b.alpha && b.rtrans.eta == b.eta);
+  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  assert_near(b.eta, 1.5046 / 1.000277, 1e-15);
+  assert_near(b.specular.value.r, 1.0, 0);
+  assert_near(b.transmittance.value.r, 1.0, 0);
+  assert_true(bsdf_is_delta(&b));
+  assert_false(bsdf_is_rough(&b, 0.0));
+  assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA);
+  checks += 19;
+  assert_int_equal(checks, 23 + 3 + 6 + 3 + 21 + 13 + 19);
 }
 
 /* ---- one-sidedness and twosided ------------------------------------------- */
@@ -1169,10 +1382,11 @@ static void test_tables_defaults(void **state) {
 static void test_sidedness(void **state) {
   (void)state;
   int checks = 0;
-  const bsdf_type one_sided[] = {BSDF_DIFFUSE, BSDF_PHONG,        BSDF_CONDUCTOR, BSDF_ROUGHCONDUCTOR,
-                                 BSDF_PLASTIC, BSDF_ROUGHDIFFUSE, BSDF_WARD};
+  const bsdf_type one_sided[] = {BSDF_DIFFUSE,      BSDF_PHONG, BSDF_CONDUCTOR,
+                                 BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC, BSDF_ROUGHDIFFUSE,
+                                 BSDF_WARD,         BSDF_ROUGHPLASTIC};
   vec3 up = dir(0.6, 0.5), up2 = dir(0.7, 2.5), down = dir(-0.6, 0.5), down2 = dir(-0.7, 2.5);
-  for (int t = 0; t < 7; t++) {
+  for (int t = 0; t < 8; t++) {
     bsdf b;
     bsdf_init_defaults(&b, one_sided[t]);
     b.alpha = 0.5;
@@ -1212,7 +1426,7 @@ static void test_sidedness(void **state) {
   rgb f1 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);
   assert_true(rgb_rel_err(f0, f1) == 0.0);
   checks++;
-  assert_int_equal(checks, 7 * 13 + 1);
+  assert_int_equal(checks, 8 * 13 + 1);
 }
 
 /* ---- microfacet internals ---------------------------------------------------- */
@@ -1268,7 +1482,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_tables_defaults),   cmocka_unit_test(test_fresnel),
       cmocka_unit_test(test_microfacet),        cmocka_unit_test(test_sidedness),
-      cmocka_unit_test(test_dielectric_delta),  cmocka_unit_test(test_reciprocity),
+      cmocka_unit_test(test_dielectric_delta),  cmocka_unit_test(test_thindielectric),
+      cmocka_unit_test(test_reciprocity),
       cmocka_unit_test(test_sample_consistency), cmocka_unit_test(test_energy),
       cmocka_unit_test(test_chi2_microfacet),   cmocka_unit_test(test_chi2_sampling),
       cmocka_unit_test(test_mask),

@@ -8,7 +8,9 @@
  *       9), bsdf_eval_ad, bsdf_pdf_ad, bsdf_sample_f_ad and tex_eval_ad
  *       give the values of bsdf_eval, bsdf_pdf, bsdf_sample_f and tex_eval
  *       (relative 1e-12) with the same success, lobe flags and eta, at
- *       thousands of random inputs per model (both hemispheres, every lobe);
+ *       thousands of random inputs per model (both hemispheres, every lobe;
+ *       thindielectric and roughplastic among the models, roughplastic's
+ *       rough transmittance spline included);
  *   (b) derivatives: with the 9 independent variables
  *         theta_o, phi_o (wo), u_lobe, u1, u2, tu, tv, theta_i, phi_i (wi,
  *         for eval and pdf),
@@ -85,7 +87,9 @@ enum {
   M_ROUGHCOND,
   M_DIELECTRIC,
   M_ROUGHDIEL,
+  M_THINDIEL,
   M_PLASTIC,
+  M_ROUGHPLASTIC,
   M_TWOSIDED,
   M_MASK,
   M_ROUGHDIFFUSE,
@@ -93,8 +97,9 @@ enum {
   M_COUNT
 };
 static const char *const g_model_names[M_COUNT] = {
-    "diffuse",  "phong", "conductor",    "roughconductor", "dielectric", "roughdielectric",
-    "plastic", "twosided", "mask", "roughdiffuse", "ward"};
+    "diffuse",        "phong",          "conductor", "roughconductor", "dielectric",
+    "roughdielectric", "thindielectric", "plastic",   "roughplastic",   "twosided",
+    "mask",           "roughdiffuse",   "ward"};
 
 typedef struct config {
   char name[64];
@@ -172,6 +177,29 @@ static int make_configs(config *c) {
         n++;
       }
 
+  /* Thin dielectric (textured reflectance and transmittance). */
+  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  b.transmittance = make_bitmap(1.0, 0.3);
+  b.specular = make_bitmap(2.0, 0.1);
+  c[n++] = (config){"thindielectric", M_THINDIEL, b};
+
+  /* Rough plastic: both distributions, two roughnesses, visible normals
+   * with the smaller, nonlinear with GGX, textured base. */
+  for (int d = 0; d < 2; d++)
+    for (int a = 0; a < 2; a++) {
+      bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+      b.dist = d ? MF_GGX : MF_BECKMANN;
+      b.sample_visible = !a;
+      b.alpha = alphas[a];
+      b.nonlinear = d;
+      b.diffuse = make_bitmap(1.0, 0.4);
+      bsdf_prepare(&b);
+      c[n] = (config){"", M_ROUGHPLASTIC, b};
+      snprintf(c[n].name, sizeof c[n].name, "roughplastic %s vis=%d a=%g nonlinear=%d",
+               d ? "ggx" : "beckmann", !a, alphas[a], d);
+      n++;
+    }
+
   /* Plastic, linear and nonlinear. */
   for (int nl = 0; nl < 2; nl++) {
     bsdf_init_defaults(&b, BSDF_PLASTIC);
@@ -247,7 +275,8 @@ static int make_configs(config *c) {
 
 /* 1 when the model answers queries from below the surface. */
 static int both_sides(const bsdf *b) {
-  return b->twosided || b->masked || b->type == BSDF_DIELECTRIC || b->type == BSDF_ROUGHDIELECTRIC;
+  return b->twosided || b->masked || b->type == BSDF_DIELECTRIC ||
+         b->type == BSDF_ROUGHDIELECTRIC || b->type == BSDF_THINDIELECTRIC;
 }
 
 /* ---- Evaluation of everything at one point x[NVAR]. ----------------------- */

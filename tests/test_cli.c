@@ -29,7 +29,7 @@
 #include "render/vec3.h"
 
 #define SCENE "data/analytic/diffuse_sphere.xml"
-#define TMP "/tmp/lmc_test_cli"
+#define TMP LMC_TEST_TMP "/lmc_test_cli"
 
 /* Runs `lmc ARGS` through the shell; stdout and stderr go to files that
  * out/err_text read back. Returns the exit status. */

@@ -26,7 +26,7 @@
  * under the default --direct separate (the diffuse sphere's paths all have
  * one or two segments: pt's pass would render all of it). */
 #define SCENE "data/analytic/furnace.xml"
-#define TMP "/tmp/lmc_test_lmc_cli"
+#define TMP LMC_TEST_TMP "/lmc_test_lmc_cli"
 #define COMMON "render " SCENE " -o " TMP "/img --resolution 16x12 --spp 8 --threads 1 --integrator lmc"
 
 static char err_text[65536];

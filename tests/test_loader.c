@@ -8,6 +8,9 @@
  *  - roughdiffuse and ward: Mitsuba's names, variants and defaults load
  *    without a warning; a textured roughness warns; a bad variant or a
  *    negative alpha is an error with file and line;
+ *  - roughplastic and thindielectric load as themselves, without warnings,
+ *    with their parameters (roughplastic's table prepared); a textured
+ *    roughness warns once;
  *  - the happy path: tests/data/loader/happy.xml has every shape type,
  *    every BSDF, textures, an <include>, <default>s and emitters; its counts
  *    and values are checked, with and without a -D override;
@@ -255,8 +258,7 @@ static void test_warnings(void **state) {
   scene_destroy(s);
 }
 
-/* ---- The happy path. ---------------------------------------------------- */
-
+/* The BSDF with XML id `id` (the test fails when there is none). */
 static const bsdf *find_bsdf(const scene *s, const char *id) {
   for (int i = 0; i < s->n_bsdfs; i++)
     if (strcmp(s->bsdfs[i].id, id) == 0) return &s->bsdfs[i];
@@ -264,6 +266,79 @@ static const bsdf *find_bsdf(const scene *s, const char *id) {
   fail();
   return NULL;
 }
+
+/* roughplastic and thindielectric load as themselves (no fallback, no
+ * warning), with their parameters and roughplastic's transmittance table
+ * prepared, also inside twosided; a textured roughness warns once and
+ * keeps the default. */
+static void test_rough_plastic_thin(void **state) {
+  (void)state;
+  write_text("/tmp/lmc_loader_rp.xml",
+             HEAD SENSOR LIGHT
+             "  <bsdf type=\"roughplastic\" id=\"rp\">\n"
+             "    <string name=\"distribution\" value=\"ggx\"/>\n"
+             "    <float name=\"alpha\" value=\"0.1\"/>\n"
+             "    <boolean name=\"nonlinear\" value=\"true\"/>\n"
+             "    <float name=\"intIOR\" value=\"1.6\"/>\n"
+             "    <rgb name=\"diffuseReflectance\" value=\"0.2, 0.4, 0.6\"/>\n"
+             "    <float name=\"specularReflectance\" value=\"0.7\"/>\n"
+             "    <boolean name=\"sampleVisible\" value=\"false\"/>\n"
+             "  </bsdf>\n"
+             "  <bsdf type=\"twosided\" id=\"rp2\">\n"
+             "    <bsdf type=\"roughplastic\"/>\n"
+             "  </bsdf>\n"
+             "  <bsdf type=\"thindielectric\" id=\"th\">\n"
+             "    <string name=\"intIOR\" value=\"water\"/>\n"
+             "    <float name=\"extIOR\" value=\"1.0\"/>\n"
+             "    <rgb name=\"specularTransmittance\" value=\"0.9, 0.8, 0.7\"/>\n"
+             "  </bsdf>\n"
+             "  <shape type=\"cube\"><ref id=\"rp\"/></shape>\n"
+             "  <shape type=\"cube\"><ref id=\"rp2\"/></shape>\n"
+             "  <shape type=\"cube\"><ref id=\"th\"/></shape>\n"
+             "</scene>\n");
+  scene *s;
+  int warnings;
+  assert_int_equal(load_quiet("/tmp/lmc_loader_rp.xml", &s, &warnings), LMC_OK);
+  assert_int_equal(warnings, 0);
+  const bsdf *rp = find_bsdf(s, "rp");
+  assert_int_equal(rp->type, BSDF_ROUGHPLASTIC);
+  assert_int_equal(rp->dist, MF_GGX);
+  assert_true(near(rp->alpha, 0.1, 0));
+  assert_int_equal(rp->nonlinear, 1);
+  assert_int_equal(rp->sample_visible, 0);
+  assert_true(near(rp->eta, 1.6 / 1.000277, 1e-12));
+  assert_true(near(rp->diffuse.value.b, 0.6, 1e-15) && near(rp->specular.value.g, 0.7, 1e-15));
+  assert_true(rp->rtrans.ready && rp->rtrans.dist == MF_GGX && rp->rtrans.alpha == 0.1 &&
+              rp->rtrans.eta == rp->eta);
+  const bsdf *rp2 = find_bsdf(s, "rp2");
+  assert_int_equal(rp2->type, BSDF_ROUGHPLASTIC);
+  assert_int_equal(rp2->twosided, 1);
+  assert_true(near(rp2->alpha, 0.1, 0) && rp2->dist == MF_BECKMANN && rp2->nonlinear == 0);
+  assert_true(near(rp2->eta, 1.49 / 1.000277, 1e-12));
+  assert_true(rp2->rtrans.ready && rp2->rtrans.alpha == rp2->alpha);
+  const bsdf *th = find_bsdf(s, "th");
+  assert_int_equal(th->type, BSDF_THINDIELECTRIC);
+  assert_true(near(th->eta, 1.3330, 1e-12));
+  assert_true(near(th->transmittance.value.r, 0.9, 1e-15) && near(th->specular.value.r, 1.0, 0));
+  scene_destroy(s);
+
+  /* A textured alpha: one warning, the default roughness. */
+  write_text("/tmp/lmc_loader_rp_tex.xml",
+             HEAD SENSOR LIGHT
+             "  <bsdf type=\"roughplastic\" id=\"rp\">\n"
+             "    <texture type=\"checkerboard\" name=\"alpha\"/>\n"
+             "  </bsdf>\n"
+             "  <shape type=\"cube\"><ref id=\"rp\"/></shape>\n"
+             "</scene>\n");
+  assert_int_equal(load_quiet("/tmp/lmc_loader_rp_tex.xml", &s, &warnings), LMC_OK);
+  assert_int_equal(warnings, 1);
+  rp = find_bsdf(s, "rp");
+  assert_int_equal(rp->type, BSDF_ROUGHPLASTIC);
+  assert_true(near(rp->alpha, 0.1, 0));
+  scene_destroy(s);
+}
+
+/* ---- The happy path. ---------------------------------------------------- */
 
 static int find_light(const scene *s, light_type t) {
   for (int i = 0; i < s->n_lights; i++)
@@ -922,7 +997,8 @@ static void test_torus_h2mc(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_malformed),       cmocka_unit_test(test_error_in_include),
-      cmocka_unit_test(test_warnings),        cmocka_unit_test(test_happy),
+      cmocka_unit_test(test_warnings),        cmocka_unit_test(test_rough_plastic_thin),
+      cmocka_unit_test(test_happy),
       cmocka_unit_test(test_define_override), cmocka_unit_test(test_torus_lmc),
       cmocka_unit_test(test_torus_h2mc),      cmocka_unit_test(test_direct_samples),
       cmocka_unit_test(test_lookat_spelling),

@@ -42,7 +42,7 @@
 #include "render/options.h"
 #include "test_util.h"
 
-#define TMP "/tmp/lmc_test_options"
+#define TMP LMC_TEST_TMP "/lmc_test_options"
 #define MAX_TABLES 32
 
 static char out_text[1 << 16], err_text[1 << 14];

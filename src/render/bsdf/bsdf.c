@@ -35,6 +35,7 @@
 
 #include "render/bsdf/bsdf_ad_internal.h"
 #include "render/bsdf/bsdf_internal.h"
+#include "render/warp.h"
 
 /* ---- Fresnel (value-only parts) --------------------------------------- */
 
@@ -197,9 +198,11 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
     break;
   case BSDF_DIELECTRIC:
   case BSDF_ROUGHDIELECTRIC:
+  case BSDF_THINDIELECTRIC:
     b->eta = 1.5046 / air; /* bk7 / air */
     break;
   case BSDF_PLASTIC:
+  case BSDF_ROUGHPLASTIC:
     b->eta = 1.49 / air; /* polypropylene / air */
     break;
   case BSDF_ROUGHDIFFUSE:
@@ -237,6 +240,10 @@ static int bsdf__model_flags(const bsdf *b) {
     return BSDF_REFLECTION | BSDF_GLOSSY; /* Mitsuba's flag: f is not constant */
   case BSDF_WARD:
     return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY;
+  case BSDF_ROUGHPLASTIC:
+    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY;
+  case BSDF_THINDIELECTRIC:
+    return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA;
   case BSDF_TYPE_COUNT:
     break;
   }
@@ -249,7 +256,17 @@ int bsdf_flags(const bsdf *b) {
 }
 
 /* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
-int bsdf_is_delta(const bsdf *b) { return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC; }
+int bsdf_is_delta(const bsdf *b) {
+  return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC ||
+         b->type == BSDF_THINDIELECTRIC;
+}
+
+void bsdf_prepare(bsdf *b) {
+  if (b->type != BSDF_ROUGHPLASTIC) return;
+  bsdf_rtrans *rt = &b->rtrans;
+  if (rt->ready && rt->dist == b->dist && rt->alpha == b->alpha && rt->eta == b->eta) return;
+  bsdf__rtrans_fill(rt, b->dist, b->alpha, b->eta);
+}
 
 int bsdf_is_rough(const bsdf *b, double rough_min) {
   if (b->masked) return 0; /* the pass-through is a delta lobe */
@@ -264,13 +281,16 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
     return sqrt(2.0 / (b->exponent + 2.0)) > rough_min;
   case BSDF_ROUGHCONDUCTOR:
   case BSDF_ROUGHDIELECTRIC:
+  case BSDF_ROUGHPLASTIC:
+    /* roughplastic by its coating alone, as roughconductor: a narrow
+     * glossy lobe over the diffuse base keeps relative parametrization. */
     return b->alpha > rough_min;
   case BSDF_WARD:
     /* As phong; the lobe's roughness is Mitsuba's (alphaU + alphaV) / 2. */
     if (rgb_luminance(tex_mean(&b->diffuse)) > 0.0) return 1.0 > rough_min;
     return 0.5 * (b->alpha_u + b->alpha_v) > rough_min;
   default:
-    return 0; /* delta lobes: smooth conductor and dielectric, plastic's coating */
+    return 0; /* delta lobes: smooth conductor and dielectrics, plastic's coating */
   }
 }
 

@@ -9,11 +9,18 @@
  *   roughconductor  microfacet metal: distribution beckmann|ggx, alpha
  *   dielectric      smooth glass: intIOR, extIOR, specularReflectance/Transmittance
  *   roughdielectric microfacet glass (Walter et al. 2007): distribution, alpha
+ *   thindielectric  a thin glass slab: delta reflection and straight-through
+ *                   transmission with the slab's interreflections; intIOR, extIOR,
+ *                   specularReflectance/Transmittance
  *   plastic         smooth dielectric coating on a diffuse base (Mitsuba's plastic)
  *   roughdiffuse    Oren-Nayar: reflectance, alpha (RMS slope), useFastApprox
  *   ward            anisotropic Ward: variant ward|ward-duer|balanced, alphaU,
  *                   alphaV (along the shading frame's x and y),
  *                   specularReflectance, diffuseReflectance
+ *   roughplastic    microfacet coating on a diffuse base (Mitsuba's roughplastic):
+ *                   distribution, alpha, intIOR, extIOR, specularReflectance,
+ *                   diffuseReflectance, nonlinear (bsdf_prepare precomputes
+ *                   its rough transmittance)
  *   twosided        the flag `twosided` on the wrapped model
  *   bumpmap         the flag `bumped` and the displacement texture `bump` on
  *                   the wrapped model (Mitsuba's bumpmap): the surface's
@@ -33,20 +40,21 @@
  * Conventions: all directions are in the local shading frame (z-up), unit,
  * pointing away from the surface. bsdf_eval returns f without the cosine
  * factor. A sample's `weight` is f |cos wi| / pdf. Delta lobes (smooth
- * conductor, dielectric, the specular part of plastic) are never returned by
- * bsdf_eval or bsdf_pdf; bsdf_sample returns them with BSDF_DELTA set, pdf
- * equal to the probability of choosing that lobe, and f such that
- * weight = f |cos wi| / pdf.
+ * conductor, dielectric, thindielectric, the specular part of plastic) are
+ * never returned by bsdf_eval or bsdf_pdf; bsdf_sample returns them with
+ * BSDF_DELTA set, pdf equal to the probability of choosing that lobe, and f
+ * such that weight = f |cos wi| / pdf.
  *
  * Anisotropic models (ward) see wo and wi in the shading frame of the hit,
  * whose x axis is chosen from the normal alone (frame_from_z, Duff et al.
  * 2017) where Mitsuba takes dpdu: the orientation of an anisotropic lobe
  * about the normal differs from Mitsuba's; isotropic ones are unaffected.
  *
- * One-sided models (all but dielectrics and twosided ones) are black when
+ * One-sided models (all but the dielectrics and twosided ones) are black when
  * wo or wi is below the surface. `mode` says whether radiance (camera paths)
  * or importance (light paths) is transported: refraction scales radiance by
- * 1/eta^2 but not importance.
+ * 1/eta^2 but not importance. thindielectric's transmission keeps the
+ * direction (wi = -wo) and the medium: its sample's eta is 1.
  *
  * Random numbers: u_lobe chooses among lobes, (u1, u2) the direction.
  */
@@ -67,6 +75,8 @@ typedef enum bsdf_type {
   BSDF_PLASTIC,
   BSDF_ROUGHDIFFUSE,
   BSDF_WARD,
+  BSDF_ROUGHPLASTIC,
+  BSDF_THINDIELECTRIC,
   BSDF_TYPE_COUNT
 } bsdf_type;
 
@@ -87,12 +97,29 @@ enum {
   BSDF_DELTA = 1 << 4
 };
 
+/* Nodes of the rough transmittance table, uniform in cos^(1/4) on [0, 1]. */
+#define BSDF_RTRANS_NODES 65
+
+/* roughplastic's rough transmittance (bsdf_rough.c): the energy that a
+ * rough dielectric interface (dist, alpha, eta) lets through from outside,
+ * as a function of the cosine of incidence, and the diffuse reflectance of
+ * the interface seen from inside. Filled by bsdf_prepare for the
+ * parameters in its key; a model whose key does not match its own
+ * parameters computes the table on the fly instead (bsdf_rough.c). */
+typedef struct bsdf_rtrans {
+  int ready;                          /* 1 once filled for the key below */
+  mf_dist dist;                       /* key: distribution, */
+  double alpha, eta;                  /* roughness and intIOR / extIOR */
+  double t_ext[BSDF_RTRANS_NODES];    /* T(cos) at cos = (i / (BSDF_RTRANS_NODES - 1))^4 */
+  double fdr_int;                     /* 1 - int_0^1 2 c T_int(c) dc, T_int at 1 / eta */
+} bsdf_rtrans;
+
 typedef struct bsdf {
   bsdf_type type;
   int twosided;
-  texture diffuse;       /* diffuse, roughdiffuse: reflectance; phong, plastic, ward:
+  texture diffuse;       /* diffuse, roughdiffuse: reflectance; phong, plastics, ward:
                             diffuseReflectance */
-  texture specular;      /* specularReflectance (phong, conductors, dielectrics, plastic, ward) */
+  texture specular;      /* specularReflectance (phong, conductors, dielectrics, plastics, ward) */
   texture transmittance; /* specularTransmittance (dielectrics) */
   double exponent;       /* phong */
   mf_dist dist;          /* rough models */
@@ -102,13 +129,14 @@ typedef struct bsdf {
   double alpha_v;        /* ward: roughness along the shading frame's y axis (> 0) */
   ward_variant variant;  /* ward: which normalisation */
   int sample_visible;    /* rough models: sample visible normals (Heitz 2014/2018) */
-  double eta;            /* dielectrics, plastic: intIOR / extIOR */
+  double eta;            /* dielectrics, plastics: intIOR / extIOR */
   rgb cond_eta, cond_k;  /* conductors: complex index of refraction relative to extIOR */
-  int nonlinear;         /* plastic: Mitsuba's `nonlinear` */
   int bumped;            /* bumpmap: the model is wrapped in Mitsuba's bumpmap */
   texture bump;          /* bumpmap: the displacement (its luminance's slope tilts the frame) */
   int masked;            /* mask: the model is wrapped in Mitsuba's mask */
   texture opacity;       /* mask: per-channel opacity in [0, 1] (1: opaque) */
+  int nonlinear;         /* plastics: Mitsuba's `nonlinear` */
+  bsdf_rtrans rtrans;    /* roughplastic: its rough transmittance (bsdf_prepare) */
   char id[64];           /* the XML id, for messages */
 } bsdf;
 
@@ -128,6 +156,12 @@ typedef struct bsdf_sample {
 
 /* Fills the defaults Mitsuba uses for the model `type`. */
 void bsdf_init_defaults(bsdf *b, bsdf_type type);
+/* Precomputes what a model needs once its parameters are set (for
+ * roughplastic the rough transmittance table: 20 ms for GGX, 80 ms for
+ * Beckmann); a no-op for the other models. Call again after changing dist,
+ * alpha or eta. The loader calls it; without it a roughplastic still works,
+ * computing its table once per thread into a small cache. */
+void bsdf_prepare(bsdf *b);
 
 /* f(wo, wi) without cosine; zero for delta lobes. (tu, tv): texture coordinates. */
 rgb bsdf_eval(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
@@ -148,7 +182,8 @@ int bsdf_is_delta(const bsdf *b);
 /* 1 when the model has no delta lobe and a roughness above rough_min
  * (diffuse and roughdiffuse count as 1, phong and ward as 1 with a diffuse
  * part and else phong as the Beckmann alpha of its lobe, sqrt(2 / (n + 2)),
- * ward as (alphaU + alphaV) / 2, the rough models as their alpha): its
+ * ward as (alphaU + alphaV) / 2, the rough models, roughplastic included
+ * despite its diffuse base, as their alpha; a mask never): its
  * sampled directions may then be parametrized absolutely (integrator.h,
  * bdpt_param), as the LMC paper's implementation does above 0.05. */
 int bsdf_is_rough(const bsdf *b, double rough_min);

@@ -15,6 +15,11 @@
  * 0 when the weight is black, not finite or pdf <= 0. */
 int bsdf__finish_ad(ad_arena *A, bsdf_sample_ad *out, adv3 wi, adrgb f, ad pdf, double eta,
                     int flags);
+/* Dual of bsdf__cosine_hemisphere: the same concentric map with its
+ * derivatives. */
+adv3 bsdf__cosine_hemisphere_ad(ad_arena *A, ad u1, ad u2);
+/* Dual of bsdf__plastic_kd. */
+adrgb bsdf__plastic_kd_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, double fdr);
 
 #define BSDF__AD_MODEL(NAME)                                                                    \
   adrgb bsdf__##NAME##_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,     \
@@ -35,9 +40,12 @@ BSDF__AD_MODEL(roughdielectric)
 BSDF__AD_MODEL(plastic)
 BSDF__AD_MODEL(roughdiffuse)
 BSDF__AD_MODEL(ward)
+BSDF__AD_MODEL(roughplastic)
+BSDF__AD_MODEL(thindielectric)
 BSDF__AD_MODEL_EVAL_PDF(phong)
 BSDF__AD_MODEL_EVAL_PDF(roughconductor)
 BSDF__AD_MODEL_EVAL_PDF(roughdielectric)
+BSDF__AD_MODEL_EVAL_PDF(roughplastic)
 
 #undef BSDF__AD_MODEL
 #undef BSDF__AD_MODEL_EVAL_PDF

@@ -1,8 +1,10 @@
 /*
  * bsdf_generic.h: the BSDF front end written once in render/real.h's
  * vocabulary and compiled twice by bsdf.c: the Fresnel equations, the
- * sample record, the twosided flip and the dispatch on the model, in
- * doubles (bsdf.h) and in duals (bsdf_ad.h). Not a header: no include guard.
+ * sample record, what models in two files share (the cosine-weighted
+ * hemisphere, the plastics' diffuse base), the twosided flip and the
+ * dispatch on the model, in doubles (bsdf.h) and in duals (bsdf_ad.h). Not a
+ * header: no include guard.
  * The formulas are in bsdf.c's opening comment.
  *
  * In duals the four entry points also keep the arena small: each marks it
@@ -138,12 +140,65 @@ RFRAME R_FN(bsdf_bump_frame)(R_CTX const bsdf *b, REAL tu, REAL tv, vec3 dpdu, v
   return R3_FRAME_FROM_Z(m);
 }
 
+/* ---- Cosine-weighted hemisphere --------------------------------------------- */
+
+/* Cosine-weighted hemisphere (the diffuse lobes of bsdf_smooth.c and
+ * bsdf_rough.c): warp_square_to_cosine_hemisphere (warp.c); in duals the
+ * same concentric map (Shirley and Chiu 1997) with its derivatives. */
+REAL3 R_FN(bsdf__cosine_hemisphere)(R_CTX REAL u1, REAL u2) {
+#if R_DUAL
+  /* (a, b) in [-1, 1]^2 to the disk. */
+  ad a = ad_sub_s(A, ad_mul_s(A, u1, 2.0), 1.0);
+  ad b = ad_sub_s(A, ad_mul_s(A, u2, 2.0), 1.0);
+  if (a.v == 0.0 && b.v == 0.0) return adv3_const(A, 0.0, 0.0, 1.0);
+  ad r, phi;
+  if (fabs(a.v) > fabs(b.v)) {
+    /* r = a, phi = pi/4 (b / a) */
+    r = a;
+    phi = ad_mul_s(A, ad_div(A, b, a), M_PI / 4.0);
+  } else {
+    /* r = b, phi = pi/2 - pi/4 (a / b) */
+    r = b;
+    phi = ad_s_sub(A, M_PI / 2.0, ad_mul_s(A, ad_div(A, a, b), M_PI / 4.0));
+  }
+  ad x = ad_mul(A, r, ad_cos(A, phi));
+  ad y = ad_mul(A, r, ad_sin(A, phi));
+  /* Lift to the hemisphere: z = sqrt(max(0, 1 - x^2 - y^2)). */
+  ad z = ad_safe_sqrt(A, ad_sub(A, ad_s_sub(A, 1.0, ad_sqr(A, x)), ad_sqr(A, y)));
+  return adv3_make(x, y, z);
+#else
+  return warp_square_to_cosine_hemisphere(u1, u2);
+#endif
+}
+
+/* ---- The plastics' diffuse base ------------------------------------------------ */
+
+/* kd', the base with its internal reflections under a coating whose
+ * diffuse reflectance from inside is fdr (bsdf_internal.h). */
+RRGB R_FN(bsdf__plastic_kd)(R_CTX const bsdf *b, REAL tu, REAL tv, double fdr) {
+  RRGB kd = R_FN(tex_eval)(R_ARG &b->diffuse, tu, tv);
+  /* kd' = kd / (1 - kd F_dr) (nonlinear; 0 where the denominator is 0, as
+   * rgb_div) or kd / (1 - F_dr). */
+  RRGB kdp;
+  if (b->nonlinear) {
+    REAL *c[3] = {&kd.r, &kd.g, &kd.b};
+    REAL *o[3] = {&kdp.r, &kdp.g, &kdp.b};
+    for (int i = 0; i < 3; i++) {
+      REAL den = R_S_SUB(1.0, R_MUL_S(*c[i], fdr));
+      *o[i] = R_V(den) != 0.0 ? R_DIV(*c[i], den) : R_C(0.0);
+    }
+  } else {
+    kdp = RRGB_SCALE_S(kd, 1.0 / (1.0 - fdr));
+  }
+  return kdp;
+}
+
 /* ---- Dispatch --------------------------------------------------------------- */
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */
 static int R_FN(bsdf__flip)(const bsdf *b, REAL3 wo) {
   return b->twosided && R_V(wo.z) < 0.0 && b->type != BSDF_DIELECTRIC &&
-         b->type != BSDF_ROUGHDIELECTRIC;
+         b->type != BSDF_ROUGHDIELECTRIC && b->type != BSDF_THINDIELECTRIC;
 }
 
 /* The twosided flip of a (wo, wi) pair: both mirrored to the upper side. */
@@ -221,6 +276,9 @@ RRGB R_FN(bsdf_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 
     break;
   case BSDF_ROUGHDIELECTRIC:
     f = R_FN(bsdf__roughdielectric_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
+    break;
+  case BSDF_ROUGHPLASTIC:
+    f = R_FN(bsdf__roughplastic_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
     break;
   default:
     /* Nothing to share: the two dispatchers (each applies the flip and

@@ -1,8 +1,10 @@
 /*
  * bsdf_internal.h: what the BSDF files share (not API). bsdf.c dispatches
  * on the model and holds Fresnel, the IOR tables and the defaults;
- * bsdf_smooth.c has diffuse, phong, the smooth conductor, the smooth
- * dielectric, plastic, roughdiffuse (Oren-Nayar) and ward; bsdf_rough.c the microfacet models. Each
+ * bsdf_smooth.c has diffuse, phong, the smooth conductor, the smooth and
+ * thin dielectrics, plastic, roughdiffuse (Oren-Nayar) and ward;
+ * bsdf_rough.c the microfacet models (roughplastic and its rough
+ * transmittance table among them). Each
  * compiles its *_generic.h body twice: in doubles (declared here) and in
  * duals (bsdf_ad_internal.h).
  *
@@ -26,6 +28,20 @@ int bsdf__finish(bsdf_sample *out, vec3 wi, rgb f, double pdf, double eta, int f
 double bsdf__fresnel_diffuse_reflectance(double eta);
 /* Mitsuba's specular sampling weight: lum(mean spec) / (lum(mean spec) + lum(mean diff)). */
 double bsdf__specular_weight(const texture *spec, const texture *diff);
+/* Cosine-weighted hemisphere sample (bsdf_generic.h; dual form in
+ * bsdf_ad_internal.h). */
+vec3 bsdf__cosine_hemisphere(double u1, double u2);
+/* The plastics' diffuse reflectance with its internal reflections, kd' =
+ * kd / (1 - F_dr) or, nonlinear, kd / (1 - kd F_dr) (bsdf_generic.h; dual
+ * form in bsdf_ad_internal.h). fdr: the interface's diffuse reflectance
+ * seen from inside. */
+rgb bsdf__plastic_kd(const bsdf *b, double tu, double tv, double fdr);
+/* Fills *rt with the rough transmittance of (dist, alpha, eta)
+ * (bsdf_rough.c; bsdf.h's bsdf_rtrans says what it holds). */
+void bsdf__rtrans_fill(bsdf_rtrans *rt, mf_dist dist, double alpha, double eta);
+/* The rough transmittance table of roughplastic b: its own when its key
+ * matches b's parameters, else one computed into a per-thread cache. */
+const bsdf_rtrans *bsdf__rtrans_get(const bsdf *b);
 
 /* The models: eval, pdf and sample with the signatures of bsdf.h; the
  * models whose eval and pdf share work also have eval_pdf (bsdf_eval_pdf).
@@ -50,9 +66,12 @@ BSDF__MODEL(roughdielectric)
 BSDF__MODEL(plastic)
 BSDF__MODEL(roughdiffuse)
 BSDF__MODEL(ward)
+BSDF__MODEL(roughplastic)
+BSDF__MODEL(thindielectric)
 BSDF__MODEL_EVAL_PDF(phong)
 BSDF__MODEL_EVAL_PDF(roughconductor)
 BSDF__MODEL_EVAL_PDF(roughdielectric)
+BSDF__MODEL_EVAL_PDF(roughplastic)
 
 #undef BSDF__MODEL
 #undef BSDF__MODEL_EVAL_PDF
@@ -68,6 +87,8 @@ BSDF__MODEL_EVAL_PDF(roughdielectric)
   BSDF__CASE(BSDF_ROUGHDIELECTRIC, roughdielectric)                                              \
   BSDF__CASE(BSDF_PLASTIC, plastic)                                                              \
   BSDF__CASE(BSDF_ROUGHDIFFUSE, roughdiffuse)                                                    \
-  BSDF__CASE(BSDF_WARD, ward)
+  BSDF__CASE(BSDF_WARD, ward)                                                                    \
+  BSDF__CASE(BSDF_ROUGHPLASTIC, roughplastic)                                                    \
+  BSDF__CASE(BSDF_THINDIELECTRIC, thindielectric)
 
 #endif

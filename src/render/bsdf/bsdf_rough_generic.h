@@ -1,6 +1,6 @@
 /*
  * bsdf_rough_generic.h: the microfacet models (roughconductor,
- * roughdielectric), written once in render/real.h's vocabulary and compiled
+ * roughdielectric, roughplastic), written once in render/real.h's vocabulary and compiled
  * twice by bsdf_rough.c, in doubles and in duals. Not a header: no include
  * guard. The models are described in bsdf_rough.c's opening comment.
  *
@@ -275,6 +275,150 @@ int R_FN(bsdf__roughdielectric_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, RE
   REAL pdf, pdf_rev = R_C(0.0);
   RRGB f = R_FN(bsdf__rd_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, mode, &pdf, BSDF_R_REV(&pdf_rev));
   int ok = R_FN(bsdf__finish)(R_ARG out, wi, f, pdf, eta_out, flags);
+  BSDF_R_SET_REV(out, pdf_rev);
+  return ok;
+}
+
+/* ---- roughplastic -------------------------------------------------------- */
+
+/* T(c) from the table of bsdf_rtrans: a cubic Hermite spline in
+ * s = c^(1/4), on whose uniform grid the nodes lie, with Catmull-Rom
+ * tangents (one-sided differences at the ends, as Mitsuba's
+ * evalCubicInterp1D), clamped to [0, 1]. It is C1 in s, so the derivative
+ * in c that duals carry is continuous for c > 0. */
+static REAL R_FN(bsdf__rtrans_eval)(R_CTX const bsdf_rtrans *rt, REAL c) {
+  const int last = BSDF_RTRANS_NODES - 1;
+  const double *y = rt->t_ext;
+  double cv = R_V(c);
+  if (!(cv > 0.0)) return R_C(y[0]);
+  if (cv >= 1.0) return R_C(y[last]);
+  REAL s = R_SQRT(R_SQRT(c));
+  int i = (int)(R_V(s) * last);
+  if (i > last - 1) i = last - 1;
+  double p0 = y[i], p1 = y[i + 1];
+  double m0 = i > 0 ? 0.5 * (y[i + 1] - y[i - 1]) : y[1] - y[0];
+  double m1 = i + 1 < last ? 0.5 * (y[i + 2] - y[i]) : y[last] - y[last - 1];
+  /* p(t) = p0 + t (m0 + t (k2 + t k3)), t = s (N - 1) - i */
+  double k2 = 3.0 * (p1 - p0) - 2.0 * m0 - m1, k3 = 2.0 * (p0 - p1) + m0 + m1;
+  REAL t = R_SUB_S(R_MUL_S(s, (double)last), (double)i);
+  REAL p = R_ADD_S(R_MUL(t, R_ADD_S(R_MUL(t, R_ADD_S(R_MUL_S(t, k3), k2)), m0)), p0);
+  if (R_V(p) < 0.0) return R_C(0.0);
+  if (R_V(p) > 1.0) return R_C(1.0);
+  return p;
+}
+
+/* Probability of choosing the specular lobe at wo, Mitsuba's rule with
+ * T_o = T(cos wo) and the specular weight w (bsdf__specular_weight):
+ *   p = (1 - T_o) w / ((1 - T_o) w + T_o (1 - w)). */
+static REAL R_FN(bsdf__rp_prob_specular)(R_CTX double w, REAL t_o) {
+  REAL s = R_MUL_S(R_S_SUB(1.0, t_o), w);
+  REAL den = R_ADD(s, R_MUL_S(t_o, 1.0 - w));
+  return R_V(den) > 0.0 ? R_DIV(s, den) : R_C(0.0);
+}
+
+/* f and pdf of one (wo, wi) pair in one pass, as bsdf__rc_eval_pdf: the
+ * half vector, D, G1 and the two transmittances are shared. */
+static RRGB R_FN(bsdf__rp_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                    int want_f, REAL *OUT_pdf, REAL *OUT_pdf_rev) {
+  if (OUT_pdf) *OUT_pdf = R_C(0.0);
+  if (OUT_pdf_rev) *OUT_pdf_rev = R_C(0.0);
+  if (R_V(wo.z) <= 0.0 || R_V(wi.z) <= 0.0) return RRGB_ZERO();
+  const bsdf_rtrans *rt = bsdf__rtrans_get(b);
+  REAL alpha = R_C(b->alpha);
+  REAL3 h = R3_NORMALIZE(R3_ADD(wo, wi));
+  REAL d = R_FN(mf_D)(R_ARG b->dist, alpha, h);
+  int need_spec = want_f && R_V(d) != 0.0;
+  REAL g1o = R_C(0.0), g1i = R_C(0.0);
+  if (need_spec || (OUT_pdf && b->sample_visible)) g1o = R_FN(mf_G1)(R_ARG b->dist, alpha, wo, h);
+  if (need_spec || (OUT_pdf_rev && b->sample_visible))
+    g1i = R_FN(mf_G1)(R_ARG b->dist, alpha, wi, h);
+  /* The transmittances into the coating at wo and at wi. */
+  REAL t_o = R_FN(bsdf__rtrans_eval)(R_ARG rt, wo.z);
+  REAL t_i = R_FN(bsdf__rtrans_eval)(R_ARG rt, wi.z);
+
+  /* pdf = p_s p_m(h) / (4 wi.h) + (1 - p_s) cos(wi) / pi, p_s at wo; the
+   * reverse density with the roles of wo and wi swapped. */
+  if (OUT_pdf || OUT_pdf_rev) {
+    double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+    if (OUT_pdf) {
+      REAL ps = R_FN(bsdf__rp_prob_specular)(R_ARG w, t_o);
+      REAL wih = R3_DOT(wi, h);
+      REAL spec = R_C(0.0);
+      if (R_V(wih) > 0.0)
+        spec = R_DIV(R_FN(mf_pdf_known)(R_ARG d, g1o, wo, h, b->sample_visible), R_MUL_S(wih, 4.0));
+      *OUT_pdf = R_ADD(R_MUL(ps, spec), R_DIV_S(R_MUL(R_S_SUB(1.0, ps), wi.z), M_PI));
+    }
+    if (OUT_pdf_rev) {
+      REAL ps = R_FN(bsdf__rp_prob_specular)(R_ARG w, t_i);
+      REAL woh = R3_DOT(wo, h);
+      REAL spec = R_C(0.0);
+      if (R_V(woh) > 0.0)
+        spec = R_DIV(R_FN(mf_pdf_known)(R_ARG d, g1i, wi, h, b->sample_visible), R_MUL_S(woh, 4.0));
+      *OUT_pdf_rev = R_ADD(R_MUL(ps, spec), R_DIV_S(R_MUL(R_S_SUB(1.0, ps), wo.z), M_PI));
+    }
+  }
+  if (!want_f) return RRGB_ZERO();
+
+  /* Diffuse: f_d = kd' T_o T_i / (pi eta^2), kd' with the rough F_dr seen
+   * from inside. */
+  RRGB kdp = R_FN(bsdf__plastic_kd)(R_ARG b, tu, tv, rt->fdr_int);
+  RRGB f = RRGB_SCALE(kdp, R_DIV_S(R_MUL(t_o, t_i), M_PI * b->eta * b->eta));
+  /* Specular: f_s = ks F(wo.h) D G / (4 cos_o cos_i), G = G1(wo, h) G1(wi, h). */
+  if (need_spec) {
+    REAL g = R_MUL(g1i, g1o);
+    if (R_V(g) != 0.0) {
+      REAL fr = R_FN(fresnel_dielectric)(R_ARG R3_DOT(wo, h), b->eta, NULL);
+      REAL s = R_DIV(R_MUL(R_MUL(fr, d), g), R_MUL(R_MUL_S(wo.z, 4.0), wi.z));
+      f = RRGB_ADD(f, RRGB_SCALE(R_FN(tex_eval)(R_ARG &b->specular, tu, tv), s));
+    }
+  }
+  return f;
+}
+
+RRGB R_FN(bsdf__roughplastic_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                   transport_mode mode) {
+  (void)mode;
+  return R_FN(bsdf__rp_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, NULL, NULL);
+}
+
+REAL R_FN(bsdf__roughplastic_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  REAL pdf;
+  R_FN(bsdf__rp_eval_pdf)(R_ARG b, tu, tv, wo, wi, 0, &pdf, NULL);
+  return pdf;
+}
+
+RRGB R_FN(bsdf__roughplastic_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                       transport_mode mode, REAL *OUT_pdf) {
+  (void)mode;
+  return R_FN(bsdf__rp_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, OUT_pdf, NULL);
+}
+
+int R_FN(bsdf__roughplastic_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo,
+                                    REAL u_lobe, REAL u1, REAL u2, transport_mode mode,
+                                    R_FN(bsdf_sample) *out) {
+  (void)mode;
+  if (R_V(wo.z) <= 0.0) return 0;
+  const bsdf_rtrans *rt = bsdf__rtrans_get(b);
+  double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  REAL ps = R_FN(bsdf__rp_prob_specular)(R_ARG w, R_FN(bsdf__rtrans_eval)(R_ARG rt, wo.z));
+  REAL3 wi;
+  int flags;
+  if (R_V(u_lobe) < R_V(ps)) {
+    /* The coating: reflect wo about a sampled normal. */
+    REAL3 m = R_FN(mf_sample)(R_ARG b->dist, R_C(b->alpha), wo, b->sample_visible, u1, u2);
+    if (R_V(R3_DOT(wo, m)) <= 0.0) return 0;
+    wi = R3_NORMALIZE(R3_REFLECT(wo, m));
+    flags = BSDF_REFLECTION | BSDF_GLOSSY;
+  } else {
+    /* The base: cosine-weighted. */
+    wi = R_FN(bsdf__cosine_hemisphere)(R_ARG u1, u2);
+    flags = BSDF_REFLECTION | BSDF_DIFFUSE_LOBE;
+  }
+  if (R_V(wi.z) <= 0.0) return 0;
+  /* The mixture density and f of the pair (Mitsuba's sample does the same). */
+  REAL pdf, pdf_rev = R_C(0.0);
+  RRGB f = R_FN(bsdf__rp_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, &pdf, BSDF_R_REV(&pdf_rev));
+  int ok = R_FN(bsdf__finish)(R_ARG out, wi, f, pdf, 1.0, flags);
   BSDF_R_SET_REV(out, pdf_rev);
   return ok;
 }

@@ -26,6 +26,17 @@
  *             mode (the 1/eta^2 radiance scaling) or 1 in importance mode.
  *             Total internal reflection: F = 1.
  *
+ * thindielectric  Mitsuba's thin slab of glass: both faces of a plate of
+ *             relative IOR eta at one surface. With R = F(|cos wo|) at the
+ *             outer face, the light reflected after any number of passes
+ *             (R, T R T, T R^3 T, ...) sums to
+ *               R' = R + (1 - R)^2 R / (1 - R^2),
+ *             and the rest, 1 - R' = (1 - R) / (1 + R), leaves the far face
+ *             parallel to where it came in: wi = -wo, no bending, no 1/eta^2
+ *             scaling, sample eta 1. Delta reflection (probability R', weight
+ *             specularReflectance) and delta transmission (probability
+ *             1 - R', weight specularTransmittance); the same from both sides.
+ *
  * plastic     Mitsuba's smooth plastic: a dielectric coating (eta) on a
  *             Lambertian base with reflectance kd. Specular: delta reflection
  *             with weight ks F_i. Diffuse, including the infinite series of

@@ -1,42 +1,14 @@
 /*
  * bsdf_smooth_generic.h: the models without microfacets (diffuse, phong,
- * the smooth conductor and dielectric, plastic, roughdiffuse, ward),
- * written once in render/real.h's vocabulary and compiled twice by
- * bsdf_smooth.c, in doubles and in duals. Not a header: no include guard. The models are
+ * the smooth conductor and dielectric, thindielectric, plastic,
+ * roughdiffuse, ward), written once in render/real.h's vocabulary and
+ * compiled twice by bsdf_smooth.c, in doubles and in duals. Not a header:
+ * no include guard. The models are
  * described in bsdf_smooth.c's opening comment.
  */
 
 /* (-w.x, -w.y, w.z): the mirror direction about the shading normal. */
 static REAL3 R_FN(bsdf__mirror)(R_CTX REAL3 w) { return R3_MAKE(R_NEG(w.x), R_NEG(w.y), w.z); }
-
-/* Cosine-weighted hemisphere: warp_square_to_cosine_hemisphere (warp.c);
- * in duals the same concentric map (Shirley and Chiu 1997) with its
- * derivatives. */
-static REAL3 R_FN(bsdf__cosine_hemisphere)(R_CTX REAL u1, REAL u2) {
-#if R_DUAL
-  /* (a, b) in [-1, 1]^2 to the disk. */
-  ad a = ad_sub_s(A, ad_mul_s(A, u1, 2.0), 1.0);
-  ad b = ad_sub_s(A, ad_mul_s(A, u2, 2.0), 1.0);
-  if (a.v == 0.0 && b.v == 0.0) return adv3_const(A, 0.0, 0.0, 1.0);
-  ad r, phi;
-  if (fabs(a.v) > fabs(b.v)) {
-    /* r = a, phi = pi/4 (b / a) */
-    r = a;
-    phi = ad_mul_s(A, ad_div(A, b, a), M_PI / 4.0);
-  } else {
-    /* r = b, phi = pi/2 - pi/4 (a / b) */
-    r = b;
-    phi = ad_s_sub(A, M_PI / 2.0, ad_mul_s(A, ad_div(A, a, b), M_PI / 4.0));
-  }
-  ad x = ad_mul(A, r, ad_cos(A, phi));
-  ad y = ad_mul(A, r, ad_sin(A, phi));
-  /* Lift to the hemisphere: z = sqrt(max(0, 1 - x^2 - y^2)). */
-  ad z = ad_safe_sqrt(A, ad_sub(A, ad_s_sub(A, 1.0, ad_sqr(A, x)), ad_sqr(A, y)));
-  return adv3_make(x, y, z);
-#else
-  return warp_square_to_cosine_hemisphere(u1, u2);
-#endif
-}
 
 /* ---- diffuse --------------------------------------------------------------- */
 
@@ -204,6 +176,52 @@ int R_FN(bsdf__dielectric_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 w
                             BSDF_TRANSMISSION | BSDF_DELTA);
 }
 
+/* ---- thindielectric ------------------------------------------------------ */
+
+/* The slab's reflectance with its interreflections,
+ *   R' = R + (1 - R)^2 R / (1 - R^2),  R = F(|cos wo|) from outside
+ * (R' = 1 when R = 1). */
+static REAL R_FN(bsdf__thin_reflectance)(R_CTX const bsdf *b, REAL cos_o) {
+  REAL r = R_FN(fresnel_dielectric)(R_ARG R_FABS(cos_o), b->eta, NULL);
+  if (!(R_V(r) < 1.0)) return r;
+  REAL t = R_S_SUB(1.0, r);
+  return R_ADD(r, R_DIV(R_MUL(R_SQR(t), r), R_S_SUB(1.0, R_SQR(r))));
+}
+
+RRGB R_FN(bsdf__thindielectric_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
+                                     transport_mode mode) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi, (void)mode;
+  return RRGB_ZERO();
+}
+
+REAL R_FN(bsdf__thindielectric_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
+  (void)b, (void)tu, (void)tv, (void)wo, (void)wi;
+  return R_C(0.0);
+}
+
+int R_FN(bsdf__thindielectric_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo,
+                                      REAL u_lobe, REAL u1, REAL u2, transport_mode mode,
+                                      R_FN(bsdf_sample) *out) {
+  (void)u1, (void)u2, (void)mode;
+  if (R_V(wo.z) == 0.0) return 0;
+  REAL r = R_FN(bsdf__thin_reflectance)(R_ARG b, wo.z);
+  if (R_V(u_lobe) < R_V(r)) {
+    /* Reflection, probability R': weight specularReflectance, f = ks R' / |cos wi|. */
+    REAL3 wi = R_FN(bsdf__mirror)(R_ARG wo);
+    RRGB ks = R_FN(tex_eval)(R_ARG &b->specular, tu, tv);
+    return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(ks, R_DIV(r, R_FABS(wi.z))), r, 1.0,
+                              BSDF_REFLECTION | BSDF_DELTA);
+  }
+  /* Transmission straight through, probability 1 - R': wi = -wo, weight
+   * specularTransmittance in both modes (the ray leaves at the IOR it came
+   * in with), eta 1. */
+  REAL3 wi = R3_NEG(wo);
+  RRGB kt = R_FN(tex_eval)(R_ARG &b->transmittance, tu, tv);
+  REAL pdf = R_S_SUB(1.0, r);
+  return R_FN(bsdf__finish)(R_ARG out, wi, RRGB_SCALE(kt, R_DIV(pdf, R_FABS(wi.z))), pdf, 1.0,
+                            BSDF_TRANSMISSION | BSDF_DELTA);
+}
+
 /* ---- plastic -------------------------------------------------------------- */
 
 /* Probability of choosing the specular coating given F_i:
@@ -222,20 +240,7 @@ RRGB R_FN(bsdf__plastic_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, R
   REAL fi = R_FN(fresnel_dielectric)(R_ARG wo.z, b->eta, NULL);
   REAL fo = R_FN(fresnel_dielectric)(R_ARG wi.z, b->eta, NULL);
   double fdr = bsdf__fresnel_diffuse_reflectance(1.0 / b->eta);
-  RRGB kd = R_FN(tex_eval)(R_ARG &b->diffuse, tu, tv);
-  /* kd' = kd / (1 - kd F_dr) (nonlinear; 0 where the denominator is 0, as
-   * rgb_div) or kd / (1 - F_dr). */
-  RRGB kdp;
-  if (b->nonlinear) {
-    REAL *c[3] = {&kd.r, &kd.g, &kd.b};
-    REAL *o[3] = {&kdp.r, &kdp.g, &kdp.b};
-    for (int i = 0; i < 3; i++) {
-      REAL den = R_S_SUB(1.0, R_MUL_S(*c[i], fdr));
-      *o[i] = R_V(den) != 0.0 ? R_DIV(*c[i], den) : R_C(0.0);
-    }
-  } else {
-    kdp = RRGB_SCALE_S(kd, 1.0 / (1.0 - fdr));
-  }
+  RRGB kdp = R_FN(bsdf__plastic_kd)(R_ARG b, tu, tv, fdr);
   /* f = kd' (1 - F_i)(1 - F_o) / (pi eta^2) */
   REAL s = R_DIV_S(R_MUL(R_S_SUB(1.0, fi), R_S_SUB(1.0, fo)), M_PI * b->eta * b->eta);
   return RRGB_SCALE(kdp, s);

@@ -1,6 +1,6 @@
 /*
  * microfacet.h: isotropic microfacet distributions (Beckmann and GGX) for
- * the rough conductor and rough dielectric models.
+ * the rough conductor, rough dielectric and rough plastic models.
  *
  * Walter, Marschner, Li, Torrance 2007, "Microfacet Models for Refraction
  * through Rough Surfaces": the normal distribution D(m), the separable

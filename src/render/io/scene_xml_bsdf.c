@@ -257,6 +257,21 @@ static lmc_status xml__inner_bsdf(builder *B, pset *o, pset **out) {
   return LMC_OK;
 }
 
+/* A roughness (alpha, alphaU, alphaV) as xml__float reads it; a texture
+ * there (Mitsuba allows one) is not supported: it warns and counts as
+ * absent, so the default applies. */
+static lmc_status xml__alpha(builder *B, pset *o, const char *name, double def, double *out,
+                             int *found) {
+  prop *p = xml__find(o, name);
+  if (p && (p->kind == PROP_OBJECT || p->kind == PROP_REF)) {
+    lmc_warn(p->file, p->line, "a textured roughness '%s' is not supported: using %g", name, def);
+    *out = def;
+    *found = 0;
+    return LMC_OK;
+  }
+  return xml__float(B, o, name, def, out, found);
+}
+
 /* Microfacet parameters shared by the rough models. */
 static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
   lmc_status st;
@@ -272,9 +287,9 @@ static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
   }
   double alpha, au, av;
   int has_a, has_u, has_v;
-  if ((st = xml__float(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
+  if ((st = xml__alpha(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
+  if ((st = xml__alpha(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
+  if ((st = xml__alpha(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
   if ((has_u || has_v) && au != av) {
     lmc_warn(o->file, o->line,
              "anisotropic roughness (alphaU %g, alphaV %g) is not supported: using their mean",
@@ -475,23 +490,22 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
     if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
   } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
              strcmp(t, "thindielectric") == 0) {
-    int rough = t[0] == 'r';
-    if (t[0] == 't')
-      lmc_warn(o->file, o->line, "thindielectric is not supported: using dielectric");
-    bsdf_init_defaults(b, rough ? BSDF_ROUGHDIELECTRIC : BSDF_DIELECTRIC);
-    if ((st = xml__eta(B, o, "bk7", "an index-matched interface, invisible", &b->eta)) != LMC_OK)
+    int rough = t[0] == 'r', thin = t[0] == 't';
+    bsdf_init_defaults(b, thin    ? BSDF_THINDIELECTRIC
+                          : rough ? BSDF_ROUGHDIELECTRIC
+                                  : BSDF_DIELECTRIC);
+    if ((st = xml__eta(B, o, "bk7",
+                       thin ? "a slab that reflects nothing, invisible"
+                            : "an index-matched interface, invisible",
+                       &b->eta)) != LMC_OK)
       return st;
     if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_SPECULAR | BSDF_TEX_TRANSMITTANCE, img)) !=
         LMC_OK)
       return st;
     if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
   } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
-    if (t[0] == 'r') {
-      lmc_warn(o->file, o->line, "roughplastic is not supported: using smooth plastic");
-      static const char *const rough_names[] = {"alpha", "distribution", "sampleVisible", NULL};
-      xml__accept(o, rough_names);
-    }
-    bsdf_init_defaults(b, BSDF_PLASTIC);
+    int rough = t[0] == 'r';
+    bsdf_init_defaults(b, rough ? BSDF_ROUGHPLASTIC : BSDF_PLASTIC);
     if ((st = xml__eta(B, o, "polypropylene", "no specular coating, only the diffuse base",
                        &b->eta)) != LMC_OK)
       return st;
@@ -499,6 +513,15 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
       return st;
     if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
       return st;
+    if (rough) {
+      if ((st = xml__rough(B, o, b)) != LMC_OK) return st;
+      /* Mitsuba 0.6 tabulates the rough transmittance for alpha in [0, 4]
+       * and rejects the scene beyond; it is computed here for any alpha. */
+      if (b->alpha > 4.0)
+        lmc_warn(o->file, o->line,
+                 "roughplastic alpha %g is above 4, where Mitsuba 0.6 refuses it; accepted here",
+                 b->alpha);
+    }
   } else if (strcmp(t, "roughdiffuse") == 0) {
     /* Mitsuba reads `reflectance`, or `diffuseReflectance` when there is no
      * `reflectance`. */
@@ -554,6 +577,7 @@ lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
   int img[XML__TEX_SLOTS];
   lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
   if (st != LMC_OK) return st;
+  bsdf_prepare(&b);
   int idx = scene_add_bsdf(B->s, &b, B->err);
   if (idx < 0) return (lmc_status)idx;
   for (int k = 0; k < XML__TEX_SLOTS; k++)
