@@ -1,7 +1,7 @@
 /*
  * test_bump.c: Mitsuba's bump map: the slope of a displacement texture
  * (tex_lum_gradient), a triangle's uv tangents (mesh_uv_tangents) and the
- * tilted shading frame (bsdf_bump_frame), in doubles and in duals.
+ * tilted shading frame (bsdf_shading_frame), in doubles and in duals.
  *
  * What is checked:
  *   - the slope of a bitmap against central differences of the luminance
@@ -15,8 +15,9 @@
  *   - the frame: a flat displacement leaves the normal alone; a ramp of
  *     slope k along u on the plane z = 0 (dpdu = x, dpdv = y) tilts it to
  *     (-k, 0, 1) / sqrt(1 + k^2), exactly as the surface z = k u would
- *     be; the normal is unit and on the geometric side;
- *   - duals: tex_lum_gradient_ad and bsdf_bump_frame_ad give the plain
+ *     be; the normal is unit and on the geometric side; an anisotropic
+ *     ward's frame keeps n and turns x to follow dpdu;
+ *   - duals: tex_lum_gradient_ad and bsdf_shading_frame_ad give the plain
  *     values (relative 1e-12) and derivatives in tu, tv and the normal
  *     that agree with central differences of the plain functions.
  * Fixed seeds; each test counts its checks and asserts the count.
@@ -37,6 +38,8 @@
 #include "render/bsdf/bsdf_ad.h"
 #include "render/mesh.h"
 #include "render/rng.h"
+
+#define SQRT1_2 0.70710678118654752440
 
 /* A 7 x 5 RGB image of smooth-ish random values. */
 static float g_px[7 * 5 * 3];
@@ -153,11 +156,11 @@ static void test_frame(void **state) {
   bsdf b;
   bsdf_init_defaults(&b, BSDF_DIFFUSE);
   /* Unbumped, and bumped by a constant: the frame of n. */
-  frame f = bsdf_bump_frame(&b, 0.3, 0.4, x, y, z, z);
+  frame f = bsdf_shading_frame(&b, 0.3, 0.4, x, y, z, z);
   assert_true(f.n.x == 0.0 && f.n.y == 0.0 && f.n.z == 1.0);
   b.bumped = 1;
   b.bump = tex_constant(rgb_gray(0.7));
-  f = bsdf_bump_frame(&b, 0.3, 0.4, v3(2, 0, 0), v3(0, 3, 0), z, z);
+  f = bsdf_shading_frame(&b, 0.3, 0.4, v3(2, 0, 0), v3(0, 3, 0), z, z);
   assert_true(v3_len(v3_sub(f.n, z)) < 1e-15);
   checks += 2;
   /* A ramp: grey texels 0, 1, 2, 3 along u (one row): inside, the
@@ -175,7 +178,7 @@ static void test_frame(void **state) {
       /* Between the centres of texels 1 and 2 (u' = 0.45 .. 0.55). */
       double u = 0.5 / scales[s];
       vec3 ng = side ? v3_neg(z) : z;
-      f = bsdf_bump_frame(&b, u, 0.5, x, y, z, ng);
+      f = bsdf_shading_frame(&b, u, 0.5, x, y, z, ng);
       vec3 want = v3_scale(v3(-k, 0.0, 1.0), 1.0 / sqrt(1.0 + k * k));
       if (side) want = v3_neg(want);
       if (v3_len(v3_sub(f.n, want)) > 1e-12)
@@ -186,7 +189,20 @@ static void test_frame(void **state) {
       checks++;
     }
   }
-  assert_int_equal(checks, 2 + 3 * 2);
+  /* An anisotropic ward without a bump: the normal kept, x along dpdu
+   * made orthogonal to it. */
+  bsdf w;
+  bsdf_init_defaults(&w, BSDF_WARD);
+  w.alpha_u = 0.1, w.alpha_v = 0.3;
+  assert_true(bsdf_is_anisotropic(&w) && bsdf_needs_tangents(&w));
+  f = bsdf_shading_frame(&w, 0.3, 0.4, v3(1.0, 1.0, 0.3), y, z, z);
+  assert_true(v3_len(v3_sub(f.n, z)) < 1e-15);
+  assert_true(v3_len(v3_sub(f.s, v3(SQRT1_2, SQRT1_2, 0.0))) < 1e-15);
+  assert_true(v3_len(v3_sub(f.t, v3(-SQRT1_2, SQRT1_2, 0.0))) < 1e-15);
+  w.alpha_v = w.alpha_u;
+  assert_false(bsdf_is_anisotropic(&w) || bsdf_needs_tangents(&w));
+  checks += 5;
+  assert_int_equal(checks, 2 + 3 * 2 + 5);
 }
 
 /* Duals against the plain functions: values and derivatives by central
@@ -194,9 +210,10 @@ static void test_frame(void **state) {
 static double g_buf[1 << 14];
 
 static void plain_frame(const bsdf *b, const double *x, vec3 dpdu, vec3 dpdv, vec3 ng,
-                        double out[3]) {
-  frame f = bsdf_bump_frame(b, x[0], x[1], dpdu, dpdv, v3_normalize(v3(x[2], x[3], x[4])), ng);
-  out[0] = f.n.x, out[1] = f.n.y, out[2] = f.n.z;
+                        double out[9]) {
+  frame f = bsdf_shading_frame(b, x[0], x[1], dpdu, dpdv, v3_normalize(v3(x[2], x[3], x[4])), ng);
+  const vec3 ax[3] = {f.n, f.s, f.t};
+  for (int k = 0; k < 3; k++) out[3 * k] = ax[k].x, out[3 * k + 1] = ax[k].y, out[3 * k + 2] = ax[k].z;
 }
 
 static void test_duals(void **state) {
@@ -204,17 +221,23 @@ static void test_duals(void **state) {
   init_image();
   ad_arena A;
   assert_int_equal(ad_arena_init(&A, g_buf, sizeof g_buf / sizeof g_buf[0], 5), 0);
-  bsdf b;
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
-  b.bumped = 1;
-  b.bump = tex_bitmap(&g_img);
-  b.bump.uscale = 1.3;
+  bsdf models[3];
+  bsdf_init_defaults(&models[0], BSDF_DIFFUSE);
+  models[0].bumped = 1;
+  models[0].bump = tex_bitmap(&g_img);
+  models[0].bump.uscale = 1.3;
+  bsdf_init_defaults(&models[1], BSDF_WARD);
+  models[1].alpha_u = 0.1, models[1].alpha_v = 0.3;
+  models[2] = models[1];
+  models[2].bumped = 1;
+  models[2].bump = models[0].bump;
   const size_t mark = ad_arena_mark(&A);
   rng r;
   rng_seed(&r, 77, 4);
   int checked = 0, points = 0;
   const double h = 1e-6;
-  while (points < 200) {
+  while (points < 600) {
+    const bsdf b = models[points % 3];
     double x[5] = {rng_uniform(&r), rng_uniform(&r), 0.3 * rng_uniform(&r) - 0.15,
                    0.3 * rng_uniform(&r) - 0.15, 1.0};
     if (edge_dist(x[0], 1.3, 0.0, 7) < 0.01 || edge_dist(x[1], 1.0, 0.0, 5) < 0.01) continue;
@@ -224,27 +247,27 @@ static void test_duals(void **state) {
     for (int i = 0; i < 5; i++) xs[i] = ad_var(&A, x[i], i);
     /* The slope in duals. */
     ad gu, gv;
-    tex_lum_gradient_ad(&A, &b.bump, xs[0], xs[1], &gu, &gv);
+    tex_lum_gradient_ad(&A, &models[0].bump, xs[0], xs[1], &gu, &gv);
     double pu, pv;
-    tex_lum_gradient(&b.bump, x[0], x[1], &pu, &pv);
+    tex_lum_gradient(&models[0].bump, x[0], x[1], &pu, &pv);
     assert_true(fabs(gu.v - pu) <= 1e-12 * fmax(1.0, fabs(pu)));
     assert_true(fabs(gv.v - pv) <= 1e-12 * fmax(1.0, fabs(pv)));
     /* The frame in duals. */
     adv3 n = adv3_normalize(&A, adv3_make(xs[2], xs[3], xs[4]));
-    ad_frame fa = bsdf_bump_frame_ad(&A, &b, xs[0], xs[1], dpdu, dpdv, n, ng);
+    ad_frame fa = bsdf_shading_frame_ad(&A, &b, xs[0], xs[1], dpdu, dpdv, n, ng);
     assert_true(ad_arena_ok(&A));
-    double v0[3];
+    double v0[9];
     plain_frame(&b, x, dpdu, dpdv, ng, v0);
-    const ad *na[3] = {&fa.n.x, &fa.n.y, &fa.n.z};
-    for (int c = 0; c < 3; c++) assert_true(fabs(na[c]->v - v0[c]) <= 1e-12);
+    const ad *na[9] = {&fa.n.x, &fa.n.y, &fa.n.z, &fa.s.x, &fa.s.y, &fa.s.z, &fa.t.x, &fa.t.y, &fa.t.z};
+    for (int c = 0; c < 9; c++) assert_true(fabs(na[c]->v - v0[c]) <= 1e-12);
     for (int j = 0; j < 5; j++) {
-      double xp[5], xm[5], vp[3], vm[3];
+      double xp[5], xm[5], vp[9], vm[9];
       memcpy(xp, x, sizeof xp);
       memcpy(xm, x, sizeof xm);
       xp[j] += h, xm[j] -= h;
       plain_frame(&b, xp, dpdu, dpdv, ng, vp);
       plain_frame(&b, xm, dpdu, dpdv, ng, vm);
-      for (int c = 0; c < 3; c++) {
+      for (int c = 0; c < 9; c++) {
         double fd = (vp[c] - vm[c]) / (2 * h), d = na[c]->d[j];
         if (fabs(d - fd) > 1e-6 * fmax(1.0, fabs(fd)))
           fail_msg("point %d: dn[%d]/dx[%d] = %.9g, differences %.9g", points, c, j, d, fd);
@@ -253,7 +276,7 @@ static void test_duals(void **state) {
     }
     points++;
   }
-  assert_int_equal(checked, 200 * 5 * 3);
+  assert_int_equal(checked, 600 * 5 * 9);
 }
 
 int main(void) {

@@ -200,10 +200,11 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   }
   h->bsdf = &s->bsdfs[m->bsdf];
   h->light = m->light;
-  /* A bump map tilts the shading frame by its displacement's slope. */
+  /* A bump map tilts the shading frame by its displacement's slope; an
+   * anisotropic lobe turns it to follow dpdu. */
   vec3 dpdu, dpdv;
-  if (h->bsdf->bumped && mesh_uv_tangents(m, ah.prim, p0, p1, p2, &dpdu, &dpdv))
-    h->sh = bsdf_bump_frame(h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
+  if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, ah.prim, p0, p1, p2, &dpdu, &dpdv))
+    h->sh = bsdf_shading_frame(h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
   return 1;
 }
 

@@ -25,7 +25,7 @@
  *   bumpmap         the flag `bumped` and the displacement texture `bump` on
  *                   the wrapped model (Mitsuba's bumpmap): the surface's
  *                   shading frame is tilted by the displacement's slope
- *                   (bsdf_bump_frame, applied where hits are made); the
+ *                   (bsdf_shading_frame, applied where hits are made); the
  *                   model itself is unchanged
  *   mask            the flag `masked` and the texture `opacity` on the wrapped
  *                   model (Mitsuba's mask): f = opacity f_wrapped, plus a
@@ -45,10 +45,10 @@
  * BSDF_DELTA set, pdf equal to the probability of choosing that lobe, and f
  * such that weight = f |cos wi| / pdf.
  *
- * Anisotropic models (ward) see wo and wi in the shading frame of the hit,
- * whose x axis is chosen from the normal alone (frame_from_z, Duff et al.
- * 2017) where Mitsuba takes dpdu: the orientation of an anisotropic lobe
- * about the normal differs from Mitsuba's; isotropic ones are unaffected.
+ * Anisotropic models (ward with alphaU != alphaV) see wo and wi in a
+ * shading frame whose x axis follows the surface's dpdu, as Mitsuba's
+ * (bsdf_shading_frame; on a mesh without texture coordinates the frame of
+ * the normal alone, frame_from_z).
  *
  * One-sided models (all but the dielectrics and twosided ones) are black when
  * wo or wi is below the surface. `mode` says whether radiance (camera paths)
@@ -188,14 +188,21 @@ int bsdf_is_delta(const bsdf *b);
  * bdpt_param), as the LMC paper's implementation does above 0.05. */
 int bsdf_is_rough(const bsdf *b, double rough_min);
 
-/* Mitsuba's bump map: the shading frame at a point whose shading normal is
- * n, geometric normal ng and uv tangents dpdu, dpdv (mesh_uv_tangents), for
- * a model with `bumped`: with the displacement's slope (du, dv) =
- * tex_lum_gradient(bump), dpdu' = dpdu + n (du - n.dpdu) and likewise
- * dpdv', the normal normalize(dpdu' x dpdv') turned to ng's side (its
- * azimuth: frame_from_z). Unbumped models, or degenerate tangents: the frame
- * of n. */
-frame bsdf_bump_frame(const bsdf *b, double tu, double tv, vec3 dpdu, vec3 dpdv, vec3 n, vec3 ng);
+/* 1 when the model's lobe is anisotropic (ward with alphaU != alphaV): its
+ * shading frame's first axis must follow dpdu, as Mitsuba's. */
+int bsdf_is_anisotropic(const bsdf *b);
+/* 1 when the model needs the hit's uv tangents (bsdf_shading_frame): a bump
+ * map or an anisotropic lobe. */
+static inline int bsdf_needs_tangents(const bsdf *b) { return b->bumped || bsdf_is_anisotropic(b); }
+/* The shading frame at a point whose interpolated normal is n, geometric
+ * normal ng and uv tangents dpdu, dpdv (mesh_uv_tangents), for a model with
+ * bsdf_needs_tangents (others: frame_from_z(n)). A bump map (Mitsuba's
+ * bumpmap): with the displacement's slope (du, dv) = tex_lum_gradient(bump),
+ * dpdu' = dpdu + n (du - n.dpdu) and likewise dpdv', the normal
+ * normalize(dpdu' x dpdv') turned to ng's side, the first axis dpdu' made
+ * orthogonal to it. Anisotropic without a bump: n with the first axis
+ * along dpdu. Degenerate tangents: the frame of n. */
+frame bsdf_shading_frame(const bsdf *b, double tu, double tv, vec3 dpdu, vec3 dpdv, vec3 n, vec3 ng);
 
 /* Fresnel reflectance of a dielectric interface; cos_i may be negative
  * (coming from inside); eta = int/ext. *cos_t gets the signed cosine of the

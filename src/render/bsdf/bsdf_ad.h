@@ -50,8 +50,8 @@ adrgb bsdf_eval_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
 ad bsdf_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi);
 adrgb bsdf_eval_pdf_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, adv3 wo, adv3 wi,
                        transport_mode mode, ad *OUT_pdf);
-/* bsdf_bump_frame (bsdf.h) in duals. */
-ad_frame bsdf_bump_frame_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, vec3 dpdu, vec3 dpdv, adv3 n,
+/* bsdf_shading_frame (bsdf.h) in duals. */
+ad_frame bsdf_shading_frame_ad(ad_arena *A, const bsdf *b, ad tu, ad tv, vec3 dpdu, vec3 dpdv, adv3 n,
                             vec3 ng);
 /* Fresnel reflectance of a dielectric and of a conductor (bsdf.h) in duals. */
 ad fresnel_dielectric_ad(ad_arena *A, ad cos_i, double eta, ad *OUT_cos_t);

@@ -122,22 +122,37 @@ static int R_FN(bsdf__mask_pass)(R_CTX REAL3 wo, RRGB alpha, REAL prob,
   return ok;
 }
 
-/* ---- Bump map --------------------------------------------------------------- */
+/* ---- Shading frame ------------------------------------------------------------ */
 
-RFRAME R_FN(bsdf_bump_frame)(R_CTX const bsdf *b, REAL tu, REAL tv, vec3 dpdu, vec3 dpdv, REAL3 n,
-                             vec3 ng) {
-  if (!b->bumped) return R3_FRAME_FROM_Z(n);
+/* The frame with normal n whose first axis is d made orthogonal to n
+ * (frame.h's frame_from_zx), the frame of n alone when that is degenerate. */
+static RFRAME R_FN(bsdf__frame_zx)(R_CTX REAL3 n, REAL3 d) {
+  REAL3 s = R3_SUB(d, R3_SCALE(n, R3_DOT(n, d)));
+  if (!(v3_len2(R3_V(s)) > 1e-24)) return R3_FRAME_FROM_Z(n);
+  RFRAME f;
+  f.n = n;
+  f.s = R3_NORMALIZE(s);
+  f.t = R3_CROSS(n, f.s);
+  return f;
+}
+
+RFRAME R_FN(bsdf_shading_frame)(R_CTX const bsdf *b, REAL tu, REAL tv, vec3 dpdu, vec3 dpdv,
+                                REAL3 n, vec3 ng) {
+  REAL3 pu = R3_CONST(dpdu.x, dpdu.y, dpdu.z);
+  if (!b->bumped) return bsdf_is_anisotropic(b) ? R_FN(bsdf__frame_zx)(R_ARG n, pu)
+                                                : R3_FRAME_FROM_Z(n);
   REAL du, dv;
   R_FN(tex_lum_gradient)(R_ARG &b->bump, tu, tv, &du, &dv);
   /* dpdu' = dpdu + n (du - n.dpdu), dpdv' = dpdv + n (dv - n.dpdv) */
-  REAL3 a = R3_ADD(R3_CONST(dpdu.x, dpdu.y, dpdu.z), R3_SCALE(n, R_SUB(du, R3_DOT_C(dpdu, n))));
+  REAL3 a = R3_ADD(pu, R3_SCALE(n, R_SUB(du, R3_DOT_C(dpdu, n))));
   REAL3 c = R3_ADD(R3_CONST(dpdv.x, dpdv.y, dpdv.z), R3_SCALE(n, R_SUB(dv, R3_DOT_C(dpdv, n))));
   REAL3 m = R3_CROSS(a, c);
   double len2 = v3_len2(R3_V(m));
   if (!(len2 > 0.0) || !isfinite(len2)) return R3_FRAME_FROM_Z(n);
   m = R3_NORMALIZE(m);
   if (v3_dot(R3_V(m), ng) < 0.0) m = R3_NEG(m);
-  return R3_FRAME_FROM_Z(m);
+  /* Its first axis along dpdu', as Mitsuba's. */
+  return R_FN(bsdf__frame_zx)(R_ARG m, a);
 }
 
 /* ---- Cosine-weighted hemisphere --------------------------------------------- */

@@ -226,10 +226,10 @@ void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
   }
   h->bsdf = &c->sc->bsdfs[m->bsdf];
   h->light = m->light;
-  /* A bump map tilts the shading frame (scene_intersect's rule). */
+  /* A bump map or an anisotropic lobe (scene_intersect's rule). */
   vec3 dpdu, dpdv;
-  if (h->bsdf->bumped && mesh_uv_tangents(m, prim, p0, p1, p2, &dpdu, &dpdv))
-    h->sh = bsdf_bump_frame_ad(A, h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
+  if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, prim, p0, p1, p2, &dpdu, &dpdv))
+    h->sh = bsdf_shading_frame_ad(A, h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
 }
 
 /* Closest hit along the dual ray; 0 on a miss. */
