@@ -2,7 +2,9 @@
  * test_loader.c: the Mitsuba XML scene loader (src/render/io/scene_xml*.c).
  *
  *  - malformed inputs: a table of small scenes written to /tmp, each of
- *    which must fail with the right status, naming the right file and line;
+ *    which must fail with the right status, naming the right file and line
+ *    (among them bad <spectrum> pairs, intents and files, and bad
+ *    <blackbody> temperatures);
  *  - warnings: unsupported things load, but each produces one warning
  *    (counted with lmc_warning_count);
  *  - roughdiffuse and ward: Mitsuba's names, variants and defaults load
@@ -11,6 +13,10 @@
  *  - roughplastic and thindielectric load as themselves, without warnings,
  *    with their parameters (roughplastic's table prepared); a textured
  *    roughness warns once;
+ *  - spectra: <spectrum> (one value, three, wavelength:value pairs, a
+ *    file) and <blackbody> load as Mitsuba 0.6 in RGB mode loads them, the
+ *    same for reflectances and emitters; errors in a spectrum file name
+ *    that file and line;
  *  - the happy path: tests/data/loader/happy.xml has every shape type,
  *    every BSDF, textures, an <include>, <default>s and emitters; its counts
  *    and values are checked, with and without a -D override;
@@ -29,6 +35,7 @@
 #include "lmc/mcmc.h"
 #include "render/io/io.h"
 #include "render/sampler.h"
+#include "render/spectrum.h"
 
 #define DATA "data/loader/"
 
@@ -162,6 +169,51 @@ static const bad_case bad_cases[] = {
                               "    <ref name=\"reflectance\" id=\"b\"/>\n" /* 8 */
                               "  </bsdf>\n</scene>\n",
      LMC_EPARSE, "lmc_loader_refnottex.xml", 8, "texture"},
+    /* Sampled spectra, black bodies (Mitsuba 0.6's <spectrum>, <blackbody>). */
+    {"spec_unsorted", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"500:0.1, 400:0.2\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_unsorted.xml", 8, "increase"},
+    {"spec_negative", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"-5:0.1, 400:0.2\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_negative.xml", 8, "negative wavelength"},
+    {"spec_nan", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"400:nan, 500:0.2\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_nan.xml", 8, "'400:nan' is not a wavelength:value pair"},
+    {"spec_malformed", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"400:0.1, 500\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_malformed.xml", 8, "'500' is not a wavelength:value pair"},
+    {"spec_onepair", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"500:0.1\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_onepair.xml", 8, "two"},
+    {"spec_both", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"0.5\" filename=\"a.spd\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_both.xml", 8, "one of"},
+    {"spec_intent", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"0.5\" intent=\"glow\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_intent.xml", 8, "intent"},
+    {"spec_intentpairs", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" value=\"400:1, 500:1\" intent=\"reflectance\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_spec_intentpairs.xml", 8, "single value"},
+    {"bb_notemp", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <blackbody name=\"reflectance\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_bb_notemp.xml", 8, "temperature"},
+    {"bb_badtemp", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <blackbody name=\"reflectance\" temperature=\"-300K\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_bb_badtemp.xml", 8, "temperature"},
+    {"spec_nofile", HEAD SENSOR "  <shape type=\"cube\">\n    <bsdf type=\"diffuse\">\n" /* 6-7 */
+                   "      <spectrum name=\"reflectance\" filename=\"lmc_nonexistent.spd\"/>\n" /* 8 */
+                   "    </bsdf>\n  </shape>\n</scene>\n",
+     LMC_EIO, "lmc_loader_spec_nofile.xml", 8, "lmc_nonexistent.spd"},
 };
 
 static void test_malformed(void **state) {
@@ -215,7 +267,7 @@ static void test_error_in_include(void **state) {
 static void test_warnings(void **state) {
   (void)state;
   write_text("/tmp/lmc_loader_warn.xml",
-             HEAD SENSOR
+             HEAD SENSOR LIGHT
              "  <medium type=\"homogeneous\" id=\"fog\"/>\n"               /* 1: element */
              "  <bsdf type=\"weirdbsdf\" id=\"w\"/>\n"                     /* 2: plugin type */
              "  <shape type=\"cube\">\n"
@@ -229,16 +281,13 @@ static void test_warnings(void **state) {
              "    </bsdf>\n"
              "  </shape>\n"
              "  <shape type=\"hair\"/>\n"                                   /* 5: shape type */
-             "  <emitter type=\"constant\">\n"
-             "    <spectrum name=\"radiance\" value=\"400:1, 700:2\"/>\n"   /* 6: sampled spectrum */
-             "  </emitter>\n"
              "</scene>\n");
   scene *s;
   int warnings;
   lmc_status st = load_quiet("/tmp/lmc_loader_warn.xml", &s, &warnings);
   assert_int_equal(st, LMC_OK);
   assert_non_null(s);
-  assert_int_equal(warnings, 6);
+  assert_int_equal(warnings, 5);
   /* Two cubes loaded, the hair skipped; the unknown BSDF became diffuse 0.5. */
   assert_int_equal(s->n_meshes, 2);
   int found = 0;
@@ -249,13 +298,116 @@ static void test_warnings(void **state) {
       assert_true(near(s->bsdfs[i].diffuse.value.g, 0.5, 1e-12));
     }
   assert_true(found);
-  /* 400:1 .. 700:2 linear: band means at 450, 550, 650 nm = 1 + (lambda-400)/300. */
-  assert_int_equal(s->n_lights, 1);
-  rgb v = s->lights[0].value;
-  assert_true(near(v.b, 1.0 + 50.0 / 300.0, 1e-9));
-  assert_true(near(v.g, 1.0 + 150.0 / 300.0, 1e-9));
-  assert_true(near(v.r, 1.0 + 250.0 / 300.0, 1e-9));
   scene_destroy(s);
+}
+
+/* ---- Spectra. ------------------------------------------------------------ */
+
+static const bsdf *find_bsdf(const scene *s, const char *id);
+
+/* <spectrum> and <blackbody> as Mitsuba 0.6 in RGB mode loads them: one
+ * number is that grey (reflectance and emitter alike, with or without an
+ * intent); three are RGB; pairs, and the same pairs in a file (a third
+ * column ignored, as by Mitsuba), go through the CIE 1931 functions after
+ * Mitsuba's zero extension, the same for a reflectance and an emitter; a
+ * black body is Planck's law times scale. */
+static void test_spectra(void **state) {
+  (void)state;
+  write_text("/tmp/lmc_loader_spec.spd", "# wavelength (nm)  value  (error)\n\n400 0.2 0.01\n  700 0.2 # end\n");
+  static const char *const bsdfs[][2] = {
+      {"pairs", "value=\"400:0.2, 700:0.2\""},
+      {"padded", "value=\"100:0, 400:0.2, 700:0.2, 1000:0\""},
+      {"flat", "value=\"360:0.2, 830:0.2\""},
+      {"const", "value=\"0.5\""},
+      {"constintent", "value=\"0.5\" intent=\"Illuminant\""},
+      {"three", "value=\"0.1, 0.2, 0.3\""},
+      {"file", "filename=\"lmc_loader_spec.spd\""},
+  };
+  char xml[8192];
+  int len = snprintf(xml, sizeof xml, HEAD SENSOR);
+  for (size_t i = 0; i < sizeof bsdfs / sizeof bsdfs[0]; i++)
+    len += snprintf(xml + len, sizeof xml - (size_t)len,
+                    "  <bsdf type=\"diffuse\" id=\"%s\"><spectrum name=\"reflectance\" %s/></bsdf>\n",
+                    bsdfs[i][0], bsdfs[i][1]);
+  static const char *const lights[] = {
+      "<spectrum name=\"intensity\" value=\"0.5\"/>",
+      "<spectrum name=\"intensity\" value=\"400:0.2, 700:0.2\"/>",
+      "<blackbody name=\"intensity\" temperature=\"2856K\" scale=\"3\"/>",
+  };
+  for (size_t i = 0; i < sizeof lights / sizeof lights[0]; i++)
+    len += snprintf(xml + len, sizeof xml - (size_t)len,
+                    "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" "
+                    "z=\"4\"/>%s</emitter>\n",
+                    lights[i]);
+  snprintf(xml + len, sizeof xml - (size_t)len, "  <shape type=\"cube\"/>\n</scene>\n");
+  int warnings, checks = 0;
+  scene *s = load_case_ok("/tmp/lmc_loader_spectra.xml", xml, 0, &warnings);
+  assert_int_equal(warnings, 0);
+  checks++;
+  rgb pairs = find_bsdf(s, "pairs")->diffuse.value;
+  /* Zero extension: the pairs as if written with zeros 300 nm beyond. */
+  assert_memory_equal(&pairs, &find_bsdf(s, "padded")->diffuse.value, sizeof pairs);
+  /* The file holds the same pairs. */
+  assert_memory_equal(&pairs, &find_bsdf(s, "file")->diffuse.value, sizeof pairs);
+  /* 0.2 over 360-830 nm: 0.2 times illuminant E in sRGB (IEC matrix on the
+   * CIE sums 106.865, 106.857, 106.892 of xbar, ybar, zbar), not grey. */
+  rgb flat = find_bsdf(s, "flat")->diffuse.value;
+  assert_true(near(flat.r, 0.2 * 1.2049, 2e-4) && near(flat.g, 0.2 * 0.9483, 2e-4) &&
+              near(flat.b, 0.2 * 0.9091, 2e-4));
+  checks += 3;
+  rgb c = find_bsdf(s, "const")->diffuse.value, ci = find_bsdf(s, "constintent")->diffuse.value;
+  rgb three = find_bsdf(s, "three")->diffuse.value;
+  assert_true(c.r == 0.5 && c.g == 0.5 && c.b == 0.5);
+  assert_true(ci.r == 0.5 && ci.g == 0.5 && ci.b == 0.5);
+  assert_true(three.r == 0.1 && three.g == 0.2 && three.b == 0.3);
+  checks += 3;
+  /* Emitters: the same conversions as reflectances. */
+  assert_int_equal(s->n_lights, 3);
+  rgb l0 = s->lights[0].value, l1 = s->lights[1].value, l2 = s->lights[2].value;
+  assert_true(l0.r == 0.5 && l0.g == 0.5 && l0.b == 0.5);
+  assert_memory_equal(&l1, &pairs, sizeof pairs);
+  rgb bb = spectrum_blackbody_rgb(2856.0, 3.0);
+  assert_true(near(l2.r, bb.r, 1e-12 * bb.r) && near(l2.g, bb.g, 1e-12 * bb.g) &&
+              near(l2.b, bb.b, 1e-12 * bb.b));
+  checks += 4;
+  scene_destroy(s);
+  assert_int_equal(checks, 11);
+}
+
+/* A bad line in a spectrum file names that file and its line. */
+static void test_spectrum_file_errors(void **state) {
+  (void)state;
+  static const struct {
+    const char *text;
+    int line;
+    const char *needle;
+  } cases[] = {
+      {"# measured\n400 0.2\n\n500 x\n", 4, "wavelength value"},
+      {"400 0.2\n300 0.1\n", 2, "increase"},
+      {"400\n500 0.1\n", 1, "wavelength value"},
+      {"400 0.2\n500 0.1x\n", 2, "wavelength value"},
+      {"400 0.2\n-500 0.1\n", 2, "negative"},
+      {"# nothing\n", 1, "two lines"},
+  };
+  int ok = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    write_text("/tmp/lmc_loader_badspec.spd", cases[i].text);
+    write_text("/tmp/lmc_loader_badspec.xml",
+               HEAD SENSOR "  <bsdf type=\"diffuse\">\n"
+                           "    <spectrum name=\"reflectance\" filename=\"lmc_loader_badspec.spd\"/>\n"
+                           "  </bsdf>\n</scene>\n");
+    scene *s = NULL;
+    lmc_error err;
+    lmc_error_clear(&err);
+    lmc_status st = scene_load_xml("/tmp/lmc_loader_badspec.xml", NULL, 0, &s, &err);
+    int good = st == LMC_EPARSE && s == NULL && strstr(err.file, "lmc_loader_badspec.spd") &&
+               err.line == cases[i].line && strstr(err.msg, cases[i].needle);
+    if (!good)
+      print_error("case %zu: status %d, %s:%d: %s\n", i, (int)st, err.file, err.line, err.msg);
+    ok += good;
+    scene_destroy(s);
+  }
+  assert_int_equal(ok, 6);
 }
 
 /* The BSDF with XML id `id` (the test fails when there is none). */
@@ -1006,6 +1158,8 @@ int main(void) {
       cmocka_unit_test(test_mask_loader),
       cmocka_unit_test(test_bump_loader),
       cmocka_unit_test(test_roughdiffuse_ward),
+      cmocka_unit_test(test_spectra),
+      cmocka_unit_test(test_spectrum_file_errors),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

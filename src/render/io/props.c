@@ -1,11 +1,13 @@
 /*
  * props.c: the property tree of the scene loader (props.h): its memory,
  * the names of its kinds, and the strict reading of value text (numbers,
- * lists, sampled spectra) that the parser (scene_xml_parse.c) uses.
+ * lists, sampled spectra, spectrum files) that the parser
+ * (scene_xml_parse.c) uses.
  */
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -102,47 +104,123 @@ int props_list(const char *s, double *vals, int max) {
   return r < 0 ? -1 : n;
 }
 
-/* Piecewise-linear interpolation of a sampled spectrum (wavelengths sorted
- * ascending), clamped to the end values outside the sampled range. */
-static double props__spectrum_at(const double *wl, const double *val, int n, double x) {
-  if (x <= wl[0]) return val[0];
-  if (x >= wl[n - 1]) return val[n - 1];
-  for (int i = 0; i + 1 < n; i++) {
-    if (x <= wl[i + 1]) {
-      double span = wl[i + 1] - wl[i];
-      double t = span > 0.0 ? (x - wl[i]) / span : 0.0;
-      return val[i] + t * (val[i + 1] - val[i]);
-    }
-  }
-  return val[n - 1];
-}
-
-/* "w1:v1, w2:v2, ..." -> RGB by band averages (B 400-500, G 500-600,
- * R 600-700 nm), each the mean of 20 evenly spaced samples of the
- * interpolated spectrum. Returns 0 on a syntax error. */
-int props_spectrum_pairs(const char *s, rgb *out) {
-  enum { MAXP = 512 };
-  double wl[MAXP], val[MAXP];
+/* "w1:v1, w2:v2, ..." into wl, val (room for max pairs): the pairs are
+ * read as Mitsuba 0.6 reads them (tokens at commas and blanks, each split
+ * at one ':'), strictly: both numbers finite, wavelengths non-negative and
+ * strictly ascending. */
+int props_spectrum_pairs(const char *s, double *wl, double *val, int max, char *why,
+                         size_t why_size) {
   int n = 0, r;
   char tok[128];
   while ((r = props__token(&s, tok, sizeof tok)) > 0) {
-    if (n == MAXP) return 0;
+    if (n == max) {
+      snprintf(why, why_size, "more than %d pairs", max);
+      return -1;
+    }
     char *colon = strchr(tok, ':');
-    if (!colon) return 0;
-    *colon = '\0';
-    if (!props_number(tok, &wl[n]) || !props_number(colon + 1, &val[n])) return 0;
-    if (n > 0 && !(wl[n] > wl[n - 1])) return 0;
+    if (colon) *colon = '\0';
+    if (!colon || strchr(colon + 1, ':') || !props_number(tok, &wl[n]) ||
+        !props_number(colon + 1, &val[n])) {
+      if (colon) *colon = ':';
+      snprintf(why, why_size, "'%s' is not a wavelength:value pair", tok);
+      return -1;
+    }
+    if (wl[n] < 0.0) {
+      snprintf(why, why_size, "negative wavelength %g", wl[n]);
+      return -1;
+    }
+    if (n > 0 && !(wl[n] > wl[n - 1])) {
+      snprintf(why, why_size, "wavelengths must increase (%g after %g)", wl[n], wl[n - 1]);
+      return -1;
+    }
     n++;
   }
-  if (r < 0) return 0;
-  if (n == 0) return 0;
-  double band[3];
-  for (int b = 0; b < 3; b++) {
-    double lo = 600.0 - 100.0 * b, acc = 0.0;
-    for (int k = 0; k < 20; k++) acc += props__spectrum_at(wl, val, n, lo + 5.0 * (k + 0.5));
-    band[b] = acc / 20.0;
+  if (r < 0) {
+    snprintf(why, why_size, "a token is too long");
+    return -1;
   }
-  *out = rgb_make(band[0], band[1], band[2]);
-  return 1;
+  if (n < 2) {
+    snprintf(why, why_size, "at least two wavelength:value pairs are needed");
+    return -1;
+  }
+  return n;
 }
 
+/* A spectrum file: lines "wavelength value", blank lines and lines starting
+ * with '#' skipped, further columns ignored (Mitsuba 0.6's
+ * InterpolatedSpectrum file reader). Where Mitsuba silently stops at the
+ * first line it cannot read, this is an error naming the line. */
+lmc_status props_spectrum_file(const char *path, double **OUT_wl, double **OUT_val, int *OUT_n,
+                               lmc_error *err) {
+  *OUT_wl = *OUT_val = NULL;
+  *OUT_n = 0;
+  FILE *f = fopen(path, "r");
+  if (!f) return lmc_error_set(err, LMC_EIO, NULL, 0, "cannot open spectrum file '%s'", path);
+  double *wl = NULL, *val = NULL;
+  int n = 0, cap = 0, line = 0;
+  lmc_status st = LMC_OK;
+  char buf[512];
+  while (fgets(buf, sizeof buf, f)) {
+    line++;
+    size_t len = strlen(buf);
+    if (len == sizeof buf - 1 && buf[len - 1] != '\n') {
+      /* Skip the rest of an overlong line (only a comment may be one). */
+      int ch;
+      while ((ch = fgetc(f)) != EOF && ch != '\n') {
+      }
+    }
+    /* Each line: two numbers, then nothing, a '#' comment or further
+     * columns, which Mitsuba ignores too. */
+    const char *p = buf;
+    while (isspace((unsigned char)*p)) p++;
+    if (!*p || *p == '#') continue;
+    char *end;
+    double w = strtod(p, &end), v = 0.0;
+    int ok = end != p && isfinite(w);
+    if (ok) {
+      p = end;
+      v = strtod(p, &end);
+      ok = end != p && isfinite(v) && (!*end || isspace((unsigned char)*end) || *end == '#');
+    }
+    if (!ok) {
+      st = lmc_error_set(err, LMC_EPARSE, path, line,
+                         "bad line in a spectrum file (expected: wavelength value)");
+      break;
+    }
+    if (w < 0.0 || (n > 0 && !(w > wl[n - 1]))) {
+      st = lmc_error_set(err, LMC_EPARSE, path, line,
+                         w < 0.0 ? "negative wavelength %g" : "wavelengths must increase (%g)",
+                         w);
+      break;
+    }
+    if (n + 2 >= cap) {
+      /* Room for the pairs and the two of the zero extension. */
+      int ncap = cap ? 2 * cap : 64;
+      double *nw = realloc(wl, (size_t)ncap * sizeof *nw);
+      if (nw) wl = nw;
+      double *nv = nw ? realloc(val, (size_t)ncap * sizeof *nv) : NULL;
+      if (nv) val = nv;
+      if (!nw || !nv) {
+        st = lmc_error_set(err, LMC_ENOMEM, path, line, "out of memory");
+        break;
+      }
+      cap = ncap;
+    }
+    wl[n] = w;
+    val[n] = v;
+    n++;
+  }
+  fclose(f);
+  if (st == LMC_OK && n < 2)
+    st = lmc_error_set(err, LMC_EPARSE, path, line,
+                       "a spectrum file needs at least two lines 'wavelength value'");
+  if (st != LMC_OK) {
+    free(wl);
+    free(val);
+    return st;
+  }
+  *OUT_wl = wl;
+  *OUT_val = val;
+  *OUT_n = n;
+  return LMC_OK;
+}

@@ -21,6 +21,8 @@
 #ifndef LMC_RENDER_IO_PROPS_H
 #define LMC_RENDER_IO_PROPS_H
 
+#include <stddef.h>
+
 #include "render/error.h"
 #include "render/transform.h"
 #include "render/vec3.h"
@@ -96,8 +98,17 @@ int props_integer(const char *s, long long *out);
 /* s split at commas and/or blanks into at most max strict numbers: their
  * count, or -1 on a bad token or too many values. */
 int props_list(const char *s, double *vals, int max);
-/* "w1:v1, w2:v2, ..." (wavelengths ascending) to RGB by band averages
- * (B 400-500, G 500-600, R 600-700 nm); returns 0 on a syntax error. */
-int props_spectrum_pairs(const char *s, rgb *out);
+/* "w1:v1, w2:v2, ..." into wl and val (room for max pairs): the count
+ * (>= 2), or -1 with a description of the first problem in why (a token
+ * that is not a pair of finite numbers, a negative wavelength, wavelengths
+ * not strictly ascending, fewer than two pairs). */
+int props_spectrum_pairs(const char *s, double *wl, double *val, int max, char *why,
+                         size_t why_size);
+/* A spectrum file (Mitsuba's .spd: "wavelength value" per line, blank and
+ * '#' lines skipped, further columns ignored) into *OUT_wl, *OUT_val (malloc'ed, caller frees, room
+ * for *OUT_n + 2 entries for the zero extension). Errors name the file and
+ * line (LMC_EIO without a line when it cannot be opened). */
+lmc_status props_spectrum_file(const char *path, double **OUT_wl, double **OUT_val, int *OUT_n,
+                               lmc_error *err);
 
 #endif

@@ -28,11 +28,12 @@
  *
  * Values are parsed strictly: a number must use the whole attribute
  * ("1.2.3" is an error), colour and vector lists accept commas and/or
- * blanks. Colours become linear RGB here: <rgb> as given, <srgb> decoded
- * with the sRGB transfer curve, <spectrum> either uniform, a list of three
- * (taken as RGB), or wavelength:value pairs reduced to three bands
- * (B 400-500 nm, G 500-600 nm, R 600-700 nm, averaging the piecewise-linear
- * spectrum) with a warning, since that is only a rough conversion.
+ * blanks. Colours become linear RGB here, as Mitsuba 0.6 compiled in RGB
+ * mode makes them: <rgb> as given, <srgb> decoded with the sRGB transfer
+ * curve, <spectrum> either one number (that grey), a list of three (taken
+ * as RGB), or a sampled spectrum (wavelength:value pairs, or a file of
+ * "wavelength value" lines) and <blackbody> (Planck's law), both through
+ * the CIE 1931 colour matching functions to linear sRGB (render/spectrum.h).
  */
 #include <ctype.h>
 #include <errno.h>
@@ -45,6 +46,7 @@
 
 #include "render/image.h"
 #include "render/io/props.h"
+#include "render/spectrum.h"
 
 #define PARSE_MAX_DEPTH 128
 #define PARSE_MAX_ATTRS 32
@@ -279,27 +281,112 @@ static const char *parse__need_attr(parse_ctx *c, const char *tag, const char *n
 
 /* ---- Values. ------------------------------------------------------------ */
 
-/* A colour element (rgb, srgb, spectrum, blackbody) into linear RGB. */
+static void parse__resolve(const char *base_file, const char *name, char *out, size_t size);
+
+/* <blackbody temperature="T[K]" scale="s">: Planck's law through the colour
+ * matching functions (spectrum.h), negative components clamped, times s. */
+static int parse__blackbody(parse_ctx *c, const char *tag, rgb *out) {
+  const char *t = parse__need_attr(c, tag, "temperature");
+  if (!t) return 0;
+  /* Mitsuba accepts a trailing K ("6500K"). */
+  char buf[128];
+  snprintf(buf, sizeof buf, "%s", t);
+  size_t len = strlen(buf);
+  while (len > 0 && isspace((unsigned char)buf[len - 1])) buf[--len] = '\0';
+  if (len > 0 && toupper((unsigned char)buf[len - 1]) == 'K') buf[--len] = '\0';
+  double temperature, scale = 1.0;
+  if (!props_number(buf, &temperature) || !(temperature > 0.0)) {
+    parse__fail(c, LMC_EPARSE, "bad temperature '%s' in <%s> (kelvin, positive)", t, tag);
+    return 0;
+  }
+  const char *sc = parse__attr(c, "scale");
+  if (sc && !props_number(sc, &scale)) {
+    parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", sc, tag);
+    return 0;
+  }
+  *out = spectrum_blackbody_rgb(temperature, scale);
+  return 1;
+}
+
+/* <spectrum filename="...">: a file of "wavelength value" lines, converted
+ * as a sampled spectrum. Errors inside the file name it and its line. */
+static int parse__spectrum_file(parse_ctx *c, const char *fn, rgb *out) {
+  char path[1024];
+  parse__resolve(c->file, fn, path, sizeof path);
+  double *wl, *val;
+  int n;
+  lmc_status st = props_spectrum_file(path, &wl, &val, &n, c->err);
+  if (st == LMC_EIO) {
+    parse__fail(c, LMC_EIO, "cannot open spectrum file '%s'", path);
+    return 0;
+  }
+  if (st != LMC_OK) {
+    /* The error already names the spectrum file and line. */
+    c->status = st;
+    if (c->parser) XML_StopParser(c->parser, XML_FALSE);
+    return 0;
+  }
+  *out = spectrum_sampled_rgb(wl, val, n);
+  free(wl);
+  free(val);
+  return 1;
+}
+
+/* <spectrum value="w1:v1, w2:v2, ...">. */
+static int parse__spectrum_pairs(parse_ctx *c, const char *value, rgb *out) {
+  /* A pair takes at least two characters with its separator. */
+  int max = (int)(strlen(value) / 2) + 1;
+  double *wl = malloc(((size_t)max + 2) * sizeof *wl);
+  double *val = malloc(((size_t)max + 2) * sizeof *val);
+  if (!wl || !val) {
+    free(wl);
+    free(val);
+    parse__fail(c, LMC_ENOMEM, "out of memory");
+    return 0;
+  }
+  char why[256];
+  int n = props_spectrum_pairs(value, wl, val, max, why, sizeof why);
+  if (n < 0) parse__fail(c, LMC_EPARSE, "bad spectrum '%.200s': %s", value, why);
+  else *out = spectrum_sampled_rgb(wl, val, n);
+  free(wl);
+  free(val);
+  return n >= 0;
+}
+
+/* A colour element (rgb, srgb, spectrum, blackbody) into linear RGB. A
+ * <spectrum> is read as Mitsuba 0.6 in RGB mode reads it: one number is
+ * that grey, for a reflectance and an emitter alike (its D65 is white in
+ * RGB mode); three numbers are linear RGB; wavelength:value pairs or a file
+ * go through the colour matching functions (spectrum.h). */
 static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
   const char *value = parse__attr(c, "value");
   double v[3];
-  if (strcmp(tag, "blackbody") == 0) {
-    /* Not modelled: white scaled by `scale`. */
-    double scale = 1.0;
-    const char *sc = parse__attr(c, "scale");
-    if (sc && !props_number(sc, &scale)) {
-      parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", sc, tag);
+  if (strcmp(tag, "blackbody") == 0) return parse__blackbody(c, tag, out);
+  if (strcmp(tag, "spectrum") == 0) {
+    const char *fn = parse__attr(c, "filename"), *intent = parse__attr(c, "intent");
+    if (!value == !fn) {
+      parse__fail(c, LMC_EPARSE, "<spectrum> needs one of the attributes 'value' or 'filename'");
       return 0;
     }
-    lmc_warn(c->file, parse__line(c), "<blackbody> is not supported: using white * scale");
-    *out = rgb_gray(scale);
-    return 1;
-  }
-  if (strcmp(tag, "spectrum") == 0 && !value && parse__attr(c, "filename")) {
-    lmc_warn(c->file, parse__line(c),
-             "<spectrum filename=...> is not supported: using the value 1");
-    *out = rgb_gray(1.0);
-    return 1;
+    /* `intent` (reflectance or illuminant) only matters to Mitsuba's
+     * spectral mode, and only with a single value. */
+    if (intent) {
+      double one;
+      char low[16] = {0};
+      for (size_t i = 0; intent[i] && i < sizeof low - 1; i++)
+        low[i] = (char)tolower((unsigned char)intent[i]);
+      if (strcmp(low, "reflectance") != 0 && strcmp(low, "illuminant") != 0) {
+        parse__fail(c, LMC_EPARSE, "bad intent '%s' in <%s> (reflectance or illuminant)",
+                    intent, tag);
+        return 0;
+      }
+      if (fn || props_list(value, &one, 1) != 1) {
+        parse__fail(c, LMC_EPARSE, "<%s>: 'intent' goes only with a single value", tag);
+        return 0;
+      }
+    }
+    if (fn) return parse__spectrum_file(c, fn, out);
+    if (strchr(value, ':')) return parse__spectrum_pairs(c, value, out);
   }
   if (!value) {
     parse__fail(c, LMC_EPARSE, "<%s> needs the attribute 'value'", tag);
@@ -316,16 +403,6 @@ static int parse__color(parse_ctx *c, const char *tag, rgb *out) {
     }
     *out = rgb_make(srgb_to_linear(r / 255.0), srgb_to_linear(g / 255.0),
                     srgb_to_linear(b / 255.0));
-    return 1;
-  }
-  if (strcmp(tag, "spectrum") == 0 && strchr(value, ':')) {
-    if (!props_spectrum_pairs(value, out)) {
-      parse__fail(c, LMC_EPARSE, "bad spectrum '%s' (expected wavelength:value pairs)",
-                  value);
-      return 0;
-    }
-    lmc_warn(c->file, parse__line(c),
-             "sampled <spectrum> converted roughly to RGB by 100 nm band averages");
     return 1;
   }
   int n = props_list(value, v, 3);
