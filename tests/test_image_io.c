@@ -2,7 +2,10 @@
  * test_image_io.c: image readers and writers (PNG, JPEG, OpenEXR), format
  * dispatch by magic bytes, the sRGB curve, the size limits every reader
  * checks in the header, PNG chunks that claim more memory than the file
- * holds, and the writers' promise never to leave a partial file behind.
+ * holds, EXR chunks that ZIP does not shrink (stored raw, read back bit for
+ * bit; OpenEXRCore's own encoder finds one whose deflate stream is exactly
+ * as long as the raw data), and the writers' promise never to leave a
+ * partial file behind.
  *
  * Test images are generated into /tmp: PNGs of every colour type and depth
  * with libpng directly, two small JPEGs embedded below (made with libjpeg
@@ -13,6 +16,7 @@
 
 #include <dirent.h>
 #include <math.h>
+#include <openexr.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -230,6 +234,142 @@ static void test_exr_roundtrip(void **state) {
   }
   assert_int_equal(n_err, n_cut);
   free(bytes);
+  image_free(&img);
+  remove(path);
+}
+
+/* ---- EXR chunks stored raw ------------------------------------------------ */
+
+/* The chunk image_write_exr stores as ZIP: 64 x 16 RGB floats, 12288 bytes. */
+enum { RAW_W = 64, RAW_LINES = 16, RAW_FLOATS = RAW_W * RAW_LINES * 3 };
+
+/* Compresses the first chunk of img (RAW_W wide) with OpenEXRCore's own ZIP
+ * compressor, as image_write_exr hands it the pixels, without writing it:
+ * OUT_packed is the raw size, the return the deflate size (0 on error). */
+static uint64_t zip_size(exr_context_t ctxt, const float *rgb, uint64_t *OUT_packed) {
+  exr_chunk_info_t cinfo;
+  exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+  if (exr_write_scanline_chunk_info(ctxt, 0, 0, &cinfo) != EXR_ERR_SUCCESS ||
+      exr_encoding_initialize(ctxt, 0, &cinfo, &enc) != EXR_ERR_SUCCESS)
+    return 0;
+  for (int c = 0; c < enc.channel_count; c++) {
+    exr_coding_channel_info_t *ci = &enc.channels[c];
+    int k = ci->channel_name[0] == 'R' ? 0 : ci->channel_name[0] == 'G' ? 1 : 2;
+    ci->encode_from_ptr = (const uint8_t *)(rgb + k);
+    ci->user_pixel_stride = 3 * (int32_t)sizeof(float);
+    ci->user_line_stride = 3 * (int32_t)sizeof(float) * RAW_W;
+    ci->user_bytes_per_element = 4;
+    ci->user_data_type = EXR_PIXEL_FLOAT;
+  }
+  uint64_t size = 0;
+  if (exr_encoding_choose_default_routines(ctxt, 0, &enc) == EXR_ERR_SUCCESS) {
+    enc.write_fn = NULL;
+    if (exr_encoding_run(ctxt, 0, &enc) == EXR_ERR_SUCCESS) size = enc.compressed_bytes;
+  }
+  *OUT_packed = enc.packed_bytes;
+  exr_encoding_destroy(ctxt, &enc);
+  return size;
+}
+
+/* Fills chunk (RAW_FLOATS floats) with k floats of noise (31 random bits,
+ * always finite), then one float with `bits` random low mantissa bits, then
+ * the constant 0.5: the deflate size grows with k by about 4 bytes and with
+ * bits by fractions of a byte. */
+static void fill_noise(float *chunk, const uint32_t *noise, int k, int bits) {
+  for (int i = 0; i < RAW_FLOATS; i++) {
+    uint32_t u = 0x3F000000u;
+    if (i < k) u = noise[i] & 0xBFFFFFFFu;
+    else if (i == k) u |= noise[i] & (uint32_t)((1ull << bits) - 1);
+    memcpy(&chunk[i], &u, sizeof u);
+  }
+}
+
+/* Searches for a chunk whose deflate stream is exactly as long as its raw
+ * data, the case where a ZIP chunk must be stored raw although compression
+ * did not make it longer. Returns 1 if found (chunk filled), else 0. */
+static int find_exact_zip_chunk(float *chunk) {
+  const char *path = "/tmp/lmc_test_imageio_probe.exr";
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  exr_context_t ctxt = NULL;
+  int part = 0, found = 0;
+  static const char *const names[3] = {"R", "G", "B"};
+  exr_result_t rv = exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init);
+  if (rv == EXR_ERR_SUCCESS) rv = exr_add_part(ctxt, "", EXR_STORAGE_SCANLINE, &part);
+  if (rv == EXR_ERR_SUCCESS)
+    rv = exr_initialize_required_attr_simple(ctxt, part, RAW_W, RAW_LINES, EXR_COMPRESSION_ZIP);
+  for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; c++)
+    rv = exr_add_channel(ctxt, part, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+  if (rv == EXR_ERR_SUCCESS) rv = exr_write_header(ctxt);
+  uint32_t *noise = malloc(sizeof(uint32_t) * RAW_FLOATS);
+  for (int seed = 0; rv == EXR_ERR_SUCCESS && !found && seed < 64; seed++) {
+    for (int i = 0; i < RAW_FLOATS; i++) noise[i] = (uint32_t)(rnd() * 4294967296.0);
+    /* The last k, from the top, at which the chunk still compresses... */
+    uint64_t packed = 0, size = 0;
+    int k = RAW_FLOATS;
+    do {
+      fill_noise(chunk, noise, --k, 0);
+      size = zip_size(ctxt, chunk, &packed);
+    } while (k > 0 && size >= packed);
+    /* ...and one more noisy float, bit by bit, around it. */
+    for (int kk = k - 1; !found && kk <= k + 1; kk++)
+      for (int bits = 0; !found && bits < 32; bits++) {
+        fill_noise(chunk, noise, kk, bits);
+        found = zip_size(ctxt, chunk, &packed) == packed && packed == sizeof(float) * RAW_FLOATS;
+        if (found)
+          printf("  exact-size ZIP chunk: seed %d, %d noisy floats + %d bits\n", seed, kk, bits);
+      }
+  }
+  free(noise);
+  exr_finish(&ctxt);
+  remove(path);
+  return found;
+}
+
+/* ZIP chunks that deflate does not shrink are stored raw (packed size ==
+ * unpacked size), which readers take as "not compressed". Three chunks: a
+ * smooth one (compressed), noise that deflate makes longer, and one whose
+ * deflate stream has exactly the raw size: OpenEXRCore before 3.4.8 stores
+ * that stream, which every reader then takes for raw floats. */
+static void test_exr_raw_chunks(void **state) {
+  (void)state;
+  lmc_image img, back;
+  lmc_error err;
+  check_ok(image_init(&img, RAW_W, 3 * RAW_LINES, 3, &err), &err);
+  for (int i = 0; i < RAW_FLOATS; i++) img.data[i] = (float)(i % (3 * RAW_W)) / 256.0f;
+  for (int i = 0; i < RAW_FLOATS; i++) {
+    uint32_t u = (uint32_t)(rnd() * 4294967296.0) & 0xBFFFFFFFu;
+    memcpy(&img.data[RAW_FLOATS + i], &u, sizeof u);
+  }
+  assert_true(find_exact_zip_chunk(img.data + 2 * RAW_FLOATS));
+
+  const char *path = "/tmp/lmc_test_imageio_raw.exr";
+  check_ok(image_write_exr(path, &img, &err), &err);
+  /* How each chunk was stored: compressed, raw, raw. */
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  exr_context_t ctxt = NULL;
+  assert_int_equal(exr_start_read(&ctxt, path, &init), EXR_ERR_SUCCESS);
+  int n_raw = 0;
+  for (int c = 0; c < 3; c++) {
+    exr_chunk_info_t cinfo;
+    assert_int_equal(exr_read_scanline_chunk_info(ctxt, 0, c * RAW_LINES, &cinfo), EXR_ERR_SUCCESS);
+    assert_int_equal(cinfo.unpacked_size, sizeof(float) * RAW_FLOATS);
+    if (c == 0) assert_true(cinfo.packed_size < cinfo.unpacked_size);
+    else if (cinfo.packed_size == cinfo.unpacked_size) n_raw++;
+  }
+  exr_finish(&ctxt);
+  assert_int_equal(n_raw, 2);
+
+  /* Bit for bit back. */
+  check_ok(image_read_exr(path, &back, &err), &err);
+  assert_int_equal(back.width, RAW_W);
+  assert_int_equal(back.height, 3 * RAW_LINES);
+  int n_same[3] = {0, 0, 0};
+  for (int i = 0; i < 3 * RAW_FLOATS; i++)
+    if (memcmp(&back.data[i], &img.data[i], sizeof(float)) == 0) n_same[i / RAW_FLOATS]++;
+  printf("  floats back bit for bit per chunk: %d %d %d of %d\n", n_same[0], n_same[1], n_same[2],
+         RAW_FLOATS);
+  for (int c = 0; c < 3; c++) assert_int_equal(n_same[c], RAW_FLOATS);
+  image_free(&back);
   image_free(&img);
   remove(path);
 }
@@ -789,7 +929,7 @@ static void test_errors(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_srgb_curve),    cmocka_unit_test(test_exr_roundtrip),
-      cmocka_unit_test(test_exr_sunsky),
+      cmocka_unit_test(test_exr_raw_chunks), cmocka_unit_test(test_exr_sunsky),
       cmocka_unit_test(test_exr_tiled_half_rgba),    cmocka_unit_test(test_png_roundtrip),
       cmocka_unit_test(test_png_types),     cmocka_unit_test(test_png_checker),
       cmocka_unit_test(test_jpeg),          cmocka_unit_test(test_size_limits),

@@ -12,7 +12,8 @@
  * linear.
  *
  * Writing produces a single-part scanline file with FP32 R, G, B channels
- * and ZIP compression (16 lines per chunk). As every writer in lmc, it
+ * and ZIP compression (16 lines per chunk); a chunk that deflate does not
+ * shrink is stored raw, as the format requires. As every writer in lmc, it
  * writes "<path>.tmp-<pid>-<n>" next to the target and renames it over the
  * target only when complete, removing the temporary on failure.
  *
@@ -276,7 +277,17 @@ lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *er
         ci->user_data_type = EXR_PIXEL_FLOAT;
       }
       rv = exr_encoding_choose_default_routines(ctxt, part, &enc);
+      /* We write the chunk ourselves: a chunk whose packed size equals its
+       * unpacked size is raw to every reader, but OpenEXRCore before 3.4.8
+       * stores a deflate stream exactly as long as the raw data as is. */
+      enc.write_fn = NULL;
       if (rv == EXR_ERR_SUCCESS) rv = exr_encoding_run(ctxt, part, &enc);
+      if (rv == EXR_ERR_SUCCESS) {
+        int raw = enc.compressed_bytes >= enc.packed_bytes;
+        rv = exr_write_scanline_chunk(ctxt, part, enc.chunk.start_y,
+                                      raw ? enc.packed_buffer : enc.compressed_buffer,
+                                      raw ? enc.packed_bytes : enc.compressed_bytes);
+      }
       exr_encoding_destroy(ctxt, &enc);
     }
     if (rv != EXR_ERR_SUCCESS) st = exr__fail(err, path, rv, &m, LMC_EIO, "cannot write EXR pixels");
