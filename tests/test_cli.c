@@ -112,6 +112,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       {"render " SCENE " --roughness-threshold=-1", "--roughness-threshold"},
       {"render " SCENE " --largestep-scale x2", "--largestep-scale"},
       {"render " SCENE " --h2mc-sigma 0", "--h2mc-sigma"},
+      {"render " SCENE " --spectra cubic", "--spectra"},
   };
   int n = 0;
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -121,7 +122,7 @@ static void test_bad_flags_exit_2_naming_the_flag(void **state) {
       fail_msg("lmc %s: stderr does not name '%s': %s", cases[i].args, cases[i].needle, err_text);
     n++;
   }
-  assert_int_equal(n, 18);
+  assert_int_equal(n, 19);
 }
 
 /* Occurrences of needle in hay. */

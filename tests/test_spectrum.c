@@ -110,7 +110,7 @@ static void test_equal_energy(void **state) {
   (void)state;
   int checks = 0;
   double wl[4] = {360.0, 830.0}, val[4] = {1.0, 1.0};
-  spectrum_xyz c = spectrum_sampled_xyz(wl, val, 2);
+  spectrum_xyz c = spectrum_sampled_xyz(wl, val, 2, SPECTRUM_INTERP_LINEAR);
   double x, y;
   spectrum_chromaticity(c, &x, &y);
   assert_near(c.y, 1.0, 1e-12);
@@ -119,7 +119,7 @@ static void test_equal_energy(void **state) {
   checks += 3;
   /* What the loader stores (zero extension lies outside 360-830 here). */
   spectrum_xyz e = {SUM_X / SUM_Y, 1.0, SUM_Z / SUM_Y};
-  rgb want = iec_xyz_to_rgb(e), got = spectrum_sampled_rgb(wl, val, 2);
+  rgb want = iec_xyz_to_rgb(e), got = spectrum_sampled_rgb(wl, val, 2, SPECTRUM_INTERP_LINEAR);
   assert_near(got.r, want.r, 1e-3);
   assert_near(got.g, want.g, 1e-3);
   assert_near(got.b, want.b, 1e-3);
@@ -127,7 +127,7 @@ static void test_equal_energy(void **state) {
   checks += 4;
   /* Extra collinear samples change nothing. */
   double wl3[5] = {360.0, 500.0, 830.0}, val3[5] = {1.0, 1.0, 1.0};
-  spectrum_xyz c3 = spectrum_sampled_xyz(wl3, val3, 3);
+  spectrum_xyz c3 = spectrum_sampled_xyz(wl3, val3, 3, SPECTRUM_INTERP_LINEAR);
   assert_near(c3.x, c.x, 1e-12);
   assert_near(c3.z, c.z, 1e-12);
   checks += 2;
@@ -162,11 +162,11 @@ static void test_d65(void **state) {
     val[i] = d65[i];
   }
   double x, y;
-  spectrum_chromaticity(spectrum_sampled_xyz(wl, val, N_D65), &x, &y);
+  spectrum_chromaticity(spectrum_sampled_xyz(wl, val, N_D65, SPECTRUM_INTERP_LINEAR), &x, &y);
   assert_near(x, 0.31272, 2e-4);
   assert_near(y, 0.32903, 2e-4);
   checks += 3;
-  rgb c = spectrum_sampled_rgb(wl, val, N_D65);
+  rgb c = spectrum_sampled_rgb(wl, val, N_D65, SPECTRUM_INTERP_LINEAR);
   assert_near(c.r / c.g, 1.0, 1e-3);
   assert_near(c.b / c.g, 1.0, 1e-3);
   checks += 2;
@@ -190,14 +190,14 @@ static void test_narrow(void **state) {
   for (size_t i = 0; i < sizeof locus / sizeof locus[0]; i++) {
     double l = locus[i].lambda;
     double wl[5] = {l - 1.0, l, l + 1.0}, val[5] = {0.0, 1.0, 0.0};
-    spectrum_xyz c = spectrum_sampled_xyz(wl, val, 3);
+    spectrum_xyz c = spectrum_sampled_xyz(wl, val, 3, SPECTRUM_INTERP_LINEAR);
     double x, y;
     spectrum_chromaticity(c, &x, &y);
     assert_near(x, locus[i].x, 3e-4);
     assert_near(y, locus[i].y, 3e-4);
     /* A unit-area triangle: Y is about ybar(l) / 106.857. */
     assert_near(c.y * SUM_Y, spectrum_cmf(l).y, 2e-3 * spectrum_cmf(l).y + 1e-6);
-    rgb u = spectrum_xyz_to_rgb(c), k = spectrum_sampled_rgb(wl, val, 3);
+    rgb u = spectrum_xyz_to_rgb(c), k = spectrum_sampled_rgb(wl, val, 3, SPECTRUM_INTERP_LINEAR);
     assert_true((u.r > 0) == (locus[i].r > 0) && (u.g > 0) == (locus[i].g > 0) &&
                 (u.b > 0) == (locus[i].b > 0));
     /* The loader's clamp keeps the positive parts. */
@@ -209,10 +209,10 @@ static void test_narrow(void **state) {
    * function (the matrix's second row on xbar, ybar, zbar) changes sign near
    * 606 nm (g > 0 at 600 nm, < 0 at 610 nm in the table above). */
   double wl[6] = {579.0, 580.0, 600.0, 601.0}, val[6] = {0.0, 1.0, 1.0, 0.0};
-  rgb u = spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, 4));
+  rgb u = spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, 4, SPECTRUM_INTERP_LINEAR));
   assert_true(u.r > u.g && u.g > 0.0 && u.b < 0.0);
   for (int i = 0; i < 4; i++) wl[i] += 20.0;
-  u = spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, 4));
+  u = spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, 4, SPECTRUM_INTERP_LINEAR));
   assert_true(u.r > u.g && u.g > u.b && fabs(u.g) < 0.01 * u.r);
   checks += 2;
   assert_int_equal(checks, 27);
@@ -250,29 +250,89 @@ static void test_blackbody(void **state) {
               spectrum_blackbody(peak, T) > spectrum_blackbody(peak + 2.0, T));
   checks++;
   /* The 1948 candela: 60 cd/cm^2 at 2042 K; L = 683 lm/W * int B ybar. */
-  double lum = 683.0 * spectrum_blackbody_xyz(2042.0).y * SUM_Y;
+  double lum = 683.0 * spectrum_blackbody_xyz(2042.0, SPECTRUM_INTERP_LINEAR).y * SUM_Y;
   assert_near(lum / 6.0e5, 1.0, 0.01);
   checks++;
   /* Illuminant A and the Planckian locus at 6500 K. */
   double x, y;
-  spectrum_chromaticity(spectrum_blackbody_xyz(2856.0), &x, &y);
+  spectrum_chromaticity(spectrum_blackbody_xyz(2856.0, SPECTRUM_INTERP_LINEAR), &x, &y);
   assert_near(x, 0.44757, 2e-4);
   assert_near(y, 0.40745, 2e-4);
-  spectrum_chromaticity(spectrum_blackbody_xyz(6500.0), &x, &y);
+  spectrum_chromaticity(spectrum_blackbody_xyz(6500.0, SPECTRUM_INTERP_LINEAR), &x, &y);
   assert_near(x, 0.3135, 3e-4);
   assert_near(y, 0.3236, 3e-4);
   checks += 4;
   /* D65 (0.3127, 0.3290) is off the locus. */
-  spectrum_chromaticity(spectrum_blackbody_xyz(6504.0), &x, &y);
+  spectrum_chromaticity(spectrum_blackbody_xyz(6504.0, SPECTRUM_INTERP_LINEAR), &x, &y);
   assert_near(x, 0.3127, 2e-3);
   assert_true(0.3290 - y > 0.004);
   checks += 2;
   /* The loader's form: clamped, times scale. */
-  rgb one = spectrum_blackbody_rgb(2856.0, 1.0), three = spectrum_blackbody_rgb(2856.0, 3.0);
+  rgb one = spectrum_blackbody_rgb(2856.0, 1.0, SPECTRUM_INTERP_LINEAR), three = spectrum_blackbody_rgb(2856.0, 3.0, SPECTRUM_INTERP_LINEAR);
   assert_near(three.r, 3.0 * one.r, 1e-12 * three.r);
   assert_true(one.r > one.g && one.g > one.b && one.b > 0.0);
   checks += 2;
   assert_int_equal(checks, 11);
+}
+
+/* Mitsuba 0.6.0's reading (SPECTRUM_INTERP_MITSUBA_060): every interval of
+ * the sampled spectrum and of the colour matching functions read with its
+ * ends swapped. Against a brute-force midpoint sum of that product
+ * (0.001 nm steps, the knots from the table at whole nanometres), against
+ * the Cornell box emitter's RGB an independent implementation gives for
+ * the two readings, (36.8, 22.0, 5.5) and (41.6, 21.7, 5.5), and a flat
+ * spectrum is the same either way. */
+static void test_mitsuba_060(void **state) {
+  (void)state;
+  int checks = 0;
+  /* 400:0, 500:8, 600:15.6, 700:18.4 as the loader extends it (800:0). */
+  const double wl[5] = {400, 500, 600, 700, 800}, val[5] = {0.0, 8.0, 15.6, 18.4, 0.0};
+  double sum[3] = {0, 0, 0}, ysum = 0.0;
+  const double h = 0.001;
+  for (long k = 0; k < 470000; k++) {
+    double x = 360.0 + (k + 0.5) * h;
+    int i = (int)floor(x - 360.0);
+    double t = x - (360.0 + i);
+    spectrum_xyz c0 = spectrum_cmf(360.0 + i), c1 = spectrum_cmf(361.0 + i);
+    /* The swapped line: c1 at the cell's start, c0 at its end. */
+    double cx = c1.x + t * (c0.x - c1.x), cy = c1.y + t * (c0.y - c1.y),
+           cz = c1.z + t * (c0.z - c1.z);
+    ysum += h * (c0.y + c1.y) * 0.5; /* per cell, the trapezoid of ybar */
+    double f = 0.0;
+    for (int j = 0; j < 4; j++)
+      if (x >= wl[j] && x < wl[j + 1]) {
+        double u = (x - wl[j]) / (wl[j + 1] - wl[j]);
+        f = val[j + 1] + u * (val[j] - val[j + 1]);
+      }
+    sum[0] += h * f * cx, sum[1] += h * f * cy, sum[2] += h * f * cz;
+  }
+  spectrum_xyz got = spectrum_sampled_xyz(wl, val, 5, SPECTRUM_INTERP_MITSUBA_060);
+  const double g[3] = {got.x, got.y, got.z};
+  for (int c = 0; c < 3; c++, checks++)
+    if (fabs(g[c] - sum[c] / ysum) > 1e-6 * fabs(sum[c] / ysum))
+      fail_msg("channel %d: %.9g, brute force %.9g", c, g[c], sum[c] / ysum);
+  /* The loader's RGB of the emitter of a public Cornell box (twice the
+   * spectrum above), both readings. */
+  double w2[6] = {400, 500, 600, 700}, v2[6] = {0.0, 16.0, 31.2, 36.8};
+  rgb old = spectrum_sampled_rgb(w2, v2, 4, SPECTRUM_INTERP_MITSUBA_060);
+  double w3[6] = {400, 500, 600, 700}, v3[6] = {0.0, 16.0, 31.2, 36.8};
+  rgb lin = spectrum_sampled_rgb(w3, v3, 4, SPECTRUM_INTERP_LINEAR);
+  assert_near(old.r, 36.8, 0.1);
+  assert_near(old.g, 22.0, 0.1);
+  assert_near(old.b, 5.5, 0.1);
+  assert_near(lin.r, 41.6, 0.1);
+  assert_near(lin.g, 21.7, 0.1);
+  assert_near(lin.b, 5.5, 0.1);
+  checks += 6;
+  /* Flat: the same either way. */
+  double wf[4] = {360.0, 830.0}, vf[4] = {0.7, 0.7};
+  spectrum_xyz a = spectrum_sampled_xyz(wf, vf, 2, SPECTRUM_INTERP_LINEAR);
+  spectrum_xyz b = spectrum_sampled_xyz(wf, vf, 2, SPECTRUM_INTERP_MITSUBA_060);
+  assert_near(a.x, b.x, 1e-12);
+  assert_near(a.y, b.y, 1e-12);
+  assert_near(a.z, b.z, 1e-12);
+  checks += 3;
+  assert_int_equal(checks, 12);
 }
 
 int main(void) {
@@ -280,7 +340,7 @@ int main(void) {
       cmocka_unit_test(test_matrix),    cmocka_unit_test(test_cmf_table),
       cmocka_unit_test(test_equal_energy), cmocka_unit_test(test_d65),
       cmocka_unit_test(test_narrow),    cmocka_unit_test(test_zero_extend),
-      cmocka_unit_test(test_blackbody),
+      cmocka_unit_test(test_blackbody),   cmocka_unit_test(test_mitsuba_060),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -28,6 +28,10 @@ static const char *lmc_render_usage =
     "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
     "                           99th percentile of luminance maps to white\n"
     "  -q, --quiet              no progress bar\n"
+    "  --spectra linear|mitsuba-0.6.0\n"
+    "                           how sampled spectra are read: linear (default, as Mitsuba\n"
+    "                           0.6 since 2020), or as the Mitsuba 0.6.0 release did, for\n"
+    "                           comparing with images made by it\n"
     "  --strict                 exit 2 instead of rendering when the scene loads with a\n"
     "                           warning (a plugin lmc lacks, no emitter, ...) or an MCMC\n"
     "                           bootstrap finds no light; exit 2 after a black image\n"
@@ -245,6 +249,62 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   return EXIT_OK;
 }
 
+/* What the command line gives the render besides the flag tables. */
+typedef struct lmc_render_input {
+  const char *scene_path, *output;
+  const char **defines; /* owned: freed by render__load_and_run */
+  int n_defines;
+  int res_w, res_h; /* --resolution (0: the scene's) */
+  const scene_load_options *lopts;
+  const lmc_exposure *exposure;
+} lmc_render_input;
+
+/* Loads the scene, merges its settings with the flags (given[] is owned
+ * and freed here), refuses under --strict when anything was warned about,
+ * renders and writes; the exit status. */
+static int render__load_and_run(const lmc_render_input *in, const render_settings *cli,
+                                lmc_given *given, int n_given) {
+  lmc_error err;
+  lmc_error_clear(&err);
+  scene *s = NULL;
+  double t_load = omp_get_wtime();
+  lmc_status lst =
+      scene_load_xml_opts(in->scene_path, in->defines, in->n_defines, in->lopts, &s, &err);
+  free(in->defines);
+  if (lst) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    free(given);
+    return EXIT_BADINPUT;
+  }
+  t_load = omp_get_wtime() - t_load;
+  if (in->res_w > 0) camera_set_resolution(&s->cam, in->res_w, in->res_h);
+
+  /* Its settings and the flags, then the render. */
+  render_settings rs;
+  lmc_status sst = render__settings(s, in->scene_path, cli, given, n_given, &rs, &err);
+  free(given);
+  if (sst) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    scene_destroy(s);
+    return EXIT_BADINPUT;
+  }
+  /* --strict: every warning so far (a plugin lmc lacks or replaced, a
+   * scene without light, ...) means the image would not be the scene's. */
+  if (rs.strict && lmc_warning_count() > 0) {
+    fprintf(stderr, "lmc: --strict: %s loaded with %d warning%s (above): not rendering\n",
+            in->scene_path, lmc_warning_count(), lmc_warning_count() == 1 ? "" : "s");
+    scene_destroy(s);
+    return EXIT_BADINPUT;
+  }
+  int status = render__run(s, &rs, in->output, in->scene_path, in->exposure, t_load);
+  scene_destroy(s);
+  return status;
+}
+
 int lmc_cmd_render(int argc, char **argv) {
   const char *scene_path = NULL, *output = NULL;
   const char **defines = calloc((size_t)argc + 1, sizeof(char *));
@@ -252,6 +312,7 @@ int lmc_cmd_render(int argc, char **argv) {
   render_settings cli = render_settings_default();
   cli.set = 0;
   int res_w = 0, res_h = 0;
+  scene_load_options lopts = {SPECTRUM_INTERP_LINEAR};
   lmc_exposure exposure = {0, 0.0};
   lmc_args a = {argc, 2, argv, NULL};
   if (!defines) return EXIT_FAIL;
@@ -291,6 +352,14 @@ int lmc_cmd_render(int argc, char **argv) {
       }
       snprintf(cli.integrator, sizeof cli.integrator, "%s", v);
       cli.set |= SET_INTEGRATOR;
+    } else if (lmc_flag_is(&a, "--spectra")) {
+      if (!(v = lmc_flag_value(&a))) goto bad;
+      if (strcmp(v, "linear") == 0) lopts.spectra = SPECTRUM_INTERP_LINEAR;
+      else if (strcmp(v, "mitsuba-0.6.0") == 0) lopts.spectra = SPECTRUM_INTERP_MITSUBA_060;
+      else {
+        fprintf(stderr, "lmc: flag --spectra: unknown value '%s' (linear or mitsuba-0.6.0)\n", v);
+        goto bad;
+      }
     } else if (lmc_flag_is(&a, "--resolution")) {
       if (!(v = lmc_flag_value(&a))) goto bad;
       char tail;
@@ -347,46 +416,8 @@ int lmc_cmd_render(int argc, char **argv) {
     goto bad;
   }
 
-  /* Load the scene. */
-  lmc_error err;
-  lmc_error_clear(&err);
-  scene *s = NULL;
-  double t_load = omp_get_wtime();
-  if (scene_load_xml(scene_path, defines, n_defines, &s, &err)) {
-    char msg[2048];
-    lmc_error_format(&err, msg, sizeof msg);
-    fprintf(stderr, "lmc: %s\n", msg);
-    free(defines), free(given);
-    return EXIT_BADINPUT;
-  }
-  free(defines);
-  t_load = omp_get_wtime() - t_load;
-  if (res_w > 0) {
-    camera_set_resolution(&s->cam, res_w, res_h);
-  }
-
-  /* Its settings and the flags, then the render. */
-  render_settings rs;
-  lmc_status sst = render__settings(s, scene_path, &cli, given, n_given, &rs, &err);
-  free(given);
-  if (sst) {
-    char msg[2048];
-    lmc_error_format(&err, msg, sizeof msg);
-    fprintf(stderr, "lmc: %s\n", msg);
-    scene_destroy(s);
-    return EXIT_BADINPUT;
-  }
-  /* --strict: every warning so far (a plugin lmc lacks or replaced, a
-   * scene without light, ...) means the image would not be the scene's. */
-  if (rs.strict && lmc_warning_count() > 0) {
-    fprintf(stderr, "lmc: --strict: %s loaded with %d warning%s (above): not rendering\n",
-            scene_path, lmc_warning_count(), lmc_warning_count() == 1 ? "" : "s");
-    scene_destroy(s);
-    return EXIT_BADINPUT;
-  }
-  int status = render__run(s, &rs, output, scene_path, &exposure, t_load);
-  scene_destroy(s);
-  return status;
+  lmc_render_input in = {scene_path, output, defines, n_defines, res_w, res_h, &lopts, &exposure};
+  return render__load_and_run(&in, &cli, given, n_given);
 bad:
   free(defines), free(given);
   return EXIT_BADINPUT;

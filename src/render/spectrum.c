@@ -19,6 +19,11 @@
  * the two agree to that tolerance. The black body is smooth; it gets
  * Simpson's rule on each 1 nm cell, whose error (of order h^5 f'''' / 2880
  * per cell) is far below that tolerance.
+ *
+ * Mitsuba 0.6.0's reading (SPECTRUM_INTERP_MITSUBA_060) swaps the ends of
+ * every interval of both tables; each stretch is still a product of two
+ * linear functions, so the same rule is exact for it. The normalisation
+ * (the integral of ybar) is the same either way.
  */
 #include "render/spectrum.h"
 
@@ -524,16 +529,37 @@ double spectrum_cmf_y_integral(void) {
   return sum;
 }
 
-/* The sampled spectrum at x on its segment j (wl[j] <= x <= wl[j + 1]). */
-static double spectrum__lerp(const double *wl, const double *val, int j, double x) {
-  double t = (x - wl[j]) / (wl[j + 1] - wl[j]);
-  return val[j] + t * (val[j + 1] - val[j]);
+/* (1 - t) f0 + t f1, or with the ends swapped (Mitsuba 0.6.0's reading). */
+static double spectrum__mix(double f0, double f1, double t, spectrum_interp interp) {
+  if (interp == SPECTRUM_INTERP_MITSUBA_060) return f1 + t * (f0 - f1);
+  return f0 + t * (f1 - f0);
 }
 
-/* Accumulates (b - a) / 6 * (f(a) cmf(a) + 4 f(m) cmf(m) + f(b) cmf(b)). */
+/* The sampled spectrum at x on its segment j (wl[j] <= x <= wl[j + 1]). */
+static double spectrum__lerp(const double *wl, const double *val, int j, double x,
+                             spectrum_interp interp) {
+  double t = (x - wl[j]) / (wl[j + 1] - wl[j]);
+  return spectrum__mix(val[j], val[j + 1], t, interp);
+}
+
+/* The colour matching functions at x in the table's cell i (360 + i <= x
+ * <= 361 + i). */
+static spectrum_xyz spectrum__cmf_cell(int i, double x, spectrum_interp interp) {
+  const double *a = spectrum__cie1931[i], *b = spectrum__cie1931[i + 1];
+  double t = x - (SPECTRUM_LAMBDA_MIN + i);
+  spectrum_xyz c = {spectrum__mix(a[0], b[0], t, interp), spectrum__mix(a[1], b[1], t, interp),
+                    spectrum__mix(a[2], b[2], t, interp)};
+  return c;
+}
+
+/* Accumulates (b - a) / 6 * (f(a) cmf(a) + 4 f(m) cmf(m) + f(b) cmf(b)) for
+ * [a, b] inside one cell of the table. */
 static void spectrum__simpson(spectrum_xyz *acc, double a, double b, double fa, double fm,
-                              double fb) {
-  spectrum_xyz ca = spectrum_cmf(a), cm = spectrum_cmf(0.5 * (a + b)), cb = spectrum_cmf(b);
+                              double fb, spectrum_interp interp) {
+  int i = (int)floor(a - SPECTRUM_LAMBDA_MIN);
+  if (i > SPECTRUM__N - 2) i = SPECTRUM__N - 2;
+  spectrum_xyz ca = spectrum__cmf_cell(i, a, interp), cm = spectrum__cmf_cell(i, 0.5 * (a + b), interp);
+  spectrum_xyz cb = spectrum__cmf_cell(i, b, interp);
   double w = (b - a) / 6.0;
   acc->x += w * (fa * ca.x + 4.0 * fm * cm.x + fb * cb.x);
   acc->y += w * (fa * ca.y + 4.0 * fm * cm.y + fb * cb.y);
@@ -547,7 +573,8 @@ static spectrum_xyz spectrum__normalise(spectrum_xyz acc) {
   return c;
 }
 
-spectrum_xyz spectrum_sampled_xyz(const double *wl, const double *val, int n) {
+spectrum_xyz spectrum_sampled_xyz(const double *wl, const double *val, int n,
+                                  spectrum_interp interp) {
   spectrum_xyz acc = {0.0, 0.0, 0.0};
   if (n < 2) return acc;
   /* Integrate over the part of [360, 830] the samples cover (zero elsewhere). */
@@ -561,8 +588,9 @@ spectrum_xyz spectrum_sampled_xyz(const double *wl, const double *val, int n) {
     while (j + 2 < n && wl[j + 1] <= a) j++;
     double b = fmin(hi, fmin(floor(a) + 1.0, wl[j + 1]));
     double m = 0.5 * (a + b);
-    spectrum__simpson(&acc, a, b, spectrum__lerp(wl, val, j, a), spectrum__lerp(wl, val, j, m),
-                      spectrum__lerp(wl, val, j, b));
+    spectrum__simpson(&acc, a, b, spectrum__lerp(wl, val, j, a, interp),
+                      spectrum__lerp(wl, val, j, m, interp), spectrum__lerp(wl, val, j, b, interp),
+                      interp);
     a = b;
   }
   return spectrum__normalise(acc);
@@ -600,14 +628,14 @@ double spectrum_blackbody(double lambda, double temperature_k) {
   return 2.0 * h * c * c / (l5 * expm1(h * c / (l * k * temperature_k))) * 1e-9;
 }
 
-spectrum_xyz spectrum_blackbody_xyz(double temperature_k) {
+spectrum_xyz spectrum_blackbody_xyz(double temperature_k, spectrum_interp interp) {
   spectrum_xyz acc = {0.0, 0.0, 0.0};
   /* Simpson's rule on each 1 nm cell of the table. */
   for (int i = 0; i + 1 < SPECTRUM__N; i++) {
     double a = SPECTRUM_LAMBDA_MIN + i, b = a + 1.0;
     spectrum__simpson(&acc, a, b, spectrum_blackbody(a, temperature_k),
                       spectrum_blackbody(0.5 * (a + b), temperature_k),
-                      spectrum_blackbody(b, temperature_k));
+                      spectrum_blackbody(b, temperature_k), interp);
   }
   return spectrum__normalise(acc);
 }
@@ -631,12 +659,12 @@ static rgb spectrum__clamp(rgb c) {
   return rgb_make(fmax(c.r, 0.0), fmax(c.g, 0.0), fmax(c.b, 0.0));
 }
 
-rgb spectrum_sampled_rgb(double *wl, double *val, int n) {
+rgb spectrum_sampled_rgb(double *wl, double *val, int n, spectrum_interp interp) {
   n = spectrum_zero_extend(wl, val, n);
-  return spectrum__clamp(spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, n)));
+  return spectrum__clamp(spectrum_xyz_to_rgb(spectrum_sampled_xyz(wl, val, n, interp)));
 }
 
-rgb spectrum_blackbody_rgb(double temperature_k, double scale) {
-  return rgb_scale(spectrum__clamp(spectrum_xyz_to_rgb(spectrum_blackbody_xyz(temperature_k))),
-                   scale);
+rgb spectrum_blackbody_rgb(double temperature_k, double scale, spectrum_interp interp) {
+  return rgb_scale(
+      spectrum__clamp(spectrum_xyz_to_rgb(spectrum_blackbody_xyz(temperature_k, interp))), scale);
 }

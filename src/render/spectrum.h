@@ -39,6 +39,18 @@ typedef struct spectrum_xyz {
   double x, y, z; /* X, Y, Z */
 } spectrum_xyz;
 
+/* How a tabulated spectrum (a sampled spectrum, the colour matching
+ * functions) is read between its samples:
+ *   SPECTRUM_INTERP_LINEAR        linearly, as Mitsuba 0.6 since 2020-01-31
+ *                                 (commit cfeb7766) and every other renderer;
+ *   SPECTRUM_INTERP_MITSUBA_060   as the Mitsuba 0.6.0 release and its code
+ *                                 until then: on each interval [a, b] the
+ *                                 line from f(b) at a to f(a) at b (the ends
+ *                                 swapped), for the colour matching functions
+ *                                 too. Images made with those builds (most
+ *                                 published Mitsuba 0.6 renders) need it. */
+typedef enum spectrum_interp { SPECTRUM_INTERP_LINEAR = 0, SPECTRUM_INTERP_MITSUBA_060 } spectrum_interp;
+
 /* The CIE 1931 2-degree colour matching functions at lambda (nm), linear
  * between the 1 nm table's samples, zero outside [360, 830]. */
 spectrum_xyz spectrum_cmf(double lambda);
@@ -49,8 +61,10 @@ double spectrum_cmf_y_integral(void);
 /* XYZ of the piecewise-linear spectrum through (wl[i], val[i]), i < n
  * (wl strictly ascending, n >= 1), zero outside [wl[0], wl[n-1]]. Exact
  * for that function: each stretch between breakpoints of both the
- * spectrum and the 1 nm table is a quadratic, integrated by Simpson's rule. */
-spectrum_xyz spectrum_sampled_xyz(const double *wl, const double *val, int n);
+ * spectrum and the 1 nm table is a quadratic, integrated by Simpson's rule.
+ * `interp` reads both tables (see spectrum_interp). */
+spectrum_xyz spectrum_sampled_xyz(const double *wl, const double *val, int n,
+                                  spectrum_interp interp);
 
 /* Mitsuba's zero extension of a sampled spectrum (n >= 2, wl ascending):
  * when val[0] != 0, a zero is put at wl[0] - d before it; when the last
@@ -63,8 +77,9 @@ int spectrum_zero_extend(double *wl, double *val, int n);
  * (kelvin) and lambda (nm), in W m^-2 sr^-1 nm^-1. */
 double spectrum_blackbody(double lambda, double temperature_k);
 
-/* XYZ of a black body at temperature_k (the normalisation above). */
-spectrum_xyz spectrum_blackbody_xyz(double temperature_k);
+/* XYZ of a black body at temperature_k (the normalisation above; `interp`
+ * reads the colour matching functions). */
+spectrum_xyz spectrum_blackbody_xyz(double temperature_k, spectrum_interp interp);
 
 /* Linear sRGB of XYZ (Rec. 709 primaries, D65 white), not clamped. */
 rgb spectrum_xyz_to_rgb(spectrum_xyz c);
@@ -75,10 +90,10 @@ void spectrum_chromaticity(spectrum_xyz c, double *OUT_x, double *OUT_y);
 /* What the loader stores for a sampled spectrum (n >= 2, wl strictly
  * ascending; wl and val need room for n + 2): zero extension, XYZ, sRGB,
  * negative components set to zero. wl and val are extended in place. */
-rgb spectrum_sampled_rgb(double *wl, double *val, int n);
+rgb spectrum_sampled_rgb(double *wl, double *val, int n, spectrum_interp interp);
 
 /* What the loader stores for <blackbody temperature=T scale=s>: the black
  * body's sRGB, negative components set to zero, times scale. */
-rgb spectrum_blackbody_rgb(double temperature_k, double scale);
+rgb spectrum_blackbody_rgb(double temperature_k, double scale, spectrum_interp interp);
 
 #endif

@@ -13,11 +13,22 @@
 #include "render/error.h"
 #include "render/mesh.h"
 #include "render/scene.h"
+#include "render/spectrum.h"
 
 /* `defines` holds n_defines strings "name=value" that override the scene's
  * <default> elements (the -D flag). The result is finalized. */
 lmc_status scene_load_xml(const char *path, const char *const *defines, int n_defines,
                           scene **OUT_scene, lmc_error *err);
+
+/* How a scene is read, beyond its file (the command line's loader flags). */
+typedef struct scene_load_options {
+  spectrum_interp spectra; /* --spectra: how sampled spectra are read (spectrum.h) */
+} scene_load_options;
+
+/* scene_load_xml with options (NULL: the defaults, all zero). */
+lmc_status scene_load_xml_opts(const char *path, const char *const *defines, int n_defines,
+                               const scene_load_options *opts, scene **OUT_scene,
+                               lmc_error *err);
 
 lmc_status mesh_read_obj(const char *path, mesh *OUT_mesh, lmc_error *err);
 /* ASCII and binary (little and big endian) PLY. */

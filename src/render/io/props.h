@@ -24,6 +24,7 @@
 #include <stddef.h>
 
 #include "render/error.h"
+#include "render/spectrum.h"
 #include "render/transform.h"
 #include "render/vec3.h"
 
@@ -81,9 +82,10 @@ typedef struct pdoc {
 } pdoc;
 
 /* Parses `path` into doc (caller-owned, zeroed by the call). `defines` are
- * "name=value" strings that override <default>. Errors carry file and line. */
+ * "name=value" strings that override <default>; sampled spectra are read
+ * with `interp`. Errors carry file and line. */
 lmc_status pdoc_parse(pdoc *doc, const char *path, const char *const *defines, int n_defines,
-                      lmc_error *err);
+                      spectrum_interp interp, lmc_error *err);
 void pdoc_free(pdoc *doc);
 void pset_free(pset *p);
 

@@ -811,9 +811,16 @@ static lmc_status xml__build(builder *B, pset *root) {
 
 lmc_status scene_load_xml(const char *path, const char *const *defines, int n_defines,
                           scene **OUT_scene, lmc_error *err) {
+  return scene_load_xml_opts(path, defines, n_defines, NULL, OUT_scene, err);
+}
+
+lmc_status scene_load_xml_opts(const char *path, const char *const *defines, int n_defines,
+                               const scene_load_options *opts, scene **OUT_scene,
+                               lmc_error *err) {
   *OUT_scene = NULL;
   pdoc doc;
-  lmc_status st = pdoc_parse(&doc, path, defines, n_defines, err);
+  spectrum_interp interp = opts ? opts->spectra : SPECTRUM_INTERP_LINEAR;
+  lmc_status st = pdoc_parse(&doc, path, defines, n_defines, interp, err);
   if (st != LMC_OK) return st;
   scene *s = NULL;
   st = scene_create(&s, err);

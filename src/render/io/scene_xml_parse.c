@@ -70,6 +70,7 @@ typedef struct parse_ctx {
   pdoc *doc;
   lmc_error *err;
   lmc_status status;
+  spectrum_interp interp; /* how sampled spectra are read (scene_load_options) */
   param *params;
   int n_params, cap_params;
   parse_frame stack[PARSE_MAX_DEPTH];
@@ -304,7 +305,7 @@ static int parse__blackbody(parse_ctx *c, const char *tag, rgb *out) {
     parse__fail(c, LMC_EPARSE, "bad number '%s' in <%s>", sc, tag);
     return 0;
   }
-  *out = spectrum_blackbody_rgb(temperature, scale);
+  *out = spectrum_blackbody_rgb(temperature, scale, c->interp);
   return 1;
 }
 
@@ -326,7 +327,7 @@ static int parse__spectrum_file(parse_ctx *c, const char *fn, rgb *out) {
     if (c->parser) XML_StopParser(c->parser, XML_FALSE);
     return 0;
   }
-  *out = spectrum_sampled_rgb(wl, val, n);
+  *out = spectrum_sampled_rgb(wl, val, n, c->interp);
   free(wl);
   free(val);
   return 1;
@@ -347,7 +348,7 @@ static int parse__spectrum_pairs(parse_ctx *c, const char *value, rgb *out) {
   char why[256];
   int n = props_spectrum_pairs(value, wl, val, max, why, sizeof why);
   if (n < 0) parse__fail(c, LMC_EPARSE, "bad spectrum '%.200s': %s", value, why);
-  else *out = spectrum_sampled_rgb(wl, val, n);
+  else *out = spectrum_sampled_rgb(wl, val, n, c->interp);
   free(wl);
   free(val);
   return n >= 0;
@@ -640,6 +641,44 @@ static void parse__resolve(const char *base_file, const char *name, char *out, s
   snprintf(out, size, "%.*s/%s", (int)(slash - base_file), base_file, name);
 }
 
+/* <include filename>: parses that file into obj (the including element's
+ * object), then restores the state of this file's parser. */
+static void parse__include(parse_ctx *c, pset *obj, const char *tag) {
+  const char *fn = parse__need_attr(c, tag, "filename");
+  if (!fn) return;
+  if (c->include_depth >= PARSE_MAX_INCLUDE) {
+    parse__fail(c, LMC_EPARSE, "<include> nested too deeply (a cycle?) at '%s'", fn);
+    return;
+  }
+  char path[1024];
+  parse__resolve(c->file, fn, path, sizeof path);
+  /* Parse the included file into this object, then restore our state. */
+  parse__clear_attrs(c);
+  parse_ctx saved = *c;
+  c->depth = 0;
+  c->n_attrs = 0;
+  c->include_depth++;
+  lmc_status st = parse__file(c, path, obj);
+  int line = (int)XML_GetCurrentLineNumber(saved.parser);
+  c->file = saved.file;
+  c->parser = saved.parser;
+  c->include_depth = saved.include_depth;
+  c->include_parent = saved.include_parent;
+  c->depth = saved.depth;
+  memcpy(c->stack, saved.stack, sizeof c->stack);
+  if (st != LMC_OK) {
+    /* A missing include file is reported at the <include>; errors inside
+     * it keep their own file and line. */
+    if (st == LMC_EIO && c->err && c->err->line == 0) {
+      lmc_error_set(c->err, LMC_EIO, c->file, line, "cannot open included file '%s'", path);
+    }
+    c->status = st;
+    XML_StopParser(c->parser, XML_FALSE);
+    return;
+  }
+  parse__push(c, FR_LEAF, NULL, -1);
+}
+
 static void XMLCALL parse__start(void *user, const XML_Char *tag, const XML_Char **atts) {
   parse_ctx *c = user;
   if (c->status != LMC_OK) return;
@@ -719,39 +758,7 @@ static void XMLCALL parse__start(void *user, const XML_Char *tag, const XML_Char
     }
     parse__push(c, FR_LEAF, NULL, -1);
   } else if (strcmp(tag, "include") == 0) {
-    const char *fn = parse__need_attr(c, tag, "filename");
-    if (!fn) return;
-    if (c->include_depth >= PARSE_MAX_INCLUDE) {
-      parse__fail(c, LMC_EPARSE, "<include> nested too deeply (a cycle?) at '%s'", fn);
-      return;
-    }
-    char path[1024];
-    parse__resolve(c->file, fn, path, sizeof path);
-    /* Parse the included file into this object, then restore our state. */
-    parse__clear_attrs(c);
-    parse_ctx saved = *c;
-    c->depth = 0;
-    c->n_attrs = 0;
-    c->include_depth++;
-    lmc_status st = parse__file(c, path, obj);
-    int line = (int)XML_GetCurrentLineNumber(saved.parser);
-    c->file = saved.file;
-    c->parser = saved.parser;
-    c->include_depth = saved.include_depth;
-    c->include_parent = saved.include_parent;
-    c->depth = saved.depth;
-    memcpy(c->stack, saved.stack, sizeof c->stack);
-    if (st != LMC_OK) {
-      /* A missing include file is reported at the <include>; errors inside
-       * it keep their own file and line. */
-      if (st == LMC_EIO && c->err && c->err->line == 0) {
-        lmc_error_set(c->err, LMC_EIO, c->file, line, "cannot open included file '%s'", path);
-      }
-      c->status = st;
-      XML_StopParser(c->parser, XML_FALSE);
-      return;
-    }
-    parse__push(c, FR_LEAF, NULL, -1);
+    parse__include(c, obj, tag);
   } else if (strcmp(tag, "animation") == 0) {
     /* Motion (Mitsuba's keyframed transform): the shutter opens at the
      * first keyframe, which is what lmc renders. */
@@ -849,10 +856,11 @@ static lmc_status parse__file(parse_ctx *c, const char *path, pset *parent) {
 }
 
 lmc_status pdoc_parse(pdoc *doc, const char *path, const char *const *defines, int n_defines,
-                      lmc_error *err) {
+                      spectrum_interp interp, lmc_error *err) {
   memset(doc, 0, sizeof *doc);
   parse_ctx c;
   memset(&c, 0, sizeof c);
+  c.interp = interp;
   c.doc = doc;
   c.err = err;
   c.status = LMC_OK;
