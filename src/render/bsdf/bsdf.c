@@ -255,10 +255,6 @@ int bsdf_flags(const bsdf *b) {
   return bsdf__model_flags(b) | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
 }
 
-int bsdf_is_anisotropic(const bsdf *b) {
-  return b->type == BSDF_WARD && b->alpha_u != b->alpha_v;
-}
-
 /* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
 int bsdf_is_delta(const bsdf *b) {
   return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC ||

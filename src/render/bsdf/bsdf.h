@@ -190,7 +190,9 @@ int bsdf_is_rough(const bsdf *b, double rough_min);
 
 /* 1 when the model's lobe is anisotropic (ward with alphaU != alphaV): its
  * shading frame's first axis must follow dpdu, as Mitsuba's. */
-int bsdf_is_anisotropic(const bsdf *b);
+static inline int bsdf_is_anisotropic(const bsdf *b) {
+  return b->type == BSDF_WARD && b->alpha_u != b->alpha_v;
+}
 /* 1 when the model needs the hit's uv tangents (bsdf_shading_frame): a bump
  * map or an anisotropic lobe. */
 static inline int bsdf_needs_tangents(const bsdf *b) { return b->bumped || bsdf_is_anisotropic(b); }
