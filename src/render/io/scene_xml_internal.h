@@ -35,6 +35,7 @@ typedef struct builder {
   int n_fix, cap_fix;
   int default_bsdf[2]; /* shared default BSDFs: [0] diffuse 0.5, [1] black; -1 until made */
   int emitters_ignored; /* emitters left out (unsupported, misplaced): for the summary */
+  spectrum_interp spectra; /* --spectra: how spectra the loader makes are read (the sun's) */
   int have_sensor;
   int spp_from_dpt;
 } builder;

@@ -18,6 +18,10 @@
  *  constant    radiance from every direction.
  *  envmap      filename, scale, toWorld; latitude-longitude map, Mitsuba's
  *              orientation (+y up), importance sampled by luminance * sin(theta).
+ *  sunsky, sky, sun
+ *              not light types: the loader rasterizes them into an envmap's
+ *              image (sunsky.h), as Mitsuba 0.6 does; with sunRadiusScale 0
+ *              the sun is a directional light.
  */
 #ifndef LMC_RENDER_LIGHT_H
 #define LMC_RENDER_LIGHT_H
