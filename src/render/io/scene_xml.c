@@ -316,69 +316,60 @@ static lmc_status xml__bad_at(builder *B, const pset *o, const char *name, const
   return xml__fail(B, LMC_EPARSE, file, line, "%s emitter: %s", o->type, what);
 }
 
-/* Mitsuba's sunsky, sky and sun emitters (sunsky.h): the sun's position
- * from sunDirection or from date, time and place, the parameters checked
- * as Mitsuba checks them (turbidity in [1, 10], stretch in [1, 2], albedo
- * in [0, 1], the sun above the horizon, sunDirection not together with
- * latitude, longitude, timezone or day) and a few more that would make
- * nonsense (negative scales, month, day, resolution), then rasterized into
- * an envmap light. `scale` is the default of sunScale and skyScale (the
- * envmap itself has scale 1, as in Mitsuba); with sunRadiusScale = 0 the
- * sun is a directional light of the disk's irradiance instead. */
-static lmc_status xml__sunsky(builder *B, pset *o) {
+/* The parameters of sunsky, sky and sun (Mitsuba's names, defaults and
+ * ranges) into *p and the emitter's toWorld into *OUT_tw. */
+static lmc_status xml__sunsky_params(builder *B, pset *o, sunsky_params *p, xform *OUT_tw) {
   lmc_status st;
-  const char *t = o->type;
-  int is_sunsky = strcmp(t, "sunsky") == 0, is_sky = strcmp(t, "sky") == 0;
-  sunsky_params p;
-  sunsky_params_default(&p);
-  p.spectra = B->spectra;
-  p.sky = !strcmp(t, "sun") ? 0 : 1;
-  p.sun = is_sky ? 0 : 1;
-
-  /* Parameters shared by the three. */
-  xform tw;
+  int is_sunsky = strcmp(o->type, "sunsky") == 0, is_sky = strcmp(o->type, "sky") == 0;
   double scale;
   long long res;
-  if ((st = xml__xform(B, o, "toWorld", &tw, NULL)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "turbidity", 3.0, &p.turbidity, NULL)) != LMC_OK) return st;
-  if ((st = xml__float(B, o, "stretch", 1.0, &p.stretch, NULL)) != LMC_OK) return st;
+  if ((st = xml__xform(B, o, "toWorld", OUT_tw, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "turbidity", 3.0, &p->turbidity, NULL)) != LMC_OK) return st;
+  if ((st = xml__float(B, o, "stretch", 1.0, &p->stretch, NULL)) != LMC_OK) return st;
   if ((st = xml__int(B, o, "resolution", 512, &res, NULL)) != LMC_OK) return st;
   if ((st = xml__float(B, o, "scale", 1.0, &scale, NULL)) != LMC_OK) return st;
-  if (!(p.turbidity >= 1.0 && p.turbidity <= 10.0))
+  if (!(p->turbidity >= 1.0 && p->turbidity <= 10.0))
     return xml__bad_at(B, o, "turbidity", "turbidity must be in [1, 10]");
-  if (!(p.stretch >= 1.0 && p.stretch <= 2.0))
+  if (!(p->stretch >= 1.0 && p->stretch <= 2.0))
     return xml__bad_at(B, o, "stretch", "stretch must be in [1, 2]");
   if (res < 2 || res > IMAGE_MAX_SIDE)
     return xml__bad_at(B, o, "resolution", "resolution must be in [2, 16384]");
-  p.resolution = (int)res;
+  p->resolution = (int)res;
   if (!(scale >= 0.0)) return xml__bad_at(B, o, "scale", "scale must not be negative");
-  p.sky_scale = p.sun_scale = scale;
+  p->sky_scale = p->sun_scale = scale;
   if (!is_sky) {
-    if ((st = xml__float(B, o, "sunRadiusScale", 1.0, &p.sun_radius_scale, NULL)) != LMC_OK)
+    if ((st = xml__float(B, o, "sunRadiusScale", 1.0, &p->sun_radius_scale, NULL)) != LMC_OK)
       return st;
     /* The disk at most a hemisphere: r = sunRadiusScale * 0.2679 <= 90 degrees. */
-    if (!(p.sun_radius_scale >= 0.0 &&
-          p.sun_radius_scale * SUNSKY_SUN_APP_RADIUS * 0.5 <= 90.0))
+    if (!(p->sun_radius_scale >= 0.0 &&
+          p->sun_radius_scale * SUNSKY_SUN_APP_RADIUS * 0.5 <= 90.0))
       return xml__bad_at(B, o, "sunRadiusScale",
                          "sunRadiusScale must be in [0, 335.9] (the sun at most a hemisphere)");
   }
   if (is_sunsky) {
-    if ((st = xml__float(B, o, "sunScale", scale, &p.sun_scale, NULL)) != LMC_OK) return st;
-    if ((st = xml__float(B, o, "skyScale", scale, &p.sky_scale, NULL)) != LMC_OK) return st;
-    if (!(p.sun_scale >= 0.0))
+    if ((st = xml__float(B, o, "sunScale", scale, &p->sun_scale, NULL)) != LMC_OK) return st;
+    if ((st = xml__float(B, o, "skyScale", scale, &p->sky_scale, NULL)) != LMC_OK) return st;
+    if (!(p->sun_scale >= 0.0))
       return xml__bad_at(B, o, "sunScale", "sunScale must not be negative");
-    if (!(p.sky_scale >= 0.0))
+    if (!(p->sky_scale >= 0.0))
       return xml__bad_at(B, o, "skyScale", "skyScale must not be negative");
   }
-  if (p.sky) {
-    if ((st = xml__rgb(B, o, "albedo", rgb_gray(0.2), &p.albedo, NULL)) != LMC_OK) return st;
-    if (!(p.albedo.r >= 0.0 && p.albedo.r <= 1.0 && p.albedo.g >= 0.0 && p.albedo.g <= 1.0 &&
-          p.albedo.b >= 0.0 && p.albedo.b <= 1.0))
+  if (p->sky) {
+    if ((st = xml__rgb(B, o, "albedo", rgb_gray(0.2), &p->albedo, NULL)) != LMC_OK) return st;
+    if (!(p->albedo.r >= 0.0 && p->albedo.r <= 1.0 && p->albedo.g >= 0.0 && p->albedo.g <= 1.0 &&
+          p->albedo.b >= 0.0 && p->albedo.b <= 1.0))
       return xml__bad_at(B, o, "albedo", "albedo must be in [0, 1]");
-    if ((st = xml__bool(B, o, "extend", 0, &p.extend, NULL)) != LMC_OK) return st;
+    if ((st = xml__bool(B, o, "extend", 0, &p->extend, NULL)) != LMC_OK) return st;
   }
 
-  /* The sun's position: a direction, or date, time and place. */
+  return LMC_OK;
+}
+
+/* The sun's position into p->sun_dir: sunDirection (in the emitter's frame
+ * tw), or date, time and place (Mitsuba's defaults: Tokyo, 2010-07-10 15:00). */
+static lmc_status xml__sun_position(builder *B, pset *o, const xform *tw, sunsky_params *p) {
+  lmc_status st;
+  const char *t = o->type;
   vec3 dir;
   int has_dir;
   if ((st = xml__vec(B, o, "sunDirection", v3(0, 1, 0), &dir, &has_dir)) != LMC_OK) return st;
@@ -392,10 +383,10 @@ static lmc_status xml__sunsky(builder *B, pset *o) {
                          "%s emitter: sunDirection and %s given: only one of them can be", t,
                          place[i]);
     }
-    vec3 local = xform_inv_vector(&tw, dir);
+    vec3 local = xform_inv_vector(tw, dir);
     if (!(v3_len2(local) > 0.0) || !v3_isfinite(local))
       return xml__bad_at(B, o, "sunDirection", "sunDirection is zero");
-    p.sun_dir = sunsky_from_dir(local);
+    p->sun_dir = sunsky_from_dir(local);
   } else {
     sunsky_time when;
     sunsky_place where;
@@ -419,11 +410,36 @@ static lmc_status xml__sunsky(builder *B, pset *o) {
     when.year = (int)year;
     when.month = (int)month;
     when.day = (int)day;
-    p.sun_dir = sunsky_sun_position(&when, &where);
+    p->sun_dir = sunsky_sun_position(&when, &where);
   }
-  if (!(p.sun_dir.theta <= 0.5 * XML_PI))
+  if (!(p->sun_dir.theta <= 0.5 * XML_PI))
     return xml__bad_at(B, o, has_dir ? "sunDirection" : "hour",
                        "the sun is below the horizon, which the sky model does not cover");
+  return LMC_OK;
+}
+
+/* Mitsuba's sunsky, sky and sun emitters (sunsky.h): the sun's position
+ * from sunDirection or from date, time and place, the parameters checked
+ * as Mitsuba checks them (turbidity in [1, 10], stretch in [1, 2], albedo
+ * in [0, 1], the sun above the horizon, sunDirection not together with
+ * latitude, longitude, timezone or day) and a few more that would make
+ * nonsense (negative scales, month, day, resolution), then rasterized into
+ * an envmap light. `scale` is the default of sunScale and skyScale (the
+ * envmap itself has scale 1, as in Mitsuba); with sunRadiusScale = 0 the
+ * sun is a directional light of the disk's irradiance instead. */
+static lmc_status xml__sunsky(builder *B, pset *o) {
+  lmc_status st;
+  const char *t = o->type;
+  int is_sky = strcmp(t, "sky") == 0;
+  sunsky_params p;
+  sunsky_params_default(&p);
+  p.spectra = B->spectra;
+  p.sky = !strcmp(t, "sun") ? 0 : 1;
+  p.sun = is_sky ? 0 : 1;
+
+  xform tw;
+  if ((st = xml__sunsky_params(B, o, &p, &tw)) != LMC_OK) return st;
+  if ((st = xml__sun_position(B, o, &tw, &p)) != LMC_OK) return st;
   xml__warn_unused(o);
 
   /* The map; with sunRadiusScale = 0 the sun is a directional light. */
