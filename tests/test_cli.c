@@ -401,6 +401,16 @@ static void test_merge_and_convert(void **state) {
   assert_int_equal(image_read(TMP "/mM.png", 0, &P, &err), LMC_OK);
   assert_int_equal(P.width, 3);
   assert_int_equal(P.height, 2);
+  /* A PNG converted again at exposure 0 gives the same bytes back (its
+   * sRGB is decoded first, not encoded twice). */
+  assert_int_equal(run_lmc("convert " TMP "/mM.png " TMP "/mM2.png"), 0);
+  lmc_image P2 = {0};
+  assert_int_equal(image_read(TMP "/mM2.png", 0, &P2, &err), LMC_OK);
+  assert_int_equal(P2.width * P2.height * P2.channels, 18);
+  int same = 0;
+  for (int i = 0; i < 18; i++) same += fabsf(P2.data[i] - P.data[i]) <= 0.5f / 255.0f;
+  assert_int_equal(same, 18);
+  image_free(&P2);
   /* Different sizes cannot be merged. */
   lmc_image C;
   assert_int_equal(image_init(&C, 2, 2, 3, &err), LMC_OK);

@@ -49,7 +49,9 @@ int lmc_cmd_convert(int argc, char **argv) {
   lmc_error_clear(&err);
   char msg[2048];
   int status = EXIT_OK;
-  if (image_read(paths[0], 0, &img, &err) || image_to_rgb(&img, &err)) {
+  /* A PNG or JPEG input is sRGB-encoded: decoded to linear first, so that
+   * converting a preview gives it back. */
+  if (image_read(paths[0], 1, &img, &err) || image_to_rgb(&img, &err)) {
     status = EXIT_BADINPUT;
   } else if (image_write_png(paths[1], &img, lmc_exposure_scale(&exposure, &img), &err)) {
     status = EXIT_FAIL;
