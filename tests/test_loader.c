@@ -805,6 +805,44 @@ static void test_bump_loader(void **state) {
   assert_non_null(strstr(err.msg, "displacement"));
 }
 
+/* maxSmoothAngle on a mesh (Mitsuba's rebuildTopology, tested in
+ * test_mesh_io): no warning, smooth normals made; outside [0, 180] an error
+ * at the shape's line. */
+static void test_max_smooth_angle(void **state) {
+  (void)state;
+  static const double angles[2] = {45.0, 200.0};
+  for (int k = 0; k < 2; k++) {
+    char xml[2048];
+    snprintf(xml, sizeof xml,
+             HEAD SENSOR LIGHT
+             "  <shape type=\"ply\">\n"
+             "    <string name=\"filename\" value=\"" LMC_SOURCE_DIR "/tests/data/loader/quad.ply\"/>\n"
+             "    <float name=\"maxSmoothAngle\" value=\"%g\"/>\n"
+             "  </shape>\n"
+             "</scene>\n",
+             angles[k]);
+    write_text("/tmp/lmc_loader_msa.xml", xml);
+    scene *s = NULL;
+    int warnings;
+    if (!k) {
+      assert_int_equal(load_quiet("/tmp/lmc_loader_msa.xml", &s, &warnings), LMC_OK);
+      assert_int_equal(warnings, 0);
+      assert_int_equal(s->n_meshes, 1);
+      assert_non_null(s->meshes[0].n);
+      scene_destroy(s);
+    } else {
+      lmc_error err;
+      lmc_error_clear(&err);
+      lmc_warn_set_quiet(1);
+      lmc_status st = scene_load_xml("/tmp/lmc_loader_msa.xml", NULL, 0, &s, &err);
+      lmc_warn_set_quiet(0);
+      assert_int_equal(st, LMC_EPARSE);
+      assert_int_equal(err.line, 7);
+      assert_non_null(strstr(err.msg, "maxSmoothAngle"));
+    }
+  }
+}
+
 /* <lookAt>, Mitsuba 0.6's other spelling of <lookat>: the same camera,
  * its pinhole at the origin given and the matrix the same to the bit. */
 static void test_lookat_spelling(void **state) {
@@ -1174,6 +1212,7 @@ int main(void) {
       cmocka_unit_test(test_sampler_type),    cmocka_unit_test(test_mitsuba_defaults),
       cmocka_unit_test(test_mask_loader),
       cmocka_unit_test(test_bump_loader),
+      cmocka_unit_test(test_max_smooth_angle),
       cmocka_unit_test(test_roughdiffuse_ward),
       cmocka_unit_test(test_spectra),
       cmocka_unit_test(test_spectrum_file_errors),

@@ -113,6 +113,41 @@ static void test_obj_cube_dedup(void **state) {
   mesh_free(&m);
 }
 
+/* Mitsuba's maxSmoothAngle on the cube (8 shared corners, faces at 90
+ * degrees): below 90 every corner splits into one vertex per face (24), each
+ * normal its face's; above 90 the 8 corners stay shared and each normal is
+ * the mean of its three faces' (every face meets a corner at 90 degrees in
+ * all, whatever its triangulation): (+-1, +-1, +-1) / sqrt(3), pointing
+ * out. The triangles keep their corners' positions. */
+static void test_max_smooth_angle(void **state) {
+  (void)state;
+  int checks = 0;
+  const double angles[2] = {30.0, 100.0};
+  for (int k = 0; k < 2; k++) {
+    mesh m;
+    lmc_error err;
+    check_ok(mesh_read_obj("data/mesh/cube.obj", &m, &err), &err);
+    vec3 before[36];
+    for (int i = 0; i < 36; i++) before[i] = mesh_position(&m, m.idx[i]);
+    check_ok(mesh_rebuild_topology(&m, angles[k], &err), &err);
+    assert_int_equal(m.n_vertices, k ? 8 : 24);
+    assert_int_equal(m.n_triangles, 12);
+    assert_non_null(m.n);
+    for (int i = 0; i < 36; i++, checks++) {
+      vec3 p = mesh_position(&m, m.idx[i]);
+      assert_true(p.x == before[i].x && p.y == before[i].y && p.z == before[i].z);
+      vec3 n = v3(m.n[3 * m.idx[i]], m.n[3 * m.idx[i] + 1], m.n[3 * m.idx[i] + 2]);
+      vec3 want = k ? v3_scale(p, 1.0 / sqrt(3.0)) : mesh_face_normal(&m, i / 3);
+      if (v3_len(v3_sub(n, want)) > 1e-6)
+        fail_msg("angle %g corner %d: normal (%g %g %g), want (%g %g %g)", angles[k], i, n.x, n.y,
+                 n.z, want.x, want.y, want.z);
+    }
+    assert_near(volume(&m), 8.0, 1e-12);
+    mesh_free(&m);
+  }
+  assert_int_equal(checks, 72);
+}
+
 static void test_obj_errors(void **state) {
   (void)state;
   static const struct {
@@ -600,6 +635,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_obj_quad),
       cmocka_unit_test(test_obj_cube_dedup),
+      cmocka_unit_test(test_max_smooth_angle),
       cmocka_unit_test(test_obj_errors),
       cmocka_unit_test(test_ply_ascii),
       cmocka_unit_test(test_ply_binary),

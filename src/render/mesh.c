@@ -30,6 +30,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 lmc_status mesh_alloc(mesh *m, int64_t n_vertices, int64_t n_triangles, int with_normals,
                       int with_uvs, lmc_error *err) {
   /* Check the counts before any allocation: indices are uint32. */
@@ -267,3 +271,129 @@ lmc_status mesh_validate(mesh *m, const char *file, int line, lmc_error *err) {
   }
   return LMC_OK;
 }
+
+/* ---- maxSmoothAngle ------------------------------------------------------- */
+
+/* A corner of a triangle, for sorting by its vertex's position and uv. */
+typedef struct mesh__corner {
+  float key[5]; /* x, y, z, u, v (u = v = 0 without uv) */
+  int64_t tri;
+  int j;        /* corner 0, 1, 2 */
+} mesh__corner;
+
+static int mesh__corner_cmp(const void *pa, const void *pb) {
+  const mesh__corner *a = pa, *b = pb;
+  for (int k = 0; k < 5; k++)
+    if (a->key[k] != b->key[k]) return a->key[k] < b->key[k] ? -1 : 1;
+  /* Equal keys keep triangle order (Mitsuba's multimap keeps insertion order). */
+  int64_t ia = 3 * a->tri + a->j, ib = 3 * b->tri + b->j;
+  return ia < ib ? -1 : ia > ib;
+}
+
+/* The angle between unit vectors a and b, accurate also near 0 and pi. */
+static double mesh__unit_angle(vec3 a, vec3 b) {
+  if (v3_dot(a, b) < 0.0) return M_PI - 2.0 * asin(0.5 * v3_len(v3_add(a, b)));
+  return 2.0 * asin(0.5 * v3_len(v3_sub(b, a)));
+}
+
+lmc_status mesh_rebuild_topology(mesh *m, double max_angle_deg, lmc_error *err) {
+  const int64_t nt = m->n_triangles, nc = 3 * nt;
+  const double dp_thresh = cos(max_angle_deg * M_PI / 180.0);
+  mesh__corner *c = malloc((size_t)(nc + 1) * sizeof *c);
+  vec3 *fn = malloc((size_t)(nt + 1) * sizeof *fn);
+  uint32_t *new_idx = malloc((size_t)(nc + 1) * sizeof *new_idx);
+  if (!c || !fn || !new_idx) {
+    free(c), free(fn), free(new_idx);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory rebuilding a mesh");
+  }
+  for (int64_t t = 0; t < nt; t++) {
+    const uint32_t *tri = m->idx + 3 * t;
+    vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+    vec3 n = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+    double l = v3_len(n);
+    fn[t] = l > 0.0 && isfinite(l) ? v3_scale(n, 1.0 / l) : v3(0.0, 0.0, 0.0);
+    for (int j = 0; j < 3; j++) {
+      mesh__corner *k = &c[3 * t + j];
+      uint32_t v = tri[j];
+      k->key[0] = m->p[3 * v], k->key[1] = m->p[3 * v + 1], k->key[2] = m->p[3 * v + 2];
+      k->key[3] = m->uv ? m->uv[2 * v] : 0.0f;
+      k->key[4] = m->uv ? m->uv[2 * v + 1] : 0.0f;
+      k->tri = t, k->j = j;
+    }
+  }
+  qsort(c, (size_t)nc, sizeof *c, mesh__corner_cmp);
+  /* Greedy clustering within each group of equal keys: an unclustered
+   * corner opens a vertex, which every later unclustered corner of the
+   * group whose face normal is within the angle of the opener's joins. */
+  int64_t nv = 0;
+  unsigned char *done = calloc((size_t)nc + 1, 1);
+  int64_t *opener = malloc((size_t)(nc + 1) * sizeof *opener); /* corner that opened vertex v */
+  if (!done || !opener) {
+    free(c), free(fn), free(new_idx), free(done), free(opener);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory rebuilding a mesh");
+  }
+  for (int64_t g = 0; g < nc;) {
+    int64_t end = g + 1;
+    while (end < nc && memcmp(c[end].key, c[g].key, sizeof c[g].key) == 0) end++;
+    for (int64_t a = g; a < end; a++) {
+      if (done[a]) continue;
+      vec3 n1 = fn[c[a].tri];
+      opener[nv] = a;
+      for (int64_t b = a; b < end; b++) {
+        if (done[b]) continue;
+        vec3 n2 = fn[c[b].tri];
+        int same = n1.x == n2.x && n1.y == n2.y && n1.z == n2.z;
+        if (same || v3_dot(n1, n2) > dp_thresh) {
+          new_idx[3 * c[b].tri + c[b].j] = (uint32_t)nv;
+          done[b] = 1;
+        }
+      }
+      nv++;
+    }
+    g = end;
+  }
+  /* The new mesh: positions and uv from each vertex's opener, smooth
+   * normals from the corner-angle-weighted face normals. */
+  mesh r = *m;
+  r.p = r.n = r.uv = NULL;
+  r.idx = NULL;
+  lmc_status st = mesh_alloc(&r, nv, nt, 1, m->uv != NULL, err);
+  if (st == LMC_OK) {
+    for (int64_t v = 0; v < nv; v++) {
+      const mesh__corner *k = &c[opener[v]];
+      uint32_t src = m->idx[3 * k->tri + k->j];
+      memcpy(r.p + 3 * v, m->p + 3 * src, 3 * sizeof(float));
+      if (m->uv) memcpy(r.uv + 2 * v, m->uv + 2 * src, 2 * sizeof(float));
+    }
+    memcpy(r.idx, new_idx, (size_t)nc * sizeof *new_idx);
+    double *acc = calloc((size_t)(3 * nv + 1), sizeof *acc);
+    if (!acc) st = lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory rebuilding a mesh");
+    for (int64_t t = 0; acc && t < nt; t++) {
+      if (fn[t].x == 0.0 && fn[t].y == 0.0 && fn[t].z == 0.0) continue;
+      for (int j = 0; j < 3; j++) {
+        uint32_t v0 = r.idx[3 * t + j], v1 = r.idx[3 * t + (j + 1) % 3], v2 = r.idx[3 * t + (j + 2) % 3];
+        vec3 a = v3_sub(mesh_position(&r, v1), mesh_position(&r, v0));
+        vec3 b = v3_sub(mesh_position(&r, v2), mesh_position(&r, v0));
+        if (!(v3_len2(a) > 0.0) || !(v3_len2(b) > 0.0)) continue;
+        double w = mesh__unit_angle(v3_normalize(a), v3_normalize(b));
+        acc[3 * v0] += w * fn[t].x, acc[3 * v0 + 1] += w * fn[t].y, acc[3 * v0 + 2] += w * fn[t].z;
+      }
+    }
+    for (int64_t v = 0; acc && v < nv; v++) {
+      vec3 n = v3(acc[3 * v], acc[3 * v + 1], acc[3 * v + 2]);
+      double l = v3_len(n);
+      n = l > 0.0 ? v3_scale(n, 1.0 / l) : v3(1.0, 0.0, 0.0); /* Mitsuba's value for none */
+      r.n[3 * v] = (float)n.x, r.n[3 * v + 1] = (float)n.y, r.n[3 * v + 2] = (float)n.z;
+    }
+    free(acc);
+  }
+  free(c), free(fn), free(new_idx), free(done), free(opener);
+  if (st != LMC_OK) {
+    mesh_free(&r);
+    return st;
+  }
+  mesh_free(m);
+  *m = r;
+  return LMC_OK;
+}
+

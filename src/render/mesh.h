@@ -57,6 +57,14 @@ static inline vec3 mesh_corners_normal(const mesh *m, vec3 p0, vec3 p1, vec3 p2)
   return m->flip_normals ? v3_neg(n) : n;
 }
 double mesh_triangle_area(const mesh *m, int64_t tri);
+/* Mitsuba's maxSmoothAngle (TriMesh::rebuildTopology): corners that share a
+ * position (and texture coordinates) share a vertex only where their
+ * faces' normals are within max_angle_deg of the first face's of the
+ * group (greedy, in triangle order); then smooth normals are made anew,
+ * each vertex's the sum of its faces' normals weighted by the corner
+ * angles (Thuermer and Wuethrich 1998), normalised. Normals the mesh had
+ * are replaced. */
+lmc_status mesh_rebuild_topology(mesh *m, double max_angle_deg, lmc_error *err);
 /* The uv tangents of triangle `tri` (corners p0, p1, p2): dpdu and dpdv
  * with p - p0 = dpdu (u - u0) + dpdv (v - v0) over the triangle (Mitsuba's
  * TriMesh::computeUVTangents); where the uv triangle is degenerate, two

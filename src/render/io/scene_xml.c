@@ -95,8 +95,12 @@ static lmc_status xml__shape_mesh(builder *B, pset *o, mesh *m, const char **OUT
     double angle;
     int has_angle;
     if ((st = xml__float(B, o, "maxSmoothAngle", 0.0, &angle, &has_angle)) != LMC_OK) return st;
-    if (has_angle)
-      lmc_warn(o->file, o->line, "maxSmoothAngle is not supported: normals kept as in the file");
+    /* Mitsuba's maxSmoothAngle: vertices split where faces meet at a sharper
+     * angle, smooth normals made anew (mesh_rebuild_topology). */
+    if (has_angle && !(angle >= 0.0 && angle <= 180.0))
+      return xml__fail(B, LMC_EPARSE, o->file, o->line, "maxSmoothAngle %g is not in [0, 180]",
+                       angle);
+    if (has_angle && (st = mesh_rebuild_topology(m, angle, B->err)) != LMC_OK) return st;
     return LMC_OK;
   }
   if (strcmp(t, "rectangle") == 0) return shape_rectangle(m, B->err);
