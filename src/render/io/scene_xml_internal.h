@@ -115,6 +115,12 @@ lmc_status xml__file(builder *B, pset *o, const char *name, const char *what,
  * XML element that asked for it, keeping the reader's text. */
 lmc_status xml__relabel(builder *B, lmc_status st, const prop *p, const char *what);
 
+/* ---- Emitters (scene_xml_emitter.c). ---------------------------------------- */
+
+/* Builds a top-level <emitter> into the scene (an unsupported type warns,
+ * counted in B->emitters_ignored). */
+lmc_status xml__emitter(builder *B, pset *o);
+
 /* ---- Textures and BSDFs (scene_xml_bsdf.c). ------------------------------ */
 
 /* Counts the texels of img that are NaN or infinite; with `repair`, also
