@@ -24,12 +24,12 @@ static REAL R_FN(tex__lerp)(R_CTX REAL s, REAL t, double c0, double c1) {
 #endif
 }
 
-/* Bilinear lookup at (u', v') with repeat wrapping; pixel centres at
- * half-integers. */
-static RRGB R_FN(tex__bilinear)(R_CTX const lmc_image *img, REAL u, REAL v) {
-  if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels <= 0)
-    return RRGB_ZERO();
-  if (!isfinite(R_V(u)) || !isfinite(R_V(v))) return RRGB_ZERO();
+/* The texel cell of (u', v') on img, repeat wrapping, pixel centres at
+ * half-integers: its corner (x0, y0) and the fractions (dx, dy) inside it;
+ * 0 for non-finite coordinates. */
+static int R_FN(tex__cell)(R_CTX const lmc_image *img, REAL u, REAL v, int *OUT_x0, int *OUT_y0,
+                           REAL *OUT_dx, REAL *OUT_dy) {
+  if (!isfinite(R_V(u)) || !isfinite(R_V(v))) return 0;
   /* Bring the coordinates near [0, 1) first so the integer conversion
    * cannot overflow (u - floor(u) keeps u's derivative). */
   u = R_SUB_S(u, floor(R_V(u)));
@@ -37,8 +37,19 @@ static RRGB R_FN(tex__bilinear)(R_CTX const lmc_image *img, REAL u, REAL v) {
   REAL x = R_SUB_S(R_MUL_S(u, (double)img->width), 0.5);
   REAL y = R_SUB_S(R_MUL_S(v, (double)img->height), 0.5);
   double fx = floor(R_V(x)), fy = floor(R_V(y));
-  int x0 = (int)fx, y0 = (int)fy;
-  REAL dx = R_SUB_S(x, fx), dy = R_SUB_S(y, fy);
+  *OUT_x0 = (int)fx, *OUT_y0 = (int)fy;
+  *OUT_dx = R_SUB_S(x, fx), *OUT_dy = R_SUB_S(y, fy);
+  return 1;
+}
+
+/* Bilinear lookup at (u', v') with repeat wrapping; pixel centres at
+ * half-integers. */
+static RRGB R_FN(tex__bilinear)(R_CTX const lmc_image *img, REAL u, REAL v) {
+  if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels <= 0)
+    return RRGB_ZERO();
+  int x0, y0;
+  REAL dx, dy;
+  if (!R_FN(tex__cell)(R_ARG img, u, v, &x0, &y0, &dx, &dy)) return RRGB_ZERO();
   REAL sx = R_S_SUB(1.0, dx), sy = R_S_SUB(1.0, dy);
   rgb c00 = tex__texel(img, x0, y0), c10 = tex__texel(img, x0 + 1, y0);
   rgb c01 = tex__texel(img, x0, y0 + 1), c11 = tex__texel(img, x0 + 1, y0 + 1);
@@ -76,16 +87,11 @@ void R_FN(tex_lum_gradient)(R_CTX const texture *t, REAL u, REAL v, REAL *OUT_du
   if (t->type != TEX_BITMAP || !img || !img->data || img->width <= 0 || img->height <= 0)
     return;
   /* The texel cell and fractions of tex__bilinear. */
-  REAL uu = R_ADD_S(R_MUL_S(u, t->uscale), t->uoffset);
-  REAL vv = R_ADD_S(R_MUL_S(v, t->vscale), t->voffset);
-  if (!isfinite(R_V(uu)) || !isfinite(R_V(vv))) return;
-  uu = R_SUB_S(uu, floor(R_V(uu)));
-  vv = R_SUB_S(vv, floor(R_V(vv)));
-  REAL x = R_SUB_S(R_MUL_S(uu, (double)img->width), 0.5);
-  REAL y = R_SUB_S(R_MUL_S(vv, (double)img->height), 0.5);
-  double fx = floor(R_V(x)), fy = floor(R_V(y));
-  int x0 = (int)fx, y0 = (int)fy;
-  REAL dx = R_SUB_S(x, fx), dy = R_SUB_S(y, fy);
+  int x0, y0;
+  REAL dx, dy;
+  if (!R_FN(tex__cell)(R_ARG img, R_ADD_S(R_MUL_S(u, t->uscale), t->uoffset),
+                       R_ADD_S(R_MUL_S(v, t->vscale), t->voffset), &x0, &y0, &dx, &dy))
+    return;
   double l00 = rgb_luminance(tex__texel(img, x0, y0));
   double l10 = rgb_luminance(tex__texel(img, x0 + 1, y0));
   double l01 = rgb_luminance(tex__texel(img, x0, y0 + 1));

@@ -658,9 +658,8 @@ static lmc_status xml__dpt(builder *B, pset *o) {
  * ignored, or all black) renders black in every integrator. */
 static void xml__check_light(builder *B, const pset *root) {
   const scene *s = B->s;
-  int lit = 0;
-  for (int i = 0; i < s->n_lights; i++) lit += light_power(&s->lights[i], s) > 0.0;
-  if (lit > 0) return;
+  for (int i = 0; i < s->n_lights; i++)
+    if (light_power(&s->lights[i], s) > 0.0) return; /* one that gives light is enough */
   if (B->emitters_ignored > 0)
     lmc_warn(root->file, 0,
              "no emitter left: the scene's %d emitter%s ignored (see above); the image will be "

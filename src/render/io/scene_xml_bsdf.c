@@ -100,23 +100,40 @@ static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
 
 static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image);
 
+/* The first object of o with tag `tag` (a nested element or a <ref> to
+ * one), marked read, into *OUT_first (NULL: none); the property of the
+ * next one, if there is one, into *OUT_next (left unread). */
+static lmc_status xml__nested(builder *B, pset *o, const char *tag, pset **OUT_first,
+                              prop **OUT_next) {
+  *OUT_first = NULL;
+  *OUT_next = NULL;
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *c = NULL;
+    lmc_status st;
+    if (p->kind == PROP_OBJECT) c = p->obj;
+    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &c)) != LMC_OK) return st;
+    if (!c || strcmp(c->tag, tag) != 0) continue;
+    if (*OUT_first) {
+      *OUT_next = p;
+      return LMC_OK;
+    }
+    p->used = 1;
+    *OUT_first = c;
+  }
+  return LMC_OK;
+}
+
+
 /* Mitsuba's `scale` texture: its nested texture times `scale` (a number
  * or a colour, default 1). A bitmap gets a scaled copy of its image. */
 static lmc_status xml__scale_texture(builder *B, pset *o, rgb def, texture *out, int *image) {
   lmc_status st;
   rgb k;
   if ((st = xml__rgb(B, o, "scale", rgb_gray(1.0), &k, NULL)) != LMC_OK) return st;
-  pset *inner = NULL;
-  for (int i = 0; i < o->n_props && !inner; i++) {
-    prop *p = &o->props[i];
-    pset *c = NULL;
-    if (p->kind == PROP_OBJECT) c = p->obj;
-    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &c)) != LMC_OK) return st;
-    if (c && strcmp(c->tag, "texture") == 0) {
-      p->used = 1;
-      inner = c;
-    }
-  }
+  pset *inner;
+  prop *next; /* a second texture stays unread: warned about as unused */
+  if ((st = xml__nested(B, o, "texture", &inner, &next)) != LMC_OK) return st;
   if (!inner)
     return xml__fail(B, LMC_EPARSE, o->file, o->line, "<texture type=\"scale\"> needs a nested texture");
   if ((st = xml__texture_object(B, inner, def, out, image)) != LMC_OK) return st;
@@ -398,19 +415,13 @@ static lmc_status xml__opacity(builder *B, pset *o, bsdf *b, int *img) {
 static lmc_status xml__bump(builder *B, pset *o, bsdf *b, int *img) {
   if (b->bumped)
     return xml__fail(B, LMC_EPARSE, o->file, o->line, "a bumpmap inside a bumpmap is not supported");
-  pset *tex = NULL;
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    pset *c = NULL;
-    lmc_status st;
-    if (p->kind == PROP_OBJECT) c = p->obj;
-    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &c)) != LMC_OK) return st;
-    if (!c || strcmp(c->tag, "texture") != 0) continue;
-    p->used = 1;
-    if (tex)
-      return xml__fail(B, LMC_EPARSE, p->file, p->line, "a bumpmap takes one displacement texture");
-    tex = c;
-  }
+  pset *tex;
+  prop *next;
+  lmc_status st = xml__nested(B, o, "texture", &tex, &next);
+  if (st != LMC_OK) return st;
+  if (next)
+    return xml__fail(B, LMC_EPARSE, next->file, next->line,
+                     "a bumpmap takes one displacement texture");
   if (!tex)
     return xml__fail(B, LMC_EPARSE, o->file, o->line, "a bumpmap needs a displacement <texture>");
   b->bumped = 1;
