@@ -67,7 +67,7 @@ static int bench_scene(const char *path, int threads, int passes) {
             double rx = x + sampler_next(&smp.base), ry = y + sampler_next(&smp.base);
             vec3 o, d;
             camera_generate_ray(&s->cam, rx, ry, &o, &d);
-            rgb L = pt_li(s, &rs, &smp.base, o, d, &cnt[tid]);
+            rgb L = pt_li(s, &rs, &smp.base, o, d, NULL, &cnt[tid]);
             (void)L;
           }
       }

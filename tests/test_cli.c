@@ -254,6 +254,18 @@ static void test_resolution_override(void **state) {
   assert_int_equal(r.width, 20);
   assert_int_equal(r.height, 10);
   image_free(&r);
+  /* -o OUT.png: the EXR beside it as OUT.exr, the PNG a PNG. */
+  remove(TMP "/p.exr");
+  assert_int_equal(run_lmc("render " SCENE " --spp 1 --resolution=20x10 -q -o " TMP "/p.png"), 0);
+  lmc_image p = read_exr(TMP "/p.exr");
+  assert_int_equal(p.width, 20);
+  image_free(&p);
+  FILE *f = fopen(TMP "/p.png", "rb");
+  assert_non_null(f);
+  unsigned char magic[4] = {0};
+  assert_int_equal(fread(magic, 1, 4, f), 4);
+  fclose(f);
+  assert_memory_equal(magic, "\x89PNG", 4);
 }
 
 static double metric(const char *name) {

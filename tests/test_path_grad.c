@@ -114,7 +114,7 @@ static void test_pt_value_matches_pt_li(void **state) {
     vec3 org, dir;
     camera_generate_ray(&fx->sc->cam, u0 * fx->sc->cam.width, u1 * fx->sc->cam.height, &org, &dir);
     render_counters cnt = {0};
-    rgb L = pt_li(fx->sc, &rs, &vs.base, org, dir, &cnt);
+    rgb L = pt_li(fx->sc, &rs, &vs.base, org, dir, NULL, &cnt);
     assert_int_equal(vs.pos[LMC_STREAM_CAMERA], ev.n_coords);
     assert_near(ev.rx, u0 * fx->sc->cam.width, 0.0);
     if (!pg_rgb_rel_equal(L, ev.value, 1e-9)) {

@@ -267,7 +267,7 @@ static void check_scene(const char *file, int n_value, int n_grad, unsigned need
     vec3 org, dir;
     camera_generate_ray(&sc->cam, u0 * sc->cam.width, u1 * sc->cam.height, &org, &dir);
     render_counters cnt = {0};
-    rgb L = pt_li(sc, &rs, &vs.base, org, dir, &cnt);
+    rgb L = pt_li(sc, &rs, &vs.base, org, dir, NULL, &cnt);
     if (!pg_rgb_rel_equal(L, ev.value, 1e-9)) {
       if (mismatched < 5)
         print_message("path %d: pt_li (%.17g %.17g %.17g) path_eval_pt (%.17g %.17g %.17g)\n", i,

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 
@@ -19,6 +20,7 @@ static const char *lmc_render_usage =
     "usage: lmc render SCENE.xml [flags]   (every flag also as --flag=value)\n"
     "\n"
     "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
+    "                           (-o OUT.png: the same two files)\n"
     "                           (default: the scene's name in the current folder)\n"
     "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc\n"
     "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
@@ -209,6 +211,9 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     snprintf(out_exr, sizeof out_exr, "%s", output);
   else
     lmc_default_output(scene_path, out_exr, sizeof out_exr);
+  /* -o OUT.png names the preview: the EXR is OUT.exr beside it. */
+  size_t len = strlen(out_exr);
+  if (len > 4 && strcasecmp(out_exr + len - 4, ".png") == 0) memcpy(out_exr + len - 4, ".exr", 4);
   lmc_install_signals();
   lmc_snapshot_ctx snap = {out_exr};
   if (rs->snapshot > 0.0) {

@@ -109,6 +109,8 @@ lmc_status scene_finalize(scene *s, lmc_error *err) {
   if (n_tris == 0 && s->n_lights == 0)
     return lmc_error_set(err, LMC_EINVAL, s->path, 0, "the scene has neither geometry nor lights");
 
+  for (int i = 0; i < s->n_bsdfs; i++) s->tex_filtered |= bsdf_is_tex_filtered(&s->bsdfs[i]);
+
   /* The accelerator. */
   st = accel_create(&s->accel, s->meshes, s->n_meshes, err);
   if (st) return st;
@@ -205,6 +207,39 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   vec3 dpdu, dpdv;
   if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, ah.prim, p0, p1, p2, &dpdu, &dpdv))
     h->sh = bsdf_shading_frame(h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
+  return 1;
+}
+
+int scene_tex_footprint(const scene *s, const surface_hit *h, vec3 org, vec3 dx, vec3 dy,
+                        tex_footprint *OUT) {
+  const mesh *m = &s->meshes[h->mesh];
+  const uint32_t *tri = m->idx + 3 * h->prim;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+  vec3 dpdu = v3_sub(p1, p0), dpdv = v3_sub(p2, p0);
+  if (m->uv) mesh_uv_tangents(m, h->prim, p0, p1, p2, &dpdu, &dpdv);
+  /* Where the offset rays meet the tangent plane. */
+  vec3 n = h->ng;
+  double pn = v3_dot(n, v3_sub(h->p, org)), nx = v3_dot(n, dx), ny = v3_dot(n, dy);
+  if (nx == 0.0 || ny == 0.0) return 0;
+  vec3 dpdx = v3_sub(v3_add(org, v3_scale(dx, pn / nx)), h->p);
+  vec3 dpdy = v3_sub(v3_add(org, v3_scale(dy, pn / ny)), h->p);
+  /* Two of the three equations: drop the axis the normal is most along. */
+  double ax = fabs(n.x), ay = fabs(n.y), az = fabs(n.z);
+  int i0 = 0, i1 = 1;
+  if (ax > ay && ax > az) i0 = 1, i1 = 2;
+  else if (ay > az) i0 = 0, i1 = 2;
+  double a00 = v3_comp(dpdu, i0), a01 = v3_comp(dpdv, i0), a10 = v3_comp(dpdu, i1), a11 = v3_comp(dpdv, i1);
+  double det = a00 * a11 - a01 * a10;
+  if (!(fabs(det) > 1e-30)) {
+    *OUT = (tex_footprint){0.0, 0.0, 0.0, 0.0};
+    return 1;
+  }
+  double inv = 1.0 / det;
+  double bx0 = v3_comp(dpdx, i0), bx1 = v3_comp(dpdx, i1), by0 = v3_comp(dpdy, i0), by1 = v3_comp(dpdy, i1);
+  OUT->dudx = (a11 * bx0 - a01 * bx1) * inv;
+  OUT->dvdx = (a00 * bx1 - a10 * bx0) * inv;
+  OUT->dudy = (a11 * by0 - a01 * by1) * inv;
+  OUT->dvdy = (a00 * by1 - a10 * by0) * inv;
   return 1;
 }
 

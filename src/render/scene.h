@@ -40,6 +40,7 @@ typedef struct scene {
   int n_lights, cap_lights;
   lmc_image *images;       /* texture images (pointers into it are stable after finalize) */
   int n_images, cap_images;
+  int tex_filtered;        /* some BSDF has a MIP-filtered texture (tex_is_filtered) */
   int *infinite_lights;    /* indices of constant/envmap lights */
   int n_infinite;
   camera cam;
@@ -84,6 +85,15 @@ lmc_status scene_finalize(scene *s, lmc_error *err);
 /* Closest surface along the ray (dir unit), with t in (tmin, tmax). */
 int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
                     surface_hit *OUT_hit);
+/* The footprint on the texture coordinates of the camera ray's hit h: the
+ * rays from org along dx and dy (the ray differentials, unit or not) meet
+ * h's tangent plane at p + dpdx and p + dpdy, and (du, dv) solve
+ * dpdx = dpdu du + dpdv dv on the two coordinate axes the normal is least
+ * along (Mitsuba's Intersection::computePartials, after pbrt); a mesh
+ * without texture coordinates has u = b1, v = b2. Returns 0 (and no
+ * footprint) when a differential is parallel to the plane. */
+int scene_tex_footprint(const scene *s, const surface_hit *h, vec3 org, vec3 dx, vec3 dy,
+                        tex_footprint *OUT);
 /* 1 when the segment from p0 to p1 is blocked (endpoints excluded). */
 int scene_occluded_segment(const scene *s, vec3 p0, vec3 p1);
 /* 1 when the ray from p along dir hits anything (towards an infinite light). */

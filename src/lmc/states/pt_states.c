@@ -87,7 +87,7 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
   double ry = -r + u1 * (st->s->cam.height + 2.0 * r);
   vec3 org, dir;
   camera_generate_ray(&st->s->cam, rx, ry, &org, &dir);
-  rgb L = pt_li(st->s, &st->rs, smp, org, dir, &sc->cnt);
+  rgb L = pt_li(st->s, &st->rs, smp, org, dir, NULL, &sc->cnt);
   mc_states_value(OUT_value, rgb_scale(L, st->area), rx, ry, &sc->cnt.nan_samples);
   return 0;
 }

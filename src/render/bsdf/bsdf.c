@@ -327,3 +327,26 @@ static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
 #define R_DUAL 1
 #include "render/real.h"
 #include "render/bsdf/bsdf_generic.h"
+
+/* b's textures (the slots of bsdf.h). */
+#define BSDF__N_TEX 5
+static void bsdf__textures(bsdf *b, texture *OUT[BSDF__N_TEX]) {
+  OUT[0] = &b->diffuse, OUT[1] = &b->specular, OUT[2] = &b->transmittance;
+  OUT[3] = &b->bump, OUT[4] = &b->opacity;
+}
+
+int bsdf_is_tex_filtered(const bsdf *b) {
+  return tex_is_filtered(&b->diffuse) || tex_is_filtered(&b->specular) ||
+         tex_is_filtered(&b->transmittance) || tex_is_filtered(&b->bump) ||
+         tex_is_filtered(&b->opacity);
+}
+
+const bsdf *bsdf_with_footprint(const bsdf *b, const tex_footprint *fp, bsdf *OUT_copy) {
+  if (!bsdf_is_tex_filtered(b)) return b;
+  *OUT_copy = *b;
+  texture *t[BSDF__N_TEX];
+  bsdf__textures(OUT_copy, t);
+  for (int k = 0; k < BSDF__N_TEX; k++)
+    if (tex_is_filtered(t[k])) tex_set_footprint(t[k], fp);
+  return OUT_copy;
+}

@@ -177,6 +177,11 @@ int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, d
                   double u2, transport_mode mode, bsdf_sample *out);
 /* Union of the lobe flags the model has. */
 int bsdf_flags(const bsdf *b);
+/* Does a footprint change one of b's textures (tex_is_filtered)? */
+int bsdf_is_tex_filtered(const bsdf *b);
+/* b with its filtered textures reading over the footprint fp: a copy in
+ * *OUT_copy (returned), or b itself when no texture of b is filtered. */
+const bsdf *bsdf_with_footprint(const bsdf *b, const tex_footprint *fp, bsdf *OUT_copy);
 /* 1 when every lobe is a delta (no point in light sampling at this vertex). */
 int bsdf_is_delta(const bsdf *b);
 /* 1 when the model has no delta lobe and a roughness above rough_min

@@ -56,10 +56,18 @@ static inline void ray_log_add(render_counters *cnt, vec3 o, vec3 d, double tmin
   r->tmax = shadow ? -(float)tmax : (float)tmax;
 }
 
+/* A camera ray's differentials: the directions of the rays through the film
+ * points one (scaled) step along x and along y, from the same origin. */
+typedef struct ray_diff {
+  vec3 dx, dy;
+} ray_diff;
+
 /* Radiance along the camera ray (org, dir): path tracing with next-event
- * estimation and multiple importance sampling (power heuristic). */
+ * estimation and multiple importance sampling (power heuristic). With ray
+ * differentials rd (NULL: none), the first hit's filtered textures read
+ * over its footprint (scene_tex_footprint), as Mitsuba's path tracer. */
 rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
-          render_counters *cnt);
+          const ray_diff *rd, render_counters *cnt);
 
 /* One BDPT sample for the camera ray through raster point (rx, ry): the
  * camera-side estimate is returned; light-tracing (t = 1) contributions are

@@ -16,13 +16,16 @@
 #include "render/integrators/integrator.h"
 
 /* What pt_li's walk reads: the scene, the settings, the sampler (r: its
- * inline independent stream, or NULL) and the counters. */
+ * inline independent stream, or NULL), the counters, and the camera ray's
+ * differentials (or NULL) with room for the first hit's filtered BSDF. */
 typedef struct pt__ctx {
   const scene *s;
   const render_settings *rs;
   lmc_sampler *smp;
   rng *r;
   render_counters *cnt;
+  const ray_diff *rd;
+  bsdf filtered;
 } pt__ctx;
 
 /* The next number of the sampler: drawn inline for the independent sampler
@@ -46,6 +49,15 @@ static int pt__blocked(pt__ctx *c, vec3 p, vec3 wi, vec3 lp, double dist) {
   return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
 }
 
+/* The camera hit h (from org) reads its filtered textures over its
+ * footprint: h's BSDF becomes a copy that carries it. */
+static void pt__footprint(pt__ctx *c, surface_hit *h, vec3 org) {
+  tex_footprint fp;
+  if (h->bsdf && bsdf_is_tex_filtered(h->bsdf) &&
+      scene_tex_footprint(c->s, h, org, c->rd->dx, c->rd->dy, &fp))
+    h->bsdf = bsdf_with_footprint(h->bsdf, &fp, &c->filtered);
+}
+
 #define R_DUAL 0
 #include "render/real.h"
 #define PT_CTX pt__ctx *c
@@ -67,10 +79,14 @@ static int pt__blocked(pt__ctx *c, vec3 p, vec3 wi, vec3 lp, double dist) {
 #define PT_ADD(L, beta, contrib, emit, lobes, length) ((L) = rgb_fma((L), (beta), (contrib)))
 #define PT_RR_Q(beta, eta) fmin(0.95, rgb_max(beta) * (eta))
 #define PT_LOBE(flags) 0u
+#define PT_FOOTPRINT(h, depth, org) \
+  ((depth) == 1 && c->rd ? pt__footprint(c, &(h), (org)) : (void)0)
 #include "render/integrators/pt_generic.h"
 
 rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
-          render_counters *cnt) {
-  pt__ctx c = {s, rs, smp, sampler_indep_rng(smp), cnt};
+          const ray_diff *rd, render_counters *cnt) {
+  pt__ctx c;
+  c.s = s, c.rs = rs, c.smp = smp, c.r = sampler_indep_rng(smp), c.cnt = cnt;
+  c.rd = rd && s->tex_filtered ? rd : NULL;
   return pt__walk(&c, org, dir, NULL, NULL);
 }

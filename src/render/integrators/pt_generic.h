@@ -26,7 +26,10 @@
  *   PT_ADD(L, beta, contrib, emit, lobes, length): L += beta contrib (the
  *                   dual side also notes the emitter, lobes and length);
  *   PT_RR_Q(beta, eta): Russian roulette's survival probability;
- *   PT_LOBE(flags): the dual path's lobe flag of a BSDF sample (plain: 0).
+ *   PT_LOBE(flags): the dual path's lobe flag of a BSDF sample (plain: 0);
+ *   PT_FOOTPRINT(h, depth, org): the hit h of the ray from org at depth
+ *                   reads its textures over its footprint (plain: the
+ *                   camera hit with ray differentials; duals: nothing).
  */
 
 static int pt__counts(const render_settings *rs, int length) {
@@ -71,6 +74,7 @@ static RRGB pt__walk(PT_CTX, REAL3 org, REAL3 dir, REAL *keep_rx, REAL *keep_ry)
       }
       break;
     }
+    PT_FOOTPRINT(h, depth, org);
     REAL3 wo = R3_NEG(dir);
 
     /* Emission of an area light that the path hit. */

@@ -124,6 +124,18 @@ typedef struct render__counters_slot {
 
 /* Hands rs->snapshot_fn the image so far: the camera estimates plus the
  * splats (already replayed into `out`), normalised as at the end. */
+/* The differentials of the camera ray through raster point (rx, ry) (dir):
+ * towards the film points a step `scale` pixels along x and along y,
+ * interpolated as Mitsuba's scaleDifferential does. */
+static void render__ray_diff(const scene *s, double rx, double ry, vec3 dir, double scale,
+                             ray_diff *OUT) {
+  vec3 o, dx, dy;
+  camera_generate_ray(&s->cam, rx + 1.0, ry, &o, &dx);
+  camera_generate_ray(&s->cam, rx, ry + 1.0, &o, &dy);
+  OUT->dx = v3_add(dir, v3_scale(v3_sub(dx, dir), scale));
+  OUT->dy = v3_add(dir, v3_scale(v3_sub(dy, dir), scale));
+}
+
 static void render__snapshot(const render_settings *rs, const film *out, int has_splats,
                              int nthreads, const render__counters_slot *counters, double seconds) {
   film tmp;
@@ -181,6 +193,10 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
       render__snapshot(rs, out, use_bdpt, nthreads, counters, omp_get_wtime() - t0);
       while (next_snapshot <= omp_get_wtime() - t0) next_snapshot += rs->snapshot;
     }
+    /* The ray differentials' step: a pixel over the square root of the
+     * samples per pixel (Mitsuba's), of those so far under --time. */
+    const double diff_scale =
+        1.0 / sqrt((double)(max_passes == INT64_MAX ? pass + 1 : max_passes));
     for (int yb = 0; yb < H && !stop; yb += block) {
       const int ye = yb + block < H ? yb + block : H;
 #pragma omp parallel num_threads(nthreads)
@@ -231,7 +247,9 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
             } else {
               vec3 org, dir;
               camera_generate_ray(&s->cam, rx, ry, &org, &dir);
-              L = pt_li(s, rs, smp, org, dir, cnt);
+              ray_diff rd;
+              if (s->tex_filtered) render__ray_diff(s, rx, ry, dir, diff_scale, &rd);
+              L = pt_li(s, rs, smp, org, dir, s->tex_filtered ? &rd : NULL, cnt);
             }
             if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX ||
                 fabs(L.b) > FLT_MAX) {

@@ -29,7 +29,7 @@ int64_t xml__bad_texels(lmc_image *img, int repair) {
 }
 
 /* Loads (once per texture object) the image of a bitmap texture. */
-static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
+static lmc_status xml__bitmap_image(builder *B, pset *o, tex_filter filter, int *out_index) {
   if (o->index >= 0) {
     *out_index = o->index;
     return LMC_OK;
@@ -79,6 +79,19 @@ static lmc_status xml__bitmap_image(builder *B, pset *o, int *out_index) {
   if (idx < 0) {
     image_free(&img);
     return (lmc_status)idx;
+  }
+  /* Its MIP levels, right after it (texture.h), when the filter reads them. */
+  if (tex_filter_uses_mip(filter)) {
+    int n = tex_mip_levels(B->s->images[idx].width, B->s->images[idx].height);
+    for (int k = 1; k < n; k++) {
+      lmc_image next = {0};
+      if ((st = tex_mip_halve(&B->s->images[idx + k - 1], &next, B->err)) != LMC_OK) return st;
+      int id = scene_add_image(B->s, &next, B->err);
+      if (id < 0) {
+        image_free(&next);
+        return (lmc_status)id;
+      }
+    }
   }
   o->index = idx;
   *out_index = idx;
@@ -142,19 +155,48 @@ static lmc_status xml__scale_texture(builder *B, pset *o, rgb def, texture *out,
   out->color0 = rgb_mul(out->color0, k);
   out->color1 = rgb_mul(out->color1, k);
   if (*image < 0) return LMC_OK;
-  const lmc_image *src = &B->s->images[*image];
-  lmc_image img = {0};
-  if ((st = image_init(&img, src->width, src->height, 3, B->err)) != LMC_OK) return st;
+  /* The image and each of its MIP levels scaled, consecutive as theirs. */
   const double kc[3] = {k.r, k.g, k.b};
-  size_t n = (size_t)src->width * src->height;
-  for (size_t i = 0; i < n; i++)
-    for (int c = 0; c < 3; c++) img.data[3 * i + c] = (float)(src->data[3 * i + c] * kc[c]);
-  int idx = scene_add_image(B->s, &img, B->err);
-  if (idx < 0) {
-    image_free(&img);
-    return (lmc_status)idx;
+  int first = -1;
+  for (int level = 0; level < out->levels; level++) {
+    const lmc_image *src = &B->s->images[*image + level];
+    lmc_image img = {0};
+    if ((st = image_init(&img, src->width, src->height, 3, B->err)) != LMC_OK) return st;
+    size_t n = (size_t)src->width * src->height;
+    for (size_t i = 0; i < n; i++)
+      for (int c = 0; c < 3; c++) img.data[3 * i + c] = (float)(src->data[3 * i + c] * kc[c]);
+    int idx = scene_add_image(B->s, &img, B->err);
+    if (idx < 0) {
+      image_free(&img);
+      return (lmc_status)idx;
+    }
+    if (level == 0) first = idx;
   }
-  *image = idx;
+  *image = first;
+  return LMC_OK;
+}
+
+/* A bitmap's filter, wrap modes and maximum anisotropy (Mitsuba's names
+ * and defaults: ewa, repeat, 20; wrapMode sets both, wrapModeU/V each). */
+static lmc_status xml__bitmap_params(builder *B, pset *o, texture *out) {
+  static const char *const filters[] = {"ewa", "trilinear", "bilinear", "nearest", NULL};
+  static const char *const wraps[] = {"repeat", "mirror", "clamp", "zero", "one", "black", NULL};
+  static const tex_wrap wrap_of[] = {TEX_WRAP_REPEAT, TEX_WRAP_MIRROR, TEX_WRAP_CLAMP,
+                                     TEX_WRAP_ZERO,   TEX_WRAP_ONE,    TEX_WRAP_ZERO};
+  int f, w, wu, wv;
+  lmc_status st;
+  if ((st = xml__choice(B, o, "filterType", filters, 0, &f)) != LMC_OK) return st;
+  if ((st = xml__choice(B, o, "wrapMode", wraps, 0, &w)) != LMC_OK) return st;
+  if ((st = xml__choice(B, o, "wrapModeU", wraps, w, &wu)) != LMC_OK) return st;
+  if ((st = xml__choice(B, o, "wrapModeV", wraps, w, &wv)) != LMC_OK) return st;
+  out->type = TEX_BITMAP;
+  out->filter = (tex_filter)f;
+  out->wrap_u = wrap_of[wu], out->wrap_v = wrap_of[wv];
+  if ((st = xml__float(B, o, "maxAnisotropy", 20.0, &out->max_aniso, NULL)) != LMC_OK) return st;
+  if (!(out->max_aniso >= 1.0)) {
+    prop *p = xml__find(o, "maxAnisotropy");
+    return xml__fail(B, LMC_EPARSE, p->file, p->line, "bitmap maxAnisotropy must be at least 1");
+  }
   return LMC_OK;
 }
 
@@ -165,21 +207,12 @@ static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out
   *image = -1;
   *out = tex_constant(def);
   if (strcmp(o->type, "bitmap") == 0) {
-    if ((st = xml__bitmap_image(B, o, image)) != LMC_OK) return st;
-    out->type = TEX_BITMAP;
+    if ((st = xml__bitmap_params(B, o, out)) != LMC_OK) return st;
+    if ((st = xml__bitmap_image(B, o, out->filter, image)) != LMC_OK) return st;
+    const lmc_image *im = &B->s->images[*image];
+    out->levels = tex_filter_uses_mip(out->filter) ? tex_mip_levels(im->width, im->height) : 1;
     if ((st = xml__uv_params(B, o, out)) != LMC_OK) return st;
-    const char *s;
-    prop *p;
-    if ((st = xml__string(B, o, "filterType", "ewa", &s, &p)) != LMC_OK) return st;
-    if (p && strcmp(s, "ewa") != 0)
-      lmc_warn(p->file, p->line, "bitmap filterType \"%s\": textures are always bilinear", s);
-    const char *wraps[3] = {"wrapMode", "wrapModeU", "wrapModeV"};
-    for (int k = 0; k < 3; k++) {
-      if ((st = xml__string(B, o, wraps[k], "repeat", &s, &p)) != LMC_OK) return st;
-      if (p && strcmp(s, "repeat") != 0)
-        lmc_warn(p->file, p->line, "bitmap %s \"%s\": textures always repeat", wraps[k], s);
-    }
-    static const char *const silent[] = {"cache", "maxAnisotropy", NULL};
+    static const char *const silent[] = {"cache", NULL};
     xml__accept(o, silent);
   } else if (strcmp(o->type, "scale") == 0) {
     return xml__scale_texture(B, o, def, out, image);

@@ -84,6 +84,11 @@ lmc_status xml__bool(builder *B, pset *o, const char *name, int def, int *out,
 lmc_status xml__string(builder *B, pset *o, const char *name, const char *def,
                        const char **out, prop **where);
 
+/* A string property that must be one of names[] (NULL-terminated): its
+ * index, or def when absent; anything else is an error at its line. */
+lmc_status xml__choice(builder *B, pset *o, const char *name, const char *const *names, int def,
+                       int *out);
+
 lmc_status xml__rgb(builder *B, pset *o, const char *name, rgb def, rgb *out,
                     int *found);
 

@@ -174,6 +174,25 @@ lmc_status xml__string(builder *B, pset *o, const char *name, const char *def,
   return LMC_OK;
 }
 
+lmc_status xml__choice(builder *B, pset *o, const char *name, const char *const *names, int def,
+                       int *out) {
+  const char *v = NULL;
+  prop *p = NULL;
+  lmc_status st = xml__string(B, o, name, NULL, &v, &p);
+  *out = def;
+  if (st != LMC_OK || !v) return st;
+  char list[256] = "";
+  for (int k = 0; names[k]; k++) {
+    if (strcmp(v, names[k]) == 0) {
+      *out = k;
+      return LMC_OK;
+    }
+    size_t n = strlen(list);
+    snprintf(list + n, sizeof list - n, "%s\"%s\"", k ? ", " : "", names[k]);
+  }
+  return xml__fail(B, LMC_EPARSE, p->file, p->line, "%s \"%s\" is not one of %s", name, v, list);
+}
+
 lmc_status xml__rgb(builder *B, pset *o, const char *name, rgb def, rgb *out,
                     int *found) {
   prop *p = xml__find(o, name);
