@@ -259,4 +259,36 @@ double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdp
  * bookkeeping of the random walks and to re-split a path). */
 void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, int s);
 
+/* ---- BDPT's vertex densities and walk, for other samplers of whole paths
+ * (path-space MLT, src/lmc/path/). Thin wrappers of the functions BDPT
+ * itself uses (bdpt_generic.h): the same numbers, bit for bit. */
+
+/* Density of `next` sampled at v reached from `prev` (pbrt's Vertex::Pdf):
+ * the camera's direction density, or the BSDF's (zero for delta lobes),
+ * converted to area at `next` (solid angle when `next` is at infinity);
+ * light endpoints (type LIGHT) use the emission density. */
+double bdpt_vertex_pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *prev,
+                       const bdpt_vertex *next);
+/* Density of `next` emitted from the light endpoint v (any vertex type
+ * whose light index is set), per unit area at `next`. */
+double bdpt_vertex_pdf_light(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *next);
+/* Density of choosing v as the light endpoint: the light's selection
+ * probability times its position density (area lights), or alone (delta
+ * positions); `next` is the vertex it connects to. */
+double bdpt_vertex_pdf_light_origin(const scene *sc, const bdpt_vertex *v,
+                                    const bdpt_vertex *next);
+/* f(v.wo, wi) |wi . n_s| at a surface vertex with Mitsuba's side rule
+ * (0 when a direction breaks it), with Veach's shading-normal correction
+ * in importance mode. */
+rgb bdpt_vertex_f_cos(const bdpt_vertex *v, vec3 wi, transport_mode mode);
+/* Continues a subpath of n vertices whose last vertex scattered into the
+ * unit direction dir (solid-angle density pdf_dir) from org: BDPT's walk
+ * (four numbers per vertex from smp's current stream), until the path has
+ * max_vertices vertices or the walk ends. Russian roulette applies from
+ * rs->rrdepth segments on (pass a large rrdepth for none). The throughputs
+ * start at one. Returns the new vertex count. */
+int bdpt_continue_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                          transport_mode mode, vec3 org, vec3 dir, double pdf_dir,
+                          bdpt_vertex *path, int n, int max_vertices, render_counters *cnt);
+
 #endif

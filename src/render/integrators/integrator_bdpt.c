@@ -283,6 +283,38 @@ void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, i
 }
 
 /* ---------------------------------------------------------------------------
+ * The densities and the walk for other samplers of whole paths (integrator.h).
+ */
+
+double bdpt_vertex_pdf(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *prev,
+                       const bdpt_vertex *next) {
+  return bdpt__pdf(sc, v, prev, next);
+}
+
+double bdpt_vertex_pdf_light(const scene *sc, const bdpt_vertex *v, const bdpt_vertex *next) {
+  return bdpt__pdf_light(sc, v, next);
+}
+
+double bdpt_vertex_pdf_light_origin(const scene *sc, const bdpt_vertex *v,
+                                    const bdpt_vertex *next) {
+  return bdpt__pdf_light_origin(sc, v, next);
+}
+
+rgb bdpt_vertex_f_cos(const bdpt_vertex *v, vec3 wi, transport_mode mode) {
+  return bdpt__f_cos(v, wi, mode);
+}
+
+int bdpt_continue_subpath(const scene *sc, const render_settings *rs, lmc_sampler *smp,
+                          transport_mode mode, vec3 org, vec3 dir, double pdf_dir,
+                          bdpt_vertex *path, int n, int max_vertices, render_counters *cnt) {
+  if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
+  if (n < 1 || n >= max_vertices) return n;
+  bdpt__walker w = {sc, rs, smp, NULL, cnt};
+  double tmin = scene_ray_eps(sc, org);
+  return bdpt__walk(&w, mode, org, dir, tmin, rgb_gray(1.0), pdf_dir, 0, path, n, max_vertices);
+}
+
+/* ---------------------------------------------------------------------------
  * One strategy.
  */
 

@@ -568,3 +568,28 @@ void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 di
   if (OUT_pdf_pos) *OUT_pdf_pos = pdf_pos;
   if (OUT_pdf_dir) *OUT_pdf_dir = pdf_dir;
 }
+
+int light_sample_dir(const light *l, vec3 n, double u3, double u4, vec3 *OUT_dir,
+                     double *OUT_pdf_dir) {
+  switch (l->type) {
+  case LIGHT_AREA: {
+    vec3 local = warp_square_to_cosine_hemisphere(u3, u4);
+    frame f = frame_from_z(n);
+    *OUT_dir = v3_normalize(frame_to_world(&f, local));
+    *OUT_pdf_dir = warp_square_to_cosine_hemisphere_pdf(local);
+    return *OUT_pdf_dir > 0.0;
+  }
+  case LIGHT_POINT:
+    *OUT_dir = warp_square_to_uniform_sphere(u3, u4);
+    *OUT_pdf_dir = 1.0 / (4.0 * M_PI);
+    return 1;
+  case LIGHT_SPOT: {
+    vec3 local = warp_square_to_uniform_cone(u3, u4, l->cos_cutoff);
+    *OUT_dir = v3_normalize(frame_to_world(&l->frm, local));
+    *OUT_pdf_dir = 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff));
+    return light__spot_falloff(l, local.z) > 0.0;
+  }
+  default:
+    return 0;
+  }
+}

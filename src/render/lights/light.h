@@ -117,4 +117,12 @@ int light_sample_le(const light *l, const struct scene *s, double u1, double u2,
 void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 dir,
                   double *OUT_pdf_pos, double *OUT_pdf_dir);
 
+/* The direction part of light_sample_le at a given point of a finite light
+ * (area: cosine-weighted about the point's normal n; point: uniform; spot:
+ * uniform in the cone): the same direction light_sample_le makes from
+ * (u3, u4) there, and its solid-angle density (light_pdf_le's pdf_dir).
+ * Returns 0 for other lights or when nothing is emitted that way. */
+int light_sample_dir(const light *l, vec3 n, double u3, double u4, vec3 *OUT_dir,
+                     double *OUT_pdf_dir);
+
 #endif

@@ -1,0 +1,122 @@
+/*
+ * pathspace.h: a state of path-space Metropolis light transport (Veach and
+ * Guibas 1997; Veach 1997, chapter 11): one whole light path and what its
+ * partial re-evaluation needs.
+ *
+ * Indexing. A path of length k (segments) is x_0 ... x_k: x_0 the pinhole,
+ * x_1 ... x_{k-1} scattering surfaces, x_k a point on an emitter (an area
+ * light, hit or sampled, or a point or spot light). Vertices are bdpt's
+ * records (bdpt_vertex, integrator.h); lights at infinity (environment,
+ * constant, directional) are not represented (ps_from_bdpt refuses them).
+ *
+ * Measure and contribution. f is the measurement contribution in the area
+ * measure of every vertex, for the whole film (camera.h's We, normalised per
+ * pixel: the film's splat of a path is f times the filter around (rx, ry)):
+ *   f(x) = We(x_0 -> x_1) prod_{i<k} G(x_i, x_{i+1}) prod_{0<i<k} f_s(x_i) Le(x_k -> x_{k-1}),
+ *   G(a, b) = |cos_a| |cos_b| / |a - b|^2 (geometric normals; 1 for a point
+ *   light's cosine, the optical axis' cosine at the pinhole),
+ *   f_s(x_i) = f(w_cam, w_light) |w_light . n_s| / |w_light . n_g|
+ * in radiance mode (w_cam towards x_{i-1}, w_light towards x_{i+1}; Mitsuba's
+ * side rule), the shading-normal form whose camera-side and light-side
+ * walks both estimate it (integrator_bdpt.c). The chain's target is the
+ * luminance of f. Densities are in the same area measure; the pinhole and
+ * point lights are discrete positions (their density is the probability of
+ * choosing them).
+ *
+ * Degenerate vertices. A surface whose BSDF is all delta lobes (conductor,
+ * dielectric, thindielectric; `delta` below) carries its lobe reduced by
+ * the Dirac in solid angle: f_s uses the lobe's sampled value bs.f and the
+ * density of the vertex sampled through it is the lobe's probability times
+ * |cos| / d^2, so that f and every density carry the same Dirac, which
+ * cancels in the acceptance ratio. The lobe is found by sampling
+ * (ps_delta_lobe); its probability is the same in both directions for every
+ * delta lobe lmc has (Fresnel at the same angle). A refraction's Dirac is
+ * not the same function of the two directions, so a vertex sampled from the
+ * light side through a delta transmission gets density 0 (the mutation
+ * then never proposes it from that side; mut_bidir.c). Delta lobes of mixed
+ * BSDFs (plastic's coating, a mask's pass-through) are not part of this
+ * path space: f and the densities see their smooth lobes only.
+ *
+ * What each vertex caches: its factor of f (We at x_0, f_s at surfaces, Le at
+ * x_k), the geometry term of its edge to x_{i+1}, and its two densities:
+ * pdf_cam, sampled from the camera side (by x_{i-1} reached from x_{i-2};
+ * at x_0 the pinhole's 1), and pdf_light, sampled from the light side (by
+ * x_{i+1} reached from x_{i+2}; at x_k the light choice times position
+ * density; 0 at x_0, which no walk can hit). The path caches f, its
+ * luminance and (rx, ry).
+ */
+#ifndef LMC_PATH_PATHSPACE_H
+#define LMC_PATH_PATHSPACE_H
+
+#include "render/integrators/integrator.h"
+
+#define PS_MAX_VERTICES BDPT_MAX_VERTICES
+
+typedef struct ps_vertex {
+  bdpt_vertex v;    /* position, normal, hit and light index (bdpt's record) */
+  int delta;        /* a surface whose BSDF is all delta lobes */
+  rgb fac;          /* its factor of f: We (x_0), f_s (surfaces), Le (x_k) */
+  double pdf_cam;   /* area density when sampled from the camera side */
+  double pdf_light; /* area density when sampled from the light side */
+  double g;         /* geometry term G(x_i, x_{i+1}); 0 at x_k */
+} ps_vertex;
+
+typedef struct ps_path {
+  int k;                        /* length in segments: vertices x_0 .. x_k */
+  ps_vertex x[PS_MAX_VERTICES]; /* the vertices, camera first */
+  rgb f;                        /* measurement contribution (area measure) */
+  double lum;                   /* luminance of f: the target */
+  double rx, ry;                /* raster point where x_1 is seen */
+} ps_path;
+
+/* What every evaluation reads. */
+typedef struct ps_context {
+  const scene *sc;      /* borrowed */
+  render_settings rs;   /* the render's settings, Russian roulette off (walks) */
+  int kmin, kmax;       /* lengths of the path space (segments) */
+  int can_hit_emitter;  /* the scene has area lights: a camera walk may end on one */
+} ps_context;
+
+/* Fills ctx for scene sc and the render's depths: kmin = max(1, mindepth),
+ * kmax = maxdepth (capped at PS_MAX_VERTICES - 1). */
+void ps_context_init(ps_context *ctx, const scene *sc, const render_settings *rs);
+
+/* Recomputes the caches of vertices lo .. hi (clipped to 0 .. k) from the
+ * geometry: factor, geometry term, both densities. */
+void ps_update(const ps_context *ctx, ps_path *p, int lo, int hi);
+/* f, its luminance and (rx, ry) from the cached factors and geometry terms. */
+void ps_total(ps_path *p);
+/* ps_update of every vertex, then ps_total: f from scratch. */
+void ps_eval(const ps_context *ctx, ps_path *p);
+
+/* The path cam[0 .. t-1] joined with lp[s-1 .. 0] (bdpt's strategy (s, t):
+ * s = 0, cam[t-1] on an emitter; t = 1, the pinhole joined to lp[s-1]),
+ * evaluated (ps_eval; f may be 0). Returns 0 when the path is not one of
+ * this space's (a light at infinity, a length beyond PS_MAX_VERTICES, a
+ * delta lobe of a mixed BSDF). */
+int ps_from_bdpt(const ps_context *ctx, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
+                 int s, ps_path *OUT_p);
+
+/* Whether a vertex record may stand in a path: a finite light endpoint,
+ * the pinhole or a surface (as its position in the path requires). */
+int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k);
+/* 1 when a walk that made v scattered through a delta lobe of a mixed
+ * BSDF (outside this space). */
+int ps_vertex_mixed_delta(const bdpt_vertex *v);
+/* A surface vertex's delta lobe that maps wo to wi (unit, world): its
+ * reduced value (bs.f) and probability; *OUT_trans is 1 for a
+ * transmission. Returns 0 when no lobe does. */
+int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, rgb *OUT_f,
+                  double *OUT_prob, int *OUT_trans);
+
+/* The densities of vertex i from the geometry (what ps_update caches). */
+double ps_density_cam(const ps_context *ctx, const ps_path *p, int i);
+double ps_density_light(const ps_context *ctx, const ps_path *p, int i);
+
+/* Whether vertex i can end a connecting edge: the pinhole, a light
+ * endpoint, or a surface with a smooth lobe. */
+int ps_connectible(const ps_path *p, int i);
+/* 1 when vertex i is the pinhole or a point or spot light (no walk hits it). */
+int ps_unhittable(const ps_context *ctx, const ps_path *p, int i);
+
+#endif
