@@ -22,7 +22,7 @@ static const char *lmc_render_usage =
     "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
     "                           (-o OUT.png: the same two files)\n"
     "                           (default: the scene's name in the current folder)\n"
-    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc\n"
+    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc | mlt\n"
     "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
     "  --resolution WxH         film size (keeps the field of view)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"

@@ -53,7 +53,7 @@ typedef struct lmc_opt {
 
 /* One part's flags, under a title in the help. */
 typedef struct lmc_opt_table {
-  const char *title; /* "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)" */
+  const char *title; /* "MCMC (pssmlt, mmlt, lmc, h2mc, mlt; --spp counts mutations per pixel)" */
   const lmc_opt *opts;
   int n;
   const void *defaults; /* a plugin's own struct with its defaults (offsets are into it), or

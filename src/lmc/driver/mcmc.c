@@ -112,10 +112,10 @@ static const char *const mcmc__allocations[] = {"b", "even", NULL};
 
 static const lmc_opt mcmc__opts[] = {
     {"states", LMC_OPT_CHOICE, offsetof(mcmc_settings, states), 0, 0, 0, mc_space_names,
-     mc_space_ids, 0, NULL, "the integrator's: mmlt for mmlt, else bdpt",
+     mc_space_ids, 0, NULL, "the integrator's: mmlt for mmlt, path for mlt, else bdpt",
      "the chains' states: bdpt (a BDPT sample and one of its strategies, every length in one "
-     "family), mmlt (one family per path length, a strategy coordinate) or pt (a path tracer's "
-     "numbers)", NULL},
+     "family), mmlt (one family per path length, a strategy coordinate), pt (a path tracer's "
+     "numbers) or path (whole light paths: mlt's, and mlt only)", NULL},
     {"lmc-states", LMC_OPT_CHOICE, offsetof(mcmc_settings, states), 0, 0, 0, mc_space_names,
      mc_space_ids, 0, NULL, "the integrator's",
      "the same as --states (the name it had for lmc alone)", NULL},
@@ -166,7 +166,7 @@ static const mcmc_settings mcmc__defaults = {
 };
 
 const lmc_opt_table mcmc_driver_options = {
-    "MCMC (pssmlt, mmlt, lmc, h2mc; --spp counts mutations per pixel)", mcmc__opts,
+    "MCMC (pssmlt, mmlt, lmc, h2mc, mlt; --spp counts mutations per pixel)", mcmc__opts,
     (int)(sizeof mcmc__opts / sizeof mcmc__opts[0]), &mcmc__defaults, sizeof mcmc__defaults};
 
 /* --- splat records ----------------------------------------------------------- */

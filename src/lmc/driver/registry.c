@@ -9,19 +9,23 @@
 #include "lmc/driver/method.h"
 #include "lmc/driver/space.h"
 
-extern const mc_method mc_method_pssmlt, mc_method_mmlt, mc_method_lmc, mc_method_h2mc;
+extern const mc_method mc_method_pssmlt, mc_method_mmlt, mc_method_lmc, mc_method_h2mc,
+    mc_method_mlt;
 
 static const mc_method *const mc__methods[] = {&mc_method_pssmlt, &mc_method_mmlt,
-                                               &mc_method_lmc, &mc_method_h2mc};
+                                               &mc_method_lmc,    &mc_method_h2mc,
+                                               &mc_method_mlt};
 
 static const mc_space_type mc__spaces[] = {
     {"bdpt", MCMC_STATES_BDPT, mc_space_bdpt_create, &mc_space_bdpt_options},
     {"mmlt", MCMC_STATES_MMLT, mc_space_mmlt_create, NULL},
     {"pt", MCMC_STATES_PT, mc_space_pt_create, NULL},
+    {"path", MCMC_STATES_PATH, mc_space_path_create, NULL},
 };
 
-const char *const mc_space_names[] = {"bdpt", "mmlt", "pt", NULL};
-const int mc_space_ids[] = {MCMC_STATES_BDPT, MCMC_STATES_MMLT, MCMC_STATES_PT};
+const char *const mc_space_names[] = {"bdpt", "mmlt", "pt", "path", NULL};
+const int mc_space_ids[] = {MCMC_STATES_BDPT, MCMC_STATES_MMLT, MCMC_STATES_PT,
+                            MCMC_STATES_PATH};
 
 /* Integrators registered at run time (mc_method_register). */
 #define MC__MAX_EXTRA 8

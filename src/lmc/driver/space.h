@@ -14,8 +14,9 @@
  *
  * The spaces (registry.c): `pt` (pt_states.c: a path tracer's numbers),
  * `mmlt` (mmlt_states.c: one family per path length, Hachisuka et al.
- * 2014) and `bdpt` (bdpt_states.c: one family over every length, a BDPT
- * sample and one of its strategies). The driver (mcmc.c) creates the one
+ * 2014), `bdpt` (bdpt_states.c: one family over every length, a BDPT
+ * sample and one of its strategies) and `path` (path_states.c: whole
+ * light paths, whose chains are their own: mc_target.chain_kind). The driver (mcmc.c) creates the one
  * --states or the integrator names and never looks inside it.
  */
 #ifndef LMC_MCMC_SPACE_H
@@ -78,8 +79,9 @@ typedef enum mcmc_states {
   MCMC_STATES_DEFAULT = 0, /* the integrator's own */
   MCMC_STATES_PT,          /* a unidirectional path tracer's primary samples */
   MCMC_STATES_MMLT,        /* one family of chains per path length (Hachisuka et al. 2014) */
-  MCMC_STATES_BDPT         /* one family over every length: a BDPT sample's numbers and one
+  MCMC_STATES_BDPT,        /* one family over every length: a BDPT sample's numbers and one
                               of its strategies */
+  MCMC_STATES_PATH         /* whole light paths, in chains of their own (path-space MLT) */
 } mcmc_states;
 
 /* A kind of state space, by --states name. create fills *OUT (zeroed by
@@ -115,6 +117,8 @@ lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settin
 lmc_status mc_space_mmlt_create(mc_space *OUT, const scene *s, const render_settings *rs,
                                 lmc_error *err);
 lmc_status mc_space_bdpt_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                                lmc_error *err);
+lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_settings *rs,
                                 lmc_error *err);
 
 #endif

@@ -73,6 +73,12 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
                            "mc_chain_create: no technique kernel on a labelled target");
     if (k[i].kind == MC_KERNEL_FULL && (!k[i].propose || !k[i].log_density))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_create: full kernel without densities");
+    if ((k[i].kind == MC_KERNEL_OWN) != (target->chain_kind != NULL))
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                           target->chain_kind
+                               ? "these states take their own moves only (kernel %s)"
+                               : "kernel %s needs states of its own kind",
+                           k[i].name ? k[i].name : "?");
     total += prob[i];
   }
   if (!(total > 0.0))
@@ -131,6 +137,13 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
       if (!c->scratch_alt) goto oom;
     }
   }
+  if (target->chain_kind) {
+    lmc_status st = target->chain_kind->create(c, err);
+    if (st) {
+      mc_chain_destroy(c);
+      return st;
+    }
+  }
   *OUT_chain = c;
   return LMC_OK;
 oom:
@@ -142,6 +155,7 @@ oom:
 
 void mc_chain_destroy(mc_chain *c) {
   if (!c) return;
+  if (c->own && c->target->chain_kind) c->target->chain_kind->destroy(c);
   mc_pss_destroy(c->pss);
   free(c->x.u);
   free(c->y.u);
@@ -295,6 +309,7 @@ double mc_chain_start(mc_chain *c, uint64_t seed, uint64_t seq, uint64_t chain_s
   rng_seed(&c->r, seed, chain_seq);
   c->steps = 0;
   c->x.from_large = 1;
+  if (T->chain_kind) return T->chain_kind->start(c);
   return c->x.v.f;
 }
 
@@ -308,6 +323,9 @@ lmc_status mc_chain_set_kernels(mc_chain *c, const mc_kernel *k, const double *p
                            "mc_chain_set_kernels: the small step must stay the chain's");
     if (k[i].kind == MC_KERNEL_FULL && (!k[i].propose || !k[i].log_density))
       return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_set_kernels: full kernel without densities");
+    if ((k[i].kind == MC_KERNEL_OWN) != (c->target->chain_kind != NULL))
+      return lmc_error_set(err, LMC_EINVAL, NULL, 0, "mc_chain_set_kernels: kernel %s of another kind of state",
+                           k[i].name ? k[i].name : "?");
   }
   c->with_grad = 0;
   for (int i = 0; i < n; i++) {
@@ -336,9 +354,17 @@ void mc_chain_set_probs(mc_chain *c, const double *prob) {
 
 int64_t mc_chain_rays(const mc_chain *c) {
   const mc_target *T = c->target;
-  if (!T->scratch_rays) return 0;
-  return (c->scratch ? T->scratch_rays(c->scratch) : 0) +
+  int64_t own = T->chain_kind ? T->chain_kind->rays(c) : 0;
+  if (!T->scratch_rays) return own;
+  return own + (c->scratch ? T->scratch_rays(c->scratch) : 0) +
          (c->scratch_alt ? T->scratch_rays(c->scratch_alt) : 0);
+}
+
+int mc_chain_pick(mc_chain *c) {
+  double uk = rng_uniform(&c->r);
+  int ki = 0;
+  while (ki < c->n_kernels - 1 && uk >= c->cdf[ki]) ki++;
+  return ki;
 }
 
 int mc_chain_max_splats(const mc_chain *c) {
@@ -506,12 +532,9 @@ static void chain__reject_outside(mc_chain *c, int ki, mc_splat_fn splat, void *
 }
 
 int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
+  if (c->target->chain_kind) return c->target->chain_kind->step(c, splat, ctx);
   mc_pss *p = c->pss;
-
-  /* Pick a kernel. */
-  double uk = rng_uniform(&c->r);
-  int ki = 0;
-  while (ki < c->n_kernels - 1 && uk >= c->cdf[ki]) ki++;
+  int ki = mc_chain_pick(c);
   mc_kernel *k = &c->kernels[ki];
   if (k->kind == MC_KERNEL_LARGE && c->target->n_labels > 0) {
     chain__large_labelled(c, ki, splat, ctx);

@@ -99,7 +99,8 @@ typedef enum mc_kernel_kind {
   MC_KERNEL_LARGE = 0, /* built in: independent uniform u */
   MC_KERNEL_SMALL,     /* built in: Kelemen's small step with s1, s2 */
   MC_KERNEL_TECHNIQUE, /* built in: coordinate `coord` redrawn uniformly, the rest small steps */
-  MC_KERNEL_FULL       /* propose / log_density below */
+  MC_KERNEL_FULL,      /* propose / log_density below */
+  MC_KERNEL_OWN        /* a move of a target's own chain (mc_chain_kind): `coord` says which */
 } mc_kernel_kind;
 
 /* A proposal. For MC_KERNEL_FULL:
@@ -214,7 +215,30 @@ typedef struct mc_chain {
   int n_drawn;
   int64_t sum_evals;          /* current states evaluated for F (the roulette) */
   int *sub;                   /* scratch: a subset kernel's coordinates */
+  void *own;                  /* a target's own chain's state (mc_chain_kind) */
 } mc_chain;
+
+/* A target's own chain (mc_target.chain_kind), for states that are not
+ * primary sample vectors. Its kernels are MC_KERNEL_OWN moves, chosen with
+ * the chain's probabilities (mc_chain_pick); it keeps their statistics in
+ * the chain's stats and its state in c->own. The chain still evaluates
+ * the starting state (the bootstrap sample (seed, seq)) through the
+ * target, into c->scratch, before `start` takes it from there. */
+typedef struct mc_chain_kind {
+  void *ctx;                                      /* the kind's own data (borrowed) */
+  lmc_status (*create)(struct mc_chain *c, lmc_error *err); /* allocates c->own */
+  void (*destroy)(struct mc_chain *c);            /* frees c->own */
+  /* The state from c->scratch after the target evaluated the starting
+   * sample; returns its f. */
+  double (*start)(struct mc_chain *c);
+  /* One step (mc_chain_step); returns the kernel index used. */
+  int (*step)(struct mc_chain *c, mc_splat_fn splat, void *ctx);
+  int64_t (*rays)(const struct mc_chain *c);      /* rays traced by the steps so far */
+} mc_chain_kind;
+
+/* The index of the next kernel, drawn with the chain's probabilities from
+ * its stream (for mc_chain_kind's step). */
+int mc_chain_pick(mc_chain *c);
 
 /* Creates a chain for `target` with kernels k[0..n-1] chosen with
  * probabilities prob[] (normalised here). The state is empty until

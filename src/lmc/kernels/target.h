@@ -59,6 +59,7 @@ typedef struct mc_contrib {
 } mc_contrib;
 
 typedef struct mc_target mc_target;
+struct mc_chain_kind;
 struct mc_target {
   int dim;                           /* coordinates of a state */
   int stream_dim[LMC_STREAM_COUNT];  /* block sizes per stream, summing to dim */
@@ -143,6 +144,12 @@ struct mc_target {
    * reverse move the same ones (mmlt's states: the numbers the state's
    * strategy reads, a function of the technique coordinate). */
   int (*local_coords)(const mc_target *t, const double *u, int label, int *OUT_idx);
+  /* Optional (NULL: the chain's state is the primary sample vector u,
+   * chain.h): a chain over states of the target's own (path space,
+   * lmc/path), which the chain framework starts, steps and counts through
+   * these hooks (chain.h's mc_chain_kind). eval then draws a starting
+   * state from the sampler's numbers (the bootstrap's samples). */
+  const struct mc_chain_kind *chain_kind;
 };
 
 /* The most coordinates a target's Hessian spans (AD_H_CAPACITY of src/ad). */

@@ -269,9 +269,10 @@ mut_bidir_status mut_bidir_generate(const mut_bidir *mb, rng *r, const ps_path *
   mut_bidir__smp smp = {{mut_bidir__next, mut_bidir__stream, NULL}, r};
   render_counters cnt;
   memset(&cnt, 0, sizeof cnt);
-  if (!mut_bidir__camera_side(mb, &smp, y, l, lc, &cnt)) return MUT_BIDIR_WALK_FAILED;
-  if (!mut_bidir__light_side(mb, &smp, x, m, y, l + ka - 1, mc, &cnt))
-    return MUT_BIDIR_WALK_FAILED;
+  int ok = mut_bidir__camera_side(mb, &smp, y, l, lc, &cnt) &&
+           mut_bidir__light_side(mb, &smp, x, m, y, l + ka - 1, mc, &cnt);
+  y->rays = cnt.rays;
+  if (!ok) return MUT_BIDIR_WALK_FAILED;
   int lo = l + 1 > 0 ? l + 1 : 0, hi = l + ka - 1 < k2 ? l + ka - 1 : k2;
   for (int i = lo; i <= hi; i++)
     if (!ps_vertex_fits(ctx, &y->x[i].v, i, k2)) return MUT_BIDIR_WALK_FAILED;
@@ -288,6 +289,7 @@ void mut_bidir_finish(const mut_bidir *mb, const ps_path *x, const mut_bidir_rec
   int l = rec->l, ka = rec->ka, k2 = y->k;
   int a = l + rec->lc;
   int joined = !(l + ka == k2 + 1 && rec->mc == 0);
+  y->rays += joined;
   if (joined && scene_occluded_segment(mb->ctx->sc, y->x[a].v.p, y->x[a + 1].v.p)) {
     y->f = rgb_zero();
     y->lum = 0.0;

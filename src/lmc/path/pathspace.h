@@ -67,6 +67,7 @@ typedef struct ps_path {
   rgb f;                        /* measurement contribution (area measure) */
   double lum;                   /* luminance of f: the target */
   double rx, ry;                /* raster point where x_1 is seen */
+  int64_t rays;                 /* rays traced to make it (mut_bidir_generate, _finish) */
 } ps_path;
 
 /* What every evaluation reads. */

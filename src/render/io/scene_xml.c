@@ -518,10 +518,15 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
   } else if (strcmp(t, "bdpt") == 0) {
     if (choose) xml__set_integrator(r, "bdpt");
   } else if (strcmp(t, "pssmlt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "erpt") == 0) {
-    if (t[0] == 'm')
-      lmc_warn(o->file, o->line, "path-space MLT (\"mlt\") maps to multiplexed MLT (mmlt)");
     if (t[0] == 'e') lmc_warn(o->file, o->line, "integrator \"erpt\" maps to pssmlt");
-    if (choose) xml__set_integrator(r, t[0] == 'm' ? "mmlt" : "pssmlt");
+    if (choose) xml__set_integrator(r, t[0] == 'm' ? "mlt" : "pssmlt");
+    /* Path-space MLT's perturbations (Mitsuba: lens, multi-chain and
+     * caustic on by default) are not in lmc yet: its mlt mutates with the
+     * bidirectional mutation alone (an exact chain, without them). */
+    if (t[0] == 'm')
+      lmc_warn(o->file, o->line,
+               "path-space MLT: the lens, caustic and multi-chain perturbations are not "
+               "implemented; lmc's mlt uses the bidirectional mutation alone");
     int found;
     /* Direct light: Mitsuba's directSamples (default 16, pt's samples per
      * pixel for paths of <= 2 segments; -1: MLT renders them too) and

@@ -1,0 +1,263 @@
+/*
+ * path_states.c: space `path`, the states of path-space Metropolis light
+ * transport (Veach and Guibas 1997; Veach 1997, chapter 11): whole light
+ * paths (lmc/path/pathspace.h), moved by the path mutations of lmc/path in
+ * a chain of their own (chain.h's mc_chain_kind), on the same driver as
+ * every other MCMC integrator.
+ *
+ * One family over every length k in [kmin, kmax]. Its target draws the
+ * bootstrap's samples: from two numbers of the sampler, a length k
+ * uniform over [kmin, kmax] and a whole path of that length
+ * (mut_bidir_sample_whole: camera and light walks split at random, joined
+ * by a connection), whose value is f / q with q = mut_bidir_whole_pdf /
+ * (kmax - kmin + 1), the density of the sample in the path measure. So
+ * b = E[lum(f) / q] is the integral of lum(f) over this path space, the
+ * chains' normalisation, and the driver's resampling of the bootstrap
+ * samples in proportion to lum(f) / q starts the chains at paths
+ * distributed about as f.
+ *
+ * The chain. Its state x is a path, its target lum(f(x)). A step picks a
+ * move among the chain's kernels (mc_chain_pick; the bidirectional
+ * mutation alone so far), which proposes y with the full Metropolis-
+ * Hastings ratio r = f(y) T(y -> x) / (f(x) T(x -> y)) (mut_bidir_propose);
+ * y is accepted with probability a = min(1, r). Splats as chain.c's
+ * (expected values, Veach 1997, sec. 11.5): y with weight a / f(y), x with
+ * 1 - a, each as f(path) at the path's raster point; a move that makes no
+ * proposal (mut_bidir.h's statuses) leaves x, splatted with weight 1.
+ *
+ * What this path space leaves out (pathspace.h): lights at infinity
+ * (constant, envmap, sunsky, directional), the delta lobes of BSDFs that
+ * mix delta and smooth lobes (plastic's coating, a mask's pass-through),
+ * and light-side walks through a delta refraction (such paths need a
+ * camera-side walk or a connection to be generated, which a point or spot
+ * light behind glass does not allow). A scene with any of them gets a
+ * warning naming it before the render (their light is missing from the
+ * image), and --strict refuses it.
+ */
+#include "lmc/states/path_states.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lmc/driver/space.h"
+#include "lmc/kernels/chain.h"
+#include "lmc/path/mut_bidir.h"
+#include "render/error.h"
+
+typedef struct path__space {
+  mc_space_family fam;
+  ps_context ctx;
+  mut_bidir mb;
+  mc_chain_kind kind;
+} path__space;
+
+/* A target scratch: the path its last evaluation drew. */
+typedef struct path__scratch {
+  ps_path p;
+  int64_t rays;
+} path__scratch;
+
+/* A chain's state: the current path and room for a proposal. */
+typedef struct path__chain {
+  ps_path buf[2];
+  int cur;      /* buf[cur] is the current path */
+  int64_t rays; /* traced by the chain's moves */
+} path__chain;
+
+static void *path__scratch_create(const mc_target *t) {
+  (void)t;
+  return calloc(1, sizeof(path__scratch));
+}
+
+static void path__scratch_destroy(void *s) { free(s); }
+
+static int64_t path__scratch_rays(const void *s) { return ((const path__scratch *)s)->rays; }
+
+/* A path's contribution as the driver splats it. */
+static mc_value path__value(const ps_path *p) {
+  mc_value v;
+  memset(&v, 0, sizeof v);
+  v.f = p->lum;
+  v.value = p->f;
+  v.rx = p->rx, v.ry = p->ry;
+  return v;
+}
+
+/* The bootstrap's sample from two numbers of smp (see the opening comment). */
+static int path__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
+                      double *OUT_grad, int *OUT_grad_ok) {
+  (void)OUT_grad;
+  const path__space *P = t->ctx;
+  path__scratch *sc = scratch;
+  memset(OUT_value, 0, sizeof *OUT_value);
+  if (OUT_grad_ok) *OUT_grad_ok = 0;
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  double u0 = sampler_next(smp), u1 = sampler_next(smp);
+  rng r;
+  rng_seed(&r, (uint64_t)(u0 * 9007199254740992.0), (uint64_t)(u1 * 9007199254740992.0));
+  int n = P->ctx.kmax - P->ctx.kmin + 1;
+  int k = P->ctx.kmin + (int)(rng_uniform(&r) * n);
+  if (k > P->ctx.kmax) k = P->ctx.kmax;
+  sc->p.k = 0, sc->p.lum = 0.0, sc->p.rays = 0;
+  mut_bidir_status st = mut_bidir_sample_whole(&P->mb, &r, k, &sc->p);
+  sc->rays += sc->p.rays;
+  if (st != MUT_BIDIR_OK || !(sc->p.lum > 0.0)) {
+    sc->p.lum = 0.0;
+    return 0;
+  }
+  double q = mut_bidir_whole_pdf(&P->mb, &sc->p, 0) / n;
+  if (!(q > 0.0) || !isfinite(sc->p.lum / q)) {
+    sc->p.lum = 0.0;
+    return 0;
+  }
+  *OUT_value = path__value(&sc->p);
+  OUT_value->f /= q;
+  OUT_value->value = rgb_scale(OUT_value->value, 1.0 / q);
+  return 0;
+}
+
+/* ---- The chain ----------------------------------------------------------------- */
+
+static lmc_status path__chain_create(mc_chain *c, lmc_error *err) {
+  path__chain *pc = calloc(1, sizeof *pc);
+  if (!pc) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for a path chain");
+  c->own = pc;
+  return LMC_OK;
+}
+
+static void path__chain_destroy(mc_chain *c) {
+  free(c->own);
+  c->own = NULL;
+}
+
+static double path__chain_start(mc_chain *c) {
+  path__chain *pc = c->own;
+  const path__scratch *sc = c->scratch;
+  pc->cur = 0;
+  pc->buf[0] = sc->p;
+  if (!(c->x.v.f > 0.0)) pc->buf[0].lum = 0.0, pc->buf[0].f = rgb_zero();
+  return pc->buf[0].lum;
+}
+
+static int path__chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
+  const path__space *P = c->target->ctx;
+  path__chain *pc = c->own;
+  ps_path *x = &pc->buf[pc->cur], *y = &pc->buf[1 - pc->cur];
+  int ki = mc_chain_pick(c);
+  mut_bidir_record rec;
+  double ratio = 0.0;
+  y->rays = 0;
+  mut_bidir_status st = mut_bidir_propose(&P->mb, &c->r, x, y, &rec, &ratio);
+  pc->rays += y->rays;
+  double a = st == MUT_BIDIR_OK ? fmin(1.0, ratio) : 0.0;
+  c->stats[ki].proposed++;
+  c->stats[ki].accept_sum += a;
+  c->steps++;
+  if (splat) {
+    if (a > 0.0) {
+      mc_value vy = path__value(y);
+      splat(ctx, &vy, a / y->lum);
+    }
+    if (a < 1.0 && x->lum > 0.0) {
+      mc_value vx = path__value(x);
+      splat(ctx, &vx, (1.0 - a) / x->lum);
+    }
+  }
+  if (a > 0.0 && rng_uniform(&c->r) < a) {
+    pc->cur = 1 - pc->cur;
+    c->stats[ki].accepted++;
+  }
+  return ki;
+}
+
+static int64_t path__chain_rays(const mc_chain *c) {
+  return c->own ? ((const path__chain *)c->own)->rays : 0;
+}
+
+/* ---- The space ----------------------------------------------------------------- */
+
+/* What of the scene this path space leaves out, said before the render
+ * (the opening comment); under --strict an error. */
+static lmc_status path__check_scene(const scene *s, const render_settings *rs, lmc_error *err) {
+  int infinite = 0, mixed = 0, delta_lights = 0, refract = 0;
+  for (int i = 0; i < s->n_lights; i++) {
+    light_type t = s->lights[i].type;
+    infinite += t != LIGHT_AREA && t != LIGHT_POINT && t != LIGHT_SPOT;
+    delta_lights += t == LIGHT_POINT || t == LIGHT_SPOT;
+  }
+  for (int i = 0; i < s->n_bsdfs; i++) {
+    const bsdf *b = &s->bsdfs[i];
+    int fl = bsdf_flags(b);
+    int pure = bsdf_is_delta(b) && !b->masked;
+    mixed += (fl & BSDF_DELTA) && !pure;
+    refract += pure && (fl & BSDF_TRANSMISSION);
+  }
+  char what[256] = "";
+  if (infinite)
+    snprintf(what + strlen(what), sizeof what - strlen(what), "%s%d light(s) at infinity",
+             *what ? ", " : "", infinite);
+  if (mixed)
+    snprintf(what + strlen(what), sizeof what - strlen(what),
+             "%sthe delta lobes of %d BSDF(s) that mix delta and smooth lobes (plastic, mask)",
+             *what ? ", " : "", mixed);
+  if (delta_lights && refract)
+    snprintf(what + strlen(what), sizeof what - strlen(what),
+             "%spaths from point or spot lights through glass", *what ? ", " : "");
+  if (!*what) return LMC_OK;
+  if (rs->strict)
+    return lmc_error_set(err, LMC_ESTRICT, s->path, 0,
+                         "--strict: %s's path space leaves out %s; not rendering", rs->integrator,
+                         what);
+  lmc_warn(s->path, 0, "%s's path space leaves out %s: their light is missing from the image",
+           rs->integrator, what);
+  return LMC_OK;
+}
+
+static void path__space_destroy(mc_space *sp) {
+  free(sp->ctx);
+  sp->ctx = NULL;
+}
+
+lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_settings *rs,
+                                lmc_error *err) {
+  lmc_status st = path__check_scene(s, rs, err);
+  if (st) return st;
+  path__space *P = calloc(1, sizeof *P);
+  if (!P) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the path states");
+  OUT->ctx = P;
+  OUT->destroy = path__space_destroy;
+  ps_context_init(&P->ctx, s, rs);
+  mut_bidir_init(&P->mb, &P->ctx);
+  if (rs->maxdepth < 0 && !rs->quiet)
+    fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
+            rs->integrator, P->ctx.kmax);
+  if (P->ctx.kmin > P->ctx.kmax)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "%s: no path length in [%d, %d]",
+                         rs->integrator, P->ctx.kmin, P->ctx.kmax);
+  P->kind = (mc_chain_kind){P,
+                            path__chain_create,
+                            path__chain_destroy,
+                            path__chain_start,
+                            path__chain_step,
+                            path__chain_rays};
+  mc_target *t = &P->fam.target;
+  t->dim = t->stream_dim[LMC_STREAM_CAMERA] = 2;
+  t->ctx = P;
+  t->eval = path__eval;
+  t->scratch_create = path__scratch_create;
+  t->scratch_destroy = path__scratch_destroy;
+  t->scratch_rays = path__scratch_rays;
+  t->chain_kind = &P->kind;
+  P->fam.length = 0;
+  P->fam.technique = -1;
+  OUT->name = "path";
+  OUT->n_fam = 1;
+  OUT->fam = &P->fam;
+  OUT->kmin = P->ctx.kmin;
+  OUT->kmax = P->ctx.kmax;
+  OUT->pool_large = 0;
+  OUT->b_note = "whole paths of the path space";
+  return LMC_OK;
+}

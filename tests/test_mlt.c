@@ -1,0 +1,191 @@
+/*
+ * test_mlt.c: path-space MLT (--integrator mlt: the path states of
+ * lmc/states/path_states.c on the MCMC driver, Veach's bidirectional
+ * mutation of lmc/path).
+ *
+ * What is checked:
+ * - tests/data/analytic/emitting_box.xml, whose every pixel has
+ *   expectation 1 - 2^-8 exactly: the image mean of R = 6 seeds (each with
+ *   its own bootstrap) lies within 8 of their standard errors of it
+ *   (P(|t_5| > 8) = 5e-4 per check), with the chains rendering every path
+ *   (--direct mcmc) and with pt rendering the paths of one and two
+ *   segments (--direct separate, the chains from three); every render
+ *   makes its budget of spp mutations per pixel (up to whole rounds), and
+ *   its statistics count the moves proposed and accepted.
+ * - Determinism under --spp: the same seed gives a bit-identical film with
+ *   1 and 2 threads; another seed a different one.
+ * - A scene with what the path space leaves out (furnace.xml: a constant
+ *   environment) is said once before the render (a warning, then the
+ *   bootstrap's b = 0 one: nothing else emits) and refused under --strict
+ *   (LMC_ESTRICT).
+ * - A scene's <integrator type="mlt"> selects mlt, warning once that
+ *   Mitsuba's perturbations are not in lmc.
+ * Each test counts its checks and asserts the count.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "lmc/mcmc.h"
+#include "render/io/io.h"
+#include "test_util.h"
+
+#define RUNS 6
+
+static scene *load(const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/tests/data/analytic/%s", LMC_SOURCE_DIR, name);
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
+  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
+  assert_int_equal(st, LMC_OK);
+  return s;
+}
+
+static render_settings settings(const scene *s, int64_t spp, uint64_t seed, int threads,
+                                const char *direct) {
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "mlt");
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  rs.time_limit = 0.0;
+  rs.threads = threads;
+  rs.seed = seed;
+  rs.quiet = 1;
+  lmc_error err;
+  assert_int_equal(mcmc_set(&rs, "bootstrap", "16384", &err), LMC_OK);
+  assert_int_equal(mcmc_set(&rs, "direct", direct, &err), LMC_OK);
+  return rs;
+}
+
+static double image_mean(const film *f) {
+  lmc_image img;
+  lmc_error err;
+  assert_int_equal(film_develop(f, &img, &err), LMC_OK);
+  double s = 0.0;
+  for (int i = 0; i < img.width * img.height * 3; i++) s += img.data[i];
+  s /= img.width * img.height * 3;
+  image_free(&img);
+  return s;
+}
+
+static void test_emitting_box(void **state) {
+  (void)state;
+  int checks = 0;
+  scene *s = load("emitting_box.xml");
+  const double exact = 1.0 - 1.0 / 256.0;
+  const char *direct[2] = {"mcmc", "separate"};
+  for (int d = 0; d < 2; d++) {
+    double sum = 0.0, sum2 = 0.0;
+    for (int r = 0; r < RUNS; r++) {
+      render_settings rs = settings(s, 16, 100 + (uint64_t)r, 2, direct[d]);
+      film f;
+      render_stats st;
+      lmc_error err;
+      lmc_error_clear(&err);
+      assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
+      int64_t want = 16 * (int64_t)s->cam.width * s->cam.height;
+      assert_true(st.samples >= want && st.samples < want + want / 10);
+      double m = image_mean(&f);
+      sum += m, sum2 += m * m;
+      film_free(&f);
+    }
+    double mean = sum / RUNS, se = sqrt(fmax(0.0, (sum2 - RUNS * mean * mean) / (RUNS - 1)) / RUNS);
+    fprintf(stderr, "  emitting box, --direct %s: mean %.5f (exact %.5f), SE %.2g\n", direct[d],
+            mean, exact, se);
+    assert_true(se > 0.0);
+    assert_near(mean, exact, 8.0 * se);
+    checks += 2;
+  }
+  scene_destroy(s);
+  assert_int_equal(checks, 4);
+}
+
+static int films_equal(const film *a, const film *b) {
+  size_t n = (size_t)a->width * a->height * 3;
+  return a->width == b->width && a->height == b->height &&
+         memcmp(a->splat, b->splat, n * sizeof *a->splat) == 0 &&
+         memcmp(a->sum, b->sum, n * sizeof *a->sum) == 0;
+}
+
+static void test_determinism(void **state) {
+  (void)state;
+  scene *s = load("emitting_box.xml");
+  film f[4];
+  const uint64_t seed[4] = {3, 3, 3, 4};
+  const int threads[4] = {2, 2, 1, 2};
+  for (int i = 0; i < 4; i++) {
+    render_settings rs = settings(s, 8, seed[i], threads[i], "separate");
+    render_stats st;
+    lmc_error err;
+    assert_int_equal(mcmc_render_run(s, &rs, &f[i], &st, &err), LMC_OK);
+  }
+  assert_true(films_equal(&f[0], &f[1]));  /* same seed, same threads */
+  assert_true(films_equal(&f[0], &f[2]));  /* 1 vs 2 threads */
+  assert_false(films_equal(&f[0], &f[3])); /* another seed differs */
+  for (int i = 0; i < 4; i++) film_free(&f[i]);
+  scene_destroy(s);
+}
+
+static void test_leaves_out(void **state) {
+  (void)state;
+  scene *s = load("furnace.xml");
+  render_settings rs = settings(s, 1, 1, 2, "mcmc");
+  film f;
+  render_stats st;
+  lmc_error err;
+  lmc_error_clear(&err);
+  int before = lmc_warning_count();
+  assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
+  /* The path space's warning, then the bootstrap's: with the environment
+   * left out, nothing in the furnace emits (b = 0). */
+  assert_int_equal(lmc_warning_count() - before, 2);
+  film_free(&f);
+  rs.strict = 1;
+  lmc_error_clear(&err);
+  assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_ESTRICT);
+  assert_non_null(strstr(err.msg, "light(s) at infinity"));
+  scene_destroy(s);
+}
+
+/* A scene's <integrator type="mlt"> (Mitsuba's path-space MLT) selects
+ * mlt, with a warning that its perturbations are not there. */
+static void test_scene_integrator(void **state) {
+  (void)state;
+  const char *path = LMC_TEST_TMP "/lmc_test_mlt.xml";
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fprintf(f, "<scene version=\"0.6.0\">\n"
+             "<integrator type=\"mlt\"><boolean name=\"lensPerturbation\" value=\"true\"/>"
+             "</integrator>\n"
+             "<sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n"
+             "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
+             "</emitter></shape>\n"
+             "</scene>\n");
+  fclose(f);
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  int before = lmc_warning_count();
+  assert_int_equal(scene_load_xml(path, NULL, 0, &s, &err), LMC_OK);
+  assert_string_equal(s->settings.integrator, "mlt");
+  assert_int_equal(lmc_warning_count() - before, 1);
+  scene_destroy(s);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_emitting_box),
+      cmocka_unit_test(test_determinism),
+      cmocka_unit_test(test_leaves_out),
+      cmocka_unit_test(test_scene_integrator),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
