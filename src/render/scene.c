@@ -228,14 +228,16 @@ int scene_tex_footprint(const scene *s, const surface_hit *h, vec3 org, vec3 dx,
   int i0 = 0, i1 = 1;
   if (ax > ay && ax > az) i0 = 1, i1 = 2;
   else if (ay > az) i0 = 0, i1 = 2;
-  double a00 = v3_comp(dpdu, i0), a01 = v3_comp(dpdv, i0), a10 = v3_comp(dpdu, i1), a11 = v3_comp(dpdv, i1);
+  double a00 = v3_comp(dpdu, i0), a01 = v3_comp(dpdv, i0);
+  double a10 = v3_comp(dpdu, i1), a11 = v3_comp(dpdv, i1);
   double det = a00 * a11 - a01 * a10;
   if (!(fabs(det) > 1e-30)) {
     *OUT = (tex_footprint){0.0, 0.0, 0.0, 0.0};
     return 1;
   }
   double inv = 1.0 / det;
-  double bx0 = v3_comp(dpdx, i0), bx1 = v3_comp(dpdx, i1), by0 = v3_comp(dpdy, i0), by1 = v3_comp(dpdy, i1);
+  double bx0 = v3_comp(dpdx, i0), bx1 = v3_comp(dpdx, i1);
+  double by0 = v3_comp(dpdy, i0), by1 = v3_comp(dpdy, i1);
   OUT->dudx = (a11 * bx0 - a01 * bx1) * inv;
   OUT->dvdx = (a00 * bx1 - a10 * bx0) * inv;
   OUT->dudy = (a11 * by0 - a01 * by1) * inv;

@@ -331,7 +331,8 @@ lmc_status mc_chain_set_kernels(mc_chain *c, const mc_kernel *k, const double *p
   for (int i = 0; i < n; i++) {
     /* A kernel that changes starts its statistics afresh. */
     int same = i < c->n_kernels && c->kernels[i].kind == k[i].kind &&
-               c->kernels[i].propose == k[i].propose && c->kernels[i].self == k[i].self;
+               c->kernels[i].propose == k[i].propose && c->kernels[i].self == k[i].self &&
+               (k[i].kind != MC_KERNEL_OWN || c->kernels[i].coord == k[i].coord);
     if (!same) memset(&c->stats[i], 0, sizeof c->stats[i]);
     c->kernels[i] = k[i];
     if (k[i].needs_grad) c->with_grad = 1;

@@ -31,6 +31,7 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "render/bsdf/bsdf_ad_internal.h"
@@ -328,25 +329,24 @@ static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
 #include "render/real.h"
 #include "render/bsdf/bsdf_generic.h"
 
-/* b's textures (the slots of bsdf.h). */
-#define BSDF__N_TEX 5
-static void bsdf__textures(bsdf *b, texture *OUT[BSDF__N_TEX]) {
-  OUT[0] = &b->diffuse, OUT[1] = &b->specular, OUT[2] = &b->transmittance;
-  OUT[3] = &b->bump, OUT[4] = &b->opacity;
-}
+/* Where b's textures are (the slots of bsdf.h). */
+static const size_t bsdf__tex_offsets[] = {offsetof(bsdf, diffuse), offsetof(bsdf, specular),
+                                           offsetof(bsdf, transmittance), offsetof(bsdf, bump),
+                                           offsetof(bsdf, opacity)};
+#define BSDF__N_TEX (sizeof bsdf__tex_offsets / sizeof bsdf__tex_offsets[0])
 
 int bsdf_is_tex_filtered(const bsdf *b) {
-  return tex_is_filtered(&b->diffuse) || tex_is_filtered(&b->specular) ||
-         tex_is_filtered(&b->transmittance) || tex_is_filtered(&b->bump) ||
-         tex_is_filtered(&b->opacity);
+  for (size_t k = 0; k < BSDF__N_TEX; k++)
+    if (tex_is_filtered((const texture *)((const char *)b + bsdf__tex_offsets[k]))) return 1;
+  return 0;
 }
 
 const bsdf *bsdf_with_footprint(const bsdf *b, const tex_footprint *fp, bsdf *OUT_copy) {
   if (!bsdf_is_tex_filtered(b)) return b;
   *OUT_copy = *b;
-  texture *t[BSDF__N_TEX];
-  bsdf__textures(OUT_copy, t);
-  for (int k = 0; k < BSDF__N_TEX; k++)
-    if (tex_is_filtered(t[k])) tex_set_footprint(t[k], fp);
+  for (size_t k = 0; k < BSDF__N_TEX; k++) {
+    texture *t = (texture *)((char *)OUT_copy + bsdf__tex_offsets[k]);
+    if (tex_is_filtered(t)) tex_set_footprint(t, fp);
+  }
   return OUT_copy;
 }

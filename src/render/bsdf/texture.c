@@ -136,24 +136,9 @@ static rgb tex__checkerboard(const texture *t, double u, double v) {
   return tex__check_parity(su) == tex__check_parity(sv) ? t->color0 : t->color1;
 }
 
-/* A coordinate of a plain lookup brought near [0, 1) (tex__prewrap of
- * texture_generic.h, in doubles). */
-static double tex__prewrap_d(double u, tex_wrap w) {
-  if (w == TEX_WRAP_REPEAT) return u - floor(u);
-  if (w == TEX_WRAP_MIRROR) return u - 2.0 * floor(0.5 * u);
-  return fmin(fmax(u, -1.0), 2.0);
-}
-
-/* The texel of img (a level of t) containing (u', v'): Mitsuba's box
- * lookup; black for non-finite coordinates. */
-static rgb tex__nearest(const texture *t, const lmc_image *img, double u, double v) {
-  if (!isfinite(u) || !isfinite(v) || !img || !img->data) return rgb_zero();
-  u = tex__prewrap_d(u, t->wrap_u);
-  v = tex__prewrap_d(v, t->wrap_v);
-  return tex__texel(t, img, (int)floor(u * img->width), (int)floor(v * img->height));
-}
-
-/* The filtered lookup over t's footprint at (u', v') (defined below). */
+/* The box and the filtered lookups at (u', v') (defined after the generic
+ * bodies, whose plain tex__prewrap and tex__bilinear they use). */
+static rgb tex__nearest(const texture *t, const lmc_image *img, double u, double v);
 static rgb tex__filtered(const texture *t, double u, double v);
 
 /* The lookups in doubles (tex_eval), then in duals (tex_eval_ad, bsdf_ad.h),
@@ -165,6 +150,15 @@ static rgb tex__filtered(const texture *t, double u, double v);
 #define R_DUAL 1
 #include "render/real.h"
 #include "render/bsdf/texture_generic.h"
+
+/* The texel of img (a level of t) containing (u', v'): Mitsuba's box
+ * lookup; black for non-finite coordinates. */
+static rgb tex__nearest(const texture *t, const lmc_image *img, double u, double v) {
+  if (!isfinite(u) || !isfinite(v) || !img || !img->data) return rgb_zero();
+  u = tex__prewrap(u, t->wrap_u);
+  v = tex__prewrap(v, t->wrap_v);
+  return tex__texel(t, img, (int)floor(u * img->width), (int)floor(v * img->height));
+}
 
 /* Bilinear lookup on MIP level `level` of t; past the last level, the
  * last level's (1 x 1) texel. */
@@ -183,8 +177,8 @@ static rgb tex__ewa(const texture *t, int level, double u, double v, double A, d
   if (level >= t->levels) return tex__nearest(t, &t->image[t->levels - 1], u, v);
   const lmc_image *img = &t->image[level];
   if (!isfinite(u) || !isfinite(v)) return rgb_zero();
-  u = tex__prewrap_d(u, t->wrap_u);
-  v = tex__prewrap_d(v, t->wrap_v);
+  u = tex__prewrap(u, t->wrap_u);
+  v = tex__prewrap(v, t->wrap_v);
   /* To this level's texels: the ellipse shrinks with the level's size. */
   double rx = (double)img->width / t->image[0].width, ry = (double)img->height / t->image[0].height;
   A /= rx * rx, B /= rx * ry, C /= ry * ry;

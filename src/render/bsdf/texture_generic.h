@@ -89,7 +89,8 @@ RRGB R_FN(tex_eval)(R_CTX const texture *t, REAL u, REAL v) {
     REAL tu = R_ADD_S(R_MUL_S(u, t->uscale), t->uoffset);
     REAL tv = R_ADD_S(R_MUL_S(v, t->vscale), t->voffset);
     /* nearest: the texel containing the point, piecewise constant. */
-    if (t->filter == TEX_FILTER_NEAREST) return RRGB_CONST(tex__nearest(t, t->image, R_V(tu), R_V(tv)));
+    if (t->filter == TEX_FILTER_NEAREST)
+      return RRGB_CONST(tex__nearest(t, t->image, R_V(tu), R_V(tv)));
 #if !R_DUAL
     if (t->has_footprint && tex_is_filtered(t)) return tex__filtered(t, tu, tv);
 #endif

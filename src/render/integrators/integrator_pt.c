@@ -87,6 +87,6 @@ rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org,
           const ray_diff *rd, render_counters *cnt) {
   pt__ctx c;
   c.s = s, c.rs = rs, c.smp = smp, c.r = sampler_indep_rng(smp), c.cnt = cnt;
-  c.rd = rd && s->tex_filtered ? rd : NULL;
+  c.rd = rd;
   return pt__walk(&c, org, dir, NULL, NULL);
 }

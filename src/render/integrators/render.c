@@ -122,20 +122,25 @@ typedef struct render__counters_slot {
   _Alignas(64) render_counters c;
 } render__counters_slot;
 
-/* Hands rs->snapshot_fn the image so far: the camera estimates plus the
- * splats (already replayed into `out`), normalised as at the end. */
-/* The differentials of the camera ray through raster point (rx, ry) (dir):
- * towards the film points a step `scale` pixels along x and along y,
- * interpolated as Mitsuba's scaleDifferential does. */
-static void render__ray_diff(const scene *s, double rx, double ry, vec3 dir, double scale,
-                             ray_diff *OUT) {
+/* pt's estimate along the camera ray through raster point (rx, ry); with
+ * filtered textures in the scene, with its differentials: towards the film
+ * points a step `diff_scale` pixels along x and along y, interpolated as
+ * Mitsuba's scaleDifferential does. */
+static rgb render__pt(const scene *s, const render_settings *rs, lmc_sampler *smp, double rx,
+                      double ry, double diff_scale, render_counters *cnt) {
+  vec3 org, dir;
+  camera_generate_ray(&s->cam, rx, ry, &org, &dir);
+  if (!s->tex_filtered) return pt_li(s, rs, smp, org, dir, NULL, cnt);
   vec3 o, dx, dy;
   camera_generate_ray(&s->cam, rx + 1.0, ry, &o, &dx);
   camera_generate_ray(&s->cam, rx, ry + 1.0, &o, &dy);
-  OUT->dx = v3_add(dir, v3_scale(v3_sub(dx, dir), scale));
-  OUT->dy = v3_add(dir, v3_scale(v3_sub(dy, dir), scale));
+  ray_diff rd = {v3_add(dir, v3_scale(v3_sub(dx, dir), diff_scale)),
+                 v3_add(dir, v3_scale(v3_sub(dy, dir), diff_scale))};
+  return pt_li(s, rs, smp, org, dir, &rd, cnt);
 }
 
+/* Hands rs->snapshot_fn the image so far: the camera estimates plus the
+ * splats (already replayed into `out`), normalised as at the end. */
 static void render__snapshot(const render_settings *rs, const film *out, int has_splats,
                              int nthreads, const render__counters_slot *counters, double seconds) {
   film tmp;
@@ -241,16 +246,8 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
             double u1 = sampler_next(smp), u2 = sampler_next(smp);
             filter_sample(&s->filter, u1, u2, &dx, &dy);
             double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
-            rgb L;
-            if (use_bdpt) {
-              L = bdpt_li(s, rs, smp, rx, ry, &row_splats, cnt);
-            } else {
-              vec3 org, dir;
-              camera_generate_ray(&s->cam, rx, ry, &org, &dir);
-              ray_diff rd;
-              if (s->tex_filtered) render__ray_diff(s, rx, ry, dir, diff_scale, &rd);
-              L = pt_li(s, rs, smp, org, dir, s->tex_filtered ? &rd : NULL, cnt);
-            }
+            rgb L = use_bdpt ? bdpt_li(s, rs, smp, rx, ry, &row_splats, cnt)
+                             : render__pt(s, rs, smp, rx, ry, diff_scale, cnt);
             if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX ||
                 fabs(L.b) > FLT_MAX) {
               cnt->nan_samples++;
