@@ -1,8 +1,11 @@
 /*
  * test_mcmc_ring_slow.c: pssmlt and mmlt agree with bdpt on the
  * ring-caustics scenes (scenes/ring-caustics, scenes/ring-caustics-glass)
- * at 64x48: in the image mean and in the means of a 4 x 4 grid of regions.
- * This is the guard against start-up bias and wrong normalisation.
+ * at 64x48, and path-space MLT (mlt) on the Cornell box (scenes/cornell-box;
+ * the rings' constant environment is outside its path space) at 32x32 with
+ * 512 samples and mutations per pixel: in the image mean and in the means
+ * of a 4 x 4 grid of regions. This is the guard against start-up bias and
+ * wrong normalisation.
  *
  * Variance: each integrator renders R = 5 independent seeds (MCMC: each with
  * its own bootstrap). For a statistic (a region's mean luminance) the runs
@@ -10,8 +13,10 @@
  * MCMC mean must lie within 6.5 sqrt(SE_mcmc^2 + SE_bdpt^2) of bdpt's. The
  * difference over its estimated standard error follows roughly a Student t
  * with about 8 degrees of freedom (Welch), P(|t| > 6.5) ~ 2e-4 per check;
- * over the 2 x 2 x 17 = 68 checks the chance of a false alarm is about 1.3%.
- * Equal effort: --spp 80 for every integrator (MCMC: mutations per pixel).
+ * over the (2 x 2 + 1) x 17 = 85 checks the chance of a false alarm is
+ * about 1.7%.
+ * Equal effort: --spp 80 (Cornell box: 512) for every integrator (MCMC:
+ * mutations per pixel).
  * The bootstrap is the default, adaptive one (mmlt: Neyman-allocated over
  * the lengths), run to a 3% standard error instead of 1% to keep the test
  * short: b's error is part of each run's, so of the SE. The renders use
@@ -40,13 +45,13 @@
 static int g_checks;
 
 /* Mean and SE over RUNS of the region means (index GRID*GRID: whole image). */
-static void run_stats(const scene *s, const char *integrator, double mean[N_STATS],
+static void run_stats(const scene *s, const char *integrator, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
     snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
-    rs.spp = 80;
+    rs.spp = spp;
     rs.set |= SET_SPP;
     lmc_error err;
     /* The default, adaptive bootstrap; its error is part of the SE. */
@@ -60,7 +65,10 @@ static void run_stats(const scene *s, const char *integrator, double mean[N_STAT
   region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
 }
 
-static void check_scene(const char *folder) {
+/* The MCMC integrators names[0 .. n-1] against bdpt on scene `folder` at
+ * w x h, spp samples (mutations) per pixel. */
+static void check_scene(const char *folder, int w, int h, int64_t spp, const char *const *names,
+                        int n) {
   char path[1024];
   snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", LMC_SOURCE_DIR, folder);
   scene *s = NULL;
@@ -69,14 +77,13 @@ static void check_scene(const char *folder) {
   lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
   if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
   assert_int_equal(st, LMC_OK);
-  camera_set_resolution(&s->cam, 64, 48);
+  camera_set_resolution(&s->cam, w, h);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", ref, ref_se);
-  const char *names[2] = {"pssmlt", "mmlt"};
-  for (int i = 0; i < 2; i++) {
+  run_stats(s, "bdpt", spp, ref, ref_se);
+  for (int i = 0; i < n; i++) {
     double m[N_STATS], se[N_STATS];
-    run_stats(s, names[i], m, se);
+    run_stats(s, names[i], spp, m, se);
     double worst = 0.0;
     for (int k = 0; k < N_STATS; k++) {
       double tol = 6.5 * sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
@@ -94,25 +101,36 @@ static void check_scene(const char *folder) {
   scene_destroy(s);
 }
 
+static const char *const g_pss[2] = {"pssmlt", "mmlt"};
+
 static void test_ring_caustics(void **state) {
   (void)state;
-  check_scene("ring-caustics");
+  check_scene("ring-caustics", 64, 48, 80, g_pss, 2);
 }
 
 static void test_ring_caustics_glass(void **state) {
   (void)state;
-  check_scene("ring-caustics-glass");
+  check_scene("ring-caustics-glass", 64, 48, 80, g_pss, 2);
+}
+
+/* Path-space MLT on the Cornell box (an area light, a glass sphere): the
+ * ring scenes' constant environment is outside its path space. */
+static void test_cornell_box_mlt(void **state) {
+  (void)state;
+  static const char *const mlt[1] = {"mlt"};
+  check_scene("cornell-box", 32, 32, 512, mlt, 1);
 }
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 2 * 2 * N_STATS);
+  assert_int_equal(g_checks, (2 * 2 + 1) * N_STATS);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_ring_caustics),
       cmocka_unit_test(test_ring_caustics_glass),
+      cmocka_unit_test(test_cornell_box_mlt),
       cmocka_unit_test(test_count),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
