@@ -5,8 +5,9 @@
  * sphere (a mixed BSDF: its coating's delta lobe is outside the path
  * space, its diffuse base inside), and `delta`, a
  * diffuse floor and wall with a mirror sphere, a glass sphere and a point
- * light (delta lobes, a delta-position light, the pinhole). Paths of 1 to
- * KMAX = 4 segments.
+ * light (delta lobes, a delta-position light, the pinhole), and `caustic`,
+ * a point light above a glass sphere over a floor (light subpaths through
+ * refractions). Paths of 1 to KMAX = 4 segments.
  *
  *  - f_matches_bdpt: a state made from a BDPT sample's strategy (s, t)
  *    (s != 1) has f / p equal to bdpt_connect's unweighted contribution
@@ -14,9 +15,10 @@
  *    of the state's own densities along the strategy; where no delta lobe
  *    is involved p is also bdpt's own product of pdf_fwd. To 1e-9 relative
  *    (the walks' throughputs use the sampled directions, the state the
- *    directions between the hit points). Strategies whose light subpath
- *    refracts through a delta lobe have density 0 in this space and are
- *    counted apart.
+ *    directions between the hit points). Every strategy has a density in
+ *    this space; on `caustic`, hundreds whose light subpath refracts through
+ *    the glass check the change of measure of a light-side refraction
+ *    (pathspace.h) against bdpt's own throughput.
  *  - cached_vs_scratch: on chains of mutations, T(x -> y) and T(y -> x)
  *    from the states' caches against bdpt_path_pdfs on the re-split paths,
  *    f(y) by partial evaluation against f from scratch, and every cache of
@@ -95,8 +97,27 @@ static const char *delta_xml =
     "<rgb name=\"intensity\" value=\"8, 8, 7\"/></emitter>\n"
     "</scene>\n";
 
+/* A point light above a glass sphere over a diffuse floor, seen from
+ * above: its caustic, whose paths leave the light through refractions. */
+static const char *caustic_xml =
+    "<scene version=\"0.6.0\">\n"
+    "  <sensor type=\"perspective\">\n"
+    "    <float name=\"fov\" value=\"40\"/>\n"
+    "    <transform name=\"toWorld\"><lookat origin=\"0, 3, 3\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>\n"
+    "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"12\"/>"
+    "<rfilter type=\"box\"/></film>\n"
+    "  </sensor>\n"
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/>"
+    "<scale x=\"2\" y=\"1\" z=\"2\"/></transform>"
+    "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7\"/></bsdf></shape>\n"
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0.8\" z=\"0\"/><float name=\"radius\" value=\"0.5\"/>"
+    "<bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf></shape>\n"
+    "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"2\" z=\"0\"/>"
+    "<rgb name=\"intensity\" value=\"8, 8, 7\"/></emitter>\n"
+    "</scene>\n";
+
 typedef struct fixture {
-  scene *sc[2]; /* diffuse, delta */
+  scene *sc[3]; /* diffuse, delta, caustic */
 } fixture;
 
 static scene *load(const char *xml, const char *tag) {
@@ -120,7 +141,8 @@ static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
   fx->sc[0] = load(diffuse_xml, "diffuse");
   fx->sc[1] = load(delta_xml, "delta");
-  if (!fx->sc[0] || !fx->sc[1]) return -1;
+  fx->sc[2] = load(caustic_xml, "caustic");
+  if (!fx->sc[0] || !fx->sc[1] || !fx->sc[2]) return -1;
   *state = fx;
   return 0;
 }
@@ -129,6 +151,7 @@ static int teardown(void **state) {
   fixture *fx = *state;
   scene_destroy(fx->sc[0]);
   scene_destroy(fx->sc[1]);
+  scene_destroy(fx->sc[2]);
   free(fx);
   return 0;
 }
@@ -152,7 +175,7 @@ static int rgb_close(rgb a, rgb b, double tol) {
 /* ---- f against BDPT's strategies --------------------------------------------- */
 
 static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *OUT_delta,
-                         int *OUT_pdf_checks, int *OUT_skipped) {
+                         int *OUT_pdf_checks, int *OUT_skipped, int *OUT_light_delta) {
   ps_context ctx;
   context(sc, &ctx);
   ps_path *x = malloc(sizeof *x);
@@ -180,8 +203,9 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
         for (int i = 0; i < t; i++) p *= x->x[i].pdf_cam, pb *= cam[i].pdf_fwd;
         for (int j = 0; j < s; j++) p *= x->x[x->k - j].pdf_light, pb *= lp[j].pdf_fwd;
         for (int i = 1; i < x->k; i++) delta |= x->x[i].delta;
-        /* A light subpath refracted through a delta lobe: density 0 by the
-         * path space's rule (pathspace.h), not compared. */
+        int light_delta = 0;
+        for (int j = 1; j < s; j++) light_delta |= lp[j].delta;
+        /* A strategy the path space gives no density (none expected). */
         if (!(p > 0.0)) {
           (*OUT_skipped)++;
           continue;
@@ -198,6 +222,7 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
         }
         (*OUT_checks)++;
         *OUT_delta += delta;
+        *OUT_light_delta += light_delta;
         if (!delta) {
           assert_true(rel_close(p, pb, 1e-9));
           (*OUT_pdf_checks)++;
@@ -210,15 +235,21 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
 
 static void test_f_matches_bdpt(void **state) {
   fixture *fx = *state;
-  int checks[2] = {0, 0}, delta[2] = {0, 0}, pdfs[2] = {0, 0}, skipped[2] = {0, 0};
-  for (int q = 0; q < 2; q++)
-    check_f_bdpt(fx->sc[q], 11 + q, &checks[q], &delta[q], &pdfs[q], &skipped[q]);
+  int checks[3] = {0}, delta[3] = {0}, pdfs[3] = {0}, skipped[3] = {0}, light_delta[3] = {0};
+  for (int q = 0; q < 3; q++)
+    check_f_bdpt(fx->sc[q], 11 + q, &checks[q], &delta[q], &pdfs[q], &skipped[q],
+                 &light_delta[q]);
   print_message("f vs bdpt: diffuse %d (densities %d), delta %d (%d through delta lobes, "
-                "densities %d; %d light-side refractions not compared)\n",
-                checks[0], pdfs[0], checks[1], delta[1], pdfs[1], skipped[1]);
-  assert_int_equal(skipped[0], 0);
+                "densities %d), caustic %d (%d with light subpaths through the glass); %d, %d, %d "
+                "without a density\n",
+                checks[0], pdfs[0], checks[1], delta[1], pdfs[1], checks[2], light_delta[2],
+                skipped[0], skipped[1], skipped[2]);
+  for (int q = 0; q < 3; q++) assert_int_equal(skipped[q], 0);
   assert_true(checks[0] >= 2000 && pdfs[0] == checks[0]);
   assert_true(checks[1] >= 1000 && delta[1] >= 50 && pdfs[1] >= 500);
+  /* The light side's refractions carry the change of measure between the
+   * two directions' Diracs: f / p against bdpt's own throughput. */
+  assert_true(checks[2] >= 1000 && light_delta[2] >= 200);
 }
 
 /* ---- Cached against scratch, detailed balance --------------------------------- */
@@ -320,12 +351,13 @@ static void check_chains(const scene *sc, uint64_t seed, int *OUT_checks, int *O
 
 static void test_cached_vs_scratch(void **state) {
   fixture *fx = *state;
-  for (int q = 0; q < 2; q++) {
+  static const char *const names[3] = {"diffuse", "delta", "caustic"};
+  for (int q = 0; q < 3; q++) {
     int checks = 0, shapes = 0, whole = 0, balance = 0, delta = 0;
     check_chains(fx->sc[q], 21 + q, &checks, &shapes, &whole, &balance, &delta);
     print_message("%s: %d proposals checked, %d shapes (kd, ka, lc), %d whole-path, %d balance, "
                   "%d with delta vertices in the changed range\n",
-                  q ? "delta" : "diffuse", checks, shapes, whole, balance, delta);
+                  names[q], checks, shapes, whole, balance, delta);
     assert_true(checks >= 1000 && shapes >= 30 && whole >= 10 && balance >= 300);
     assert_true(q == 0 ? delta == 0 : delta >= 100);
   }
@@ -421,10 +453,12 @@ static inv_result invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term
 
 static void test_invariance(void **state) {
   fixture *fx = *state;
-  for (int q = 0; q < 2; q++) {
-    inv_result r = invariance(fx->sc[q], 31 + q, MUT_BIDIR_BIAS_NONE, 1.0, 2000000);
-    print_message("%s: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n",
-                  q ? "delta" : "diffuse", r.samples, r.moved, r.bins, r.min_p, r.level);
+  static const char *const names[3] = {"diffuse", "delta", "caustic"};
+  for (int q = 0; q < 3; q++) {
+    /* The caustic scene's whole paths carry light more rarely: more draws. */
+    inv_result r = invariance(fx->sc[q], 31 + q, MUT_BIDIR_BIAS_NONE, 1.0, q == 2 ? 6000000 : 2000000);
+    print_message("%s: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n", names[q],
+                  r.samples, r.moved, r.bins, r.min_p, r.level);
     assert_true(r.samples >= 50000 && r.moved >= 10000 && r.bins >= 20);
     assert_true(r.min_p >= r.level);
   }

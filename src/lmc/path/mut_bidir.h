@@ -39,8 +39,8 @@
  *   a(x -> y) = min(1, f(y) T(y -> x) / (f(x) T(x -> y)))
  * (f's luminance) then satisfies detailed balance. A generated y whose own
  * split has density zero under this rule (a delta lobe at a connection, a
- * light-side refraction through a delta lobe, a mixed BSDF's delta lobe) is
- * not proposed: the chain stays, as on any failed generation.
+ * mixed BSDF's delta lobe) is not proposed: the chain stays, as on any
+ * failed generation.
  *
  * The densities come from y's caches (pathspace.h), so that T is O(ka) per
  * split sum; mut_bidir_density with scratch = 1 recomputes them instead

@@ -87,7 +87,7 @@ static int ps__side_ok(const surface_hit *h, vec3 w) {
 }
 
 int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, rgb *OUT_f,
-                  double *OUT_prob, int *OUT_trans) {
+                  double *OUT_prob, int *OUT_trans, double *OUT_eta) {
   const surface_hit *h = &v->hit;
   vec3 wo_l = frame_to_local(&h->sh, wo), wi_l = frame_to_local(&h->sh, wi);
   /* Each delta model of lmc picks its lobe by u_lobe against a threshold:
@@ -101,6 +101,7 @@ int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, r
     *OUT_f = bs.f;
     *OUT_prob = bs.pdf;
     *OUT_trans = (bs.flags & BSDF_TRANSMISSION) != 0;
+    if (OUT_eta) *OUT_eta = bs.eta;
     return 1;
   }
   return 0;
@@ -134,7 +135,8 @@ static rgb ps__scatter_factor(const ps_path *p, int i) {
     double prob;
     int trans;
     if (!ps__side_ok(h, wc) || !ps__side_ok(h, wl)) return rgb_zero();
-    if (!ps_delta_lobe(&x->v, wc, wl, TRANSPORT_RADIANCE, &f, &prob, &trans)) return rgb_zero();
+    if (!ps_delta_lobe(&x->v, wc, wl, TRANSPORT_RADIANCE, &f, &prob, &trans, NULL))
+      return rgb_zero();
     return rgb_scale(f, fabs(frame_to_local(&h->sh, wl).z) / cg);
   }
   bdpt_vertex tmp = x->v;
@@ -174,19 +176,27 @@ static double ps__to_area(const ps_context *ctx, const ps_path *p, double pdf_sa
 }
 
 /* Density of vertex `to` sampled through the delta lobe of vertex s that
- * was reached from `from`; zero from the light side through a refraction
- * (pathspace.h). */
+ * was reached from `from`, in the reduced measure of f (pathspace.h: the
+ * lobe's Dirac in the direction towards the light). From the light side
+ * the walk's Dirac is in the direction towards the camera, w_c = wi, so a
+ * refraction's density carries |dw_l / dw_c| = eta^2 |cos w_c| / |cos w_l|
+ * (the radiance invariant eta^2 cos dw, eta = eta_c / eta_l the sample's
+ * relative index); a reflection's Jacobian is 1. */
 static double ps__delta_density(const ps_context *ctx, const ps_path *p, int s, int from, int to,
                                 int light_side) {
   const surface_hit *h = &p->x[s].v.hit;
   vec3 wo = ps__dir(p, s, from), wi = ps__dir(p, s, to);
   if (!ps__side_ok(h, wo) || !ps__side_ok(h, wi)) return 0.0;
   rgb f;
-  double prob;
+  double prob, eta = 1.0;
   int trans;
   transport_mode mode = light_side ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE;
-  if (!ps_delta_lobe(&p->x[s].v, wo, wi, mode, &f, &prob, &trans)) return 0.0;
-  if (light_side && trans) return 0.0;
+  if (!ps_delta_lobe(&p->x[s].v, wo, wi, mode, &f, &prob, &trans, &eta)) return 0.0;
+  if (light_side && trans) {
+    double cl = fabs(frame_to_local(&h->sh, wo).z), cc = fabs(frame_to_local(&h->sh, wi).z);
+    if (!(cl > 0.0)) return 0.0;
+    prob *= eta * eta * cc / cl;
+  }
   return ps__to_area(ctx, p, prob, s, to);
 }
 

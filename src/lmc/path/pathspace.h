@@ -30,10 +30,12 @@
  * |cos| / d^2, so that f and every density carry the same Dirac, which
  * cancels in the acceptance ratio. The lobe is found by sampling
  * (ps_delta_lobe); its probability is the same in both directions for every
- * delta lobe lmc has (Fresnel at the same angle). A refraction's Dirac is
- * not the same function of the two directions, so a vertex sampled from the
- * light side through a delta transmission gets density 0 (the mutation
- * then never proposes it from that side; mut_bidir.c). Delta lobes of mixed
+ * delta lobe lmc has (Fresnel at the same angle). The Dirac is the one in
+ * the direction towards the light, as f's; a vertex sampled from the light
+ * side through a refraction, whose walk's Dirac is in the direction towards
+ * the camera, carries the change of measure between the two,
+ * |dw_l / dw_c| = eta^2 |cos w_c| / |cos w_l| (1 for reflections and
+ * thindielectric). Delta lobes of mixed
  * BSDFs (plastic's coating, a mask's pass-through) are not part of this
  * path space: f and the densities see their smooth lobes only.
  *
@@ -106,9 +108,10 @@ int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k
 int ps_vertex_mixed_delta(const bdpt_vertex *v);
 /* A surface vertex's delta lobe that maps wo to wi (unit, world): its
  * reduced value (bs.f) and probability; *OUT_trans is 1 for a
- * transmission. Returns 0 when no lobe does. */
+ * transmission; *OUT_eta (may be NULL) the relative index eta_wi / eta_wo
+ * it crosses (1 for a reflection). Returns 0 when no lobe does. */
 int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, rgb *OUT_f,
-                  double *OUT_prob, int *OUT_trans);
+                  double *OUT_prob, int *OUT_trans, double *OUT_eta);
 
 /* The densities of vertex i from the geometry (what ps_update caches). */
 double ps_density_cam(const ps_context *ctx, const ps_path *p, int i);

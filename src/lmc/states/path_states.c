@@ -26,13 +26,11 @@
  * proposal (mut_bidir.h's statuses) leaves x, splatted with weight 1.
  *
  * What this path space leaves out (pathspace.h): lights at infinity
- * (constant, envmap, sunsky, directional), the delta lobes of BSDFs that
- * mix delta and smooth lobes (plastic's coating, a mask's pass-through),
- * and light-side walks through a delta refraction (such paths need a
- * camera-side walk or a connection to be generated, which a point or spot
- * light behind glass does not allow). A scene with any of them gets a
- * warning naming it before the render (their light is missing from the
- * image), and --strict refuses it.
+ * (constant, envmap, sunsky, directional) and the delta lobes of BSDFs
+ * that mix delta and smooth lobes (plastic's coating, a mask's
+ * pass-through). A scene with any of them gets a warning naming it before
+ * the render (their light is missing from the image), and --strict
+ * refuses it.
  */
 #include "lmc/states/path_states.h"
 
@@ -181,18 +179,14 @@ static int64_t path__chain_rays(const mc_chain *c) {
 /* What of the scene this path space leaves out, said before the render
  * (the opening comment); under --strict an error. */
 static lmc_status path__check_scene(const scene *s, const render_settings *rs, lmc_error *err) {
-  int infinite = 0, mixed = 0, delta_lights = 0, refract = 0;
+  int infinite = 0, mixed = 0;
   for (int i = 0; i < s->n_lights; i++) {
     light_type t = s->lights[i].type;
     infinite += t != LIGHT_AREA && t != LIGHT_POINT && t != LIGHT_SPOT;
-    delta_lights += t == LIGHT_POINT || t == LIGHT_SPOT;
   }
   for (int i = 0; i < s->n_bsdfs; i++) {
     const bsdf *b = &s->bsdfs[i];
-    int fl = bsdf_flags(b);
-    int pure = bsdf_is_delta(b) && !b->masked;
-    mixed += (fl & BSDF_DELTA) && !pure;
-    refract += pure && (fl & BSDF_TRANSMISSION);
+    mixed += (bsdf_flags(b) & BSDF_DELTA) && !(bsdf_is_delta(b) && !b->masked);
   }
   char what[256] = "";
   if (infinite)
@@ -202,9 +196,6 @@ static lmc_status path__check_scene(const scene *s, const render_settings *rs, l
     snprintf(what + strlen(what), sizeof what - strlen(what),
              "%sthe delta lobes of %d BSDF(s) that mix delta and smooth lobes (plastic, mask)",
              *what ? ", " : "", mixed);
-  if (delta_lights && refract)
-    snprintf(what + strlen(what), sizeof what - strlen(what),
-             "%spaths from point or spot lights through glass", *what ? ", " : "");
   if (!*what) return LMC_OK;
   if (rs->strict)
     return lmc_error_set(err, LMC_ESTRICT, s->path, 0,
