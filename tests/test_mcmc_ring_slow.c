@@ -1,10 +1,9 @@
 /*
- * test_mcmc_ring_slow.c: pssmlt and mmlt agree with bdpt on the
- * ring-caustics scenes (scenes/ring-caustics, scenes/ring-caustics-glass)
- * at 64x48, and path-space MLT (mlt) on the Cornell box (scenes/cornell-box;
- * the rings' constant environment is outside its path space) at 32x32 with
- * 512 samples and mutations per pixel: in the image mean and in the means
- * of a 4 x 4 grid of regions. This is the guard against start-up bias and
+ * test_mcmc_ring_slow.c: pssmlt, mmlt and path-space MLT (mlt) agree with
+ * bdpt on the ring-caustics scenes (scenes/ring-caustics,
+ * scenes/ring-caustics-glass) at 64x48, and mlt on the Cornell box
+ * (scenes/cornell-box) at 32x32 with 512 samples and mutations per pixel:
+ * in the image mean and in the means of a 4 x 4 grid of regions. This is the guard against start-up bias and
  * wrong normalisation.
  *
  * Variance: each integrator renders R = 5 independent seeds (MCMC: each with
@@ -13,8 +12,8 @@
  * MCMC mean must lie within 6.5 sqrt(SE_mcmc^2 + SE_bdpt^2) of bdpt's. The
  * difference over its estimated standard error follows roughly a Student t
  * with about 8 degrees of freedom (Welch), P(|t| > 6.5) ~ 2e-4 per check;
- * over the (2 x 2 + 1) x 17 = 85 checks the chance of a false alarm is
- * about 1.7%.
+ * over the (2 x 3 + 1) x 17 = 119 checks the chance of a false alarm is
+ * about 2.4%.
  * Equal effort: --spp 80 (Cornell box: 512) for every integrator (MCMC:
  * mutations per pixel).
  * The bootstrap is the default, adaptive one (mmlt: Neyman-allocated over
@@ -101,20 +100,19 @@ static void check_scene(const char *folder, int w, int h, int64_t spp, const cha
   scene_destroy(s);
 }
 
-static const char *const g_pss[2] = {"pssmlt", "mmlt"};
+static const char *const g_pss[3] = {"pssmlt", "mmlt", "mlt"};
 
 static void test_ring_caustics(void **state) {
   (void)state;
-  check_scene("ring-caustics", 64, 48, 80, g_pss, 2);
+  check_scene("ring-caustics", 64, 48, 80, g_pss, 3);
 }
 
 static void test_ring_caustics_glass(void **state) {
   (void)state;
-  check_scene("ring-caustics-glass", 64, 48, 80, g_pss, 2);
+  check_scene("ring-caustics-glass", 64, 48, 80, g_pss, 3);
 }
 
-/* Path-space MLT on the Cornell box (an area light, a glass sphere): the
- * ring scenes' constant environment is outside its path space. */
+/* Path-space MLT on the Cornell box too (an area light, a glass sphere). */
 static void test_cornell_box_mlt(void **state) {
   (void)state;
   static const char *const mlt[1] = {"mlt"};
@@ -123,7 +121,7 @@ static void test_cornell_box_mlt(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, (2 * 2 + 1) * N_STATS);
+  assert_int_equal(g_checks, (2 * 3 + 1) * N_STATS);
 }
 
 int main(void) {

@@ -7,7 +7,8 @@
  * diffuse floor and wall with a mirror sphere, a glass sphere and a point
  * light (delta lobes, a delta-position light, the pinhole), and `caustic`,
  * a point light above a glass sphere over a floor (light subpaths through
- * refractions). Paths of 1 to KMAX = 4 segments.
+ * refractions), and `env`, spheres under a constant environment (endpoints
+ * at infinity). Paths of 1 to KMAX = 4 segments.
  *
  *  - f_matches_bdpt: a state made from a BDPT sample's strategy (s, t)
  *    (s != 1) has f / p equal to bdpt_connect's unweighted contribution
@@ -116,8 +117,33 @@ static const char *caustic_xml =
     "<rgb name=\"intensity\" value=\"8, 8, 7\"/></emitter>\n"
     "</scene>\n";
 
+/* A diffuse floor, a diffuse and a mirror sphere under a constant
+ * environment and a small area light: endpoints at infinity, reached by
+ * camera walks that escape and sampled by light walks from the
+ * environment's disk. */
+static const char *env_xml =
+    "<scene version=\"0.6.0\">\n"
+    "  <sensor type=\"perspective\">\n"
+    "    <float name=\"fov\" value=\"50\"/>\n"
+    "    <transform name=\"toWorld\"><lookat origin=\"0, 1.5, 5\" target=\"0, 0.5, 0\" up=\"0, 1, 0\"/></transform>\n"
+    "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"12\"/>"
+    "<rfilter type=\"box\"/></film>\n"
+    "  </sensor>\n"
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/>"
+    "<scale x=\"3\" y=\"1\" z=\"3\"/></transform>"
+    "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6\"/></bsdf></shape>\n"
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"-0.7\" y=\"0.6\" z=\"0\"/><float name=\"radius\" value=\"0.6\"/>"
+    "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.3, 0.5, 0.7\"/></bsdf></shape>\n"
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"0.8\" y=\"0.5\" z=\"0.3\"/><float name=\"radius\" value=\"0.5\"/>"
+    "<bsdf type=\"conductor\"><string name=\"material\" value=\"Ag\"/></bsdf></shape>\n"
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/>"
+    "<scale value=\"0.3\"/><translate y=\"2.5\"/></transform>"
+    "<emitter type=\"area\"><rgb name=\"radiance\" value=\"20\"/></emitter></shape>\n"
+    "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.4, 0.5, 0.6\"/></emitter>\n"
+    "</scene>\n";
+
 typedef struct fixture {
-  scene *sc[3]; /* diffuse, delta, caustic */
+  scene *sc[4]; /* diffuse, delta, caustic, env */
 } fixture;
 
 static scene *load(const char *xml, const char *tag) {
@@ -142,7 +168,8 @@ static int setup(void **state) {
   fx->sc[0] = load(diffuse_xml, "diffuse");
   fx->sc[1] = load(delta_xml, "delta");
   fx->sc[2] = load(caustic_xml, "caustic");
-  if (!fx->sc[0] || !fx->sc[1] || !fx->sc[2]) return -1;
+  fx->sc[3] = load(env_xml, "env");
+  if (!fx->sc[0] || !fx->sc[1] || !fx->sc[2] || !fx->sc[3]) return -1;
   *state = fx;
   return 0;
 }
@@ -152,6 +179,7 @@ static int teardown(void **state) {
   scene_destroy(fx->sc[0]);
   scene_destroy(fx->sc[1]);
   scene_destroy(fx->sc[2]);
+  scene_destroy(fx->sc[3]);
   free(fx);
   return 0;
 }
@@ -175,7 +203,8 @@ static int rgb_close(rgb a, rgb b, double tol) {
 /* ---- f against BDPT's strategies --------------------------------------------- */
 
 static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *OUT_delta,
-                         int *OUT_pdf_checks, int *OUT_skipped, int *OUT_light_delta) {
+                         int *OUT_pdf_checks, int *OUT_skipped, int *OUT_light_delta,
+                         int *OUT_inf) {
   ps_context ctx;
   context(sc, &ctx);
   ps_path *x = malloc(sizeof *x);
@@ -203,6 +232,7 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
         for (int i = 0; i < t; i++) p *= x->x[i].pdf_cam, pb *= cam[i].pdf_fwd;
         for (int j = 0; j < s; j++) p *= x->x[x->k - j].pdf_light, pb *= lp[j].pdf_fwd;
         for (int i = 1; i < x->k; i++) delta |= x->x[i].delta;
+        *OUT_inf += x->x[x->k].inf;
         int light_delta = 0;
         for (int j = 1; j < s; j++) light_delta |= lp[j].delta;
         /* A strategy the path space gives no density (none expected). */
@@ -235,21 +265,25 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
 
 static void test_f_matches_bdpt(void **state) {
   fixture *fx = *state;
-  int checks[3] = {0}, delta[3] = {0}, pdfs[3] = {0}, skipped[3] = {0}, light_delta[3] = {0};
-  for (int q = 0; q < 3; q++)
+  int checks[4] = {0}, delta[4] = {0}, pdfs[4] = {0}, skipped[4] = {0}, light_delta[4] = {0};
+  int inf[4] = {0};
+  for (int q = 0; q < 4; q++)
     check_f_bdpt(fx->sc[q], 11 + q, &checks[q], &delta[q], &pdfs[q], &skipped[q],
-                 &light_delta[q]);
+                 &light_delta[q], &inf[q]);
   print_message("f vs bdpt: diffuse %d (densities %d), delta %d (%d through delta lobes, "
-                "densities %d), caustic %d (%d with light subpaths through the glass); %d, %d, %d "
-                "without a density\n",
+                "densities %d), caustic %d (%d with light subpaths through the glass), env %d "
+                "(%d ending at infinity, densities %d); %d, %d, %d, %d without a density\n",
                 checks[0], pdfs[0], checks[1], delta[1], pdfs[1], checks[2], light_delta[2],
-                skipped[0], skipped[1], skipped[2]);
-  for (int q = 0; q < 3; q++) assert_int_equal(skipped[q], 0);
+                checks[3], inf[3], pdfs[3], skipped[0], skipped[1], skipped[2], skipped[3]);
+  for (int q = 0; q < 4; q++) assert_int_equal(skipped[q], 0);
   assert_true(checks[0] >= 2000 && pdfs[0] == checks[0]);
   assert_true(checks[1] >= 1000 && delta[1] >= 50 && pdfs[1] >= 500);
   /* The light side's refractions carry the change of measure between the
    * two directions' Diracs: f / p against bdpt's own throughput. */
   assert_true(checks[2] >= 1000 && light_delta[2] >= 200);
+  /* Endpoints at infinity: the camera's escapes and the environment's
+   * own light walks, against bdpt's. */
+  assert_true(checks[3] >= 1000 && inf[3] >= 500 && pdfs[3] >= 500);
 }
 
 /* ---- Cached against scratch, detailed balance --------------------------------- */
@@ -351,8 +385,8 @@ static void check_chains(const scene *sc, uint64_t seed, int *OUT_checks, int *O
 
 static void test_cached_vs_scratch(void **state) {
   fixture *fx = *state;
-  static const char *const names[3] = {"diffuse", "delta", "caustic"};
-  for (int q = 0; q < 3; q++) {
+  static const char *const names[4] = {"diffuse", "delta", "caustic", "env"};
+  for (int q = 0; q < 4; q++) {
     int checks = 0, shapes = 0, whole = 0, balance = 0, delta = 0;
     check_chains(fx->sc[q], 21 + q, &checks, &shapes, &whole, &balance, &delta);
     print_message("%s: %d proposals checked, %d shapes (kd, ka, lc), %d whole-path, %d balance, "
@@ -453,8 +487,8 @@ static inv_result invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term
 
 static void test_invariance(void **state) {
   fixture *fx = *state;
-  static const char *const names[3] = {"diffuse", "delta", "caustic"};
-  for (int q = 0; q < 3; q++) {
+  static const char *const names[4] = {"diffuse", "delta", "caustic", "env"};
+  for (int q = 0; q < 4; q++) {
     /* The caustic scene's whole paths carry light more rarely: more draws. */
     inv_result r = invariance(fx->sc[q], 31 + q, MUT_BIDIR_BIAS_NONE, 1.0, q == 2 ? 6000000 : 2000000);
     print_message("%s: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n", names[q],

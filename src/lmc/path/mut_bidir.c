@@ -232,16 +232,24 @@ static int mut_bidir__light_side(const mut_bidir *mb, mut_bidir__smp *smp, const
   const ps_vertex *xm = &x->x[m];
   vec3 dir;
   double pdf;
-  if (m == x->k) {
+  vec3 org = xm->v.p;
+  if (m == x->k && xm->inf) {
+    /* A kept direction at infinity: a fresh origin on the disk its rays
+     * leave from, as light_sample_le's. */
+    double u1 = rng_uniform(smp->r), u2 = rng_uniform(smp->r);
+    dir = xm->v.dir;
+    org = light_disk_point(sc, dir, u1, u2);
+    pdf = light_disk_pdf(sc);
+  } else if (m == x->k) {
     const light *lt = &sc->lights[xm->v.light];
     double u3 = rng_uniform(smp->r), u4 = rng_uniform(smp->r);
     if (!light_sample_dir(lt, xm->v.n, u3, u4, &dir, &pdf)) return 0;
   } else {
-    vec3 wo = v3_normalize(v3_sub(x->x[m + 1].v.p, xm->v.p));
+    vec3 wo = ps_dir(x, m, m + 1);
     if (!mut_bidir__scatter(xm, wo, TRANSPORT_IMPORTANCE, smp->r, &dir, &pdf)) return 0;
   }
   tmp[0] = xm->v;
-  int n = bdpt_continue_subpath(sc, &ctx->rs, &smp->base, TRANSPORT_IMPORTANCE, tmp[0].p, dir, pdf,
+  int n = bdpt_continue_subpath(sc, &ctx->rs, &smp->base, TRANSPORT_IMPORTANCE, org, dir, pdf,
                                 tmp, 1, mc + 1, cnt);
   if (n != mc + 1) return 0;
   for (int j = 1; j <= mc; j++) y->x[last - j + 1].v = tmp[j];
@@ -290,7 +298,11 @@ void mut_bidir_finish(const mut_bidir *mb, const ps_path *x, const mut_bidir_rec
   int a = l + rec->lc;
   int joined = !(l + ka == k2 + 1 && rec->mc == 0);
   y->rays += joined;
-  if (joined && scene_occluded_segment(mb->ctx->sc, y->x[a].v.p, y->x[a + 1].v.p)) {
+  const scene *sc = mb->ctx->sc;
+  int blocked = joined && (y->x[a + 1].inf
+                               ? scene_occluded_ray(sc, y->x[a].v.p, v3_neg(y->x[a + 1].v.dir))
+                               : scene_occluded_segment(sc, y->x[a].v.p, y->x[a + 1].v.p));
+  if (blocked) {
     y->f = rgb_zero();
     y->lum = 0.0;
     return;

@@ -23,7 +23,8 @@ void ps_context_init(ps_context *ctx, const scene *sc, const render_settings *rs
   ctx->kmax = PS_MAX_VERTICES - 1;
   if (rs->maxdepth >= 0 && rs->maxdepth < ctx->kmax) ctx->kmax = rs->maxdepth;
   for (int i = 0; i < sc->n_lights; i++)
-    if (sc->lights[i].type == LIGHT_AREA) ctx->can_hit_emitter = 1;
+    if (sc->lights[i].type == LIGHT_AREA || light_is_infinite(&sc->lights[i]))
+      ctx->can_hit_emitter = 1;
 }
 
 /* ---- Vertex queries -------------------------------------------------------- */
@@ -39,9 +40,17 @@ static int ps__light(const ps_context *ctx, const bdpt_vertex *v) {
   return v->light;
 }
 
+/* An endpoint of the infinite lights (constant, envmap, sunsky; not
+ * directional): a direction; its emission is that of every infinite light
+ * together (bdpt's escaped camera ray, light -1, or one light's sample). */
+static int ps__infinite(const ps_context *ctx, const bdpt_vertex *v) {
+  if (v->type != BDPT_VERTEX_LIGHT) return 0;
+  return v->light < 0 || light_is_infinite(&ctx->sc->lights[v->light]);
+}
+
 int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k) {
   if (index == 0) return v->type == BDPT_VERTEX_CAMERA;
-  if (index == k) return ps__light(ctx, v) >= 0;
+  if (index == k) return ps__light(ctx, v) >= 0 || ps__infinite(ctx, v);
   return v->type == BDPT_VERTEX_SURFACE;
 }
 
@@ -66,8 +75,11 @@ int ps_unhittable(const ps_context *ctx, const ps_path *p, int i) {
          light_is_delta(&ctx->sc->lights[v->light]);
 }
 
-/* Unit direction from vertex a to vertex b of p. */
-static vec3 ps__dir(const ps_path *p, int a, int b) {
+/* Unit direction from vertex a to vertex b of p (against the light's
+ * travel when b is at infinity). */
+vec3 ps_dir(const ps_path *p, int a, int b) {
+  if (p->x[b].inf) return v3_neg(p->x[b].v.dir);
+  if (p->x[a].inf) return p->x[a].v.dir;
   return v3_normalize(v3_sub(p->x[b].v.p, p->x[a].v.p));
 }
 
@@ -113,10 +125,18 @@ int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, r
 static rgb ps__emitted(const ps_context *ctx, const ps_path *p) {
   int k = p->k;
   const bdpt_vertex *v = &p->x[k].v;
+  if (p->x[k].inf) {
+    /* Every infinite light's radiance from that direction. */
+    rgb le = rgb_zero();
+    for (int j = 0; j < ctx->sc->n_infinite; j++)
+      le = rgb_add(le, light_le_infinite(&ctx->sc->lights[ctx->sc->infinite_lights[j]],
+                                         v3_neg(v->dir)));
+    return le;
+  }
   int li = ps__light(ctx, v);
   if (li < 0) return rgb_zero();
   const light *l = &ctx->sc->lights[li];
-  if (l->type == LIGHT_AREA) return light_le_area(l, v->n, ps__dir(p, k, k - 1));
+  if (l->type == LIGHT_AREA) return light_le_area(l, v->n, ps_dir(p, k, k - 1));
   /* Point and spot lights: the intensity towards x_{k-1}. */
   light_li_sample ls;
   if (!light_sample_li(l, ctx->sc, p->x[k - 1].v.p, 0.5, 0.5, &ls)) return rgb_zero();
@@ -126,7 +146,7 @@ static rgb ps__emitted(const ps_context *ctx, const ps_path *p) {
 /* f_s at surface vertex i: f(w_cam, w_light) |w_light . n_s| / |w_light . n_g|. */
 static rgb ps__scatter_factor(const ps_path *p, int i) {
   const ps_vertex *x = &p->x[i];
-  vec3 wc = ps__dir(p, i, i - 1), wl = ps__dir(p, i, i + 1);
+  vec3 wc = ps_dir(p, i, i - 1), wl = ps_dir(p, i, i + 1);
   double cg = fabs(v3_dot(wl, x->v.n));
   if (!(cg > 0.0)) return rgb_zero();
   if (x->delta) {
@@ -148,7 +168,7 @@ static rgb ps__scatter_factor(const ps_path *p, int i) {
 static rgb ps__factor(const ps_context *ctx, ps_path *p, int i) {
   if (i == 0) {
     double rx = -1.0, ry = -1.0;
-    double we = camera_we(&ctx->sc->cam, ps__dir(p, 0, 1), &rx, &ry);
+    double we = camera_we(&ctx->sc->cam, ps_dir(p, 0, 1), &rx, &ry);
     p->rx = rx, p->ry = ry;
     return rgb_gray(we);
   }
@@ -156,8 +176,10 @@ static rgb ps__factor(const ps_context *ctx, ps_path *p, int i) {
   return ps__scatter_factor(p, i);
 }
 
-/* G(x_i, x_{i+1}). */
+/* G(x_i, x_{i+1}); towards a direction at infinity |cos| at x_i alone
+ * (its measure is solid angle). */
 static double ps__geometry(const ps_context *ctx, const ps_path *p, int i) {
+  if (p->x[i + 1].inf) return ps__cos(ctx, p, i, ps_dir(p, i, i + 1));
   vec3 d = v3_sub(p->x[i + 1].v.p, p->x[i].v.p);
   double d2 = v3_len2(d);
   if (!(d2 > 0.0)) return 0.0;
@@ -167,8 +189,10 @@ static double ps__geometry(const ps_context *ctx, const ps_path *p, int i) {
 
 /* ---- Densities ------------------------------------------------------------------ */
 
-/* A solid-angle density at vertex a of the direction to b, per unit area at b. */
+/* A solid-angle density at vertex a of the direction to b, per unit area at
+ * b (unchanged when b is a direction at infinity). */
 static double ps__to_area(const ps_context *ctx, const ps_path *p, double pdf_sa, int a, int b) {
+  if (p->x[b].inf) return pdf_sa;
   vec3 d = v3_sub(p->x[b].v.p, p->x[a].v.p);
   double d2 = v3_len2(d);
   if (!(d2 > 0.0)) return 0.0;
@@ -185,7 +209,7 @@ static double ps__to_area(const ps_context *ctx, const ps_path *p, double pdf_sa
 static double ps__delta_density(const ps_context *ctx, const ps_path *p, int s, int from, int to,
                                 int light_side) {
   const surface_hit *h = &p->x[s].v.hit;
-  vec3 wo = ps__dir(p, s, from), wi = ps__dir(p, s, to);
+  vec3 wo = ps_dir(p, s, from), wi = ps_dir(p, s, to);
   if (!ps__side_ok(h, wo) || !ps__side_ok(h, wi)) return 0.0;
   rgb f;
   double prob, eta = 1.0;
@@ -224,11 +248,13 @@ double ps_density_light(const ps_context *ctx, const ps_path *p, int i) {
 void ps_update(const ps_context *ctx, ps_path *p, int lo, int hi) {
   if (lo < 0) lo = 0;
   if (hi > p->k) hi = p->k;
-  /* The delta flags first: the densities of neighbours read them. */
+  /* The delta and infinity flags first: the densities of neighbours read
+   * them. */
   for (int i = lo; i <= hi; i++) {
     const bdpt_vertex *v = &p->x[i].v;
     p->x[i].delta = i > 0 && i < p->k && v->type == BDPT_VERTEX_SURFACE &&
                     ps__pure_delta(v->hit.bsdf);
+    p->x[i].inf = i == p->k && ps__infinite(ctx, v);
   }
   for (int i = lo; i <= hi; i++) {
     ps_vertex *x = &p->x[i];

@@ -5,9 +5,11 @@
  *
  * Indexing. A path of length k (segments) is x_0 ... x_k: x_0 the pinhole,
  * x_1 ... x_{k-1} scattering surfaces, x_k a point on an emitter (an area
- * light, hit or sampled, or a point or spot light). Vertices are bdpt's
- * records (bdpt_vertex, integrator.h); lights at infinity (environment,
- * constant, directional) are not represented (ps_from_bdpt refuses them).
+ * light, hit or sampled, or a point or spot light) or a direction at
+ * infinity (the infinite lights together: constant, envmap, sunsky; an
+ * escaped camera walk or an environment's light walk). Vertices are bdpt's
+ * records (bdpt_vertex, integrator.h); directional lights are not
+ * represented (ps_from_bdpt refuses them).
  *
  * Measure and contribution. f is the measurement contribution in the area
  * measure of every vertex, for the whole film (camera.h's We, normalised per
@@ -21,7 +23,12 @@
  * walks both estimate it (integrator_bdpt.c). The chain's target is the
  * luminance of f. Densities are in the same area measure; the pinhole and
  * point lights are discrete positions (their density is the probability of
- * choosing them).
+ * choosing them). An endpoint at infinity is measured in solid angle: its
+ * edge's G is |cos| at x_{k-1} alone, its emission every infinite light's
+ * radiance from that direction, its density from the camera side the
+ * direction's, from the light side the direction's summed over the
+ * infinite lights (bdpt's), and x_{k-1}'s from the light side the disk
+ * density of the environment's rays (light_disk_point) times |cos|.
  *
  * Degenerate vertices. A surface whose BSDF is all delta lobes (conductor,
  * dielectric, thindielectric; `delta` below) carries its lobe reduced by
@@ -57,6 +64,8 @@
 typedef struct ps_vertex {
   bdpt_vertex v;    /* position, normal, hit and light index (bdpt's record) */
   int delta;        /* a surface whose BSDF is all delta lobes */
+  int inf;          /* the endpoint of an infinite light: a direction (v.dir, the way the
+                       light travels), not a point */
   rgb fac;          /* its factor of f: We (x_0), f_s (surfaces), Le (x_k) */
   double pdf_cam;   /* area density when sampled from the camera side */
   double pdf_light; /* area density when sampled from the light side */
@@ -95,7 +104,7 @@ void ps_eval(const ps_context *ctx, ps_path *p);
 /* The path cam[0 .. t-1] joined with lp[s-1 .. 0] (bdpt's strategy (s, t):
  * s = 0, cam[t-1] on an emitter; t = 1, the pinhole joined to lp[s-1]),
  * evaluated (ps_eval; f may be 0). Returns 0 when the path is not one of
- * this space's (a light at infinity, a length beyond PS_MAX_VERTICES, a
+ * this space's (a directional light, a length beyond PS_MAX_VERTICES, a
  * delta lobe of a mixed BSDF). */
 int ps_from_bdpt(const ps_context *ctx, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                  int s, ps_path *OUT_p);
@@ -112,6 +121,10 @@ int ps_vertex_mixed_delta(const bdpt_vertex *v);
  * it crosses (1 for a reflection). Returns 0 when no lobe does. */
 int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, rgb *OUT_f,
                   double *OUT_prob, int *OUT_trans, double *OUT_eta);
+
+/* Unit direction from vertex a to vertex b of p (against the light's
+ * travel when b is a direction at infinity). */
+vec3 ps_dir(const ps_path *p, int a, int b);
 
 /* The densities of vertex i from the geometry (what ps_update caches). */
 double ps_density_cam(const ps_context *ctx, const ps_path *p, int i);

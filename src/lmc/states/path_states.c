@@ -25,9 +25,8 @@
  * 1 - a, each as f(path) at the path's raster point; a move that makes no
  * proposal (mut_bidir.h's statuses) leaves x, splatted with weight 1.
  *
- * What this path space leaves out (pathspace.h): lights at infinity
- * (constant, envmap, sunsky, directional) and the delta lobes of BSDFs
- * that mix delta and smooth lobes (plastic's coating, a mask's
+ * What this path space leaves out (pathspace.h): directional lights and
+ * the delta lobes of BSDFs that mix delta and smooth lobes (plastic's coating, a mask's
  * pass-through). A scene with any of them gets a warning naming it before
  * the render (their light is missing from the image), and --strict
  * refuses it.
@@ -182,7 +181,7 @@ static lmc_status path__check_scene(const scene *s, const render_settings *rs, l
   int infinite = 0, mixed = 0;
   for (int i = 0; i < s->n_lights; i++) {
     light_type t = s->lights[i].type;
-    infinite += t != LIGHT_AREA && t != LIGHT_POINT && t != LIGHT_SPOT;
+    infinite += t == LIGHT_DIRECTIONAL;
   }
   for (int i = 0; i < s->n_bsdfs; i++) {
     const bsdf *b = &s->bsdfs[i];
@@ -190,7 +189,7 @@ static lmc_status path__check_scene(const scene *s, const render_settings *rs, l
   }
   char what[256] = "";
   if (infinite)
-    snprintf(what + strlen(what), sizeof what - strlen(what), "%s%d light(s) at infinity",
+    snprintf(what + strlen(what), sizeof what - strlen(what), "%s%d directional light(s)",
              *what ? ", " : "", infinite);
   if (mixed)
     snprintf(what + strlen(what), sizeof what - strlen(what),

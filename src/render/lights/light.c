@@ -173,7 +173,7 @@ static double light__env_pdf_uv(const light *l, double u, double v, double sin_t
 
 /* A point uniformly on the disk of radius r perpendicular to unit dir,
  * centred at center - dir * r (the plane that rays along dir leave from). */
-static vec3 light__disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
+vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
   double x, y;
   warp_square_to_disk_concentric(u1, u2, &x, &y);
   frame f = frame_from_z(dir);
@@ -181,7 +181,7 @@ static vec3 light__disk_point(const struct scene *s, vec3 dir, double u1, double
   return v3_add(s->center, v3_scale(v3_sub(offset, dir), s->radius));
 }
 
-static double light__disk_pdf(const struct scene *s) {
+double light_disk_pdf(const struct scene *s) {
   return 1.0 / (M_PI * s->radius * s->radius);
 }
 
@@ -499,20 +499,20 @@ int light_sample_le(const light *l, const struct scene *s, double u1, double u2,
   }
   case LIGHT_DIRECTIONAL:
     out->dir = l->frm.n;
-    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->p = light_disk_point(s, out->dir, u1, u2);
     out->n = out->dir;
     out->le = l->value;
-    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_pos = light_disk_pdf(s);
     out->pdf_dir = 1.0;
     out->delta_dir = 1;
     return 1;
   case LIGHT_CONSTANT:
     /* Travel direction uniform (u3, u4); radiance arrives from -dir. */
     out->dir = warp_square_to_uniform_sphere(u3, u4);
-    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->p = light_disk_point(s, out->dir, u1, u2);
     out->n = out->dir;
     out->le = l->value;
-    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_pos = light_disk_pdf(s);
     out->pdf_dir = 1.0 / (4.0 * M_PI);
     return 1;
   case LIGHT_ENVMAP: {
@@ -523,10 +523,10 @@ int light_sample_le(const light *l, const struct scene *s, double u1, double u2,
     vec3 w_env = light__env_uv_to_dir(l, uv[0], uv[1], &sin_theta);
     if (!(sin_theta > 0.0) || !(pdf_uv > 0.0)) return 0;
     out->dir = v3_neg(w_env);
-    out->p = light__disk_point(s, out->dir, u1, u2);
+    out->p = light_disk_point(s, out->dir, u1, u2);
     out->n = out->dir;
     out->le = light__env_eval_uv(l, uv[0], uv[1]);
-    out->pdf_pos = light__disk_pdf(s);
+    out->pdf_pos = light_disk_pdf(s);
     out->pdf_dir = pdf_uv / (2.0 * M_PI * M_PI * sin_theta);
     return isfinite(out->pdf_dir);
   }
@@ -553,15 +553,15 @@ void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 di
                                                      : 0.0;
     break;
   case LIGHT_DIRECTIONAL:
-    pdf_pos = light__disk_pdf(s);
+    pdf_pos = light_disk_pdf(s);
     pdf_dir = 1.0;
     break;
   case LIGHT_CONSTANT:
-    pdf_pos = light__disk_pdf(s);
+    pdf_pos = light_disk_pdf(s);
     pdf_dir = 1.0 / (4.0 * M_PI);
     break;
   case LIGHT_ENVMAP:
-    pdf_pos = light__disk_pdf(s);
+    pdf_pos = light_disk_pdf(s);
     pdf_dir = light_pdf_li(l, s, p, v3_neg(dir), p, n);
     break;
   }

@@ -117,6 +117,14 @@ int light_sample_le(const light *l, const struct scene *s, double u1, double u2,
 void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 dir,
                   double *OUT_pdf_pos, double *OUT_pdf_dir);
 
+/* The origin light_sample_le gives a ray of an infinite or directional
+ * light travelling along the unit dir: a point uniform (density
+ * 1 / (pi r^2)) on the disk of the scene's bounding radius r perpendicular
+ * to dir, centred at the scene's centre minus r dir. */
+vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2);
+/* Its density, 1 / (pi r^2). */
+double light_disk_pdf(const struct scene *s);
+
 /* The direction part of light_sample_le at a given point of a finite light
  * (area: cosine-weighted about the point's normal n; point: uniform; spot:
  * uniform in the cone): the same direction light_sample_le makes from
