@@ -14,9 +14,9 @@
  *   its statistics count the moves proposed and accepted.
  * - Determinism under --spp: the same seed gives a bit-identical film with
  *   1 and 2 threads; another seed a different one.
- * - A scene with what the path space leaves out (mask.xml: a mask's
- *   pass-through lobe, a delta lobe of a mixed BSDF) is said once before
- *   the render (a warning) and refused under --strict (LMC_ESTRICT).
+ * - A scene with what the path space leaves out (a directional light) is
+ *   said before the render (a warning; then the bootstrap's b = 0 one,
+ *   nothing else emitting) and refused under --strict (LMC_ESTRICT).
  * - A scene's <integrator type="mlt"> selects mlt, warning once that
  *   Mitsuba's perturbations are not in lmc.
  * Each test counts its checks and asserts the count.
@@ -135,20 +135,35 @@ static void test_determinism(void **state) {
 
 static void test_leaves_out(void **state) {
   (void)state;
-  scene *s = load("mask.xml");
+  const char *path = LMC_TEST_TMP "/lmc_test_mlt_sun.xml";
+  FILE *fp = fopen(path, "w");
+  assert_non_null(fp);
+  fprintf(fp, "<scene version=\"0.6.0\">\n"
+              "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" "
+              "value=\"16\"/><integer name=\"height\" value=\"12\"/></film></sensor>\n"
+              "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate z=\"-2\"/>"
+              "</transform></shape>\n"
+              "<emitter type=\"directional\"><vector name=\"direction\" x=\"0\" y=\"0\" "
+              "z=\"-1\"/></emitter>\n"
+              "</scene>\n");
+  fclose(fp);
+  scene *s = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  assert_int_equal(scene_load_xml(path, NULL, 0, &s, &err), LMC_OK);
   render_settings rs = settings(s, 1, 1, 2, "mcmc");
   film f;
   render_stats st;
-  lmc_error err;
   lmc_error_clear(&err);
   int before = lmc_warning_count();
   assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
-  assert_int_equal(lmc_warning_count() - before, 1);
+  /* The path space's warning, then the bootstrap's: nothing else emits (b = 0). */
+  assert_int_equal(lmc_warning_count() - before, 2);
   film_free(&f);
   rs.strict = 1;
   lmc_error_clear(&err);
   assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_ESTRICT);
-  assert_non_null(strstr(err.msg, "mix delta and smooth lobes"));
+  assert_non_null(strstr(err.msg, "directional light"));
   scene_destroy(s);
 }
 

@@ -2,8 +2,8 @@
  * test_pathspace.c: path-space states (src/lmc/path/pathspace.c) and
  * Veach's bidirectional mutation (mut_bidir.c) on two small built-in
  * scenes: `diffuse`, a diffuse box lit by an area light, with a plastic
- * sphere (a mixed BSDF: its coating's delta lobe is outside the path
- * space, its diffuse base inside), and `delta`, a
+ * sphere (a mixed BSDF: a vertex on it scatters through its coating's delta
+ * lobe or its diffuse base, pathspace.h), `delta`, a
  * diffuse floor and wall with a mirror sphere, a glass sphere and a point
  * light (delta lobes, a delta-position light, the pinhole), and `caustic`,
  * a point light above a glass sphere over a floor (light subpaths through
@@ -276,7 +276,8 @@ static void test_f_matches_bdpt(void **state) {
                 checks[0], pdfs[0], checks[1], delta[1], pdfs[1], checks[2], light_delta[2],
                 checks[3], inf[3], pdfs[3], skipped[0], skipped[1], skipped[2], skipped[3]);
   for (int q = 0; q < 4; q++) assert_int_equal(skipped[q], 0);
-  assert_true(checks[0] >= 2000 && pdfs[0] == checks[0]);
+  /* The plastic sphere's coating (a mixed BSDF's delta lobe) among them. */
+  assert_true(checks[0] >= 2000 && delta[0] >= 100 && pdfs[0] + delta[0] == checks[0]);
   assert_true(checks[1] >= 1000 && delta[1] >= 50 && pdfs[1] >= 500);
   /* The light side's refractions carry the change of measure between the
    * two directions' Diracs: f / p against bdpt's own throughput. */
@@ -393,7 +394,7 @@ static void test_cached_vs_scratch(void **state) {
                   "%d with delta vertices in the changed range\n",
                   names[q], checks, shapes, whole, balance, delta);
     assert_true(checks >= 1000 && shapes >= 30 && whole >= 10 && balance >= 300);
-    assert_true(q == 0 ? delta == 0 : delta >= 100);
+    assert_true(delta >= (q == 0 ? 20 : 100)); /* diffuse: the plastic's coating alone */
   }
 }
 

@@ -167,17 +167,16 @@ static double mut_bidir__next(lmc_sampler *s) { return rng_uniform(((mut_bidir__
 static void mut_bidir__stream(lmc_sampler *s, int stream) { (void)s, (void)stream; }
 
 /* Samples a direction at the kept surface vertex pv whose other neighbour
- * lies along wo (BSDF sampling in `mode`; a mixed BSDF's delta lobe is
- * refused). */
+ * lies along wo (BSDF sampling in `mode`); *OUT_delta: the lobe is a delta. */
 static int mut_bidir__scatter(const ps_vertex *pv, vec3 wo, transport_mode mode, rng *r,
-                              vec3 *OUT_dir, double *OUT_pdf) {
+                              vec3 *OUT_dir, double *OUT_pdf, int *OUT_delta) {
   const surface_hit *h = &pv->v.hit;
   vec3 wo_l = frame_to_local(&h->sh, wo);
   if (!(v3_dot(wo, h->ng) * wo_l.z > 0.0)) return 0;
   double u_lobe = rng_uniform(r), u1 = rng_uniform(r), u2 = rng_uniform(r);
   bsdf_sample bs;
   if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) return 0;
-  if ((bs.flags & BSDF_DELTA) && !pv->delta) return 0;
+  *OUT_delta = (bs.flags & BSDF_DELTA) != 0;
   vec3 wi = v3_normalize(frame_to_world(&h->sh, bs.wi));
   if (!(v3_dot(wi, h->ng) * frame_to_local(&h->sh, wi).z > 0.0)) return 0;
   *OUT_dir = wi;
@@ -201,15 +200,16 @@ static int mut_bidir__camera_side(const mut_bidir *mb, mut_bidir__smp *smp, ps_p
   } else {
     vec3 wo = v3_normalize(v3_sub(y->x[l - 1].v.p, y->x[l].v.p)), dir;
     double pdf;
-    if (!mut_bidir__scatter(&y->x[l], wo, TRANSPORT_RADIANCE, smp->r, &dir, &pdf)) return 0;
+    int delta;
+    if (!mut_bidir__scatter(&y->x[l], wo, TRANSPORT_RADIANCE, smp->r, &dir, &pdf, &delta))
+      return 0;
+    y->x[l].v.delta = delta;
     tmp[0] = y->x[l].v;
     int n = bdpt_continue_subpath(sc, &ctx->rs, &smp->base, TRANSPORT_RADIANCE, tmp[0].p, dir,
                                   pdf, tmp, 1, lc + 1, cnt);
     if (n != lc + 1) return 0;
     for (int i = 1; i <= lc; i++) y->x[l + i].v = tmp[i];
   }
-  for (int i = l + 1; i < l + lc; i++)
-    if (ps_vertex_mixed_delta(&y->x[i].v)) return 0;
   return 1;
 }
 
@@ -224,8 +224,6 @@ static int mut_bidir__light_side(const mut_bidir *mb, mut_bidir__smp *smp, const
   if (!x || m == x->k + 1) {
     if (bdpt_light_subpath(sc, &ctx->rs, &smp->base, mc, tmp, cnt) != mc) return 0;
     for (int j = 0; j < mc; j++) y->x[last - j].v = tmp[j];
-    for (int j = 1; j + 1 < mc; j++)
-      if (ps_vertex_mixed_delta(&tmp[j])) return 0;
     return 1;
   }
   /* From the kept x_m: its light's emission, or its BSDF. */
@@ -246,15 +244,15 @@ static int mut_bidir__light_side(const mut_bidir *mb, mut_bidir__smp *smp, const
     if (!light_sample_dir(lt, xm->v.n, u3, u4, &dir, &pdf)) return 0;
   } else {
     vec3 wo = ps_dir(x, m, m + 1);
-    if (!mut_bidir__scatter(xm, wo, TRANSPORT_IMPORTANCE, smp->r, &dir, &pdf)) return 0;
+    int delta;
+    if (!mut_bidir__scatter(xm, wo, TRANSPORT_IMPORTANCE, smp->r, &dir, &pdf, &delta)) return 0;
+    y->x[last + 1].v.delta = delta;
   }
   tmp[0] = xm->v;
   int n = bdpt_continue_subpath(sc, &ctx->rs, &smp->base, TRANSPORT_IMPORTANCE, org, dir, pdf,
                                 tmp, 1, mc + 1, cnt);
   if (n != mc + 1) return 0;
   for (int j = 1; j <= mc; j++) y->x[last - j + 1].v = tmp[j];
-  for (int j = 1; j < mc; j++)
-    if (ps_vertex_mixed_delta(&tmp[j])) return 0;
   return 1;
 }
 
@@ -281,6 +279,8 @@ mut_bidir_status mut_bidir_generate(const mut_bidir *mb, rng *r, const ps_path *
            mut_bidir__light_side(mb, &smp, x, m, y, l + ka - 1, mc, &cnt);
   y->rays = cnt.rays;
   if (!ok) return MUT_BIDIR_WALK_FAILED;
+  /* The connection's ends scatter through smooth lobes. */
+  if (!(l + ka == k2 + 1 && mc == 0)) y->x[l + lc].v.delta = y->x[l + lc + 1].v.delta = 0;
   int lo = l + 1 > 0 ? l + 1 : 0, hi = l + ka - 1 < k2 ? l + ka - 1 : k2;
   for (int i = lo; i <= hi; i++)
     if (!ps_vertex_fits(ctx, &y->x[i].v, i, k2)) return MUT_BIDIR_WALK_FAILED;

@@ -38,9 +38,10 @@
  * (the reverse move's is (range (l, l + ka), kd)); the acceptance
  *   a(x -> y) = min(1, f(y) T(y -> x) / (f(x) T(x -> y)))
  * (f's luminance) then satisfies detailed balance. A generated y whose own
- * split has density zero under this rule (a delta lobe at a connection, a
- * mixed BSDF's delta lobe) is not proposed: the chain stays, as on any
- * failed generation.
+ * split has density zero under this rule (a delta lobe at a connection) is
+ * not proposed: the chain stays, as on any failed generation. A kept
+ * vertex a walk scatters from anew takes the lobe the walk sampled, and the
+ * ends of the connection their smooth lobes (pathspace.h's flags).
  *
  * The densities come from y's caches (pathspace.h), so that T is O(ka) per
  * split sum; mut_bidir_density with scratch = 1 recomputes them instead

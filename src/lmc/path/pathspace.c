@@ -58,10 +58,6 @@ int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k
  * count: a masked model is mixed). */
 static int ps__pure_delta(const bsdf *b) { return b && bsdf_is_delta(b) && !b->masked; }
 
-int ps_vertex_mixed_delta(const bdpt_vertex *v) {
-  return v->type == BDPT_VERTEX_SURFACE && v->delta && !ps__pure_delta(v->hit.bsdf);
-}
-
 int ps_connectible(const ps_path *p, int i) {
   const ps_vertex *x = &p->x[i];
   if (i == 0 || i == p->k) return 1;
@@ -252,8 +248,9 @@ void ps_update(const ps_context *ctx, ps_path *p, int lo, int hi) {
    * them. */
   for (int i = lo; i <= hi; i++) {
     const bdpt_vertex *v = &p->x[i].v;
-    p->x[i].delta = i > 0 && i < p->k && v->type == BDPT_VERTEX_SURFACE &&
-                    ps__pure_delta(v->hit.bsdf);
+    const bsdf *b = v->type == BDPT_VERTEX_SURFACE ? v->hit.bsdf : NULL;
+    p->x[i].delta = i > 0 && i < p->k && b &&
+                    (ps__pure_delta(b) || (v->delta && (bsdf_flags(b) & BSDF_DELTA)));
     p->x[i].inf = i == p->k && ps__infinite(ctx, v);
   }
   for (int i = lo; i <= hi; i++) {
@@ -290,11 +287,9 @@ int ps_from_bdpt(const ps_context *ctx, const bdpt_vertex *cam, int t, const bdp
   for (int j = 0; j < s; j++) OUT_p->x[n - 1 - j].v = lp[j];
   for (int i = 0; i < n; i++)
     if (!ps_vertex_fits(ctx, &OUT_p->x[i].v, i, n - 1)) return 0;
-  /* The subpaths' own scatterings (not those at the connection). */
-  for (int i = 1; i + 1 < t; i++)
-    if (ps_vertex_mixed_delta(&cam[i])) return 0;
-  for (int j = 1; j + 1 < s; j++)
-    if (ps_vertex_mixed_delta(&lp[j])) return 0;
+  /* The connection's two ends scatter through smooth lobes; the subpaths'
+   * own scatterings keep the lobe their walk chose. */
+  if (s > 0) OUT_p->x[t - 1].v.delta = OUT_p->x[t].v.delta = 0;
   ps_eval(ctx, OUT_p);
   return 1;
 }

@@ -42,9 +42,11 @@
  * side through a refraction, whose walk's Dirac is in the direction towards
  * the camera, carries the change of measure between the two,
  * |dw_l / dw_c| = eta^2 |cos w_c| / |cos w_l| (1 for reflections and
- * thindielectric). Delta lobes of mixed
- * BSDFs (plastic's coating, a mask's pass-through) are not part of this
- * path space: f and the densities see their smooth lobes only.
+ * thindielectric). A BSDF that mixes delta and smooth lobes (plastic's
+ * coating, a mask's pass-through) gives each vertex on it one of the two:
+ * the vertex's flag (bdpt_vertex.delta, set by the walk that scattered
+ * there, cleared at a connection's ends) says which, and f and the
+ * densities see that lobe alone (the path space is the union of both).
  *
  * What each vertex caches: its factor of f (We at x_0, f_s at surfaces, Le at
  * x_k), the geometry term of its edge to x_{i+1}, and its two densities:
@@ -104,17 +106,13 @@ void ps_eval(const ps_context *ctx, ps_path *p);
 /* The path cam[0 .. t-1] joined with lp[s-1 .. 0] (bdpt's strategy (s, t):
  * s = 0, cam[t-1] on an emitter; t = 1, the pinhole joined to lp[s-1]),
  * evaluated (ps_eval; f may be 0). Returns 0 when the path is not one of
- * this space's (a directional light, a length beyond PS_MAX_VERTICES, a
- * delta lobe of a mixed BSDF). */
+ * this space's (a directional light, a length beyond PS_MAX_VERTICES). */
 int ps_from_bdpt(const ps_context *ctx, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                  int s, ps_path *OUT_p);
 
 /* Whether a vertex record may stand in a path: a finite light endpoint,
  * the pinhole or a surface (as its position in the path requires). */
 int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k);
-/* 1 when a walk that made v scattered through a delta lobe of a mixed
- * BSDF (outside this space). */
-int ps_vertex_mixed_delta(const bdpt_vertex *v);
 /* A surface vertex's delta lobe that maps wo to wi (unit, world): its
  * reduced value (bs.f) and probability; *OUT_trans is 1 for a
  * transmission; *OUT_eta (may be NULL) the relative index eta_wi / eta_wo

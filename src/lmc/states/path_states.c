@@ -7,10 +7,11 @@
  *
  * One family over every length k in [kmin, kmax]. Its target draws the
  * bootstrap's samples: from two numbers of the sampler, a length k
- * uniform over [kmin, kmax] and a whole path of that length
- * (mut_bidir_sample_whole: camera and light walks split at random, joined
- * by a connection), whose value is f / q with q = mut_bidir_whole_pdf /
- * (kmax - kmin + 1), the density of the sample in the path measure. So
+ * (path__length_pmf: half uniform over [kmin, kmax], half geometric) and a
+ * whole path of that length (mut_bidir_sample_whole: camera and light
+ * walks split at random, joined by a connection), whose value is f / q
+ * with q = mut_bidir_whole_pdf times the length's probability, the density
+ * of the sample in the path measure. So
  * b = E[lum(f) / q] is the integral of lum(f) over this path space, the
  * chains' normalisation, and the driver's resampling of the bootstrap
  * samples in proportion to lum(f) / q starts the chains at paths
@@ -82,6 +83,26 @@ static mc_value path__value(const ps_path *p) {
   return v;
 }
 
+/* The bootstrap's length k in [kmin, kmax]: half uniform, half
+ * geometric from kmin (ratio 1/2), so that short paths, which carry most
+ * light in most scenes, are not drowned by an unbounded depth's many long
+ * lengths, and every length keeps a share. */
+static double path__length_pmf(const path__space *P, int k) {
+  int n = P->ctx.kmax - P->ctx.kmin + 1, j = k - P->ctx.kmin;
+  if (j < 0 || j >= n) return 0.0;
+  /* ratio 1/2, normalised over the n lengths: 2^-j / (2 (1 - 2^-n)) */
+  return 0.5 / n + 0.5 * ldexp(1.0, -j - 1) / (1.0 - ldexp(1.0, -n));
+}
+
+static int path__draw_length(const path__space *P, double u) {
+  double acc = 0.0;
+  for (int k = P->ctx.kmin; k < P->ctx.kmax; k++) {
+    acc += path__length_pmf(P, k);
+    if (u < acc) return k;
+  }
+  return P->ctx.kmax;
+}
+
 /* The bootstrap's sample from two numbers of smp (see the opening comment). */
 static int path__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
                       double *OUT_grad, int *OUT_grad_ok) {
@@ -94,9 +115,7 @@ static int path__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_va
   double u0 = sampler_next(smp), u1 = sampler_next(smp);
   rng r;
   rng_seed(&r, (uint64_t)(u0 * 9007199254740992.0), (uint64_t)(u1 * 9007199254740992.0));
-  int n = P->ctx.kmax - P->ctx.kmin + 1;
-  int k = P->ctx.kmin + (int)(rng_uniform(&r) * n);
-  if (k > P->ctx.kmax) k = P->ctx.kmax;
+  int k = path__draw_length(P, rng_uniform(&r));
   sc->p.k = 0, sc->p.lum = 0.0, sc->p.rays = 0;
   mut_bidir_status st = mut_bidir_sample_whole(&P->mb, &r, k, &sc->p);
   sc->rays += sc->p.rays;
@@ -104,7 +123,7 @@ static int path__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_va
     sc->p.lum = 0.0;
     return 0;
   }
-  double q = mut_bidir_whole_pdf(&P->mb, &sc->p, 0) / n;
+  double q = mut_bidir_whole_pdf(&P->mb, &sc->p, 0) * path__length_pmf(P, k);
   if (!(q > 0.0) || !isfinite(sc->p.lum / q)) {
     sc->p.lum = 0.0;
     return 0;
@@ -178,30 +197,18 @@ static int64_t path__chain_rays(const mc_chain *c) {
 /* What of the scene this path space leaves out, said before the render
  * (the opening comment); under --strict an error. */
 static lmc_status path__check_scene(const scene *s, const render_settings *rs, lmc_error *err) {
-  int infinite = 0, mixed = 0;
-  for (int i = 0; i < s->n_lights; i++) {
-    light_type t = s->lights[i].type;
-    infinite += t == LIGHT_DIRECTIONAL;
-  }
-  for (int i = 0; i < s->n_bsdfs; i++) {
-    const bsdf *b = &s->bsdfs[i];
-    mixed += (bsdf_flags(b) & BSDF_DELTA) && !(bsdf_is_delta(b) && !b->masked);
-  }
-  char what[256] = "";
-  if (infinite)
-    snprintf(what + strlen(what), sizeof what - strlen(what), "%s%d directional light(s)",
-             *what ? ", " : "", infinite);
-  if (mixed)
-    snprintf(what + strlen(what), sizeof what - strlen(what),
-             "%sthe delta lobes of %d BSDF(s) that mix delta and smooth lobes (plastic, mask)",
-             *what ? ", " : "", mixed);
-  if (!*what) return LMC_OK;
+  int directional = 0;
+  for (int i = 0; i < s->n_lights; i++) directional += s->lights[i].type == LIGHT_DIRECTIONAL;
+  if (!directional) return LMC_OK;
   if (rs->strict)
     return lmc_error_set(err, LMC_ESTRICT, s->path, 0,
-                         "--strict: %s's path space leaves out %s; not rendering", rs->integrator,
-                         what);
-  lmc_warn(s->path, 0, "%s's path space leaves out %s: their light is missing from the image",
-           rs->integrator, what);
+                         "--strict: %s's path space leaves out %d directional light(s); not "
+                         "rendering",
+                         rs->integrator, directional);
+  lmc_warn(s->path, 0,
+           "%s's path space leaves out %d directional light(s): their light is missing from the "
+           "image",
+           rs->integrator, directional);
   return LMC_OK;
 }
 
