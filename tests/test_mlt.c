@@ -32,6 +32,7 @@
 
 #include "lmc/mcmc.h"
 #include "render/io/io.h"
+#include "render/options.h"
 #include "test_util.h"
 
 #define RUNS 6
@@ -168,28 +169,44 @@ static void test_leaves_out(void **state) {
 }
 
 /* A scene's <integrator type="mlt"> (Mitsuba's path-space MLT) selects
- * mlt, with a warning that its perturbations are not there. */
+ * mlt; its mutation flags (Mitsuba's names) become mlt's, and the manifold
+ * perturbation, which lmc lacks, is warned about when asked for. */
 static void test_scene_integrator(void **state) {
   (void)state;
   const char *path = LMC_TEST_TMP "/lmc_test_mlt.xml";
-  FILE *f = fopen(path, "w");
-  assert_non_null(f);
-  fprintf(f, "<scene version=\"0.6.0\">\n"
-             "<integrator type=\"mlt\"><boolean name=\"lensPerturbation\" value=\"true\"/>"
-             "</integrator>\n"
-             "<sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n"
-             "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
-             "</emitter></shape>\n"
-             "</scene>\n");
-  fclose(f);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  int before = lmc_warning_count();
-  assert_int_equal(scene_load_xml(path, NULL, 0, &s, &err), LMC_OK);
-  assert_string_equal(s->settings.integrator, "mlt");
-  assert_int_equal(lmc_warning_count() - before, 1);
-  scene_destroy(s);
+  static const char *const flags[4][2] = {{"bidirectionalMutation", "bidir-mutation"},
+                                          {"lensPerturbation", "lens-perturbation"},
+                                          {"multiChainPerturbation", "multichain-perturbation"},
+                                          {"causticPerturbation", "caustic-perturbation"}};
+  for (int manifold = 0; manifold < 2; manifold++) {
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "<scene version=\"0.6.0\">\n<integrator type=\"mlt\">");
+    for (int j = 0; j < 4; j++)
+      fprintf(f, "<boolean name=\"%s\" value=\"%s\"/>", flags[j][0], j % 2 ? "false" : "true");
+    fprintf(f, "<boolean name=\"manifoldPerturbation\" value=\"%s\"/>", manifold ? "true" : "false");
+    fprintf(f, "</integrator>\n"
+               "<sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n"
+               "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" "
+               "value=\"1\"/></emitter></shape>\n"
+               "</scene>\n");
+    fclose(f);
+    scene *s = NULL;
+    lmc_error err;
+    lmc_error_clear(&err);
+    int before = lmc_warning_count();
+    assert_int_equal(scene_load_xml(path, NULL, 0, &s, &err), LMC_OK);
+    assert_string_equal(s->settings.integrator, "mlt");
+    render_settings rs;
+    assert_int_equal(mcmc_scene_settings(s, &rs, &err), LMC_OK);
+    assert_int_equal(lmc_warning_count() - before, manifold);
+    for (int j = 0; j < 4; j++) {
+      const char *v = lmc_opt_value(&rs, flags[j][1]);
+      assert_non_null(v);
+      assert_string_equal(v, j % 2 ? "off" : "on");
+    }
+    scene_destroy(s);
+  }
 }
 
 int main(void) {

@@ -45,6 +45,7 @@
 
 #include "chi2.h"
 #include "lmc/path/mut_bidir.h"
+#include "pathspace_test.h"
 #include "render/io/io.h"
 #include "test_util.h"
 
@@ -146,29 +147,12 @@ typedef struct fixture {
   scene *sc[4]; /* diffuse, delta, caustic, env */
 } fixture;
 
-static scene *load(const char *xml, const char *tag) {
-  char path[96];
-  snprintf(path, sizeof path, "/tmp/lmc_test_pathspace_%s_%d.xml", tag, (int)getpid());
-  FILE *f = fopen(path, "w");
-  if (!f) return NULL;
-  fputs(xml, f);
-  fclose(f);
-  scene *sc = NULL;
-  lmc_error err;
-  if (scene_load_xml(path, NULL, 0, &sc, &err) != LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    sc = NULL;
-  }
-  remove(path);
-  return sc;
-}
-
 static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
-  fx->sc[0] = load(diffuse_xml, "diffuse");
-  fx->sc[1] = load(delta_xml, "delta");
-  fx->sc[2] = load(caustic_xml, "caustic");
-  fx->sc[3] = load(env_xml, "env");
+  fx->sc[0] = ps_test_load(diffuse_xml, "diffuse");
+  fx->sc[1] = ps_test_load(delta_xml, "delta");
+  fx->sc[2] = ps_test_load(caustic_xml, "caustic");
+  fx->sc[3] = ps_test_load(env_xml, "env");
   if (!fx->sc[0] || !fx->sc[1] || !fx->sc[2] || !fx->sc[3]) return -1;
   *state = fx;
   return 0;
@@ -184,21 +168,7 @@ static int teardown(void **state) {
   return 0;
 }
 
-static void context(const scene *sc, ps_context *ctx) {
-  render_settings rs = sc->settings;
-  rs.maxdepth = KMAX;
-  rs.mindepth = -1;
-  ps_context_init(ctx, sc, &rs);
-}
-
-static int rel_close(double a, double b, double tol) {
-  if (!isfinite(a) || !isfinite(b)) return 0;
-  return fabs(a - b) <= tol * fmax(fabs(a), fabs(b)) || (a == 0.0 && b == 0.0);
-}
-
-static int rgb_close(rgb a, rgb b, double tol) {
-  return rel_close(a.r, b.r, tol) && rel_close(a.g, b.g, tol) && rel_close(a.b, b.b, tol);
-}
+static void context(const scene *sc, ps_context *ctx) { ps_test_context(sc, KMAX, ctx); }
 
 /* ---- f against BDPT's strategies --------------------------------------------- */
 
@@ -300,26 +270,7 @@ static int start_state(const mut_bidir *mb, rng *r, ps_path *x) {
 
 /* Every cache of y against a fresh evaluation of a copy. */
 static void check_caches(const ps_context *ctx, const ps_path *y, ps_path *tmp) {
-  *tmp = *y;
-  ps_eval(ctx, tmp);
-  for (int i = 0; i <= y->k; i++) {
-    const ps_vertex *a = &y->x[i], *b = &tmp->x[i];
-    int ok = rgb_close(a->fac, b->fac, 1e-12) && rel_close(a->g, b->g, 1e-12) &&
-             rel_close(a->pdf_cam, b->pdf_cam, 1e-12) &&
-             rel_close(a->pdf_light, b->pdf_light, 1e-12) && a->delta == b->delta;
-    if (!ok)
-      print_message("vertex %d of %d: pdf_cam %.17g / %.17g, pdf_light %.17g / %.17g, g %.17g / "
-                    "%.17g\n",
-                    i, y->k, a->pdf_cam, b->pdf_cam, a->pdf_light, b->pdf_light, a->g, b->g);
-    assert_true(ok);
-  }
-  assert_near(y->rx, tmp->rx, 1e-9);
-  assert_near(y->ry, tmp->ry, 1e-9);
-  if (y->lum > 0.0) {
-    if (!rgb_close(y->f, tmp->f, 1e-9))
-      print_message("partial f %.17g, scratch %.17g\n", y->lum, tmp->lum);
-    assert_true(rgb_close(y->f, tmp->f, 1e-9));
-  }
+  assert_true(ps_test_caches_fresh(ctx, y, tmp));
 }
 
 static void check_chains(const scene *sc, uint64_t seed, int *OUT_checks, int *OUT_shapes,
@@ -425,6 +376,7 @@ static void test_cached_vs_scratch(void **state) {
  */
 
 #define INV_BINS (KMAX * 4 * 3 * 3)
+_Static_assert(INV_BINS <= PS_INV_MAX_BINS, "the bins fit ps_inv");
 
 /* (length) x (quadrant of (rx, ry)) x (height band of x_1) x (delta
  * vertices: 0, 1, 2 or more). */
@@ -436,15 +388,7 @@ static int inv_bin(const scene *sc, const ps_path *x) {
   return (((x->k - 1) * 4 + 2 * qy + qx) * 3 + hb) * 3 + (nd < 2 ? nd : 2);
 }
 
-typedef struct inv_result {
-  double min_p;  /* smallest p-value over the bins */
-  double level;  /* the Sidak level */
-  int bins;      /* bins with moves */
-  int samples;   /* samples with f > 0 */
-  int moved;     /* samples whose bin changed */
-} inv_result;
-
-static inv_result invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term term, double bias,
+static ps_inv *invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term term, double bias,
                              int n) {
   ps_context ctx;
   context(sc, &ctx);
@@ -454,8 +398,7 @@ static inv_result invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term
   mb.test_bias_term = term;
   mb.test_bias = bias;
   ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
-  double D[INV_BINS] = {0}, V[INV_BINS] = {0};
-  inv_result res = {1.0, 0.0, 0, 0, 0};
+  ps_inv *res = calloc(1, sizeof *res);
   rng r;
   rng_seed(&r, seed, 5);
   for (int i = 0; i < n; i++) {
@@ -464,24 +407,15 @@ static inv_result invariance(const scene *sc, uint64_t seed, mut_bidir_bias_term
     double q = mut_bidir_whole_pdf(&mb0, x, 0) / KMAX;
     assert_true(q > 0.0);
     double w = x->lum / q;
-    res.samples++;
+    res->samples++;
     mut_bidir_record rec;
     double ratio;
     int moved = mut_bidir_propose(&mb, &r, x, y, &rec, &ratio) == MUT_BIDIR_OK &&
                 rng_uniform(&r) < ratio;
     int b0 = inv_bin(sc, x), b1 = moved ? inv_bin(sc, y) : b0;
-    if (b0 == b1) continue;
-    res.moved++;
-    D[b1] += w, D[b0] -= w;
-    V[b1] += w * w, V[b0] += w * w;
+    ps_inv_add(res, w, b0, b1);
   }
-  for (int b = 0; b < INV_BINS; b++) {
-    if (!(V[b] > 0.0)) continue;
-    res.bins++;
-    double p = chi2_gamma_q(0.5, 0.5 * D[b] * D[b] / V[b]);
-    if (p < res.min_p) res.min_p = p;
-  }
-  res.level = chi2_sidak(1e-3, res.bins > 0 ? res.bins : 1);
+  ps_inv_finish(res);
   free(x), free(y);
   return res;
 }
@@ -491,11 +425,12 @@ static void test_invariance(void **state) {
   static const char *const names[4] = {"diffuse", "delta", "caustic", "env"};
   for (int q = 0; q < 4; q++) {
     /* The caustic scene's whole paths carry light more rarely: more draws. */
-    inv_result r = invariance(fx->sc[q], 31 + q, MUT_BIDIR_BIAS_NONE, 1.0, q == 2 ? 6000000 : 2000000);
+    ps_inv *r = invariance(fx->sc[q], 31 + q, MUT_BIDIR_BIAS_NONE, 1.0, q == 2 ? 6000000 : 2000000);
     print_message("%s: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n", names[q],
-                  r.samples, r.moved, r.bins, r.min_p, r.level);
-    assert_true(r.samples >= 50000 && r.moved >= 10000 && r.bins >= 20);
-    assert_true(r.min_p >= r.level);
+                  r->samples, r->moved, r->bins, r->min_p, r->level);
+    assert_true(r->samples >= 50000 && r->moved >= 10000 && r->bins >= 20);
+    assert_true(r->min_p >= r->level);
+    free(r);
   }
 }
 
@@ -503,11 +438,12 @@ static void test_invariance_detects_bias(void **state) {
   fixture *fx = *state;
   for (int q = 0; q < 2; q++) {
     mut_bidir_bias_term term = q ? MUT_BIDIR_BIAS_DELTA : MUT_BIDIR_BIAS_LIGHT_BSDF;
-    inv_result r = invariance(fx->sc[q], 31 + q, term, 0.5, 2000000);
+    ps_inv *r = invariance(fx->sc[q], 31 + q, term, 0.5, 2000000);
     print_message("%s, biased T: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n",
-                  q ? "delta" : "diffuse", r.samples, r.moved, r.bins, r.min_p, r.level);
-    assert_true(r.samples >= 50000 && r.moved >= 10000 && r.bins >= 20);
-    assert_true(r.min_p < r.level);
+                  q ? "delta" : "diffuse", r->samples, r->moved, r->bins, r->min_p, r->level);
+    assert_true(r->samples >= 50000 && r->moved >= 10000 && r->bins >= 20);
+    assert_true(r->min_p < r->level);
+    free(r);
   }
 }
 

@@ -4,23 +4,88 @@
  * driver (method.h) and the path states (path_states.c): chains of whole
  * light paths moved by Veach's bidirectional mutation (lmc/path/mut_bidir.h),
  * which deletes a subpath (possibly the whole path) and regenerates it from
- * both ends. As Veach's, direct light is rendered apart by default
- * (--direct separate). The perturbations (lens, caustic, multi-chain) are
- * to come.
+ * both ends, and by the lens, multi-chain and caustic perturbations
+ * (lmc/path/mut_perturb.h), which move a path a little keeping its form.
+ * Each move is on or off (Mitsuba's flags, all on by default); a step
+ * selects among those that apply to the current path with equal weights,
+ * as Mitsuba does (path_states.c puts the selection into the ratio). As
+ * Veach's, direct light is rendered apart by default (--direct separate).
  */
+#include <stddef.h>
+#include <stdlib.h>
+
 #include "lmc/driver/method.h"
 #include "lmc/states/path_states.h"
 
+typedef struct mlt_settings {
+  int move[4]; /* on (1) or off, by mc_path_move */
+} mlt_settings;
+
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1}};
+static const char *const mlt__off_on[] = {"off", "on", NULL};
+static const char *const mlt__names[4] = {"bidir", "lens", "multichain", "caustic"};
+
+static const lmc_opt mlt__opts[] = {
+    {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
+     mlt__off_on, NULL, 0, NULL, "on",
+     "Veach's bidirectional mutation: a subpath (up to the whole path) deleted and regenerated",
+     "bidirectionalMutation"},
+    {"lens-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_LENS]), 0, 0, 0,
+     mlt__off_on, NULL, 0, NULL, "on",
+     "the image point moved, the camera's specular chain retraced (paths E S* D (D|L))",
+     "lensPerturbation"},
+    {"multichain-perturbation", LMC_OPT_CHOICE,
+     offsetof(mlt_settings, move[MC_PATH_MOVE_MULTICHAIN]), 0, 0, 0, mlt__off_on, NULL, 0, NULL,
+     "on", "the lens perturbation, then each further specular chain's start turned a little",
+     "multiChainPerturbation"},
+    {"caustic-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_CAUSTIC]), 0,
+     0, 0, mlt__off_on, NULL, 0, NULL, "on",
+     "the direction leaving the light side turned, the specular chain retraced to the camera "
+     "(paths E D S* (D|L))",
+     "causticPerturbation"},
+};
+
+static const lmc_opt_table mlt__options = {"Path-space MLT (--integrator mlt)", mlt__opts,
+                                           (int)(sizeof mlt__opts / sizeof mlt__opts[0]),
+                                           &mlt__defaults, sizeof(mlt_settings)};
+
+static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_error *err) {
+  mlt_settings *ms = malloc(sizeof *ms);
+  if (!ms) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for mlt's settings");
+  *OUT_run = ms;
+  lmc_status st = lmc_opt_read(&mlt__options, setup->rs, ms, err);
+  if (st) return st;
+  if (!ms->move[0] && !ms->move[1] && !ms->move[2] && !ms->move[3])
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                         "--integrator mlt: every mutation is off (--bidir-mutation, "
+                         "--lens-perturbation, --multichain-perturbation, --caustic-perturbation)");
+  if (!ms->move[MC_PATH_MOVE_BIDIR] && !setup->rs->quiet)
+    lmc_warn(NULL, 0,
+             "mlt without the bidirectional mutation: the perturbations alone keep each path's "
+             "form and length, and a path none applies to never moves");
+  return LMC_OK;
+}
+
+static void mlt__destroy(void *run) { free(run); }
+
 static int mlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
                               const mc_space_family *F, mc_kernel *k, double *p) {
-  (void)run, (void)setup, (void)i, (void)F;
-  k[0] = (mc_kernel){.name = "bidir", .kind = MC_KERNEL_OWN, .coord = MC_PATH_MOVE_BIDIR};
-  p[0] = 1.0;
-  return 1;
+  (void)setup, (void)i, (void)F;
+  const mlt_settings *ms = run ? run : &mlt__defaults;
+  int n = 0;
+  for (int j = 0; j < 4; j++) {
+    if (!ms->move[j]) continue;
+    k[n] = (mc_kernel){.name = mlt__names[j], .kind = MC_KERNEL_OWN, .coord = j};
+    p[n++] = 1.0;
+  }
+  return n;
 }
 
 const mc_method mc_method_mlt = {
     .name = "mlt",
     .default_states = MCMC_STATES_PATH,
+    .opts = &mlt__options,
+    .create = mlt__create,
+    .destroy = mlt__destroy,
     .chain_kernels = mlt__chain_kernels,
 };

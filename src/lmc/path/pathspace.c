@@ -203,21 +203,30 @@ static double ps__to_area(const ps_context *ctx, const ps_path *p, double pdf_sa
  * (the radiance invariant eta^2 cos dw, eta = eta_c / eta_l the sample's
  * relative index); a reflection's Jacobian is 1. */
 static double ps__delta_density(const ps_context *ctx, const ps_path *p, int s, int from, int to,
-                                int light_side) {
+                                int light_side, int with_prob) {
   const surface_hit *h = &p->x[s].v.hit;
   vec3 wo = ps_dir(p, s, from), wi = ps_dir(p, s, to);
   if (!ps__side_ok(h, wo) || !ps__side_ok(h, wi)) return 0.0;
   rgb f;
-  double prob, eta = 1.0;
+  double prob, eta = 1.0, jac = 1.0;
   int trans;
   transport_mode mode = light_side ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE;
   if (!ps_delta_lobe(&p->x[s].v, wo, wi, mode, &f, &prob, &trans, &eta)) return 0.0;
   if (light_side && trans) {
     double cl = fabs(frame_to_local(&h->sh, wo).z), cc = fabs(frame_to_local(&h->sh, wi).z);
     if (!(cl > 0.0)) return 0.0;
-    prob *= eta * eta * cc / cl;
+    jac = eta * eta * cc / cl;
   }
-  return ps__to_area(ctx, p, prob, s, to);
+  return ps__to_area(ctx, p, (with_prob ? prob : 1.0) * jac, s, to);
+}
+
+double ps_forced_density(const ps_context *ctx, const ps_path *p, int s, int from, int to,
+                         int light_side) {
+  return ps__delta_density(ctx, p, s, from, to, light_side, 0);
+}
+
+double ps_area_jacobian(const ps_context *ctx, const ps_path *p, int a, int b) {
+  return ps__to_area(ctx, p, 1.0, a, b);
 }
 
 double ps_density_cam(const ps_context *ctx, const ps_path *p, int i) {
@@ -225,7 +234,7 @@ double ps_density_cam(const ps_context *ctx, const ps_path *p, int i) {
   if (ps_unhittable(ctx, p, i)) return 0.0;
   const scene *sc = ctx->sc;
   if (i == 1) return bdpt_vertex_pdf(sc, &p->x[0].v, NULL, &p->x[1].v);
-  if (p->x[i - 1].delta) return ps__delta_density(ctx, p, i - 1, i - 2, i, 0);
+  if (p->x[i - 1].delta) return ps__delta_density(ctx, p, i - 1, i - 2, i, 0, 1);
   return bdpt_vertex_pdf(sc, &p->x[i - 1].v, &p->x[i - 2].v, &p->x[i].v);
 }
 
@@ -235,7 +244,7 @@ double ps_density_light(const ps_context *ctx, const ps_path *p, int i) {
   if (i == 0) return 0.0;
   if (i == k) return bdpt_vertex_pdf_light_origin(sc, &p->x[k].v, &p->x[k - 1].v);
   if (i == k - 1) return bdpt_vertex_pdf_light(sc, &p->x[k].v, &p->x[i].v);
-  if (p->x[i + 1].delta) return ps__delta_density(ctx, p, i + 1, i + 2, i, 1);
+  if (p->x[i + 1].delta) return ps__delta_density(ctx, p, i + 1, i + 2, i, 1, 1);
   return bdpt_vertex_pdf(sc, &p->x[i + 1].v, &p->x[i + 2].v, &p->x[i].v);
 }
 

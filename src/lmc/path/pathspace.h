@@ -128,6 +128,17 @@ vec3 ps_dir(const ps_path *p, int a, int b);
 double ps_density_cam(const ps_context *ctx, const ps_path *p, int i);
 double ps_density_light(const ps_context *ctx, const ps_path *p, int i);
 
+/* The densities of vertex `to` sampled through a forced lobe, as the
+ * perturbations sample (mut_perturb.h): |cos| / d^2 of a solid-angle
+ * density of one at vertex a (1 when b is a direction at infinity)
+ * (ps_area_jacobian); and the reduced measure's density of `to` reached
+ * through the delta lobe of vertex s from `from` without the lobe's
+ * probability (light_side: with the refraction's change of measure above)
+ * (ps_forced_density; 0 when no delta lobe of s joins the two). */
+double ps_area_jacobian(const ps_context *ctx, const ps_path *p, int a, int b);
+double ps_forced_density(const ps_context *ctx, const ps_path *p, int s, int from, int to,
+                         int light_side);
+
 /* Whether vertex i can end a connecting edge: the pinhole, a light
  * endpoint, or a surface with a smooth lobe. */
 int ps_connectible(const ps_path *p, int i);

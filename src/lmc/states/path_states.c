@@ -17,11 +17,16 @@
  * samples in proportion to lum(f) / q starts the chains at paths
  * distributed about as f.
  *
- * The chain. Its state x is a path, its target lum(f(x)). A step picks a
- * move among the chain's kernels (mc_chain_pick; the bidirectional
- * mutation alone so far), which proposes y with the full Metropolis-
- * Hastings ratio r = f(y) T(y -> x) / (f(x) T(x -> y)) (mut_bidir_propose);
- * y is accepted with probability a = min(1, r). Splats as chain.c's
+ * The chain. Its state x is a path, its target lum(f(x)). Its kernels are
+ * the moves of mc_path_move with the integrator's weights w_j. A step
+ * selects a move among those that apply to x (the bidirectional mutation
+ * always; a perturbation to the paths of its form, mut_perturb.h) with
+ * probability P_j(x) = w_j / (sum of the applicable w), the move proposes
+ * y with its own ratio f(y) T_j(y -> x) / (f(x) T_j(x -> y))
+ * (mut_bidir_propose, mut_perturb_propose), and the selection enters too:
+ * r = P_j(y) / P_j(x) times that (a proposal to which move j does not
+ * apply back has r = 0). y is accepted with probability a = min(1, r).
+ * Splats as chain.c's
  * (expected values, Veach 1997, sec. 11.5): y with weight a / f(y), x with
  * 1 - a, each as f(path) at the path's raster point; a move that makes no
  * proposal (mut_bidir.h's statuses) leaves x, splatted with weight 1.
@@ -42,12 +47,14 @@
 #include "lmc/driver/space.h"
 #include "lmc/kernels/chain.h"
 #include "lmc/path/mut_bidir.h"
+#include "lmc/path/mut_perturb.h"
 #include "render/error.h"
 
 typedef struct path__space {
   mc_space_family fam;
   ps_context ctx;
   mut_bidir mb;
+  mut_perturb mp;
   mc_chain_kind kind;
 } path__space;
 
@@ -157,17 +164,78 @@ static double path__chain_start(mc_chain *c) {
   return pc->buf[0].lum;
 }
 
+/* Whether move `move` applies to x. */
+static int path__applies(int move, const ps_path *x) {
+  switch (move) {
+  case MC_PATH_MOVE_LENS:
+    return mut_perturb_applies(MUT_PERTURB_LENS, x);
+  case MC_PATH_MOVE_MULTICHAIN:
+    return mut_perturb_applies(MUT_PERTURB_MULTICHAIN, x);
+  case MC_PATH_MOVE_CAUSTIC:
+    return mut_perturb_applies(MUT_PERTURB_CAUSTIC, x);
+  default:
+    return 1;
+  }
+}
+
+/* The probability of selecting kernel ki at x (the opening comment), from
+ * the chain's kernel probabilities as weights. */
+static double path__select_prob(const mc_chain *c, int ki, const ps_path *x) {
+  double sum = 0.0, wk = 0.0;
+  for (int j = 0; j < c->n_kernels; j++) {
+    if (!path__applies(c->kernels[j].coord, x)) continue;
+    double w = c->cdf[j] - (j > 0 ? c->cdf[j - 1] : 0.0);
+    sum += w;
+    if (j == ki) wk = w;
+  }
+  return sum > 0.0 ? wk / sum : 0.0;
+}
+
+static int path__pick(mc_chain *c, const ps_path *x) {
+  double u = rng_uniform(&c->r), acc = 0.0;
+  int last = 0;
+  for (int j = 0; j < c->n_kernels; j++) {
+    double p = path__select_prob(c, j, x);
+    if (!(p > 0.0)) continue;
+    last = j;
+    acc += p;
+    if (u < acc) return j;
+  }
+  return last;
+}
+
+/* Move ki's proposal y from x and its ratio, selection included; 0 when
+ * it makes none. */
+static int path__propose(const path__space *P, mc_chain *c, int ki, const ps_path *x, ps_path *y,
+                         double *OUT_ratio) {
+  int move = c->kernels[ki].coord, ok;
+  double ratio = 0.0;
+  if (move == MC_PATH_MOVE_BIDIR) {
+    mut_bidir_record rec;
+    ok = mut_bidir_propose(&P->mb, &c->r, x, y, &rec, &ratio) == MUT_BIDIR_OK;
+  } else {
+    mut_perturb_kind kind = move == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
+                            : move == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN
+                                                              : MUT_PERTURB_CAUSTIC;
+    ok = mut_perturb_propose(&P->mp, kind, &c->r, x, y, &ratio, &y->rays, NULL);
+  }
+  *OUT_ratio = 0.0;
+  if (!ok) return 0;
+  if (ratio > 0.0) ratio *= path__select_prob(c, ki, y) / path__select_prob(c, ki, x);
+  *OUT_ratio = isfinite(ratio) ? ratio : 0.0;
+  return 1;
+}
+
 static int path__chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   const path__space *P = c->target->ctx;
   path__chain *pc = c->own;
   ps_path *x = &pc->buf[pc->cur], *y = &pc->buf[1 - pc->cur];
-  int ki = mc_chain_pick(c);
-  mut_bidir_record rec;
+  int ki = path__pick(c, x);
   double ratio = 0.0;
   y->rays = 0;
-  mut_bidir_status st = mut_bidir_propose(&P->mb, &c->r, x, y, &rec, &ratio);
+  int ok = path__propose(P, c, ki, x, y, &ratio);
   pc->rays += y->rays;
-  double a = st == MUT_BIDIR_OK ? fmin(1.0, ratio) : 0.0;
+  double a = ok ? fmin(1.0, ratio) : 0.0;
   c->stats[ki].proposed++;
   c->stats[ki].accept_sum += a;
   c->steps++;
@@ -227,6 +295,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   OUT->destroy = path__space_destroy;
   ps_context_init(&P->ctx, s, rs);
   mut_bidir_init(&P->mb, &P->ctx);
+  mut_perturb_init(&P->mp, &P->ctx);
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
             rs->integrator, P->ctx.kmax);

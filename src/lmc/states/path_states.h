@@ -8,7 +8,10 @@
 
 /* The moves of a path chain. */
 typedef enum mc_path_move {
-  MC_PATH_MOVE_BIDIR = 0 /* Veach's bidirectional mutation (lmc/path/mut_bidir.h) */
+  MC_PATH_MOVE_BIDIR = 0,     /* Veach's bidirectional mutation (lmc/path/mut_bidir.h) */
+  MC_PATH_MOVE_LENS,          /* the lens perturbation (lmc/path/mut_perturb.h) */
+  MC_PATH_MOVE_MULTICHAIN,    /* the multi-chain perturbation */
+  MC_PATH_MOVE_CAUSTIC        /* the caustic perturbation */
 } mc_path_move;
 
 #endif

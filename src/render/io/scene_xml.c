@@ -520,13 +520,6 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
   } else if (strcmp(t, "pssmlt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "erpt") == 0) {
     if (t[0] == 'e') lmc_warn(o->file, o->line, "integrator \"erpt\" maps to pssmlt");
     if (choose) xml__set_integrator(r, t[0] == 'm' ? "mlt" : "pssmlt");
-    /* Path-space MLT's perturbations (Mitsuba: lens, multi-chain and
-     * caustic on by default) are not in lmc yet: its mlt mutates with the
-     * bidirectional mutation alone (an exact chain, without them). */
-    if (t[0] == 'm')
-      lmc_warn(o->file, o->line,
-               "path-space MLT: the lens, caustic and multi-chain perturbations are not "
-               "implemented; lmc's mlt uses the bidirectional mutation alone");
     int found;
     /* Direct light: Mitsuba's directSamples (default 16, pt's samples per
      * pixel for paths of <= 2 segments; -1: MLT renders them too) and
@@ -555,12 +548,22 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
     if ((st = xml__bool(B, o, "bidirectional", 1, &bidir, &found_bidir)) != LMC_OK) return st;
     if (found_bidir && !bidir && (st = xml__pass(B, xml__find(o, "bidirectional"), "states", "pt")))
       return st;
-    static const char *const mlt_silent[] = {"lambda", "chainLength",
-                                             "numChains", "maxChains", "bidirectionalMutation",
-                                             "lensPerturbation", "multiChainPerturbation",
-                                             "causticPerturbation", "manifoldPerturbation",
+    /* Path-space MLT's mutation flags (bidirectionalMutation,
+     * lensPerturbation, ...) pass on to mlt's own flags; pssmlt has none. */
+    static const char *const mlt_silent[] = {"lambda", "chainLength", "numChains", "maxChains",
                                              NULL};
+    static const char *const pss_silent[] = {"bidirectionalMutation", "lensPerturbation",
+                                             "multiChainPerturbation", "causticPerturbation",
+                                             "manifoldPerturbation", NULL};
     xml__accept(o, mlt_silent);
+    if (t[0] != 'm') xml__accept(o, pss_silent);
+    int manifold, found_mf;
+    if ((st = xml__bool(B, o, "manifoldPerturbation", 0, &manifold, &found_mf)) != LMC_OK)
+      return st;
+    if (manifold)
+      lmc_warn(xml__find(o, "manifoldPerturbation")->file,
+               xml__find(o, "manifoldPerturbation")->line,
+               "the manifold perturbation is not implemented: mlt renders without it");
   } else if (strcmp(t, "mmlt") == 0 || strcmp(t, "lmc") == 0 || strcmp(t, "h2mc") == 0) {
     /* lmc's own MCMC integrators; their parameters are their flags. */
     if (choose) xml__set_integrator(r, t);
