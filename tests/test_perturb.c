@@ -1,7 +1,8 @@
 /*
  * test_perturb.c: the lens, multi-chain and caustic perturbations of
  * path-space MLT (src/lmc/path/mut_perturb.c) on three small scenes:
- * `diffuse` (a diffuse box under an area light: lens perturbations of
+ * `diffuse` (a dark plastic floor, whose coating is a mixed BSDF's delta
+ * lobe, a diffuse wall and sphere under an area light: lens perturbations of
  * E D D.. paths, caustic perturbations of E D (D|L) ones), `delta` (a
  * mirror and a glass sphere over a diffuse floor, a point light: lens
  * perturbations through specular chains, multi-chain perturbations of
@@ -39,6 +40,7 @@
 
 #include "chi2.h"
 #include "lmc/path/mut_bidir.h"
+#include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
 #include "pathspace_test.h"
 #include "render/io/io.h"
@@ -57,7 +59,8 @@ static const char *diffuse_xml =
     "  </sensor>\n"
     "  <bsdf type=\"diffuse\" id=\"white\"><rgb name=\"reflectance\" value=\"0.7, 0.7, 0.7\"/></bsdf>\n"
     "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/>"
-    "<scale x=\"30\" y=\"1\" z=\"30\"/></transform><ref id=\"white\"/></shape>\n"
+    "<scale x=\"30\" y=\"1\" z=\"30\"/></transform>"
+    "<bsdf type=\"plastic\"><rgb name=\"diffuseReflectance\" value=\"0.1\"/></bsdf></shape>\n"
     "  <shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"30\" y=\"30\" z=\"1\"/>"
     "<translate x=\"0\" y=\"2\" z=\"-2\"/></transform><ref id=\"white\"/></shape>\n"
     "  <shape type=\"sphere\"><point name=\"center\" x=\"0.6\" y=\"0.6\" z=\"0\"/><float name=\"radius\" value=\"0.6\"/>"
@@ -138,12 +141,14 @@ typedef struct movers {
   ps_context ctx;
   mut_bidir mb;
   mut_perturb mp;
+  mut_lenssub ml;
 } movers;
 
 static void movers_init(movers *mv, const scene *sc) {
   ps_test_context(sc, KMAX, &mv->ctx);
   mut_bidir_init(&mv->mb, &mv->ctx);
   mut_perturb_init(&mv->mp, &mv->ctx);
+  mut_lenssub_init(&mv->ml, &mv->ctx);
 }
 
 /* A path with f > 0 that perturbation `kind` applies to (whole-path
@@ -485,6 +490,97 @@ static void test_invariance_detects_bias(void **state) {
   assert_int_equal(controls, 2);
 }
 
+/* ---- The lens subpath mutation ------------------------------------------------ */
+
+/* A path with f > 0 that the lens subpath mutation applies to. */
+static int draw_lenssub(const movers *mv, rng *r, ps_path *x) {
+  for (int tries = 0; tries < 2000000; tries++) {
+    int k = 1 + (int)(rng_uniform(r) * KMAX);
+    if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    if (mut_lenssub_m(x) > 0) return 1;
+  }
+  return 0;
+}
+
+/* Caches, T both ways from y's and x's caches against fresh evaluations,
+ * and detailed balance, on proposals; the length changes counted. */
+static void test_lenssub_balance(void **state) {
+  fixture *fx = *state;
+  for (int q = DIFFUSE; q <= DELTA; q++) {
+    movers mv;
+    movers_init(&mv, fx->sc[q]);
+    ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y), *z = malloc(sizeof *z);
+    rng r;
+    rng_seed(&r, 71 + q, 3);
+    int made = 0, balanced = 0, longer = 0, shorter = 0, specular = 0;
+    for (int i = 0; i < 4000; i++) {
+      if (!draw_lenssub(&mv, &r, x)) fail();
+      double ratio;
+      if (!mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL)) continue;
+      made++;
+      assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
+      assert_int_equal(y->k - x->k, mut_lenssub_m(y) - mut_lenssub_m(x));
+      longer += y->k > x->k, shorter += y->k < x->k, specular += mut_lenssub_m(y) > 1;
+      if (!(y->lum > 0.0)) continue;
+      double tf = mut_lenssub_density(&mv.ml, y), tr = mut_lenssub_density(&mv.ml, x);
+      double ratio_rev = x->lum * tf / (y->lum * tr);
+      double lhs = x->lum * tf * fmin(1.0, ratio), rhs = y->lum * tr * fmin(1.0, ratio_rev);
+      assert_true(tf > 0.0 && tr > 0.0 && rel_close(lhs, rhs, 1e-9));
+      balanced++;
+    }
+    print_message("lens subpath on %s: %d proposals, %d balanced, %d longer, %d shorter, %d "
+                  "through delta lobes\n",
+                  scene_names[q], made, balanced, longer, shorter, specular);
+    assert_true(made >= 1500 && balanced >= 500 && specular >= 100);
+    if (q == DELTA) assert_true(longer >= 50 && shorter >= 50);
+    free(x), free(y), free(z);
+  }
+}
+
+/* One-step invariance (test_pathspace.c's statistic), and its negative
+ * control: P_smooth left out of T (power 0), on the plastic sphere. */
+static ps_inv *lenssub_invariance(const scene *sc, uint64_t seed, double power, int n) {
+  movers mv;
+  movers_init(&mv, sc);
+  mv.ml.test_smooth_power = power;
+  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
+  ps_inv *res = calloc(1, sizeof *res);
+  rng r;
+  rng_seed(&r, seed, 5);
+  for (int i = 0; i < n; i++) {
+    int k = 1 + (int)(rng_uniform(&r) * KMAX);
+    if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / KMAX, ratio = 0.0;
+    res->samples++;
+    int moved = mut_lenssub_m(x) > 0 && mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL) &&
+                rng_uniform(&r) < ratio;
+    ps_inv_add(res, x->lum / q, inv_bin(sc, x), moved ? inv_bin(sc, y) : inv_bin(sc, x));
+  }
+  ps_inv_finish(res);
+  free(x), free(y);
+  return res;
+}
+
+static void test_lenssub_invariance(void **state) {
+  fixture *fx = *state;
+  for (int q = DIFFUSE; q <= DELTA; q++) {
+    for (int control = 0; control < 2; control++) {
+      if (control && q != DIFFUSE) continue;
+      ps_inv *r = lenssub_invariance(fx->sc[q], 81 + q, control ? 0.0 : 1.0, 1000000);
+      print_message("lens subpath on %s%s: %d samples, %d moved, %d bins, min p %.3g (level "
+                    "%.3g)\n",
+                    scene_names[q], control ? ", P_smooth left out" : "", r->samples, r->moved,
+                    r->bins, r->min_p, r->level);
+      assert_true(r->samples >= 20000 && r->moved >= 2000 && r->bins >= 20);
+      if (control)
+        assert_true(r->min_p < r->level);
+      else
+        assert_true(r->min_p >= r->level);
+      free(r);
+    }
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_log_sample),
@@ -492,6 +588,8 @@ int main(void) {
       cmocka_unit_test(test_reverse_and_balance),
       cmocka_unit_test(test_invariance),
       cmocka_unit_test(test_invariance_detects_bias),
+      cmocka_unit_test(test_lenssub_balance),
+      cmocka_unit_test(test_lenssub_invariance),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -4,9 +4,11 @@
  * driver (method.h) and the path states (path_states.c): chains of whole
  * light paths moved by Veach's bidirectional mutation (lmc/path/mut_bidir.h),
  * which deletes a subpath (possibly the whole path) and regenerates it from
- * both ends, and by the lens, multi-chain and caustic perturbations
- * (lmc/path/mut_perturb.h), which move a path a little keeping its form.
- * Each move is on or off (Mitsuba's flags, all on by default); a step
+ * both ends, by the lens, multi-chain and caustic perturbations
+ * (lmc/path/mut_perturb.h), which move a path a little keeping its form,
+ * and by the lens subpath mutation (lmc/path/mut_lenssub.h), which moves
+ * it to a fresh image point. Each move is on or off (Mitsuba's flags; the
+ * lens subpath mutation, which Mitsuba lacks, has none), all on by default; a step
  * selects among those that apply to the current path with equal weights,
  * as Mitsuba does (path_states.c puts the selection into the ratio). As
  * Veach's, direct light is rendered apart by default (--direct separate).
@@ -18,12 +20,13 @@
 #include "lmc/states/path_states.h"
 
 typedef struct mlt_settings {
-  int move[4]; /* on (1) or off, by mc_path_move */
+  int move[MC_PATH_MOVE_COUNT]; /* on (1) or off, by mc_path_move */
 } mlt_settings;
 
-static const mlt_settings mlt__defaults = {{1, 1, 1, 1}};
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1}};
 static const char *const mlt__off_on[] = {"off", "on", NULL};
-static const char *const mlt__names[4] = {"bidir", "lens", "multichain", "caustic"};
+static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir", "lens", "multichain",
+                                                           "caustic", "lenssub"};
 
 static const lmc_opt mlt__opts[] = {
     {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
@@ -43,6 +46,11 @@ static const lmc_opt mlt__opts[] = {
      "the direction leaving the light side turned, the specular chain retraced to the camera "
      "(paths E D S* (D|L))",
      "causticPerturbation"},
+    {"lens-subpath-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_LENSSUB]),
+     0, 0, 0, mlt__off_on, NULL, 0, NULL, "on",
+     "the camera's subpath E S* D replaced by a fresh one through a uniform image point (Veach; "
+     "not in Mitsuba)",
+     NULL},
 };
 
 static const lmc_opt_table mlt__options = {"Path-space MLT (--integrator mlt)", mlt__opts,
@@ -55,10 +63,13 @@ static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_
   *OUT_run = ms;
   lmc_status st = lmc_opt_read(&mlt__options, setup->rs, ms, err);
   if (st) return st;
-  if (!ms->move[0] && !ms->move[1] && !ms->move[2] && !ms->move[3])
+  int on = 0;
+  for (int j = 0; j < MC_PATH_MOVE_COUNT; j++) on += ms->move[j];
+  if (!on)
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--integrator mlt: every mutation is off (--bidir-mutation, "
-                         "--lens-perturbation, --multichain-perturbation, --caustic-perturbation)");
+                         "--lens-perturbation, --multichain-perturbation, --caustic-perturbation, "
+                         "--lens-subpath-mutation)");
   if (!ms->move[MC_PATH_MOVE_BIDIR] && !setup->rs->quiet)
     lmc_warn(NULL, 0,
              "mlt without the bidirectional mutation: the perturbations alone keep each path's "
@@ -73,7 +84,7 @@ static int mlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
   (void)setup, (void)i, (void)F;
   const mlt_settings *ms = run ? run : &mlt__defaults;
   int n = 0;
-  for (int j = 0; j < 4; j++) {
+  for (int j = 0; j < MC_PATH_MOVE_COUNT; j++) {
     if (!ms->move[j]) continue;
     k[n] = (mc_kernel){.name = mlt__names[j], .kind = MC_KERNEL_OWN, .coord = j};
     p[n++] = 1.0;

@@ -138,9 +138,8 @@ static int mp__forced_dir(const bdpt_vertex *v, vec3 wo, int trans, transport_mo
   return 0;
 }
 
-/* The surface hit from vertex `from` along dir, into *OUT (0: none). */
-static int mp__trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir, transport_mode mode,
-                     bdpt_vertex *OUT, int64_t *rays) {
+int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
+                      transport_mode mode, bdpt_vertex *OUT, int64_t *rays) {
   bdpt_vertex tmp[2];
   tmp[0] = *from;
   mp__smp smp = {{mp__half, mp__stream, NULL}};
@@ -152,6 +151,21 @@ static int mp__trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir, t
   if (n != 2 || tmp[1].type != BDPT_VERTEX_SURFACE) return 0;
   *OUT = tmp[1];
   OUT->delta = 0;
+  return 1;
+}
+
+int mut_perturb_first_hit(const ps_context *ctx, double rx, double ry, bdpt_vertex *OUT_pinhole,
+                          bdpt_vertex *OUT_hit, int64_t *rays) {
+  bdpt_vertex tmp[2];
+  mp__smp smp = {{mp__half, mp__stream, NULL}};
+  render_counters cnt;
+  memset(&cnt, 0, sizeof cnt);
+  int n = bdpt_camera_subpath(ctx->sc, &ctx->rs, &smp.base, rx, ry, 2, tmp, &cnt);
+  if (rays) *rays += cnt.rays;
+  if (n != 2 || tmp[1].type != BDPT_VERTEX_SURFACE) return 0;
+  *OUT_pinhole = tmp[0];
+  *OUT_hit = tmp[1];
+  OUT_hit->delta = 0;
   return 1;
 }
 
@@ -184,16 +198,7 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
   ps_path *y = OUT_y;
   *y = *x;
   y->rays = 0;
-  bdpt_vertex tmp[2];
-  mp__smp smp = {{mp__half, mp__stream, NULL}};
-  render_counters cnt;
-  memset(&cnt, 0, sizeof cnt);
-  int n = bdpt_camera_subpath(sc, &ctx->rs, &smp.base, rx, ry, 2, tmp, &cnt);
-  if (rays) *rays += cnt.rays;
-  if (n != 2 || tmp[1].type != BDPT_VERTEX_SURFACE) return 0;
-  y->x[0].v = tmp[0];
-  y->x[1].v = tmp[1];
-  y->x[1].v.delta = 0;
+  if (!mut_perturb_first_hit(ctx, rx, ry, &y->x[0].v, &y->x[1].v, rays)) return 0;
   int e = ends[nc - 1], chain = 0;
   for (int i = 1; i < e; i++) {
     vec3 wo = v3_normalize(v3_sub(y->x[i - 1].v.p, y->x[i].v.p)), dir;
@@ -205,7 +210,7 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
       dir = dirs[chain++];
       y->x[i].v.delta = 0;
     }
-    if (!mp__trace(ctx, &y->x[i].v, dir, TRANSPORT_RADIANCE, &y->x[i + 1].v, rays)) return 0;
+    if (!mut_perturb_trace(ctx, &y->x[i].v, dir, TRANSPORT_RADIANCE, &y->x[i + 1].v, rays)) return 0;
   }
   ps_update(ctx, y, 0, e + 2);
   return mp__finish(ctx, x, y, 1, e, e, rays);
@@ -219,12 +224,12 @@ int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 d
   ps_path *y = OUT_y;
   *y = *x;
   y->rays = 0;
-  if (!mp__trace(ctx, &x->x[m].v, dir, TRANSPORT_IMPORTANCE, &y->x[m - 1].v, rays)) return 0;
+  if (!mut_perturb_trace(ctx, &x->x[m].v, dir, TRANSPORT_IMPORTANCE, &y->x[m - 1].v, rays)) return 0;
   for (int i = m - 1; i >= 2; i--) {
     vec3 wo = v3_normalize(v3_sub(y->x[i + 1].v.p, y->x[i].v.p)), d;
     if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_IMPORTANCE, &d)) return 0;
     y->x[i].v.delta = 1;
-    if (!mp__trace(ctx, &y->x[i].v, d, TRANSPORT_IMPORTANCE, &y->x[i - 1].v, rays)) return 0;
+    if (!mut_perturb_trace(ctx, &y->x[i].v, d, TRANSPORT_IMPORTANCE, &y->x[i - 1].v, rays)) return 0;
   }
   ps_update(ctx, y, 0, m + 1);
   return mp__finish(ctx, x, y, 1, m - 1, 0, rays);

@@ -127,6 +127,16 @@ int mut_perturb_propose(const mut_perturb *mp, mut_perturb_kind kind, rng *r, co
                         ps_path *OUT_y, double *OUT_ratio, int64_t *rays,
                         mut_perturb_choice *OUT_choice);
 
+/* Retracing, one vertex at a time (also the lens subpath mutation's):
+ * the surface hit from vertex `from` along the unit direction dir, as
+ * bdpt's walk records it (delta flag clear); and the pinhole and the
+ * surface its ray through raster point (rx, ry) hits. Return 0 when the
+ * ray hits no surface. rays (may be NULL) adds the rays traced. */
+int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
+                      transport_mode mode, bdpt_vertex *OUT, int64_t *rays);
+int mut_perturb_first_hit(const ps_context *ctx, double rx, double ry, bdpt_vertex *OUT_pinhole,
+                          bdpt_vertex *OUT_hit, int64_t *rays);
+
 /* The offset distributions: a length on [lo, hi] with density 1 / (t
  * ln(hi / lo)) from u in [0, 1), and that density (0 outside). */
 double mut_perturb_log_sample(double lo, double hi, double u);

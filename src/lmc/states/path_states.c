@@ -20,7 +20,8 @@
  * The chain. Its state x is a path, its target lum(f(x)). Its kernels are
  * the moves of mc_path_move with the integrator's weights w_j. A step
  * selects a move among those that apply to x (the bidirectional mutation
- * always; a perturbation to the paths of its form, mut_perturb.h) with
+ * always; a perturbation or the lens subpath mutation to the paths of
+ * its form, mut_perturb.h, mut_lenssub.h) with
  * probability P_j(x) = w_j / (sum of the applicable w), the move proposes
  * y with its own ratio f(y) T_j(y -> x) / (f(x) T_j(x -> y))
  * (mut_bidir_propose, mut_perturb_propose), and the selection enters too:
@@ -47,6 +48,7 @@
 #include "lmc/driver/space.h"
 #include "lmc/kernels/chain.h"
 #include "lmc/path/mut_bidir.h"
+#include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
 #include "render/error.h"
 
@@ -55,6 +57,7 @@ typedef struct path__space {
   ps_context ctx;
   mut_bidir mb;
   mut_perturb mp;
+  mut_lenssub ml;
   mc_chain_kind kind;
 } path__space;
 
@@ -173,6 +176,8 @@ static int path__applies(int move, const ps_path *x) {
     return mut_perturb_applies(MUT_PERTURB_MULTICHAIN, x);
   case MC_PATH_MOVE_CAUSTIC:
     return mut_perturb_applies(MUT_PERTURB_CAUSTIC, x);
+  case MC_PATH_MOVE_LENSSUB:
+    return mut_lenssub_m(x) > 0;
   default:
     return 1;
   }
@@ -213,6 +218,8 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, const ps_pat
   if (move == MC_PATH_MOVE_BIDIR) {
     mut_bidir_record rec;
     ok = mut_bidir_propose(&P->mb, &c->r, x, y, &rec, &ratio) == MUT_BIDIR_OK;
+  } else if (move == MC_PATH_MOVE_LENSSUB) {
+    ok = mut_lenssub_propose(&P->ml, &c->r, x, y, &ratio, &y->rays);
   } else {
     mut_perturb_kind kind = move == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
                             : move == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN
@@ -296,6 +303,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   ps_context_init(&P->ctx, s, rs);
   mut_bidir_init(&P->mb, &P->ctx);
   mut_perturb_init(&P->mp, &P->ctx);
+  mut_lenssub_init(&P->ml, &P->ctx);
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
             rs->integrator, P->ctx.kmax);

@@ -11,7 +11,9 @@ typedef enum mc_path_move {
   MC_PATH_MOVE_BIDIR = 0,     /* Veach's bidirectional mutation (lmc/path/mut_bidir.h) */
   MC_PATH_MOVE_LENS,          /* the lens perturbation (lmc/path/mut_perturb.h) */
   MC_PATH_MOVE_MULTICHAIN,    /* the multi-chain perturbation */
-  MC_PATH_MOVE_CAUSTIC        /* the caustic perturbation */
+  MC_PATH_MOVE_CAUSTIC,       /* the caustic perturbation */
+  MC_PATH_MOVE_LENSSUB,       /* the lens subpath mutation (lmc/path/mut_lenssub.h) */
+  MC_PATH_MOVE_COUNT
 } mc_path_move;
 
 #endif
