@@ -119,9 +119,10 @@ static const char *caustic_xml =
     "</scene>\n";
 
 /* A diffuse floor, a diffuse and a mirror sphere under a constant
- * environment and a small area light: endpoints at infinity, reached by
- * camera walks that escape and sampled by light walks from the
- * environment's disk. */
+ * environment, a directional light and a small area light: endpoints at
+ * infinity, reached by camera walks that escape and sampled by light walks
+ * from the environment's disk, and the directional light's, which only
+ * its light walks reach. */
 static const char *env_xml =
     "<scene version=\"0.6.0\">\n"
     "  <sensor type=\"perspective\">\n"
@@ -141,6 +142,8 @@ static const char *env_xml =
     "<scale value=\"0.3\"/><translate y=\"2.5\"/></transform>"
     "<emitter type=\"area\"><rgb name=\"radiance\" value=\"20\"/></emitter></shape>\n"
     "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.4, 0.5, 0.6\"/></emitter>\n"
+    "  <emitter type=\"directional\"><vector name=\"direction\" x=\"0.3\" y=\"-1\" z=\"-0.4\"/>"
+    "<rgb name=\"irradiance\" value=\"2, 1.8, 1.5\"/></emitter>\n"
     "</scene>\n";
 
 typedef struct fixture {
@@ -174,7 +177,7 @@ static void context(const scene *sc, ps_context *ctx) { ps_test_context(sc, KMAX
 
 static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *OUT_delta,
                          int *OUT_pdf_checks, int *OUT_skipped, int *OUT_light_delta,
-                         int *OUT_inf) {
+                         int *OUT_inf, int *OUT_sun) {
   ps_context ctx;
   context(sc, &ctx);
   ps_path *x = malloc(sizeof *x);
@@ -203,6 +206,8 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
         for (int j = 0; j < s; j++) p *= x->x[x->k - j].pdf_light, pb *= lp[j].pdf_fwd;
         for (int i = 1; i < x->k; i++) delta |= x->x[i].delta;
         *OUT_inf += x->x[x->k].inf;
+        *OUT_sun += x->x[x->k].inf && x->x[x->k].v.light >= 0 &&
+                    sc->lights[x->x[x->k].v.light].type == LIGHT_DIRECTIONAL;
         int light_delta = 0;
         for (int j = 1; j < s; j++) light_delta |= lp[j].delta;
         /* A strategy the path space gives no density (none expected). */
@@ -236,15 +241,16 @@ static void check_f_bdpt(const scene *sc, uint64_t seed, int *OUT_checks, int *O
 static void test_f_matches_bdpt(void **state) {
   fixture *fx = *state;
   int checks[4] = {0}, delta[4] = {0}, pdfs[4] = {0}, skipped[4] = {0}, light_delta[4] = {0};
-  int inf[4] = {0};
+  int inf[4] = {0}, sun[4] = {0};
   for (int q = 0; q < 4; q++)
     check_f_bdpt(fx->sc[q], 11 + q, &checks[q], &delta[q], &pdfs[q], &skipped[q],
-                 &light_delta[q], &inf[q]);
+                 &light_delta[q], &inf[q], &sun[q]);
   print_message("f vs bdpt: diffuse %d (densities %d), delta %d (%d through delta lobes, "
                 "densities %d), caustic %d (%d with light subpaths through the glass), env %d "
-                "(%d ending at infinity, densities %d); %d, %d, %d, %d without a density\n",
+                "(%d ending at infinity, %d of them at the directional light, densities %d); %d, "
+                "%d, %d, %d without a density\n",
                 checks[0], pdfs[0], checks[1], delta[1], pdfs[1], checks[2], light_delta[2],
-                checks[3], inf[3], pdfs[3], skipped[0], skipped[1], skipped[2], skipped[3]);
+                checks[3], inf[3], sun[3], pdfs[3], skipped[0], skipped[1], skipped[2], skipped[3]);
   for (int q = 0; q < 4; q++) assert_int_equal(skipped[q], 0);
   /* The plastic sphere's coating (a mixed BSDF's delta lobe) among them. */
   assert_true(checks[0] >= 2000 && delta[0] >= 100 && pdfs[0] + delta[0] == checks[0]);
@@ -254,7 +260,7 @@ static void test_f_matches_bdpt(void **state) {
   assert_true(checks[2] >= 1000 && light_delta[2] >= 200);
   /* Endpoints at infinity: the camera's escapes and the environment's
    * own light walks, against bdpt's. */
-  assert_true(checks[3] >= 1000 && inf[3] >= 500 && pdfs[3] >= 500);
+  assert_true(checks[3] >= 1000 && inf[3] >= 500 && pdfs[3] >= 500 && sun[3] >= 200);
 }
 
 /* ---- Cached against scratch, detailed balance --------------------------------- */

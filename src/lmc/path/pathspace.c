@@ -48,9 +48,17 @@ static int ps__infinite(const ps_context *ctx, const bdpt_vertex *v) {
   return v->light < 0 || light_is_infinite(&ctx->sc->lights[v->light]);
 }
 
+/* A directional light's endpoint: a direction too (its own, fixed), its
+ * emission the light's irradiance (the Dirac in direction reduced). */
+static int ps__directional(const ps_context *ctx, const bdpt_vertex *v) {
+  return v->type == BDPT_VERTEX_LIGHT && v->light >= 0 &&
+         ctx->sc->lights[v->light].type == LIGHT_DIRECTIONAL;
+}
+
 int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k) {
   if (index == 0) return v->type == BDPT_VERTEX_CAMERA;
-  if (index == k) return ps__light(ctx, v) >= 0 || ps__infinite(ctx, v);
+  if (index == k)
+    return ps__light(ctx, v) >= 0 || ps__infinite(ctx, v) || ps__directional(ctx, v);
   return v->type == BDPT_VERTEX_SURFACE;
 }
 
@@ -121,6 +129,7 @@ int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, r
 static rgb ps__emitted(const ps_context *ctx, const ps_path *p) {
   int k = p->k;
   const bdpt_vertex *v = &p->x[k].v;
+  if (p->x[k].inf && ps__directional(ctx, v)) return ctx->sc->lights[v->light].value;
   if (p->x[k].inf) {
     /* Every infinite light's radiance from that direction. */
     rgb le = rgb_zero();
@@ -260,7 +269,7 @@ void ps_update(const ps_context *ctx, ps_path *p, int lo, int hi) {
     const bsdf *b = v->type == BDPT_VERTEX_SURFACE ? v->hit.bsdf : NULL;
     p->x[i].delta = i > 0 && i < p->k && b &&
                     (ps__pure_delta(b) || (v->delta && (bsdf_flags(b) & BSDF_DELTA)));
-    p->x[i].inf = i == p->k && ps__infinite(ctx, v);
+    p->x[i].inf = i == p->k && (ps__infinite(ctx, v) || ps__directional(ctx, v));
   }
   for (int i = lo; i <= hi; i++) {
     ps_vertex *x = &p->x[i];

@@ -6,10 +6,10 @@
  * Indexing. A path of length k (segments) is x_0 ... x_k: x_0 the pinhole,
  * x_1 ... x_{k-1} scattering surfaces, x_k a point on an emitter (an area
  * light, hit or sampled, or a point or spot light) or a direction at
- * infinity (the infinite lights together: constant, envmap, sunsky; an
- * escaped camera walk or an environment's light walk). Vertices are bdpt's
- * records (bdpt_vertex, integrator.h); directional lights are not
- * represented (ps_from_bdpt refuses them).
+ * infinity: the infinite lights together (constant, envmap, sunsky; an
+ * escaped camera walk or an environment's light walk), or a directional
+ * light's own direction (its light walk only: no walk hits it). Vertices
+ * are bdpt's records (bdpt_vertex, integrator.h).
  *
  * Measure and contribution. f is the measurement contribution in the area
  * measure of every vertex, for the whole film (camera.h's We, normalised per
@@ -28,7 +28,11 @@
  * radiance from that direction, its density from the camera side the
  * direction's, from the light side the direction's summed over the
  * infinite lights (bdpt's), and x_{k-1}'s from the light side the disk
- * density of the environment's rays (light_disk_point) times |cos|.
+ * density of the environment's rays (light_disk_point) times |cos|. A
+ * directional light's endpoint is measured by its Dirac in direction,
+ * reduced: its emission is the irradiance, its density from the light
+ * side the light's selection probability, x_{k-1}'s the disk's times |cos|
+ * (bdpt's), and from the camera side none.
  *
  * Degenerate vertices. A surface whose BSDF is all delta lobes (conductor,
  * dielectric, thindielectric; `delta` below) carries its lobe reduced by
@@ -106,7 +110,7 @@ void ps_eval(const ps_context *ctx, ps_path *p);
 /* The path cam[0 .. t-1] joined with lp[s-1 .. 0] (bdpt's strategy (s, t):
  * s = 0, cam[t-1] on an emitter; t = 1, the pinhole joined to lp[s-1]),
  * evaluated (ps_eval; f may be 0). Returns 0 when the path is not one of
- * this space's (a directional light, a length beyond PS_MAX_VERTICES). */
+ * this space's (a length beyond PS_MAX_VERTICES, a vertex out of place). */
 int ps_from_bdpt(const ps_context *ctx, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                  int s, ps_path *OUT_p);
 

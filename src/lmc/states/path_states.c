@@ -31,12 +31,6 @@
  * (expected values, Veach 1997, sec. 11.5): y with weight a / f(y), x with
  * 1 - a, each as f(path) at the path's raster point; a move that makes no
  * proposal (mut_bidir.h's statuses) leaves x, splatted with weight 1.
- *
- * What this path space leaves out (pathspace.h): directional lights and
- * the delta lobes of BSDFs that mix delta and smooth lobes (plastic's coating, a mask's
- * pass-through). A scene with any of them gets a warning naming it before
- * the render (their light is missing from the image), and --strict
- * refuses it.
  */
 #include "lmc/states/path_states.h"
 
@@ -269,24 +263,6 @@ static int64_t path__chain_rays(const mc_chain *c) {
 
 /* ---- The space ----------------------------------------------------------------- */
 
-/* What of the scene this path space leaves out, said before the render
- * (the opening comment); under --strict an error. */
-static lmc_status path__check_scene(const scene *s, const render_settings *rs, lmc_error *err) {
-  int directional = 0;
-  for (int i = 0; i < s->n_lights; i++) directional += s->lights[i].type == LIGHT_DIRECTIONAL;
-  if (!directional) return LMC_OK;
-  if (rs->strict)
-    return lmc_error_set(err, LMC_ESTRICT, s->path, 0,
-                         "--strict: %s's path space leaves out %d directional light(s); not "
-                         "rendering",
-                         rs->integrator, directional);
-  lmc_warn(s->path, 0,
-           "%s's path space leaves out %d directional light(s): their light is missing from the "
-           "image",
-           rs->integrator, directional);
-  return LMC_OK;
-}
-
 static void path__space_destroy(mc_space *sp) {
   free(sp->ctx);
   sp->ctx = NULL;
@@ -294,8 +270,6 @@ static void path__space_destroy(mc_space *sp) {
 
 lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_settings *rs,
                                 lmc_error *err) {
-  lmc_status st = path__check_scene(s, rs, err);
-  if (st) return st;
   path__space *P = calloc(1, sizeof *P);
   if (!P) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the path states");
   OUT->ctx = P;
