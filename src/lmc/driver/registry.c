@@ -20,7 +20,7 @@ static const mc_space_type mc__spaces[] = {
     {"bdpt", MCMC_STATES_BDPT, mc_space_bdpt_create, &mc_space_bdpt_options},
     {"mmlt", MCMC_STATES_MMLT, mc_space_mmlt_create, NULL},
     {"pt", MCMC_STATES_PT, mc_space_pt_create, NULL},
-    {"path", MCMC_STATES_PATH, mc_space_path_create, NULL},
+    {"path", MCMC_STATES_PATH, mc_space_path_create, &mc_space_path_options},
 };
 
 const char *const mc_space_names[] = {"bdpt", "mmlt", "pt", "path", NULL};

@@ -100,8 +100,10 @@ const mc_space_type *mc_space_find(int id);
 extern const char *const mc_space_names[];
 extern const int mc_space_ids[];
 
-/* The bdpt states' flags (bdpt_states.c). */
+/* The bdpt states' flags (bdpt_states.c) and the path states'
+ * (path_states.c). */
 extern const lmc_opt_table mc_space_bdpt_options;
+extern const lmc_opt_table mc_space_path_options;
 
 /* Frees what sp holds (accepts NULL and a space never created). */
 void mc_space_free(mc_space *sp);

@@ -36,6 +36,7 @@ void mut_perturb_init(mut_perturb *mp, const ps_context *ctx) {
   mp->theta2 = rad * mp->r2;
   mp->mc_theta1 = 0.0001 * MP_PI / 180.0;
   mp->mc_theta2 = 0.1 * MP_PI / 180.0;
+  mp->glossy_rough = 0.1;
   mp->test_jac_power = 1.0;
 }
 
@@ -63,11 +64,26 @@ static vec3 mp__turn(vec3 w, double theta, double phi) {
 
 /* ---- Forms ------------------------------------------------------------------ */
 
-int mut_perturb_chains(const ps_path *x, int *OUT_ends) {
+int mut_perturb_glossy(const mut_perturb *mp, const ps_path *x, int i) {
+  if (i < 1 || i >= x->k || x->x[i].delta || x->x[i].v.type != BDPT_VERTEX_SURFACE) return 0;
+  const bsdf *b = x->x[i].v.hit.bsdf;
+  if (!b || b->masked || !(mp->glossy_rough > 0.0)) return 0;
+  switch (b->type) {
+  case BSDF_ROUGHCONDUCTOR:
+  case BSDF_ROUGHDIELECTRIC:
+  case BSDF_PHONG:
+  case BSDF_WARD:
+    return !bsdf_is_rough(b, mp->glossy_rough);
+  default:
+    return 0;
+  }
+}
+
+int mut_perturb_chains(const mut_perturb *mp, const ps_path *x, int *OUT_ends) {
   int k = x->k, n = 0, i = 1;
   while (i < k) {
-    while (i < k && x->x[i].delta) i++;
-    if (i >= k) return 0; /* the emitter reached through S vertices */
+    while (i < k && (x->x[i].delta || mut_perturb_glossy(mp, x, i))) i++;
+    if (i >= k) return 0; /* the emitter reached through S and G vertices */
     OUT_ends[n++] = i;
     if (ps_connectible(x, i + 1)) return n;
     i++;
@@ -83,13 +99,13 @@ int mut_perturb_caustic_m(const ps_path *x) {
   return x->x[m].inf ? 0 : m;
 }
 
-int mut_perturb_applies(mut_perturb_kind kind, const ps_path *x) {
+int mut_perturb_applies(const mut_perturb *mp, mut_perturb_kind kind, const ps_path *x) {
   int ends[MUT_PERTURB_MAX_CHAINS];
   switch (kind) {
   case MUT_PERTURB_LENS:
-    return mut_perturb_chains(x, ends) == 1;
+    return mut_perturb_chains(mp, x, ends) == 1;
   case MUT_PERTURB_MULTICHAIN:
-    return mut_perturb_chains(x, ends) >= 2;
+    return mut_perturb_chains(mp, x, ends) >= 2;
   case MUT_PERTURB_CAUSTIC:
     return mut_perturb_caustic_m(x) > 0;
   }
@@ -171,11 +187,13 @@ int mut_perturb_first_hit(const ps_context *ctx, double rx, double ry, bdpt_vert
 
 /* y's vertices lo .. hi have x's kinds (S or D); then the edge from y_a
  * to y_{a+1} unblocked (else f(y) = 0), and f(y). */
-static int mp__finish(const ps_context *ctx, const ps_path *x, ps_path *y, int lo, int hi, int a,
+static int mp__finish(const mut_perturb *mp, const ps_path *x, ps_path *y, int lo, int hi, int a,
                       int64_t *rays) {
   for (int i = lo; i <= hi; i++)
-    if (y->x[i].delta != x->x[i].delta) return 0;
-  const scene *sc = ctx->sc;
+    if (y->x[i].delta != x->x[i].delta ||
+        mut_perturb_glossy(mp, y, i) != mut_perturb_glossy(mp, x, i))
+      return 0;
+  const scene *sc = mp->ctx->sc;
   if (rays) (*rays)++;
   int blocked = y->x[a + 1].inf ? scene_occluded_ray(sc, y->x[a].v.p, v3_neg(y->x[a + 1].v.dir))
                                 : scene_occluded_segment(sc, y->x[a].v.p, y->x[a + 1].v.p);
@@ -188,12 +206,29 @@ static int mp__finish(const ps_context *ctx, const ps_path *x, ps_path *y, int l
   return 1;
 }
 
+/* A direction sampled from the BSDF of surface vertex v reached from
+ * along wo (radiance mode, Mitsuba's side rule), not through a delta lobe. */
+static int mp__sample_dir(const bdpt_vertex *v, vec3 wo, rng *r, vec3 *OUT_dir) {
+  const surface_hit *h = &v->hit;
+  vec3 wo_l = frame_to_local(&h->sh, wo);
+  if (!r || !(v3_dot(wo, h->ng) * wo_l.z > 0.0)) return 0;
+  double u_lobe = rng_uniform(r), u1 = rng_uniform(r), u2 = rng_uniform(r);
+  bsdf_sample bs;
+  if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, TRANSPORT_RADIANCE, &bs))
+    return 0;
+  if ((bs.flags & BSDF_DELTA) || !(bs.pdf > 0.0)) return 0;
+  vec3 wi = v3_normalize(frame_to_world(&h->sh, bs.wi));
+  if (!(v3_dot(wi, h->ng) * frame_to_local(&h->sh, wi).z > 0.0)) return 0;
+  *OUT_dir = wi;
+  return 1;
+}
+
 int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx, double ry,
-                              const vec3 *dirs, ps_path *OUT_y, int64_t *rays) {
+                              const vec3 *dirs, rng *r, ps_path *OUT_y, int64_t *rays) {
   const ps_context *ctx = mp->ctx;
   const scene *sc = ctx->sc;
   int ends[MUT_PERTURB_MAX_CHAINS];
-  int nc = mut_perturb_chains(x, ends);
+  int nc = mut_perturb_chains(mp, x, ends);
   if (nc == 0 || !(rx >= 0.0 && rx < sc->cam.width && ry >= 0.0 && ry < sc->cam.height)) return 0;
   ps_path *y = OUT_y;
   *y = *x;
@@ -205,6 +240,9 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
     if (x->x[i].delta) {
       if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_RADIANCE, &dir)) return 0;
       y->x[i].v.delta = 1;
+    } else if (mut_perturb_glossy(mp, x, i)) {
+      if (!mp__sample_dir(&y->x[i].v, wo, r, &dir)) return 0;
+      y->x[i].v.delta = 0;
     } else {
       if (chain >= nc - 1 || ends[chain] != i) return 0;
       dir = dirs[chain++];
@@ -213,7 +251,7 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
     if (!mut_perturb_trace(ctx, &y->x[i].v, dir, TRANSPORT_RADIANCE, &y->x[i + 1].v, rays)) return 0;
   }
   ps_update(ctx, y, 0, e + 2);
-  return mp__finish(ctx, x, y, 1, e, e, rays);
+  return mp__finish(mp, x, y, 1, e, e, rays);
 }
 
 int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir,
@@ -232,7 +270,7 @@ int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 d
     if (!mut_perturb_trace(ctx, &y->x[i].v, d, TRANSPORT_IMPORTANCE, &y->x[i - 1].v, rays)) return 0;
   }
   ps_update(ctx, y, 0, m + 1);
-  return mp__finish(ctx, x, y, 1, m - 1, 0, rays);
+  return mp__finish(mp, x, y, 1, m - 1, 0, rays);
 }
 
 /* ---- Densities ------------------------------------------------------------------ */
@@ -248,8 +286,8 @@ static double mp__lens_density(const mut_perturb *mp, const ps_path *x, const ps
   const ps_context *ctx = mp->ctx;
   const camera *cam = &ctx->sc->cam;
   int ex[MUT_PERTURB_MAX_CHAINS], ey[MUT_PERTURB_MAX_CHAINS];
-  int nc = mut_perturb_chains(x, ex);
-  if (nc == 0 || mut_perturb_chains(y, ey) != nc || ey[nc - 1] != ex[nc - 1] || y->k != x->k)
+  int nc = mut_perturb_chains(mp, x, ex);
+  if (nc == 0 || mut_perturb_chains(mp, y, ey) != nc || ey[nc - 1] != ex[nc - 1] || y->k != x->k)
     return 0.0;
   double dr = hypot(y->rx - x->rx, y->ry - x->ry);
   double p = mut_perturb_log_pdf(mp->r1, mp->r2, dr) / (2.0 * MP_PI * dr);
@@ -260,7 +298,10 @@ static double mp__lens_density(const mut_perturb *mp, const ps_path *x, const ps
   }
   if (!(p > 0.0)) return 0.0;
   double jac = (double)cam->width * cam->height * y->x[1].pdf_cam;
-  for (int i = 2; i <= ex[nc - 1]; i++) jac *= ps_area_jacobian(ctx, y, i - 1, i);
+  /* Each vertex after a G vertex has the BSDF's sampling density (pdf_cam), after an S or
+   * a chain's start the Jacobian of its forced or turned direction. */
+  for (int i = 2; i <= ex[nc - 1]; i++)
+    jac *= mut_perturb_glossy(mp, y, i - 1) ? y->x[i].pdf_cam : ps_area_jacobian(ctx, y, i - 1, i);
   return p * pow(jac, mp->test_jac_power);
 }
 
@@ -302,7 +343,7 @@ int mut_perturb_propose(const mut_perturb *mp, mut_perturb_kind kind, rng *r, co
     ok = mut_perturb_caustic_generate(mp, x, w, OUT_y, rays);
   } else {
     int ends[MUT_PERTURB_MAX_CHAINS];
-    int nc = mut_perturb_chains(x, ends);
+    int nc = mut_perturb_chains(mp, x, ends);
     if (kind == MUT_PERTURB_LENS ? nc != 1 : nc < 2) return 0;
     ch.size = mut_perturb_log_sample(mp->r1, mp->r2, rng_uniform(r));
     ch.phi = 2.0 * MP_PI * rng_uniform(r);
@@ -315,7 +356,7 @@ int mut_perturb_propose(const mut_perturb *mp, mut_perturb_kind kind, rng *r, co
     }
     if (OUT_choice) *OUT_choice = ch;
     ok = mut_perturb_lens_generate(mp, x, x->rx + ch.size * cos(ch.phi),
-                                   x->ry + ch.size * sin(ch.phi), dirs, OUT_y, rays);
+                                   x->ry + ch.size * sin(ch.phi), dirs, r, OUT_y, rays);
   }
   if (!ok) return 0;
   double t_fwd = mut_perturb_density(mp, kind, x, OUT_y);

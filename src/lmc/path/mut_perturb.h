@@ -3,19 +3,25 @@
  * 11.4.3; Veach and Guibas 1997) on pathspace.h's states: small moves of a
  * path that keep its form, each with its exact transition density.
  *
- * Forms. Seen from the camera, x splits into chains: x_1 .. x_{e_0} is a
- * run of vertices with delta lobes (S, none or more) ending at a
- * connectible surface x_{e_0} (D); while the vertex after a chain's end is
- * not connectible, a further chain S+ D follows, up to e_{n-1}, whose
- * successor is connectible (a D surface or the emitter end). A path whose
- * camera walk reaches the emitter end through S vertices alone (E S* L, or
- * a last chain S+ L) has no chains.
+ * Forms. A surface vertex is S (scattering through a delta lobe), G
+ * (glossy: a rough conductor or dielectric, phong or ward without diffuse
+ * part, whose roughness is at most glossy_rough: bsdf_is_rough) or D (the
+ * rest). Seen from the camera, x splits into chains: x_1 .. x_{e_0} is a
+ * run of S and G vertices (none or more) ending at a D vertex x_{e_0};
+ * while the vertex after a chain's end is not connectible (an S vertex), a
+ * further chain (S|G)+ D follows, up to e_{n-1}, whose successor is
+ * connectible (a D or G surface or the emitter end). A path whose camera
+ * walk reaches the emitter end through S and G vertices alone has no
+ * chains. (G vertices are connectible; the chains retrace them rather than
+ * join through them, because a narrow lobe rejects nearly every join.)
  *
  *  - Lens perturbation (one chain: E S* D (D|L)): the raster point moves by
  *    an offset of length r with density proportional to 1/r on [r1, r2] and
  *    uniform angle; the camera ray through it is retraced through the chain,
  *    each S vertex keeping its lobe (reflection or transmission, the delta
- *    lobe of a mixed BSDF), to a new D end, which joins x_{e_0 + 1}.
+ *    lobe of a mixed BSDF), each G vertex sampling its BSDF afresh (not Veach's:
+ *    his perturbations know only S and D), to a new D end, which joins
+ *    x_{e_0 + 1}.
  *  - Multi-chain perturbation (two chains or more: E S* D (S+ D)+ (D|L)):
  *    the lens perturbation through the first chain; at each further chain's
  *    start the direction leaving the D vertex is x's direction there turned
@@ -35,22 +41,24 @@
  *    retraced towards the camera with the same lobes to a new x_1, which
  *    joins the pinhole (its raster point must lie on the film).
  * Each kept vertex's lobe flag stays; a retraced vertex must have the same
- * kind (S or D) as x's, or there is no proposal (the chain stays).
+ * kind (S, G or D) as x's, or there is no proposal (the chain stays).
  *
  * Transition densities, in the path measure of the changed vertices
  * (pathspace.h: area, delta vertices' Diracs reduced):
  *   lens, multi-chain: T(x -> y) = p_r(|dr|) / (2 pi |dr|) * W H *
- *       pdf_cam(y_1) prod_{i=2..e} |cos y_i| / |y_i - y_{i-1}|^2 *
+ *       pdf_cam(y_1) prod_{i=2..e} J_i *
  *       prod_{chains j > 0} p_theta(theta_j) / (2 pi sin theta_j),
  *     dr the raster offset, W H the film's area in pixels (pdf_cam(y_1)
- *     W H is the raster-to-area Jacobian), e the last chain's end;
+ *     W H is the raster-to-area Jacobian), e the last chain's end, J_i =
+ *     pdf_cam(y_i) (the BSDF's sampling density) after a G vertex, else
+ *     |cos y_i| / |y_i - y_{i-1}|^2;
  *   caustic: T(x -> y) = p_theta,x(theta) / (2 pi sin theta) *
  *       |cos y_{m-1}| / |y_{m-1} - x_m|^2 *
  *       prod_{i=1..m-2} ps_forced_density(y_i through y_{i+1}),
  *     p_theta,x on x's range;
  * and the acceptance f(y) T(y -> x) / (f(x) T(x -> y)): for the lens and
  * multi-chain perturbations the offsets' densities are symmetric and
- * cancel, leaving the Jacobians.
+ * cancel, leaving the Jacobians and the G vertices' sampling densities.
  */
 #ifndef LMC_PATH_MUT_PERTURB_H
 #define LMC_PATH_MUT_PERTURB_H
@@ -76,30 +84,34 @@ typedef struct mut_perturb {
                                pixels span (radians) */
   double mc_theta1, mc_theta2; /* multi-chain: the direction's angle range (0.0001 and
                                   0.1 degrees, radians) */
+  double glossy_rough;      /* G vertices: roughness at most this (0.1; 0: none) */
   double test_jac_power;    /* tests only: the densities' Jacobians raised to this wrong
                                power (1: right) */
 } mut_perturb;
 
 void mut_perturb_init(mut_perturb *mp, const ps_context *ctx);
 
+/* Whether vertex i of x is G (the opening comment). */
+int mut_perturb_glossy(const mut_perturb *mp, const ps_path *x, int i);
 /* The camera-side chains of x: their ends e_0 < e_1 < ... into OUT_ends
  * (room for MUT_PERTURB_MAX_CHAINS); returns their number (0: none). */
-int mut_perturb_chains(const ps_path *x, int *OUT_ends);
+int mut_perturb_chains(const mut_perturb *mp, const ps_path *x, int *OUT_ends);
 /* The caustic perturbation's m for x, or 0 when it does not apply. */
 int mut_perturb_caustic_m(const ps_path *x);
 /* The caustic perturbation's scale s of x's turn (the opening comment). */
 double mut_perturb_caustic_scale(const mut_perturb *mp, const ps_path *x, int m);
 /* Whether perturbation `kind` applies to x. */
-int mut_perturb_applies(mut_perturb_kind kind, const ps_path *x);
+int mut_perturb_applies(const mut_perturb *mp, mut_perturb_kind kind, const ps_path *x);
 
 /* y from x by the lens or multi-chain perturbation with its choices given:
  * the new raster point (rx, ry) and, for the chains after the first, the
- * directions dirs[0 .. n - 2] leaving their starting D vertices. Returns 1
- * with y evaluated (f(y) may be 0: blocked, off the lobes' support), 0
- * when y has not x's form (the chain stays). rays (may be NULL) adds the
- * rays traced. */
+ * directions dirs[0 .. n - 2] leaving their starting D vertices; G
+ * vertices sample their BSDFs from r (NULL: a path with G vertices makes
+ * no proposal). Returns 1 with y evaluated (f(y) may be 0: blocked, off
+ * the lobes' support), 0 when y has not x's form (the chain stays). rays
+ * (may be NULL) adds the rays traced. */
 int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx, double ry,
-                              const vec3 *dirs, ps_path *OUT_y, int64_t *rays);
+                              const vec3 *dirs, rng *r, ps_path *OUT_y, int64_t *rays);
 /* y from x by the caustic perturbation with x_m's new direction towards
  * y_{m-1} given (as above). */
 int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir,

@@ -35,6 +35,7 @@
 #include "lmc/states/path_states.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,7 @@
 #include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
 #include "render/error.h"
+#include "render/options.h"
 
 typedef struct path__space {
   mc_space_family fam;
@@ -162,14 +164,14 @@ static double path__chain_start(mc_chain *c) {
 }
 
 /* Whether move `move` applies to x. */
-static int path__applies(int move, const ps_path *x) {
+static int path__applies(const path__space *P, int move, const ps_path *x) {
   switch (move) {
   case MC_PATH_MOVE_LENS:
-    return mut_perturb_applies(MUT_PERTURB_LENS, x);
+    return mut_perturb_applies(&P->mp, MUT_PERTURB_LENS, x);
   case MC_PATH_MOVE_MULTICHAIN:
-    return mut_perturb_applies(MUT_PERTURB_MULTICHAIN, x);
+    return mut_perturb_applies(&P->mp, MUT_PERTURB_MULTICHAIN, x);
   case MC_PATH_MOVE_CAUSTIC:
-    return mut_perturb_applies(MUT_PERTURB_CAUSTIC, x);
+    return mut_perturb_applies(&P->mp, MUT_PERTURB_CAUSTIC, x);
   case MC_PATH_MOVE_LENSSUB:
     return mut_lenssub_m(x) > 0;
   default:
@@ -180,9 +182,10 @@ static int path__applies(int move, const ps_path *x) {
 /* The probability of selecting kernel ki at x (the opening comment), from
  * the chain's kernel probabilities as weights. */
 static double path__select_prob(const mc_chain *c, int ki, const ps_path *x) {
+  const path__space *P = c->target->ctx;
   double sum = 0.0, wk = 0.0;
   for (int j = 0; j < c->n_kernels; j++) {
-    if (!path__applies(c->kernels[j].coord, x)) continue;
+    if (!path__applies(P, c->kernels[j].coord, x)) continue;
     double w = c->cdf[j] - (j > 0 ? c->cdf[j - 1] : 0.0);
     sum += w;
     if (j == ki) wk = w;
@@ -263,6 +266,24 @@ static int64_t path__chain_rays(const mc_chain *c) {
 
 /* ---- The space ----------------------------------------------------------------- */
 
+/* The space's own settings (its flag table). */
+typedef struct path__settings {
+  double glossy_rough; /* --glossy-roughness */
+} path__settings;
+
+static const path__settings path__defaults = {0.1};
+
+static const lmc_opt path__opts[] = {
+    {"glossy-roughness", LMC_OPT_DOUBLE, offsetof(path__settings, glossy_rough), 0, 0, 1, NULL,
+     NULL, 0, "R", NULL,
+     "the lens and multi-chain perturbations retrace glossy vertices of roughness <= R by "
+     "sampling their BSDFs, as they retrace specular ones (0: Veach's, joining through them)",
+     NULL},
+};
+
+const lmc_opt_table mc_space_path_options = {"The path states (--states path, mlt)", path__opts,
+                                             1, &path__defaults, sizeof path__defaults};
+
 static void path__space_destroy(mc_space *sp) {
   free(sp->ctx);
   sp->ctx = NULL;
@@ -277,6 +298,10 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   ps_context_init(&P->ctx, s, rs);
   mut_bidir_init(&P->mb, &P->ctx);
   mut_perturb_init(&P->mp, &P->ctx);
+  path__settings ps;
+  lmc_status st = lmc_opt_read(&mc_space_path_options, rs, &ps, err);
+  if (st) return st;
+  P->mp.glossy_rough = ps.glossy_rough;
   mut_lenssub_init(&P->ml, &P->ctx);
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
