@@ -298,11 +298,7 @@ void mut_bidir_finish(const mut_bidir *mb, const ps_path *x, const mut_bidir_rec
   int a = l + rec->lc;
   int joined = !(l + ka == k2 + 1 && rec->mc == 0);
   y->rays += joined;
-  const scene *sc = mb->ctx->sc;
-  int blocked = joined && (y->x[a + 1].inf
-                               ? scene_occluded_ray(sc, y->x[a].v.p, v3_neg(y->x[a + 1].v.dir))
-                               : scene_occluded_segment(sc, y->x[a].v.p, y->x[a + 1].v.p));
-  if (blocked) {
+  if (joined && ps_edge_blocked(mb->ctx, y, a)) {
     y->f = rgb_zero();
     y->lum = 0.0;
     return;

@@ -106,17 +106,12 @@ int mut_lenssub_propose(const mut_lenssub *ml, rng *r, const ps_path *x, ps_path
   if (k2 < ctx->kmin || k2 > ctx->kmax) return 0;
   ps_path *y = OUT_y;
   y->k = k2;
-  y->rays = 0;
   for (int i = 0; i <= m2; i++) y->x[i].v = v[i];
   for (int i = m + 1; i <= k; i++) y->x[i - m + m2] = x->x[i];
   ps_eval(ctx, y);
   if (mut_lenssub_m(y) != m2) return 0; /* (not reachable back: no proposal) */
   if (rays) (*rays)++;
-  const scene *sc = ctx->sc;
-  int blocked = y->x[m2 + 1].inf
-                    ? scene_occluded_ray(sc, y->x[m2].v.p, v3_neg(y->x[m2 + 1].v.dir))
-                    : scene_occluded_segment(sc, y->x[m2].v.p, y->x[m2 + 1].v.p);
-  if (blocked) {
+  if (ps_edge_blocked(ctx, y, m2)) {
     y->f = rgb_zero();
     y->lum = 0.0;
   }

@@ -193,11 +193,8 @@ static int mp__finish(const mut_perturb *mp, const ps_path *x, ps_path *y, int l
     if (y->x[i].delta != x->x[i].delta ||
         mut_perturb_glossy(mp, y, i) != mut_perturb_glossy(mp, x, i))
       return 0;
-  const scene *sc = mp->ctx->sc;
   if (rays) (*rays)++;
-  int blocked = y->x[a + 1].inf ? scene_occluded_ray(sc, y->x[a].v.p, v3_neg(y->x[a + 1].v.dir))
-                                : scene_occluded_segment(sc, y->x[a].v.p, y->x[a + 1].v.p);
-  if (blocked) {
+  if (ps_edge_blocked(mp->ctx, y, a)) {
     y->f = rgb_zero();
     y->lum = 0.0;
     return 1;

@@ -87,6 +87,12 @@ vec3 ps_dir(const ps_path *p, int a, int b) {
   return v3_normalize(v3_sub(p->x[b].v.p, p->x[a].v.p));
 }
 
+int ps_edge_blocked(const ps_context *ctx, const ps_path *p, int a) {
+  const scene *sc = ctx->sc;
+  if (p->x[a + 1].inf) return scene_occluded_ray(sc, p->x[a].v.p, v3_neg(p->x[a + 1].v.dir));
+  return scene_occluded_segment(sc, p->x[a].v.p, p->x[a + 1].v.p);
+}
+
 /* |cos| at vertex i of the unit direction w: the optical axis' at the
  * pinhole, 1 at a point or spot light, the geometric normal's elsewhere. */
 static double ps__cos(const ps_context *ctx, const ps_path *p, int i, vec3 w) {

@@ -124,6 +124,10 @@ int ps_vertex_fits(const ps_context *ctx, const bdpt_vertex *v, int index, int k
 int ps_delta_lobe(const bdpt_vertex *v, vec3 wo, vec3 wi, transport_mode mode, rgb *OUT_f,
                   double *OUT_prob, int *OUT_trans, double *OUT_eta);
 
+/* Whether the edge from vertex a to a + 1 of p is blocked (a shadow ray:
+ * towards the direction when a + 1 is at infinity). */
+int ps_edge_blocked(const ps_context *ctx, const ps_path *p, int a);
+
 /* Unit direction from vertex a to vertex b of p (against the light's
  * travel when b is a direction at infinity). */
 vec3 ps_dir(const ps_path *p, int a, int b);

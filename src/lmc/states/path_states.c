@@ -179,28 +179,32 @@ static int path__applies(const path__space *P, int move, const ps_path *x) {
   }
 }
 
-/* The probability of selecting kernel ki at x (the opening comment), from
- * the chain's kernel probabilities as weights. */
-static double path__select_prob(const mc_chain *c, int ki, const ps_path *x) {
+/* The selection weights at x (the opening comment): w[j] the chain's
+ * probability of kernel j when its move applies to x, else 0; returns
+ * their sum. */
+static double path__weights(const mc_chain *c, const ps_path *x, double *w) {
   const path__space *P = c->target->ctx;
-  double sum = 0.0, wk = 0.0;
+  double sum = 0.0;
   for (int j = 0; j < c->n_kernels; j++) {
-    if (!path__applies(P, c->kernels[j].coord, x)) continue;
-    double w = c->cdf[j] - (j > 0 ? c->cdf[j - 1] : 0.0);
-    sum += w;
-    if (j == ki) wk = w;
+    w[j] = path__applies(P, c->kernels[j].coord, x) ? c->cdf[j] - (j > 0 ? c->cdf[j - 1] : 0.0)
+                                                     : 0.0;
+    sum += w[j];
   }
-  return sum > 0.0 ? wk / sum : 0.0;
+  return sum;
 }
 
-static int path__pick(mc_chain *c, const ps_path *x) {
+/* The kernel selected at x, and its probability P_ki(x). */
+static int path__pick(mc_chain *c, const ps_path *x, double *OUT_p) {
+  double w[MC_MAX_KERNELS], sum = path__weights(c, x, w);
   double u = rng_uniform(&c->r), acc = 0.0;
   int last = 0;
+  *OUT_p = 0.0;
   for (int j = 0; j < c->n_kernels; j++) {
-    double p = path__select_prob(c, j, x);
+    double p = sum > 0.0 ? w[j] / sum : 0.0;
     if (!(p > 0.0)) continue;
     last = j;
     acc += p;
+    *OUT_p = p;
     if (u < acc) return j;
   }
   return last;
@@ -208,8 +212,8 @@ static int path__pick(mc_chain *c, const ps_path *x) {
 
 /* Move ki's proposal y from x and its ratio, selection included; 0 when
  * it makes none. */
-static int path__propose(const path__space *P, mc_chain *c, int ki, const ps_path *x, ps_path *y,
-                         double *OUT_ratio) {
+static int path__propose(const path__space *P, mc_chain *c, int ki, double p_x, const ps_path *x,
+                         ps_path *y, double *OUT_ratio) {
   int move = c->kernels[ki].coord, ok;
   double ratio = 0.0;
   if (move == MC_PATH_MOVE_BIDIR) {
@@ -225,7 +229,10 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, const ps_pat
   }
   *OUT_ratio = 0.0;
   if (!ok) return 0;
-  if (ratio > 0.0) ratio *= path__select_prob(c, ki, y) / path__select_prob(c, ki, x);
+  if (ratio > 0.0) {
+    double w[MC_MAX_KERNELS], sum = path__weights(c, y, w);
+    ratio *= (sum > 0.0 ? w[ki] / sum : 0.0) / p_x;
+  }
   *OUT_ratio = isfinite(ratio) ? ratio : 0.0;
   return 1;
 }
@@ -234,10 +241,11 @@ static int path__chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   const path__space *P = c->target->ctx;
   path__chain *pc = c->own;
   ps_path *x = &pc->buf[pc->cur], *y = &pc->buf[1 - pc->cur];
-  int ki = path__pick(c, x);
+  double p_x;
+  int ki = path__pick(c, x, &p_x);
   double ratio = 0.0;
   y->rays = 0;
-  int ok = path__propose(P, c, ki, x, y, &ratio);
+  int ok = path__propose(P, c, ki, p_x, x, y, &ratio);
   pc->rays += y->rays;
   double a = ok ? fmin(1.0, ratio) : 0.0;
   c->stats[ki].proposed++;
