@@ -307,7 +307,7 @@ static void offsets_run(const scene *sc, mut_perturb_kind kind, uint64_t seed, i
     mut_perturb_choice ch;
     double ratio;
     int made = mut_perturb_propose(&mv.mp, kind, &r, x, y, &ratio, NULL, &ch);
-    int ok = 1, m = mut_perturb_caustic_m(x);
+    int ok = 1, m = mut_perturb_caustic_m(&mv.mp, x);
     if (kind == MUT_PERTURB_CAUSTIC) {
       double s = mut_perturb_caustic_scale(&mv.mp, x, m);
       offsets_add(&o, mv.mp.theta1 * s, mv.mp.theta2 * s, ch.size, ch.phi);
@@ -353,8 +353,8 @@ static void test_offsets(void **state) {
 static int reverse(const mut_perturb *mp, mut_perturb_kind kind, const ps_path *x,
                    const ps_path *y, ps_path *z) {
   if (kind == MUT_PERTURB_CAUSTIC) {
-    int m = mut_perturb_caustic_m(x);
-    return mut_perturb_caustic_generate(mp, y, ps_dir(x, m, m - 1), z, NULL);
+    int m = mut_perturb_caustic_m(mp, x);
+    return mut_perturb_caustic_generate(mp, y, ps_dir(x, m, m - 1), NULL, z, NULL);
   }
   int ends[MUT_PERTURB_MAX_CHAINS];
   int nc = mut_perturb_chains(mp, x, ends);
@@ -364,7 +364,7 @@ static int reverse(const mut_perturb *mp, mut_perturb_kind kind, const ps_path *
 }
 
 static double g_acc_sum;
-static int g_acc_n;
+static int g_acc_n, g_inner_glossy;
 
 static void check_pairs(const scene *sc, mut_perturb_kind kind, int specular, uint64_t seed,
                         int *OUT_reverse, int *OUT_balance, int *OUT_specular) {
@@ -381,6 +381,12 @@ static void check_pairs(const scene *sc, mut_perturb_kind kind, int specular, ui
     int glossy = 0;
     for (int j = 1; j < x->k; j++) glossy |= mut_perturb_glossy(&mv.mp, x, j);
     *OUT_specular += n_delta(y) > 0 || glossy;
+    if (kind == MUT_PERTURB_CAUSTIC)
+      for (int j = 2; j < mut_perturb_caustic_m(&mv.mp, x); j++)
+        if (mut_perturb_glossy(&mv.mp, x, j)) {
+          g_inner_glossy++; /* a G vertex inside the retraced chain */
+          break;
+        }
     /* The reverse move reproduces x (not through G vertices, which sample
      * their BSDFs). */
     if (!glossy) assert_true(reverse(&mv.mp, kind, x, y, z));
@@ -416,16 +422,18 @@ static void test_reverse_and_balance(void **state) {
   } cases[] = {{DIFFUSE, MUT_PERTURB_LENS, 0},      {DELTA, MUT_PERTURB_LENS, 300},
                {GLOSSY, MUT_PERTURB_LENS, 1000},
                {DELTA, MUT_PERTURB_MULTICHAIN, 1000}, {DIFFUSE, MUT_PERTURB_CAUSTIC, 0},
-               {CAUSTIC, MUT_PERTURB_CAUSTIC, 1000}};
+               {CAUSTIC, MUT_PERTURB_CAUSTIC, 1000}, {GLOSSY, MUT_PERTURB_CAUSTIC, 1000}};
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
     int rev = 0, bal = 0, spec = 0;
     check_pairs(fx->sc[cases[c].scene], cases[c].kind, cases[c].min_specular > 0, 51 + c, &rev,
                 &bal, &spec);
-    print_message("%s on %s: %d reversed, %d balanced, %d through delta vertices; mean "
-                  "acceptance %.3f\n",
+    print_message("%s on %s: %d reversed, %d balanced, %d through delta or G vertices (%d "
+                  "retracing a G vertex); mean acceptance %.3f\n",
                   kind_names[cases[c].kind], scene_names[cases[c].scene], rev, bal, spec,
-                  g_acc_sum / g_acc_n);
-    g_acc_sum = 0.0, g_acc_n = 0;
+                  g_inner_glossy, g_acc_sum / g_acc_n);
+    if (cases[c].scene == GLOSSY && cases[c].kind == MUT_PERTURB_CAUSTIC)
+      assert_true(g_inner_glossy >= 500);
+    g_acc_sum = 0.0, g_acc_n = 0, g_inner_glossy = 0;
     assert_true((cases[c].scene == GLOSSY || rev >= 1500) && bal >= 1000 &&
                 spec >= cases[c].min_specular);
   }
@@ -493,7 +501,8 @@ static const struct {
                  {DELTA, MUT_PERTURB_MULTICHAIN, KMAX, 4000000, 0},
                  {DIFFUSE, MUT_PERTURB_CAUSTIC, 0, 1000000, 0},
                  {CAUSTIC, MUT_PERTURB_CAUSTIC, 0, 2000000, 1},
-                 {GLOSSY, MUT_PERTURB_LENS, 0, 1000000, 1}};
+                 {GLOSSY, MUT_PERTURB_LENS, 0, 1000000, 1},
+                 {GLOSSY, MUT_PERTURB_CAUSTIC, 0, 1000000, 1}};
 
 static void test_invariance(void **state) {
   fixture *fx = *state;
@@ -525,7 +534,7 @@ static void test_invariance_detects_bias(void **state) {
     assert_true(r->min_p < r->level);
     free(r);
   }
-  assert_int_equal(controls, 3);
+  assert_int_equal(controls, 4);
 }
 
 /* ---- The lens subpath mutation ------------------------------------------------ */
@@ -535,16 +544,19 @@ static int draw_lenssub(const movers *mv, rng *r, ps_path *x) {
   for (int tries = 0; tries < 2000000; tries++) {
     int k = 1 + (int)(rng_uniform(r) * KMAX);
     if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
-    if (mut_lenssub_m(x) > 0) return 1;
+    if (mut_lenssub_m(&mv->ctx, x) > 0) return 1;
   }
   return 0;
 }
 
 /* Caches, T both ways from y's and x's caches against fresh evaluations,
  * and detailed balance, on proposals; the length changes counted. */
+static const int lenssub_scenes[3] = {DIFFUSE, DELTA, GLOSSY};
+
 static void test_lenssub_balance(void **state) {
   fixture *fx = *state;
-  for (int q = DIFFUSE; q <= DELTA; q++) {
+  for (int c = 0; c < 3; c++) {
+    int q = lenssub_scenes[c];
     movers mv;
     movers_init(&mv, fx->sc[q]);
     ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y), *z = malloc(sizeof *z);
@@ -557,8 +569,8 @@ static void test_lenssub_balance(void **state) {
       if (!mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL)) continue;
       made++;
       assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
-      assert_int_equal(y->k - x->k, mut_lenssub_m(y) - mut_lenssub_m(x));
-      longer += y->k > x->k, shorter += y->k < x->k, specular += mut_lenssub_m(y) > 1;
+      assert_int_equal(y->k - x->k, mut_lenssub_m(&mv.ctx, y) - mut_lenssub_m(&mv.ctx, x));
+      longer += y->k > x->k, shorter += y->k < x->k, specular += mut_lenssub_m(&mv.ctx, y) > 1;
       if (!(y->lum > 0.0)) continue;
       double tf = mut_lenssub_density(&mv.ml, y), tr = mut_lenssub_density(&mv.ml, x);
       double ratio_rev = x->lum * tf / (y->lum * tr);
@@ -567,10 +579,10 @@ static void test_lenssub_balance(void **state) {
       balanced++;
     }
     print_message("lens subpath on %s: %d proposals, %d balanced, %d longer, %d shorter, %d "
-                  "through delta lobes\n",
+                  "through delta lobes or G vertices\n",
                   scene_names[q], made, balanced, longer, shorter, specular);
     assert_true(made >= 1500 && balanced >= 500 && specular >= 100);
-    if (q == DELTA) assert_true(longer >= 50 && shorter >= 50);
+    if (q != DIFFUSE) assert_true(longer >= 50 && shorter >= 50);
     free(x), free(y), free(z);
   }
 }
@@ -590,7 +602,7 @@ static ps_inv *lenssub_invariance(const scene *sc, uint64_t seed, double power, 
     if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
     double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / KMAX, ratio = 0.0;
     res->samples++;
-    int moved = mut_lenssub_m(x) > 0 && mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL) &&
+    int moved = mut_lenssub_m(&mv.ctx, x) > 0 && mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL) &&
                 rng_uniform(&r) < ratio;
     ps_inv_add(res, x->lum / q, inv_bin(sc, x), moved ? inv_bin(sc, y) : inv_bin(sc, x));
   }
@@ -601,7 +613,8 @@ static ps_inv *lenssub_invariance(const scene *sc, uint64_t seed, double power, 
 
 static void test_lenssub_invariance(void **state) {
   fixture *fx = *state;
-  for (int q = DIFFUSE; q <= DELTA; q++) {
+  for (int c = 0; c < 3; c++) {
+    int q = lenssub_scenes[c];
     for (int control = 0; control < 2; control++) {
       if (control && q != DIFFUSE) continue;
       ps_inv *r = lenssub_invariance(fx->sc[q], 81 + q, control ? 0.0 : 1.0, 1000000);

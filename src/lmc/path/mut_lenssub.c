@@ -18,9 +18,9 @@ void mut_lenssub_init(mut_lenssub *ml, const ps_context *ctx) {
   ml->test_smooth_power = 1.0;
 }
 
-int mut_lenssub_m(const ps_path *x) {
+int mut_lenssub_m(const ps_context *ctx, const ps_path *x) {
   int k = x->k, m = 1;
-  while (m < k && !ps_connectible(x, m)) m++;
+  while (m < k && (!ps_connectible(x, m) || ps_glossy(ctx, x, m))) m++;
   if (m >= k || !ps_connectible(x, m + 1)) return 0;
   return m;
 }
@@ -58,7 +58,7 @@ double mut_lenssub_smooth_prob(const bdpt_vertex *v, vec3 wo) {
 }
 
 double mut_lenssub_density(const mut_lenssub *ml, const ps_path *p) {
-  int m = mut_lenssub_m(p);
+  int m = mut_lenssub_m(ml->ctx, p);
   if (m == 0) return 0.0;
   double d = 1.0;
   for (int i = 1; i <= m; i++) d *= p->x[i].pdf_cam;
@@ -76,6 +76,14 @@ static int ml__walk(const ps_context *ctx, rng *r, int mmax, bdpt_vertex *v, int
   for (int i = 1;; i++) {
     vec3 wo = v3_normalize(v3_sub(v[i - 1].p, v[i].p)), dir[2];
     double prob[2];
+    if (ps_glossy_vertex(ctx, &v[i])) {
+      /* A G vertex: on through its BSDF's sample. */
+      if (i + 1 > mmax || !mut_perturb_sample_dir(&v[i], wo, TRANSPORT_RADIANCE, r, &dir[0]))
+        return 0;
+      v[i].delta = 0;
+      if (!mut_perturb_trace(ctx, &v[i], dir[0], TRANSPORT_RADIANCE, &v[i + 1], rays)) return 0;
+      continue;
+    }
     int n = ml__delta_lobes(&v[i], wo, dir, prob);
     if (n < 0) return 0;
     double u = rng_uniform(r), ps = 1.0;
@@ -97,7 +105,7 @@ int mut_lenssub_propose(const mut_lenssub *ml, rng *r, const ps_path *x, ps_path
                         double *OUT_ratio, int64_t *rays) {
   const ps_context *ctx = ml->ctx;
   *OUT_ratio = 0.0;
-  int m = mut_lenssub_m(x), k = x->k;
+  int m = mut_lenssub_m(ctx, x), k = x->k;
   if (m == 0) return 0;
   int mmax = ctx->kmax - (k - m), m2;
   bdpt_vertex v[PS_MAX_VERTICES];
@@ -109,7 +117,7 @@ int mut_lenssub_propose(const mut_lenssub *ml, rng *r, const ps_path *x, ps_path
   for (int i = 0; i <= m2; i++) y->x[i].v = v[i];
   for (int i = m + 1; i <= k; i++) y->x[i - m + m2] = x->x[i];
   ps_eval(ctx, y);
-  if (mut_lenssub_m(y) != m2) return 0; /* (not reachable back: no proposal) */
+  if (mut_lenssub_m(ctx, y) != m2) return 0; /* (not reachable back: no proposal) */
   if (rays) (*rays)++;
   if (ps_edge_blocked(ctx, y, m2)) {
     y->f = rgb_zero();

@@ -36,7 +36,6 @@ void mut_perturb_init(mut_perturb *mp, const ps_context *ctx) {
   mp->theta2 = rad * mp->r2;
   mp->mc_theta1 = 0.0001 * MP_PI / 180.0;
   mp->mc_theta2 = 0.1 * MP_PI / 180.0;
-  mp->glossy_rough = 0.1;
   mp->test_jac_power = 1.0;
 }
 
@@ -65,18 +64,7 @@ static vec3 mp__turn(vec3 w, double theta, double phi) {
 /* ---- Forms ------------------------------------------------------------------ */
 
 int mut_perturb_glossy(const mut_perturb *mp, const ps_path *x, int i) {
-  if (i < 1 || i >= x->k || x->x[i].delta || x->x[i].v.type != BDPT_VERTEX_SURFACE) return 0;
-  const bsdf *b = x->x[i].v.hit.bsdf;
-  if (!b || b->masked || !(mp->glossy_rough > 0.0)) return 0;
-  switch (b->type) {
-  case BSDF_ROUGHCONDUCTOR:
-  case BSDF_ROUGHDIELECTRIC:
-  case BSDF_PHONG:
-  case BSDF_WARD:
-    return !bsdf_is_rough(b, mp->glossy_rough);
-  default:
-    return 0;
-  }
+  return ps_glossy(mp->ctx, x, i);
 }
 
 int mut_perturb_chains(const mut_perturb *mp, const ps_path *x, int *OUT_ends) {
@@ -91,11 +79,11 @@ int mut_perturb_chains(const mut_perturb *mp, const ps_path *x, int *OUT_ends) {
   return 0;
 }
 
-int mut_perturb_caustic_m(const ps_path *x) {
+int mut_perturb_caustic_m(const mut_perturb *mp, const ps_path *x) {
   int k = x->k;
   if (k < 2 || !ps_connectible(x, 1)) return 0;
   int m = 2;
-  while (m < k && !ps_connectible(x, m)) m++;
+  while (m < k && (!ps_connectible(x, m) || ps_glossy(mp->ctx, x, m))) m++;
   return x->x[m].inf ? 0 : m;
 }
 
@@ -107,7 +95,7 @@ int mut_perturb_applies(const mut_perturb *mp, mut_perturb_kind kind, const ps_p
   case MUT_PERTURB_MULTICHAIN:
     return mut_perturb_chains(mp, x, ends) >= 2;
   case MUT_PERTURB_CAUSTIC:
-    return mut_perturb_caustic_m(x) > 0;
+    return mut_perturb_caustic_m(mp, x) > 0;
   }
   return 0;
 }
@@ -203,16 +191,14 @@ static int mp__finish(const mut_perturb *mp, const ps_path *x, ps_path *y, int l
   return 1;
 }
 
-/* A direction sampled from the BSDF of surface vertex v reached from
- * along wo (radiance mode, Mitsuba's side rule), not through a delta lobe. */
-static int mp__sample_dir(const bdpt_vertex *v, vec3 wo, rng *r, vec3 *OUT_dir) {
+int mut_perturb_sample_dir(const bdpt_vertex *v, vec3 wo, transport_mode mode, rng *r,
+                           vec3 *OUT_dir) {
   const surface_hit *h = &v->hit;
   vec3 wo_l = frame_to_local(&h->sh, wo);
   if (!r || !(v3_dot(wo, h->ng) * wo_l.z > 0.0)) return 0;
   double u_lobe = rng_uniform(r), u1 = rng_uniform(r), u2 = rng_uniform(r);
   bsdf_sample bs;
-  if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, TRANSPORT_RADIANCE, &bs))
-    return 0;
+  if (!bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u_lobe, u1, u2, mode, &bs)) return 0;
   if ((bs.flags & BSDF_DELTA) || !(bs.pdf > 0.0)) return 0;
   vec3 wi = v3_normalize(frame_to_world(&h->sh, bs.wi));
   if (!(v3_dot(wi, h->ng) * frame_to_local(&h->sh, wi).z > 0.0)) return 0;
@@ -238,7 +224,7 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
       if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_RADIANCE, &dir)) return 0;
       y->x[i].v.delta = 1;
     } else if (mut_perturb_glossy(mp, x, i)) {
-      if (!mp__sample_dir(&y->x[i].v, wo, r, &dir)) return 0;
+      if (!mut_perturb_sample_dir(&y->x[i].v, wo, TRANSPORT_RADIANCE, r, &dir)) return 0;
       y->x[i].v.delta = 0;
     } else {
       if (chain >= nc - 1 || ends[chain] != i) return 0;
@@ -251,10 +237,10 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
   return mp__finish(mp, x, y, 1, e, e, rays);
 }
 
-int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir,
+int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir, rng *r,
                                  ps_path *OUT_y, int64_t *rays) {
   const ps_context *ctx = mp->ctx;
-  int m = mut_perturb_caustic_m(x);
+  int m = mut_perturb_caustic_m(mp, x);
   if (m == 0) return 0;
   ps_path *y = OUT_y;
   *y = *x;
@@ -262,8 +248,13 @@ int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 d
   if (!mut_perturb_trace(ctx, &x->x[m].v, dir, TRANSPORT_IMPORTANCE, &y->x[m - 1].v, rays)) return 0;
   for (int i = m - 1; i >= 2; i--) {
     vec3 wo = v3_normalize(v3_sub(y->x[i + 1].v.p, y->x[i].v.p)), d;
-    if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_IMPORTANCE, &d)) return 0;
-    y->x[i].v.delta = 1;
+    if (x->x[i].delta) {
+      if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_IMPORTANCE, &d)) return 0;
+      y->x[i].v.delta = 1;
+    } else {
+      if (!mut_perturb_sample_dir(&y->x[i].v, wo, TRANSPORT_IMPORTANCE, r, &d)) return 0;
+      y->x[i].v.delta = 0;
+    }
     if (!mut_perturb_trace(ctx, &y->x[i].v, d, TRANSPORT_IMPORTANCE, &y->x[i - 1].v, rays)) return 0;
   }
   ps_update(ctx, y, 0, m + 1);
@@ -304,14 +295,17 @@ static double mp__lens_density(const mut_perturb *mp, const ps_path *x, const ps
 
 static double mp__caustic_density(const mut_perturb *mp, const ps_path *x, const ps_path *y) {
   const ps_context *ctx = mp->ctx;
-  int m = mut_perturb_caustic_m(x);
-  if (m == 0 || mut_perturb_caustic_m(y) != m || y->k != x->k) return 0.0;
+  int m = mut_perturb_caustic_m(mp, x);
+  if (m == 0 || mut_perturb_caustic_m(mp, y) != m || y->k != x->k) return 0.0;
   double s = mut_perturb_caustic_scale(mp, x, m);
   double th = mp__angle(ps_dir(x, m, m - 1), ps_dir(y, m, m - 1));
   double p = mut_perturb_log_pdf(mp->theta1 * s, mp->theta2 * s, th) / (2.0 * MP_PI * sin(th));
   if (!(p > 0.0)) return 0.0;
   double jac = ps_area_jacobian(ctx, y, m, m - 1);
-  for (int i = m - 2; i >= 1; i--) jac *= ps_forced_density(ctx, y, i + 1, i + 2, i, 1);
+  /* Each vertex before an S the Jacobian of its forced direction, before a G
+   * the BSDF's sampling density from the light side (pdf_light). */
+  for (int i = m - 2; i >= 1; i--)
+    jac *= y->x[i + 1].delta ? ps_forced_density(ctx, y, i + 1, i + 2, i, 1) : y->x[i].pdf_light;
   return p * pow(jac, mp->test_jac_power);
 }
 
@@ -330,14 +324,14 @@ int mut_perturb_propose(const mut_perturb *mp, mut_perturb_kind kind, rng *r, co
   mut_perturb_choice ch = {0.0, 0.0, 0.0, 0.0};
   int ok;
   if (kind == MUT_PERTURB_CAUSTIC) {
-    int m = mut_perturb_caustic_m(x);
+    int m = mut_perturb_caustic_m(mp, x);
     if (m == 0) return 0;
     double s = mut_perturb_caustic_scale(mp, x, m);
     ch.size = mut_perturb_log_sample(mp->theta1 * s, mp->theta2 * s, rng_uniform(r));
     ch.phi = 2.0 * MP_PI * rng_uniform(r);
     vec3 w = mp__turn(ps_dir(x, m, m - 1), ch.size, ch.phi);
     if (OUT_choice) *OUT_choice = ch;
-    ok = mut_perturb_caustic_generate(mp, x, w, OUT_y, rays);
+    ok = mut_perturb_caustic_generate(mp, x, w, r, OUT_y, rays);
   } else {
     int ends[MUT_PERTURB_MAX_CHAINS];
     int nc = mut_perturb_chains(mp, x, ends);

@@ -4,9 +4,8 @@
  * path that keep its form, each with its exact transition density.
  *
  * Forms. A surface vertex is S (scattering through a delta lobe), G
- * (glossy: a rough conductor or dielectric, phong or ward without diffuse
- * part, whose roughness is at most glossy_rough: bsdf_is_rough) or D (the
- * rest). Seen from the camera, x splits into chains: x_1 .. x_{e_0} is a
+ * (glossy: ps_glossy, a narrow lobe of a rough conductor or dielectric,
+ * phong or ward) or D (the rest). Seen from the camera, x splits into chains: x_1 .. x_{e_0} is a
  * run of S and G vertices (none or more) ending at a D vertex x_{e_0};
  * while the vertex after a chain's end is not connectible (an S vertex), a
  * further chain (S|G)+ D follows, up to e_{n-1}, whose successor is
@@ -28,9 +27,9 @@
  *    by an angle theta with density proportional to 1/theta on
  *    [mc_theta1, mc_theta2] and uniform azimuth; the last end joins its
  *    successor.
- *  - Caustic perturbation (E D S* (D|L)): x_1 is D; m > 1 is the next
- *    connectible vertex (x_2 .. x_{m-1} are S); x_m is a surface or a finite
- *    emitter (not a direction at infinity). The direction leaving x_m
+ *  - Caustic perturbation (E (D|G) (S|G)* (D|L)): x_1 is connectible; m > 1
+ *    is the next D vertex or the emitter end (x_2 .. x_{m-1} are S or G);
+ *    x_m is a surface or a finite emitter (not a direction at infinity). The direction leaving x_m
  *    towards x_{m-1} turns by theta with density proportional to 1/theta
  *    on [theta1 s, theta2 s], uniform azimuth, where s = |x_1 - x_0| /
  *    (|x_1 x_2| + ... + |x_{m-1} x_m|) (Veach p. 354: an image-plane move
@@ -38,8 +37,10 @@
  *    turn must stay below pi for its density to hold; a path whose x_1
  *    nearly touches x_2 would ask for more), depends on the path: the move is not
  *    symmetric and both directions' ranges enter the ratio. The chain is
- *    retraced towards the camera with the same lobes to a new x_1, which
- *    joins the pinhole (its raster point must lie on the film).
+ *    retraced towards the camera to a new x_1, each S vertex keeping its
+ *    lobe, each G vertex sampling its BSDF afresh (importance transport;
+ *    not Veach's), and x_1 joins the pinhole (its raster point must lie on
+ *    the film).
  * Each kept vertex's lobe flag stays; a retraced vertex must have the same
  * kind (S, G or D) as x's, or there is no proposal (the chain stays).
  *
@@ -54,7 +55,8 @@
  *     |cos y_i| / |y_i - y_{i-1}|^2;
  *   caustic: T(x -> y) = p_theta,x(theta) / (2 pi sin theta) *
  *       |cos y_{m-1}| / |y_{m-1} - x_m|^2 *
- *       prod_{i=1..m-2} ps_forced_density(y_i through y_{i+1}),
+ *       prod_{i=1..m-2} K_i, K_i = ps_forced_density(y_i through y_{i+1})
+ *       when y_{i+1} is S, pdf_light(y_i) (its BSDF's sampling density) when G,
  *     p_theta,x on x's range;
  * and the acceptance f(y) T(y -> x) / (f(x) T(x -> y)): for the lens and
  * multi-chain perturbations the offsets' densities are symmetric and
@@ -84,7 +86,6 @@ typedef struct mut_perturb {
                                pixels span (radians) */
   double mc_theta1, mc_theta2; /* multi-chain: the direction's angle range (0.0001 and
                                   0.1 degrees, radians) */
-  double glossy_rough;      /* G vertices: roughness at most this (0.1; 0: none) */
   double test_jac_power;    /* tests only: the densities' Jacobians raised to this wrong
                                power (1: right) */
 } mut_perturb;
@@ -97,7 +98,7 @@ int mut_perturb_glossy(const mut_perturb *mp, const ps_path *x, int i);
  * (room for MUT_PERTURB_MAX_CHAINS); returns their number (0: none). */
 int mut_perturb_chains(const mut_perturb *mp, const ps_path *x, int *OUT_ends);
 /* The caustic perturbation's m for x, or 0 when it does not apply. */
-int mut_perturb_caustic_m(const ps_path *x);
+int mut_perturb_caustic_m(const mut_perturb *mp, const ps_path *x);
 /* The caustic perturbation's scale s of x's turn (the opening comment). */
 double mut_perturb_caustic_scale(const mut_perturb *mp, const ps_path *x, int m);
 /* Whether perturbation `kind` applies to x. */
@@ -114,8 +115,14 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
                               const vec3 *dirs, rng *r, ps_path *OUT_y, int64_t *rays);
 /* y from x by the caustic perturbation with x_m's new direction towards
  * y_{m-1} given (as above). */
-int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir,
+int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir, rng *r,
                                  ps_path *OUT_y, int64_t *rays);
+/* A direction sampled from the BSDF of surface vertex v reached from along
+ * wo (unit, towards the vertex before it) in transport mode `mode`, not
+ * through a delta lobe, on the sides Mitsuba's rule allows; 0 when there is
+ * none (or r is NULL). */
+int mut_perturb_sample_dir(const bdpt_vertex *v, vec3 wo, transport_mode mode, rng *r,
+                           vec3 *OUT_dir);
 
 /* T(x -> y) of perturbation `kind` (the opening comment), 0 when y cannot
  * come from x by it. */

@@ -25,6 +25,27 @@ void ps_context_init(ps_context *ctx, const scene *sc, const render_settings *rs
   for (int i = 0; i < sc->n_lights; i++)
     if (sc->lights[i].type == LIGHT_AREA || light_is_infinite(&sc->lights[i]))
       ctx->can_hit_emitter = 1;
+  ctx->glossy_rough = 0.1;
+}
+
+int ps_glossy_vertex(const ps_context *ctx, const bdpt_vertex *v) {
+  if (v->type != BDPT_VERTEX_SURFACE) return 0;
+  const bsdf *b = v->hit.bsdf;
+  if (!b || b->masked || !(ctx->glossy_rough > 0.0)) return 0;
+  switch (b->type) {
+  case BSDF_ROUGHCONDUCTOR:
+  case BSDF_ROUGHDIELECTRIC:
+  case BSDF_PHONG:
+  case BSDF_WARD:
+    return !bsdf_is_rough(b, ctx->glossy_rough);
+  default:
+    return 0;
+  }
+}
+
+int ps_glossy(const ps_context *ctx, const ps_path *p, int i) {
+  if (i < 1 || i >= p->k || p->x[i].delta) return 0;
+  return ps_glossy_vertex(ctx, &p->x[i].v);
 }
 
 /* ---- Vertex queries -------------------------------------------------------- */

@@ -93,11 +93,22 @@ typedef struct ps_context {
   render_settings rs;   /* the render's settings, Russian roulette off (walks) */
   int kmin, kmax;       /* lengths of the path space (segments) */
   int can_hit_emitter;  /* the scene has area lights: a camera walk may end on one */
+  double glossy_rough;  /* G vertices: roughness at most this (0.1; 0: none; ps_glossy) */
 } ps_context;
 
 /* Fills ctx for scene sc and the render's depths: kmin = max(1, mindepth),
- * kmax = maxdepth (capped at PS_MAX_VERTICES - 1). */
+ * kmax = maxdepth (capped at PS_MAX_VERTICES - 1); glossy_rough 0.1. */
 void ps_context_init(ps_context *ctx, const scene *sc, const render_settings *rs);
+
+/* Whether surface vertex v is glossy (G), the class of material that the
+ * moves retrace by sampling its BSDF rather than join through: a rough
+ * conductor or dielectric, phong or ward without diffuse part, whose
+ * roughness is at most ctx->glossy_rough (bsdf_is_rough). A property of
+ * the material at the hit alone. */
+int ps_glossy_vertex(const ps_context *ctx, const bdpt_vertex *v);
+/* Whether vertex i of p is G: an inner surface vertex that is not delta
+ * and ps_glossy_vertex. */
+int ps_glossy(const ps_context *ctx, const ps_path *p, int i);
 
 /* Recomputes the caches of vertices lo .. hi (clipped to 0 .. k) from the
  * geometry: factor, geometry term, both densities. */

@@ -173,7 +173,7 @@ static int path__applies(const path__space *P, int move, const ps_path *x) {
   case MC_PATH_MOVE_CAUSTIC:
     return mut_perturb_applies(&P->mp, MUT_PERTURB_CAUSTIC, x);
   case MC_PATH_MOVE_LENSSUB:
-    return mut_lenssub_m(x) > 0;
+    return mut_lenssub_m(&P->ctx, x) > 0;
   default:
     return 1;
   }
@@ -284,8 +284,9 @@ static const path__settings path__defaults = {0.1};
 static const lmc_opt path__opts[] = {
     {"glossy-roughness", LMC_OPT_DOUBLE, offsetof(path__settings, glossy_rough), 0, 0, 1, NULL,
      NULL, 0, "R", NULL,
-     "the lens and multi-chain perturbations retrace glossy vertices of roughness <= R by "
-     "sampling their BSDFs, as they retrace specular ones (0: Veach's, joining through them)",
+     "the perturbations and the lens subpath mutation retrace glossy vertices of roughness "
+     "<= R by sampling their BSDFs, as they retrace specular ones (0: Veach's, joining "
+     "through them)",
      NULL},
 };
 
@@ -309,7 +310,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   path__settings ps;
   lmc_status st = lmc_opt_read(&mc_space_path_options, rs, &ps, err);
   if (st) return st;
-  P->mp.glossy_rough = ps.glossy_rough;
+  P->ctx.glossy_rough = ps.glossy_rough;
   mut_lenssub_init(&P->ml, &P->ctx);
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
