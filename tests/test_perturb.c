@@ -403,7 +403,9 @@ static void check_pairs(const scene *sc, mut_perturb_kind kind, int specular, ui
     if (!(y->lum > 0.0)) continue;
     double tf = mut_perturb_density(&mv.mp, kind, x, y), tr = mut_perturb_density(&mv.mp, kind, y, x);
     double ratio_rev = y->lum > 0.0 ? x->lum * tf / (y->lum * tr) : 0.0;
-    double lhs = x->lum * tf * fmin(1.0, ratio), rhs = y->lum * tr * fmin(1.0, ratio_rev);
+    /* Both sides over f(x) T(x -> y), which keeps them clear of underflow
+     * where a G vertex's density is tiny. */
+    double lhs = fmin(1.0, ratio), rhs = y->lum * tr / (x->lum * tf) * fmin(1.0, ratio_rev);
     if (!rel_close(lhs, rhs, 1e-9)) print_message("balance %.17g vs %.17g\n", lhs, rhs);
     assert_true(tf > 0.0 && rel_close(lhs, rhs, 1e-9));
     *OUT_balance += lhs > 0.0;

@@ -206,6 +206,33 @@ int mut_perturb_sample_dir(const bdpt_vertex *v, vec3 wo, transport_mode mode, r
   return 1;
 }
 
+/* The direction leaving G vertex v (reached from along wo) of the path
+ * being retraced, whose counterpart in x leaves along x_dir: with
+ * probability 1/2 a sample of v's BSDF, else x_dir turned by a log-uniform
+ * angle on [theta1, theta2] (a local move that keeps the path near x's
+ * where a fresh sample of a narrow lobe would lose it); mp__glossy_density
+ * is the mixture's density. */
+static int mp__glossy_dir(const mut_perturb *mp, const bdpt_vertex *v, vec3 wo, vec3 x_dir,
+                          transport_mode mode, rng *r, vec3 *OUT_dir) {
+  if (!r) return 0;
+  if (rng_uniform(r) < 0.5) return mut_perturb_sample_dir(v, wo, mode, r, OUT_dir);
+  double th = mut_perturb_log_sample(mp->theta1, mp->theta2, rng_uniform(r));
+  *OUT_dir = mp__turn(x_dir, th, 2.0 * MP_PI * rng_uniform(r));
+  return 1;
+}
+
+/* The area density of the vertex after a G vertex in the retraced path
+ * (mp__glossy_dir): pdf_sampled, the BSDF's, and the turn's from the
+ * angle between the two paths' directions times area_jac, the solid-angle
+ * to area Jacobian. */
+static double mp__glossy_density(const mut_perturb *mp, double pdf_sampled, vec3 dir_a,
+                                 vec3 dir_b, double area_jac) {
+  double th = mp__angle(dir_a, dir_b);
+  double turn = th > 0.0 ? mut_perturb_log_pdf(mp->theta1, mp->theta2, th) / (2.0 * MP_PI * sin(th))
+                         : 0.0;
+  return 0.5 * pdf_sampled + 0.5 * turn * area_jac;
+}
+
 int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx, double ry,
                               const vec3 *dirs, rng *r, ps_path *OUT_y, int64_t *rays) {
   const ps_context *ctx = mp->ctx;
@@ -224,7 +251,8 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
       if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_RADIANCE, &dir)) return 0;
       y->x[i].v.delta = 1;
     } else if (mut_perturb_glossy(mp, x, i)) {
-      if (!mut_perturb_sample_dir(&y->x[i].v, wo, TRANSPORT_RADIANCE, r, &dir)) return 0;
+      if (!mp__glossy_dir(mp, &y->x[i].v, wo, ps_dir(x, i, i + 1), TRANSPORT_RADIANCE, r, &dir))
+        return 0;
       y->x[i].v.delta = 0;
     } else {
       if (chain >= nc - 1 || ends[chain] != i) return 0;
@@ -252,7 +280,8 @@ int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 d
       if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_IMPORTANCE, &d)) return 0;
       y->x[i].v.delta = 1;
     } else {
-      if (!mut_perturb_sample_dir(&y->x[i].v, wo, TRANSPORT_IMPORTANCE, r, &d)) return 0;
+      if (!mp__glossy_dir(mp, &y->x[i].v, wo, ps_dir(x, i, i - 1), TRANSPORT_IMPORTANCE, r, &d))
+        return 0;
       y->x[i].v.delta = 0;
     }
     if (!mut_perturb_trace(ctx, &y->x[i].v, d, TRANSPORT_IMPORTANCE, &y->x[i - 1].v, rays)) return 0;
@@ -289,7 +318,10 @@ static double mp__lens_density(const mut_perturb *mp, const ps_path *x, const ps
   /* Each vertex after a G vertex has the BSDF's sampling density (pdf_cam), after an S or
    * a chain's start the Jacobian of its forced or turned direction. */
   for (int i = 2; i <= ex[nc - 1]; i++)
-    jac *= mut_perturb_glossy(mp, y, i - 1) ? y->x[i].pdf_cam : ps_area_jacobian(ctx, y, i - 1, i);
+    jac *= mut_perturb_glossy(mp, y, i - 1)
+               ? mp__glossy_density(mp, y->x[i].pdf_cam, ps_dir(x, i - 1, i), ps_dir(y, i - 1, i),
+                                    ps_area_jacobian(ctx, y, i - 1, i))
+               : ps_area_jacobian(ctx, y, i - 1, i);
   return p * pow(jac, mp->test_jac_power);
 }
 
@@ -305,7 +337,10 @@ static double mp__caustic_density(const mut_perturb *mp, const ps_path *x, const
   /* Each vertex before an S the Jacobian of its forced direction, before a G
    * the BSDF's sampling density from the light side (pdf_light). */
   for (int i = m - 2; i >= 1; i--)
-    jac *= y->x[i + 1].delta ? ps_forced_density(ctx, y, i + 1, i + 2, i, 1) : y->x[i].pdf_light;
+    jac *= y->x[i + 1].delta
+               ? ps_forced_density(ctx, y, i + 1, i + 2, i, 1)
+               : mp__glossy_density(mp, y->x[i].pdf_light, ps_dir(x, i + 1, i),
+                                    ps_dir(y, i + 1, i), ps_area_jacobian(ctx, y, i + 1, i));
   return p * pow(jac, mp->test_jac_power);
 }
 

@@ -18,9 +18,9 @@
  *    an offset of length r with density proportional to 1/r on [r1, r2] and
  *    uniform angle; the camera ray through it is retraced through the chain,
  *    each S vertex keeping its lobe (reflection or transmission, the delta
- *    lobe of a mixed BSDF), each G vertex sampling its BSDF afresh (not Veach's:
- *    his perturbations know only S and D), to a new D end, which joins
- *    x_{e_0 + 1}.
+ *    lobe of a mixed BSDF), each G vertex leaving along a new direction
+ *    (below; not Veach's: his perturbations know only S and D), to a new D
+ *    end, which joins x_{e_0 + 1}.
  *  - Multi-chain perturbation (two chains or more: E S* D (S+ D)+ (D|L)):
  *    the lens perturbation through the first chain; at each further chain's
  *    start the direction leaving the D vertex is x's direction there turned
@@ -29,8 +29,8 @@
  *    successor.
  *  - Caustic perturbation (E (D|G) (S|G)* (D|L)): x_1 is connectible; m > 1
  *    is the next D vertex or the emitter end (x_2 .. x_{m-1} are S or G);
- *    x_m is a surface or a finite emitter (not a direction at infinity). The direction leaving x_m
- *    towards x_{m-1} turns by theta with density proportional to 1/theta
+ *    x_m is a surface or a finite emitter (not a direction at infinity).
+ *    The direction leaving x_m towards x_{m-1} turns by theta with density proportional to 1/theta
  *    on [theta1 s, theta2 s], uniform azimuth, where s = |x_1 - x_0| /
  *    (|x_1 x_2| + ... + |x_{m-1} x_m|) (Veach p. 354: an image-plane move
  *    like the lens perturbation's), capped so that theta2 s <= pi / 2 (a
@@ -38,9 +38,14 @@
  *    nearly touches x_2 would ask for more), depends on the path: the move is not
  *    symmetric and both directions' ranges enter the ratio. The chain is
  *    retraced towards the camera to a new x_1, each S vertex keeping its
- *    lobe, each G vertex sampling its BSDF afresh (importance transport;
- *    not Veach's), and x_1 joins the pinhole (its raster point must lie on
+ *    lobe, each G vertex leaving along a new direction (below, importance
+ *    transport), and x_1 joins the pinhole (its raster point must lie on
  *    the film).
+ * A retraced G vertex's direction: with probability 1/2 a sample of its
+ * BSDF, else x's direction at that vertex turned by an angle with density
+ * proportional to 1/theta on [theta1, theta2] and uniform azimuth (a
+ * local move: a fresh sample of a narrow lobe scatters the rest of the
+ * path, which loses a small lit region; the turn keeps it near x's).
  * Each kept vertex's lobe flag stays; a retraced vertex must have the same
  * kind (S, G or D) as x's, or there is no proposal (the chain stays).
  *
@@ -51,12 +56,14 @@
  *       prod_{chains j > 0} p_theta(theta_j) / (2 pi sin theta_j),
  *     dr the raster offset, W H the film's area in pixels (pdf_cam(y_1)
  *     W H is the raster-to-area Jacobian), e the last chain's end, J_i =
- *     pdf_cam(y_i) (the BSDF's sampling density) after a G vertex, else
- *     |cos y_i| / |y_i - y_{i-1}|^2;
+ *     (pdf_cam(y_i) + p_turn(y_i)) / 2 after a G vertex (the BSDF's sampling
+ *     density and the turn's, p_theta(theta) / (2 pi sin theta) times
+ *     |cos y_i| / |y_i - y_{i-1}|^2, theta the angle between x's and y's
+ *     directions there), else |cos y_i| / |y_i - y_{i-1}|^2;
  *   caustic: T(x -> y) = p_theta,x(theta) / (2 pi sin theta) *
  *       |cos y_{m-1}| / |y_{m-1} - x_m|^2 *
  *       prod_{i=1..m-2} K_i, K_i = ps_forced_density(y_i through y_{i+1})
- *       when y_{i+1} is S, pdf_light(y_i) (its BSDF's sampling density) when G,
+ *       when y_{i+1} is S, (pdf_light(y_i) + p_turn(y_i)) / 2 when G,
  *     p_theta,x on x's range;
  * and the acceptance f(y) T(y -> x) / (f(x) T(x -> y)): for the lens and
  * multi-chain perturbations the offsets' densities are symmetric and
