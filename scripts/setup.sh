@@ -24,6 +24,7 @@ jobs=${LMC_JOBS:-$(nproc)}
 packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-dev
           libjpeg-dev zlib1g-dev libexpat1-dev libcmocka-dev liblapack-dev
           clang libclang-rt-dev libomp-dev   # libFuzzer (-fsanitize=fuzzer) and OpenMP for clang
+          openmpi-bin libopenmpi-dev         # mpirun: one image over many processes or machines
           gnuplot-nox                        # plots of bench/equal_time.sh
           imagemagick fonts-dejavu-core)     # the demo's side-by-side picture, benchmark grids
 
@@ -62,7 +63,7 @@ case "$mode" in
     if [ "${LMC_FUZZ_SECONDS:-15}" -gt 0 ]; then
       # Only the fuzz targets: clang's warnings elsewhere are gcc's business.
       cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DLMC_WERROR=ON \
-        -DCMAKE_C_COMPILER=clang -DLMC_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+        -DCMAKE_C_COMPILER=clang -DLMC_FUZZ=ON -DLMC_MPI=OFF -DBUILD_TESTING=OFF >/dev/null
       cmake --build build-fuzz -j "$jobs" --target fuzz_xml fuzz_obj fuzz_ply fuzz_serialized \
         fuzz_png fuzz_jpeg fuzz_exr
       bash scripts/fuzz.sh build-fuzz "${LMC_FUZZ_SECONDS:-15}"

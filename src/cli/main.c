@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "render/dist.h"
 
 static const char *lmc_usage =
     "usage: lmc <command> [arguments]\n"
@@ -34,6 +35,10 @@ static const char *lmc_usage =
     "130/143 interrupted by SIGINT/SIGTERM (the image so far is still written)\n";
 
 int main(int argc, char **argv) {
+  /* Under an MPI launcher, one rank of the job (dist.h); rank 0 alone
+   * speaks: the others' warnings would repeat its own. */
+  dist_init(&argc, &argv);
+  if (dist_rank() != 0) lmc_warn_set_quiet(1);
   if (argc < 2) {
     fputs(lmc_usage, stderr);
     return EXIT_BADINPUT;

@@ -15,6 +15,7 @@
 #include <strings.h>
 
 #include "cli/cli.h"
+#include "render/dist.h"
 
 static const char *lmc_render_usage =
     "usage: lmc render SCENE.xml [flags]   (every flag also as --flag=value)\n"
@@ -224,6 +225,12 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   render_stats st;
   lmc_error err;
   lmc_error_clear(&err);
+  if (dist_active() && mcmc_is_integrator(rs->integrator)) {
+    if (dist_rank() == 0)
+      fprintf(stderr, "lmc: %s does not run on several MPI ranks yet (pt and bdpt do); run it "
+              "without mpirun or with -n 1\n", rs->integrator);
+    return EXIT_BADINPUT;
+  }
   lmc_status rst = mcmc_is_integrator(rs->integrator) ? mcmc_render_run(s, rs, &f, &st, &err)
                                                         : render_run(s, rs, &f, &st, &err);
   if (rst) {
@@ -232,9 +239,17 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     fprintf(stderr, "lmc: %s\n", msg);
     return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
   }
+  if (dist_rank() != 0) {
+    /* Rank 0 holds the image of every rank (dist.h) and writes it. */
+    film_free(&f);
+    return st.interrupted ? (render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT) : EXIT_OK;
+  }
   int black = 0;
   int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure, scene_path,
                              s->n_lights > 0, &black);
+  if (dist_active())
+    fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
+            dist_size());
   fprintf(stderr,
           "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
           "%.3g Mrays/s%s%s\n",

@@ -14,6 +14,8 @@
  */
 #include "render/film.h"
 
+#include "render/dist.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -223,6 +225,13 @@ void film_merge(film *dst, const film *src) {
     dst->splat[i] += src->splat[i];
   }
   for (size_t i = 0; i < n; i++) dst->count[i] += src->count[i];
+}
+
+void film_sum_to_root(film *f) {
+  size_t n = (size_t)f->width * (size_t)f->height;
+  dist_sum_to_root(f->sum, 3 * n);
+  dist_sum_to_root(f->count, n);
+  dist_sum_to_root(f->splat, 3 * n);
 }
 
 lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err) {

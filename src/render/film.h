@@ -84,6 +84,10 @@ void film_splat_log_replay(film *f, const film_filter *filter, film_splat_log *l
 void film_splat_log_free(film_splat_log *log);
 /* dst += src (same size). */
 void film_merge(film *dst, const film *src);
+/* Collective (dist.h): every rank's sum, count and splat buffers added in
+ * rank order into rank 0's f (the others' f unchanged); splat_scale is
+ * left to the caller. */
+void film_sum_to_root(film *f);
 /* The image: sum / count + splat * splat_scale (out is initialised here). */
 lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err);
 

@@ -37,6 +37,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "render/dist.h"
+
 /* Rows per block of bdpt's splat lists (the memory they hold is about
  * RENDER_SPLAT_ROWS * width * path length * 40 bytes). */
 #define RENDER_SPLAT_ROWS 32
@@ -145,12 +147,19 @@ static void render__snapshot(const render_settings *rs, const film *out, int has
                              int nthreads, const render__counters_slot *counters, double seconds) {
   film tmp;
   lmc_error err;
-  if (film_init(&tmp, out->width, out->height, &err)) return;
+  /* (Collective: a rank out of memory ends the job rather than leave the
+   * others waiting in the sums.) */
+  if (film_init(&tmp, out->width, out->height, &err)) {
+    if (dist_active()) dist_abort(1);
+    return;
+  }
   film_merge(&tmp, out);
+  film_sum_to_root(&tmp);
   int64_t samples = 0;
   for (int t = 0; t < nthreads; t++) samples += counters[t].c.samples;
+  dist_sum_to_root_i64(&samples, 1);
   if (has_splats) tmp.splat_scale = samples > 0 ? 1.0 / (double)samples : 0.0;
-  rs->snapshot_fn(rs->snapshot_ctx, &tmp, seconds);
+  if (dist_rank() == 0) rs->snapshot_fn(rs->snapshot_ctx, &tmp, seconds);
   film_free(&tmp);
 }
 
@@ -181,23 +190,29 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
   }
 
+  const int rank = dist_rank(), ranks = dist_size();
   progress bar;
-  progress_init(&bar, rs->integrator, rs->quiet);
+  progress_init(&bar, rs->integrator, rs->quiet || rank != 0);
   double t0 = omp_get_wtime();
   int64_t max_passes = rs->time_limit > 0.0 && !(rs->set & SET_SPP) ? INT64_MAX : rs->spp;
   if (max_passes <= 0) max_passes = 1;
   volatile int stop = 0;
 
-  /* Render passes until the budget, the clock or a signal says stop. */
-  int64_t pass;
+  /* Render passes until the budget, the clock or a signal says stop. With
+   * several ranks (dist.h), round r has pass r * ranks + rank on each rank
+   * (none where that passes the budget), and the ranks agree between
+   * rounds on the stop and the snapshots. */
+  int64_t pass = 0, round;
   double next_snapshot = rs->snapshot;
-  for (pass = 0; pass < max_passes && !stop; pass++) {
+  for (round = 0; !stop && (max_passes == INT64_MAX || round * ranks < max_passes); round++) {
     /* An intermediate image (--snapshot) between passes. */
-    if (rs->snapshot > 0.0 && rs->snapshot_fn && pass > 0 &&
-        omp_get_wtime() - t0 >= next_snapshot) {
+    if (rs->snapshot > 0.0 && rs->snapshot_fn && round > 0 &&
+        dist_any(omp_get_wtime() - t0 >= next_snapshot)) {
       render__snapshot(rs, out, use_bdpt, nthreads, counters, omp_get_wtime() - t0);
       while (next_snapshot <= omp_get_wtime() - t0) next_snapshot += rs->snapshot;
     }
+    pass = round * ranks + rank;
+    if (pass >= max_passes) goto agree;
     /* The ray differentials' step: a pixel over the square root of the
      * samples per pixel (Mitsuba's), of those so far under --time. */
     const double diff_scale =
@@ -270,6 +285,12 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
       if (logs)
         for (int y = yb; y < ye; y++) film_splat_log_replay(out, &s->filter, &logs[y - yb]);
     }
+  agree:
+    /* A signal or the clock on any rank stops them all. */
+    if (ranks > 1) {
+      int sig = dist_any(stop == 1), clock = dist_any(stop == 2);
+      stop = sig ? 1 : clock ? 2 : 0;
+    }
   }
   if (stop == 1) st->interrupted = 1;
   if (stop == 2) st->timed_out = 1;
@@ -283,7 +304,12 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
     st->samples += counters[t].c.samples;
     st->nan_samples += counters[t].c.nan_samples;
   }
-  st->passes = (st->samples == (int64_t)W * H * pass) ? pass : st->samples / ((int64_t)W * H);
+  /* Every rank's film and counts, on rank 0. */
+  int64_t totals[3] = {st->rays, st->samples, st->nan_samples};
+  dist_sum_to_root_i64(totals, 3);
+  film_sum_to_root(out);
+  if (rank == 0) st->rays = totals[0], st->samples = totals[1], st->nan_samples = totals[2];
+  st->passes = st->samples / ((int64_t)W * H);
   if (use_bdpt) {
     int64_t lost = 0;
     for (int k = 0; k < block; k++) {
