@@ -1,24 +1,27 @@
 /*
- * test_mpi_slow.c: pt and bdpt over MPI ranks (src/render/dist.h, issue
- * 21), through mpirun on this machine (ranks oversubscribe its cores).
+ * test_mpi_slow.c: renders over MPI ranks (src/render/dist.h, issue 21):
+ * pt and bdpt, and the MCMC integrators (pssmlt, mmlt, lmc, h2mc, mlt),
+ * through mpirun on this machine (ranks oversubscribe its cores).
  * Skipped when lmc is built without MPI.
  *
  *  - One rank through mpirun writes the same pixels (bits) and the same
- *    file (bytes) as the plain run: the reduction of one rank is its own
- *    film.
+ *    file (bytes) as the plain run, for every integrator: the reduction
+ *    of one rank is its own film.
  *  - Two ranks with 1 and with 2 threads each write identical images:
  *    each rank's film does not depend on its threads, and rank 0 adds the
  *    ranks' films in rank order; a different seed changes the image, so
  *    the comparison can fail.
+ *  - MCMC over 2 and 3 ranks makes the moves of one process: the same b
+ *    (gathered bootstrap, shared large-step tallies) to the last printed
+ *    digit, the same image up to float rounding.
  *  - 1, 2 and 4 ranks on the furnace (tests/data/analytic: every pixel's
- *    expectation is exactly 1): the image mean within 5 standard errors
- *    of 1 (the pixels of pt are independent; bdpt's light tracing ties
- *    them weakly), and every pixel has exactly the spp samples asked for
- *    (--spp 6 over 4 ranks: passes 0-5 shared 2, 2, 1, 1).
+ *    expectation is exactly 1): the image mean within its tolerance of 1
+ *    (see the test), and every pixel has exactly the spp samples asked
+ *    for (--spp 6 over 4 ranks: pt's passes 0-5 shared 2, 2, 1, 1).
  *  - A rank killed mid-render: mpirun exits non-zero within seconds and no
  *    image is written.
- *  - Ctrl-C (SIGINT) on mpirun: it exits non-zero within seconds and the
- *    image of what both ranks rendered is written.
+ *  - Ctrl-C (SIGINT) on mpirun, for pt, pssmlt and lmc: it exits non-zero
+ *    within seconds and the image of what both ranks rendered is written.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
@@ -51,19 +54,43 @@ static char tmp_dir[256];
   "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "              \
   "OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_rmaps_base_oversubscribe=1 "
 
-/* Renders scene_path with `flags` into tmp_dir/NAME.exr, by mpirun with `ranks`
+/* Renders scene_path with `flags` into tmp_dir/NAME.exr (its stderr in
+ * NAME.err, with the statistics unless quiet), by mpirun with `ranks`
  * ranks (0: the plain binary); the exit status. */
-static int render(int ranks, const char *scene_path, const char *flags, const char *name) {
+static int render_v(int ranks, const char *scene_path, const char *flags, const char *name,
+                    int quiet) {
   char cmd[4096], launch[1024] = "";
 #ifdef LMC_MPIEXEC
   if (ranks > 0)
     snprintf(launch, sizeof launch, MPI_ENV "timeout -k 5 240 '%s' --bind-to none -n %d ",
              LMC_MPIEXEC, ranks);
 #endif
-  snprintf(cmd, sizeof cmd, "%s'%s' render '%s' %s -q -o '%s/%s.exr' > /dev/null 2> '%s/%s.err'",
-           launch, LMC_BINARY, scene_path, flags, tmp_dir, name, tmp_dir, name);
+  snprintf(cmd, sizeof cmd, "%s'%s' render '%s' %s %s -o '%s/%s.exr' > /dev/null 2> '%s/%s.err'",
+           launch, LMC_BINARY, scene_path, flags, quiet ? "-q" : "", tmp_dir, name, tmp_dir, name);
   int rc = system(cmd);
   return rc == -1 || !WIFEXITED(rc) ? -1 : WEXITSTATUS(rc);
+}
+
+static int render(int ranks, const char *scene_path, const char *flags, const char *name) {
+  return render_v(ranks, scene_path, flags, name, 1);
+}
+
+/* The integrators under test: pt and bdpt (camera samples per pixel), then
+ * the MCMC ones on the driver (mutations per pixel), with their budget. */
+static const char *const integrators[] = {"pt", "bdpt", "pssmlt", "mmlt", "lmc", "h2mc", "mlt"};
+#define N_INTEGRATORS 7
+static int budget(int k) { return k < 2 ? 4 : 2; }
+
+/* The first line of tmp_dir/NAME.err holding `key`, into line; 0 when none. */
+static int log_line(const char *name, const char *key, char *line, size_t size) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s.err", tmp_dir, name);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  int found = 0;
+  while (!found && fgets(line, (int)size, f)) found = strstr(line, key) != NULL;
+  fclose(f);
+  return found;
 }
 
 static void read_image(const char *name, lmc_image *img) {
@@ -106,13 +133,12 @@ static int skip_without_mpi(void) {
 static void test_one_rank_is_the_plain_run(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
-  static const char *const integrators[] = {"pt", "bdpt"};
   int compared = 0;
-  for (int k = 0; k < 2; k++) {
+  for (int k = 0; k < N_INTEGRATORS; k++) {
     char flags[256], plain[64], one[64];
     snprintf(flags, sizeof flags,
-             "--integrator %s --spp 3 --resolution 40x30 --maxdepth 5 --seed 5 --threads 2",
-             integrators[k]);
+             "--integrator %s --spp %d --resolution 40x30 --maxdepth 5 --seed 5 --threads 2",
+             integrators[k], budget(k));
     snprintf(plain, sizeof plain, "%s_plain", integrators[k]);
     snprintf(one, sizeof one, "%s_one", integrators[k]);
     assert_int_equal(render(0, CORNELL, flags, plain), 0);
@@ -121,17 +147,16 @@ static void test_one_rank_is_the_plain_run(void **state) {
     assert_true(same_file(plain, one));
     compared++;
   }
-  assert_int_equal(compared, 2);
+  assert_int_equal(compared, N_INTEGRATORS);
 }
 
 static void test_two_ranks_independent_of_threads(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
-  static const char *const integrators[] = {"pt", "bdpt"};
   int compared = 0;
-  for (int k = 0; k < 2; k++) {
-    char f1[256], f2[256], f3[256], a[64], b[64], c[64];
-    const char *common = "--spp 4 --resolution 40x30 --maxdepth 5";
+  for (int k = 0; k < N_INTEGRATORS; k++) {
+    char f1[256], f2[256], f3[256], a[64], b[64], c[64], common[128];
+    snprintf(common, sizeof common, "--spp %d --resolution 40x30 --maxdepth 5", budget(k));
     snprintf(f1, sizeof f1, "--integrator %s %s --seed 5 --threads 1", integrators[k], common);
     snprintf(f2, sizeof f2, "--integrator %s %s --seed 5 --threads 2", integrators[k], common);
     snprintf(f3, sizeof f3, "--integrator %s %s --seed 6 --threads 2", integrators[k], common);
@@ -146,50 +171,137 @@ static void test_two_ranks_independent_of_threads(void **state) {
     assert_true(differing(a, c) > 100);
     compared++;
   }
-  assert_int_equal(compared, 2);
+  assert_int_equal(compared, N_INTEGRATORS);
 }
 
+/* The MCMC integrators over 2 and 3 ranks make exactly the moves of one
+ * process: the same b (bootstrap values gathered, the chains' large-step
+ * tallies shared), printed to the last digit, and the same image up to
+ * the order its splats are added in: a relative 1e-6 per channel, the
+ * float rounding of sums that differ in their last bits (one mutation's
+ * splat weighs about 1e-3 of a pixel here). */
+static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
+  (void)state;
+  if (skip_without_mpi()) skip();
+  static const int rank_counts[] = {2, 3};
+  int compared = 0;
+  for (int k = 2; k < N_INTEGRATORS; k++) {
+    char flags[256], plain[64], line[512], b_plain[512], bl_plain[512];
+    snprintf(flags, sizeof flags,
+             "--integrator %s --spp 2 --resolution 40x30 --maxdepth 5 --seed 8 --threads 1",
+             integrators[k]);
+    snprintf(plain, sizeof plain, "%s_b_plain", integrators[k]);
+    assert_int_equal(render_v(0, CORNELL, flags, plain, 0), 0);
+    assert_true(log_line(plain, "b = ", b_plain, sizeof b_plain));
+    int refined = log_line(plain, "b with large steps = ", bl_plain, sizeof bl_plain);
+    lmc_image ip = {0};
+    read_image(plain, &ip);
+    for (int q = 0; q < 2; q++) {
+      char name[64];
+      snprintf(name, sizeof name, "%s_b_%d", integrators[k], rank_counts[q]);
+      assert_int_equal(render_v(rank_counts[q], CORNELL, flags, name, 0), 0);
+      /* "b = X +- E (..., N bootstrap paths; ...)": the same to the digit
+       * (the line's mutations per second aside). */
+      assert_true(log_line(name, "b = ", line, sizeof line));
+      assert_string_equal(strstr(line, "b = "), strstr(b_plain, "b = "));
+      if (refined) {
+        assert_true(log_line(name, "b with large steps = ", line, sizeof line));
+        assert_string_equal(line, bl_plain);
+      }
+      lmc_image ir = {0};
+      read_image(name, &ir);
+      int64_t n = (int64_t)ip.width * ip.height * ip.channels, off = 0;
+      assert_int_equal(ir.width * ir.height * ir.channels, n);
+      double sum = 0.0;
+      for (int64_t i = 0; i < n; i++) {
+        double a = ip.data[i], c = ir.data[i];
+        sum += a;
+        off += !(fabs(a - c) <= 1e-6 * fmax(fabs(a), 1e-30) + 1e-12);
+      }
+      print_message("%s on %d ranks: %s", integrators[k], rank_counts[q], strstr(line, "b"));
+      assert_true(sum > 0.0);
+      assert_int_equal(off, 0);
+      image_free(&ir);
+      compared++;
+    }
+    image_free(&ip);
+  }
+  assert_int_equal(compared, 2 * (N_INTEGRATORS - 2));
+}
+
+/* The mean over the pixels and channels of tmp_dir/NAME.exr, and the
+ * standard error of that mean over its pixels in OUT_se. */
+static double image_mean(const char *name, double *OUT_se) {
+  lmc_image img = {0};
+  read_image(name, &img);
+  int64_t n = (int64_t)img.width * img.height;
+  double s = 0.0, s2 = 0.0;
+  for (int64_t i = 0; i < n; i++) {
+    const float *p = &img.data[i * img.channels];
+    double v = (p[0] + p[1] + p[2]) / 3.0;
+    s += v, s2 += v * v;
+  }
+  image_free(&img);
+  double mean = s / n, sd = sqrt(fmax(s2 / n - mean * mean, 0.0));
+  *OUT_se = sd / sqrt((double)n);
+  return mean;
+}
+
+/* Furnace renders (tests/data/analytic: every pixel's expectation is
+ * exactly 1) over 1, 2 and 4 ranks. pt and bdpt: the image mean within 5
+ * standard errors of 1 (the pixels of pt are independent; bdpt's light
+ * tracing ties them weakly). The MCMC integrators (every path, --direct
+ * mcmc, of up to 16 segments: longer ones carry below 1e-6 here): their
+ * pixels are tied by the chains, and the mean's error is b's and the
+ * chains' (the share of splats that fall outside the frame, about 5%
+ * here), so its spread is measured: 8 plain runs of other seeds give a
+ * standard deviation s, and each run over ranks must lie within
+ * t_7(0.9995) s sqrt(1 + 1/8) = 5.74 s of 1 (a prediction interval that a
+ * correct render leaves once in a thousand), their mean within 5.41 s /
+ * sqrt(8). Every run has exactly 6 samples (mutations) per pixel. */
 static void test_furnace_over_ranks(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
-  static const char *const integrators[] = {"pt", "bdpt"};
   static const int rank_counts[] = {1, 2, 4};
   int checked = 0;
-  for (int k = 0; k < 2; k++)
+  for (int k = 0; k < N_INTEGRATORS; k++) {
+    const char *mc = k < 2 ? "" : " --direct mcmc --maxdepth 16";
+    double s_runs = 0.0;
+    if (k >= 2) {
+      double m[8], mbar = 0.0, var = 0.0, se;
+      for (int r = 0; r < 8; r++) {
+        char flags[256], name[64];
+        snprintf(flags, sizeof flags, "--integrator %s --spp 6 --seed %d --threads 2%s",
+                 integrators[k], 100 + r, mc);
+        snprintf(name, sizeof name, "furnace_%s_seed%d", integrators[k], r);
+        assert_int_equal(render(0, FURNACE, flags, name), 0);
+        m[r] = image_mean(name, &se);
+        mbar += m[r] / 8.0;
+      }
+      for (int r = 0; r < 8; r++) var += (m[r] - mbar) * (m[r] - mbar) / 7.0;
+      s_runs = sqrt(var);
+      print_message("%s, 8 plain runs: furnace mean %.5f, spread %.5f\n", integrators[k], mbar,
+                    s_runs);
+      assert_true(s_runs > 0.0);
+      assert_near(mbar, 1.0, 5.41 * s_runs / sqrt(8.0));
+    }
     for (int q = 0; q < 3; q++) {
-      char flags[256], name[64];
-      snprintf(flags, sizeof flags, "--integrator %s --spp 6 --seed %d --threads 1",
-               integrators[k], 20 + q);
+      char flags[256], name[64], line[512];
+      snprintf(flags, sizeof flags, "--integrator %s --spp 6 --seed %d --threads 1%s",
+               integrators[k], 20 + q, mc);
       snprintf(name, sizeof name, "furnace_%s_%d", integrators[k], rank_counts[q]);
       assert_int_equal(render(rank_counts[q], FURNACE, flags, name), 0);
-      lmc_image img = {0};
-      read_image(name, &img);
-      int64_t n = (int64_t)img.width * img.height;
-      double s = 0.0, s2 = 0.0;
-      for (int64_t i = 0; i < n; i++) {
-        const float *p = &img.data[i * img.channels];
-        double v = (p[0] + p[1] + p[2]) / 3.0;
-        s += v, s2 += v * v;
-      }
-      double mean = s / n, sd = sqrt(fmax(s2 / n - mean * mean, 0.0)), se = sd / sqrt((double)n);
-      print_message("%s on %d rank(s): furnace mean %.5f (SE %.5f)\n", integrators[k],
-                    rank_counts[q], mean, se);
-      assert_true(se > 0.0);
-      assert_near(mean, 1.0, 5.0 * se);
-      image_free(&img);
-      /* Every pixel's 6 samples: the log reports the passes. */
-      char path[512], line[512];
-      snprintf(path, sizeof path, "%s/%s.err", tmp_dir, name);
-      FILE *f = fopen(path, "r");
-      assert_non_null(f);
-      int found = 0;
-      while (fgets(line, sizeof line, f))
-        if (strstr(line, " 6 spp (")) found = 1;
-      fclose(f);
-      assert_true(found);
+      double se, mean = image_mean(name, &se);
+      double tol = k < 2 ? 5.0 * se : 5.74 * s_runs;
+      print_message("%s on %d rank(s): furnace mean %.5f (tolerance %.5f)\n", integrators[k],
+                    rank_counts[q], mean, tol);
+      assert_true(tol > 0.0);
+      assert_near(mean, 1.0, tol);
+      assert_true(log_line(name, " 6 spp (", line, sizeof line));
       checked++;
     }
-  assert_int_equal(checked, 6);
+  }
+  assert_int_equal(checked, 3 * N_INTEGRATORS);
 }
 
 static void test_killed_rank_ends_the_job(void **state) {
@@ -222,37 +334,38 @@ static void test_interrupted_job_writes_its_image(void **state) {
   if (skip_without_mpi()) skip();
 #ifdef LMC_MPIEXEC
   /* Ctrl-C on the launcher: mpirun passes the signal on, every rank stops
-   * at its next row, and rank 0 writes the image of both. */
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd,
-           MPI_ENV "timeout -k 5 60 '%s' --bind-to none -n 2 '%s' render '%s' --integrator pt "
-                   "--time 40 --threads 1 -q -o '%s/int.exr' > /dev/null 2> '%s/int.err' & "
-                   "sleep 3; kill -INT $!; wait $!",
-           LMC_MPIEXEC, LMC_BINARY, CORNELL, tmp_dir, tmp_dir);
-  time_t t0 = time(NULL);
-  int rc = system(cmd);
-  double took = difftime(time(NULL), t0);
-  int status = rc == -1 || !WIFEXITED(rc) ? -1 : WEXITSTATUS(rc);
-  print_message("Ctrl-C on mpirun: exited %d after %.0f s\n", status, took);
-  assert_true(status != 0);
-  assert_true(took < 30.0);
-  lmc_image img = {0};
-  read_image("int", &img);
-  double sum = 0.0;
-  int64_t n = (int64_t)img.width * img.height * img.channels;
-  for (int64_t i = 0; i < n; i++) sum += img.data[i];
-  assert_true(n > 0 && sum > 0.0 && isfinite(sum));
-  image_free(&img);
-  /* Both ranks' samples: the summary names the processes. */
-  char path[512], line[512];
-  snprintf(path, sizeof path, "%s/int.err", tmp_dir);
-  FILE *f = fopen(path, "r");
-  assert_non_null(f);
-  int both = 0;
-  while (fgets(line, sizeof line, f))
-    if (strstr(line, "2 processes (MPI ranks)")) both = 1;
-  fclose(f);
-  assert_true(both);
+   * (pt at its next row, the MCMC chains at the end of their round, which
+   * every rank drops) and rank 0 writes the image of both. */
+  static const char *const which[] = {"pt", "pssmlt", "lmc"};
+  int checked = 0;
+  for (int k = 0; k < 3; k++) {
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd,
+             MPI_ENV "timeout -k 5 60 '%s' --bind-to none -n 2 '%s' render '%s' --integrator %s "
+                     "--time 40 --threads 1 -q -o '%s/int_%s.exr' > /dev/null 2> "
+                     "'%s/int_%s.err' & sleep 4; kill -INT $!; wait $!",
+             LMC_MPIEXEC, LMC_BINARY, CORNELL, which[k], tmp_dir, which[k], tmp_dir, which[k]);
+    time_t t0 = time(NULL);
+    int rc = system(cmd);
+    double took = difftime(time(NULL), t0);
+    int status = rc == -1 || !WIFEXITED(rc) ? -1 : WEXITSTATUS(rc);
+    print_message("%s, Ctrl-C on mpirun: exited %d after %.0f s\n", which[k], status, took);
+    assert_true(status != 0);
+    assert_true(took < 30.0);
+    char name[64], line[512];
+    snprintf(name, sizeof name, "int_%s", which[k]);
+    lmc_image img = {0};
+    read_image(name, &img);
+    double sum = 0.0;
+    int64_t n = (int64_t)img.width * img.height * img.channels;
+    for (int64_t i = 0; i < n; i++) sum += img.data[i];
+    assert_true(n > 0 && sum > 0.0 && isfinite(sum));
+    image_free(&img);
+    /* Both ranks' samples: the summary names the processes. */
+    assert_true(log_line(name, "2 processes (MPI ranks)", line, sizeof line));
+    checked++;
+  }
+  assert_int_equal(checked, 3);
 #endif
 }
 
@@ -274,6 +387,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_one_rank_is_the_plain_run),
       cmocka_unit_test(test_two_ranks_independent_of_threads),
+      cmocka_unit_test(test_mcmc_ranks_make_the_moves_of_one_process),
       cmocka_unit_test(test_furnace_over_ranks),
       cmocka_unit_test(test_killed_rank_ends_the_job),
       cmocka_unit_test(test_interrupted_job_writes_its_image),

@@ -225,12 +225,6 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   render_stats st;
   lmc_error err;
   lmc_error_clear(&err);
-  if (dist_active() && mcmc_is_integrator(rs->integrator)) {
-    if (dist_rank() == 0)
-      fprintf(stderr, "lmc: %s does not run on several MPI ranks yet (pt and bdpt do); run it "
-              "without mpirun or with -n 1\n", rs->integrator);
-    return EXIT_BADINPUT;
-  }
   lmc_status rst = mcmc_is_integrator(rs->integrator) ? mcmc_render_run(s, rs, &f, &st, &err)
                                                         : render_run(s, rs, &f, &st, &err);
   if (rst) {
@@ -239,7 +233,15 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     fprintf(stderr, "lmc: %s\n", msg);
     return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
   }
+  /* Every rank's own rays and samples, for rank 0's summary. */
+  int64_t *per_rank = dist_active() ? calloc(2 * (size_t)dist_size(), sizeof *per_rank) : NULL;
+  if (dist_active() && !per_rank) dist_abort(EXIT_FAIL);
+  if (per_rank) {
+    per_rank[2 * dist_rank()] = st.rank_rays, per_rank[2 * dist_rank() + 1] = st.rank_samples;
+    dist_allsum_i64(per_rank, 2 * (size_t)dist_size());
+  }
   if (dist_rank() != 0) {
+    free(per_rank);
     /* Rank 0 holds the image of every rank (dist.h) and writes it. */
     film_free(&f);
     return st.interrupted ? (render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT) : EXIT_OK;
@@ -247,9 +249,15 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   int black = 0;
   int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure, scene_path,
                              s->n_lights > 0, &black);
-  if (dist_active())
+  if (dist_active()) {
     fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
             dist_size());
+    for (int r = 0; r < dist_size(); r++)
+      fprintf(stderr, "lmc: rank %d: %.4g rays, %lld %s\n", r, (double)per_rank[2 * r],
+              (long long)per_rank[2 * r + 1],
+              mcmc_is_integrator(rs->integrator) ? "mutations" : "camera samples");
+    free(per_rank);
+  }
   fprintf(stderr,
           "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
           "%.3g Mrays/s%s%s\n",

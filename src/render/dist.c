@@ -130,6 +130,46 @@ void dist_sum_to_root_i64(int64_t *buf, size_t n) {
 #endif
 }
 
+#ifdef LMC_HAVE_MPI
+static void dist__allsum(void *buf, size_t n, size_t elem, MPI_Datatype type) {
+  if (dist__size <= 1) return;
+  for (size_t at = 0; at < n; at += DIST_CHUNK) {
+    size_t m = n - at < DIST_CHUNK ? n - at : DIST_CHUNK;
+    MPI_Allreduce(MPI_IN_PLACE, (char *)buf + at * elem, (int)m, type, MPI_SUM, MPI_COMM_WORLD);
+  }
+}
+#endif
+
+void dist_allsum(double *buf, size_t n) {
+#ifdef LMC_HAVE_MPI
+  dist__allsum(buf, n, sizeof *buf, MPI_DOUBLE);
+#else
+  (void)buf, (void)n;
+#endif
+}
+
+void dist_allsum_i64(int64_t *buf, size_t n) {
+#ifdef LMC_HAVE_MPI
+  dist__allsum(buf, n, sizeof *buf, MPI_INT64_T);
+#else
+  (void)buf, (void)n;
+#endif
+}
+
+void dist_max_n(double *v, int n) {
+#ifdef LMC_HAVE_MPI
+  if (dist__size > 1 && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+#else
+  (void)v, (void)n;
+#endif
+}
+
+void dist_block(int64_t from, int64_t to, int64_t *OUT_lo, int64_t *OUT_hi) {
+  int64_t n = to > from ? to - from : 0;
+  *OUT_lo = from + n * dist__rank / dist__size;
+  *OUT_hi = from + n * (dist__rank + 1) / dist__size;
+}
+
 void dist_broadcast(double *buf, size_t n) {
 #ifdef LMC_HAVE_MPI
   if (dist__size <= 1) return;

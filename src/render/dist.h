@@ -42,6 +42,18 @@ double dist_max(double v);
 void dist_sum_to_root(double *buf, size_t n);
 /* The same for 64-bit counts. */
 void dist_sum_to_root_i64(int64_t *buf, size_t n);
+/* buf[0 .. n-1] summed over the ranks onto every rank (MPI_Allreduce).
+ * Its order of additions is MPI's, so use it to gather parts that only
+ * one rank fills (the others hold 0 there: x + 0 is x exactly) or for
+ * integers, never to add overlapping sums of doubles. */
+void dist_allsum(double *buf, size_t n);
+void dist_allsum_i64(int64_t *buf, size_t n);
+/* The largest of each v[i] over the ranks, onto every rank. */
+void dist_max_n(double *v, int n);
+/* This rank's block [*OUT_lo, *OUT_hi) of the items [from, to) when they
+ * are shared out in contiguous blocks, rank by rank (all of them under
+ * one rank). */
+void dist_block(int64_t from, int64_t to, int64_t *OUT_lo, int64_t *OUT_hi);
 /* rank 0's buf[0 .. n-1] to every rank. */
 void dist_broadcast(double *buf, size_t n);
 /* Ends the job with `code` (every rank, from any one): for a failure that

@@ -7,6 +7,8 @@
 #include <omp.h>
 #include <stdlib.h>
 
+#include "render/dist.h"
+
 int mc_boot_reserve(mc_boot *bt, int64_t n) {
   if (n <= bt->cap) return 1;
   int64_t c = bt->cap > 0 ? bt->cap : n;
@@ -125,7 +127,7 @@ int mc_boot_run(mc_boot *boot, int n_fam, const mc_boot_params *p, mc_boot_draw_
     to[g] = pilot;
   }
   boot__draw(boot, n_fam, to, draw, ctx);
-  if (p->fixed > 0 || (p->stop && p->stop())) goto done;
+  if (p->fixed > 0 || dist_any(p->stop && p->stop())) goto done;
 
   /* The main phase: the pilot becomes planning only. */
   const int timed = isfinite(p->seconds);
@@ -152,8 +154,8 @@ int mc_boot_run(mc_boot *boot, int n_fam, const mc_boot_params *p, mc_boot_draw_
     if (added == 0) break;
     boot__draw(boot, n_fam, to, draw, ctx);
     drawn += added;
-    if (timed && omp_get_wtime() - t0 > p->seconds) break;
-    if (p->stop && p->stop()) break;
+    /* (Over several ranks the first to reach the time or a stop decides.) */
+    if (dist_any((timed && omp_get_wtime() - t0 > p->seconds) || (p->stop && p->stop()))) break;
     if (!timed) {
       for (int g = 0; g < n_fam; g++) n_est[g] = boot[g].n_est;
       if (mc_boot_rel_err(boot, n_fam, n_est) < p->rel_err) break;

@@ -99,9 +99,12 @@ void mc_boot_shares(const mc_boot *boot, int n_fam, double *OUT_share);
  * is 0 and some variance is not). */
 double mc_boot_rel_err(const mc_boot *boot, int n_fam, const int64_t *n_est);
 /* The pilot and the main phase (above) over boot[0 .. n_fam-1], which
- * start empty. Returns 0, or 1 when the pilot could not be allocated. A
- * family the main phase could not reach (no memory, a stop) keeps the
- * pilot's estimate. */
+ * start empty. Over several MPI ranks (render/dist.h) it is collective:
+ * draw must leave every rank holding every value, and the time and stop
+ * are agreed (the first rank to see them decides), so every rank makes
+ * the same decisions and ends with the same b. Returns 0, or 1 when the
+ * pilot could not be allocated. A family the main phase could not reach
+ * (no memory, a stop) keeps the pilot's estimate. */
 int mc_boot_run(mc_boot *boot, int n_fam, const mc_boot_params *p, mc_boot_draw_fn draw, void *ctx);
 
 #endif

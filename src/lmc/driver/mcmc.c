@@ -98,6 +98,7 @@
 #include <string.h>
 
 #include "lmc/driver/mcmc_internal.h"
+#include "render/dist.h"
 
 int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;
@@ -279,6 +280,7 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
   lmc_status status = render_run(R->s, &prs, R->out, &pst, err);
   if (status) return status;
   R->st->rays += pst.rays;
+  R->st->rank_rays += pst.rank_rays;
   R->st->nan_samples += pst.nan_samples;
   if (pst.interrupted) {
     R->st->interrupted = 1;
@@ -414,45 +416,46 @@ static lmc_status mcmc__start_chains(mcmc_render *R, lmc_error *err) {
   return LMC_OK;
 }
 
-/* One round: every chain makes its family's share of m mutations, then the
- * records are added in chain order, each thread to its band of rows.
- * Returns 1 when the round was abandoned (Ctrl-C, the time limit). */
+/* One round: every chain here (mcmc_chain_here) makes its family's share
+ * of m mutations, then the records are added in chain order, each thread
+ * to its band of rows. Returns 1 when the round was abandoned (Ctrl-C, the
+ * time limit; over several ranks by any of them: then every rank drops
+ * it, so that the films of all ranks hold the same rounds). */
 static int mcmc__round(mcmc_render *R, int64_t m) {
   const int H = R->s->cam.height;
   volatile int abandon = 0;
+#pragma omp parallel for num_threads(R->nthreads) schedule(dynamic, 1)
+  for (int i = 0; i < R->n_slots; i++) {
+    mcmc_chain_slot *sl = &R->slots[i];
+    sl->n_rec = 0;
+    if (abandon || !mcmc_chain_here(i)) continue;
+    int64_t r0 = mc_chain_rays(sl->chain);
+    int64_t mg = mcmc__family_steps(&R->fam[sl->family], m);
+    for (int64_t q = 0; q < mg; q++) mc_chain_step(sl->chain, mcmc__record, sl);
+    R->cnt[omp_get_thread_num()].rays += mc_chain_rays(sl->chain) - r0;
+    if (render_stop_signal() || (R->timed && omp_get_wtime() - R->t0 >= R->rs->time_limit))
+      abandon = 1;
+  }
+  if (dist_any(abandon)) return 1;
 #pragma omp parallel num_threads(R->nthreads)
   {
-    int tid = omp_get_thread_num();
-#pragma omp for schedule(dynamic, 1)
+    int tid = omp_get_thread_num(), nt = omp_get_num_threads();
+    int y_lo = (int)((int64_t)H * tid / nt), y_hi = (int)((int64_t)H * (tid + 1) / nt);
     for (int i = 0; i < R->n_slots; i++) {
-      mcmc_chain_slot *sl = &R->slots[i];
-      sl->n_rec = 0;
-      if (abandon) continue;
-      int64_t r0 = mc_chain_rays(sl->chain);
-      int64_t mg = mcmc__family_steps(&R->fam[sl->family], m);
-      for (int64_t q = 0; q < mg; q++) mc_chain_step(sl->chain, mcmc__record, sl);
-      R->cnt[tid].rays += mc_chain_rays(sl->chain) - r0;
-      if (render_stop_signal() || (R->timed && omp_get_wtime() - R->t0 >= R->rs->time_limit))
-        abandon = 1;
-    }
-    if (!abandon) {
-      int y_lo = (int)((int64_t)H * tid / R->nthreads);
-      int y_hi = (int)((int64_t)H * (tid + 1) / R->nthreads);
-      for (int i = 0; i < R->n_slots; i++) {
-        const mcmc_family *F = &R->fam[R->slots[i].family];
-        double *dst = F->splat ? F->splat : R->out->splat;
-        for (int q = 0; q < R->slots[i].n_rec; q++)
-          mcmc__splat_rows(R->out, dst, &R->s->filter, &R->slots[i].rec[q], y_lo, y_hi);
-      }
+      const mcmc_family *F = &R->fam[R->slots[i].family];
+      double *dst = F->splat ? F->splat : R->out->splat;
+      for (int q = 0; q < R->slots[i].n_rec; q++)
+        mcmc__splat_rows(R->out, dst, &R->s->filter, &R->slots[i].rec[q], y_lo, y_hi);
     }
   }
-  return abandon;
+  return 0;
 }
 
 /* The integrator asked for a restart (stage 1 of lmc --adapt cache ended:
  * its chains ran a fixed kernel, so its image stays; they restart from
  * their bootstrap states with kernels asked again). */
 static lmc_status mcmc__restart(mcmc_render *R, lmc_error *err) {
+  mcmc__sync_chains(R);
   for (int i = 0; i < R->n_slots && R->M->note_restart_chain; i++)
     R->M->note_restart_chain(R->mrun, R->slots[i].chain);
   lmc_status status = mcmc__rekernel(R, err);
@@ -492,12 +495,15 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
     if (mcmc__round(R, m)) break;
     R->done_per_chain += m;
     for (int g = 0; g < R->n_fam; g++) R->fam[g].done += mcmc__family_steps(&R->fam[g], m);
+    /* The clocks of the render and of the chains as every rank agrees on
+     * them (the latest rank's): every decision below is taken from them. */
+    double el[2] = {omp_get_wtime() - R->t0, omp_get_wtime() - t_chain0};
+    dist_max_n(el, 2);
     if (R->ls_pending) {
       /* --largestep-scale: from MCMC_LARGESTEP_SCALE_AFTER of the chains'
        * budget on (of their mutations under --spp, of their time under --time). */
       double share = R->by_spp ? (double)R->done_per_chain / (double)R->per_chain
-                               : (omp_get_wtime() - t_chain0) /
-                                     fmax(1e-9, rs->time_limit - (t_chain0 - R->t0));
+                               : el[1] / fmax(1e-9, rs->time_limit - (el[0] - el[1]));
       if (share >= MCMC_LARGESTEP_SCALE_AFTER) {
         R->ls_pending = 0;
         lmc_status status = mcmc__rekernel(R, err);
@@ -506,34 +512,34 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
     }
     mcmc__publish(R, R->done_per_chain, 0);
     if (R->M->after_round &&
-        R->M->after_round(R->mrun, R->done_per_chain, R->per_chain, omp_get_wtime() - R->t0)) {
+        R->M->after_round(R->mrun, R->done_per_chain, R->per_chain, el[0], el[1])) {
       lmc_status status = mcmc__restart(R, err);
       if (status) return status;
     }
-    double now = omp_get_wtime();
-    int stop = render_stop_signal() || (R->timed && now - R->t0 >= rs->time_limit);
-    if (rs->snapshot > 0.0 && rs->snapshot_fn && now - R->t0 >= next_snapshot) {
-      mcmc__publish(R, R->done_per_chain, 1);
-      rs->snapshot_fn(rs->snapshot_ctx, R->out, now - R->t0);
-      while (next_snapshot <= now - R->t0) next_snapshot += rs->snapshot;
+    int stop = dist_any(render_stop_signal() || (R->timed && el[0] >= rs->time_limit));
+    if (rs->snapshot > 0.0 && rs->snapshot_fn && el[0] >= next_snapshot) {
+      mcmc__snapshot(R, el[0]);
+      while (next_snapshot <= el[0]) next_snapshot += rs->snapshot;
     }
     double frac = R->by_spp ? (double)R->done_per_chain / (double)R->per_chain : 0.0;
-    if (R->timed) frac = fmax(frac, (now - R->t0) / rs->time_limit);
-    progress_update_rate(&R->bar, frac, (double)mcmc__mutations(R) / fmax(now - t_chain0, 1e-9),
+    if (R->timed) frac = fmax(frac, el[0] / rs->time_limit);
+    progress_update_rate(&R->bar, frac, (double)mcmc__mutations(R) / fmax(el[1], 1e-9),
                          "mutations/s");
     if (stop) break;
   }
   progress_finish(&R->bar);
   /* The final image with the refined b (also after an interruption: the
    * film holds whole rounds, and the tallies of the abandoned round are
-   * still independent samples of b). */
+   * still independent samples of b), every rank's on rank 0. */
+  mcmc__sync_chains(R);
   mcmc__publish(R, R->done_per_chain, 1);
+  if (dist_active()) dist_sum_to_root(R->out->splat, 3 * (size_t)W * (size_t)H);
   if (R->norm != MCMC_NORM_BOOT) {
     double v = 0.0;
     R->st->mcmc_b = mcmc__refine_b(R, &v);
     R->st->mcmc_b_se = sqrt(v);
   }
-  if (render_stop_signal()) R->st->interrupted = 1;
+  if (dist_any(render_stop_signal())) R->st->interrupted = 1;
   else if (R->timed && R->done_per_chain < R->per_chain) R->st->timed_out = 1;
   R->st->samples = mcmc__mutations(R);
   R->st->passes = R->st->samples / ((int64_t)W * H);
@@ -603,9 +609,16 @@ static void mcmc__report(mcmc_render *R) {
     fprintf(stderr, "lmc: b with large steps = %.6g +- %.2g (%.2f%%, %lld large steps more)\n",
             b_ref, sqrt(b_ref_var), 100.0 * sqrt(b_ref_var) / fmax(b_ref, 1e-300),
             (long long)n_large);
+  if (R->n_snapshots > 0)
+    fprintf(stderr, "lmc: %d snapshots, %.3g ms each to gather (b, counters, splats%s)\n",
+            R->n_snapshots, 1e3 * R->snapshot_seconds / R->n_snapshots,
+            dist_active() ? " of every rank" : "");
   if (overflow > 0)
     fprintf(stderr, "lmc: %lld coordinates drawn past the state's blocks\n", (long long)overflow);
   if (R->M->report) {
+    if (dist_active())
+      fprintf(stderr, "lmc: %s's own lines below count rank 0's %d of the %d chains\n",
+              R->M->name, (R->n_slots + dist_size() - 1) / dist_size(), R->n_slots);
     mc_chain **chains = malloc((size_t)R->n_slots * sizeof *chains);
     if (chains) {
       for (int i = 0; i < R->n_slots; i++) chains[i] = R->slots[i].chain;
@@ -615,18 +628,26 @@ static void mcmc__report(mcmc_render *R) {
   }
 }
 
-/* Rays and non-finite contributions of every thread and chain. */
+/* Rays and non-finite contributions of every thread and chain, this
+ * rank's own (rank_rays, rank_samples) and every rank's summed on rank 0. */
 static void mcmc__count(mcmc_render *R) {
-  for (int t = 0; R->cnt && t < R->nthreads; t++) R->st->rays += R->cnt[t].rays;
+  int64_t own[2] = {0, 0}, mutations = 0;
+  for (int t = 0; R->cnt && t < R->nthreads; t++) own[0] += R->cnt[t].rays;
   mc_counts c = {0};
   for (int i = 0; R->slots && i < R->n_slots; i++) {
     const mc_chain *ch = R->slots[i].chain;
-    if (!ch) continue;
-    const mc_space_family *F = R->fam[R->slots[i].family].sf;
-    mc_space_counts(F, ch->scratch, &c);
-    mc_space_counts(F, ch->scratch_alt, &c);
+    if (!ch || !mcmc_chain_here(i)) continue;
+    const mcmc_family *F = &R->fam[R->slots[i].family];
+    mc_space_counts(F->sf, ch->scratch, &c);
+    mc_space_counts(F->sf, ch->scratch_alt, &c);
+    mutations += F->done;
   }
-  R->st->nan_samples += c.nan_samples;
+  own[1] = c.nan_samples;
+  R->st->rank_rays += own[0];
+  R->st->rank_samples = mutations;
+  dist_sum_to_root_i64(own, 2);
+  R->st->rays += own[0];
+  R->st->nan_samples += own[1];
 }
 
 static void mcmc__free(mcmc_render *R) {
@@ -661,7 +682,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   R.ls_pending = R.ms.largestep_scale != 1.0;
   R.t0 = omp_get_wtime();
   /* One progress line over the phases: direct light, bootstrap, chains. */
-  progress_init(&R.bar, rs->integrator, rs->quiet);
+  progress_init(&R.bar, rs->integrator, rs->quiet || dist_rank() != 0);
   int done = 0;
   status = mcmc__direct(&R, &done, err);
   if (status || done) {
@@ -691,7 +712,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   } else if (!status) {
     status = mcmc__start_chains(&R, err);
     if (!status) status = mcmc__rounds(&R, err);
-    if (!status && !rs->quiet) mcmc__report(&R);
+    if (!status && !rs->quiet && dist_rank() == 0) mcmc__report(&R);
   }
   if (!status) mcmc__count(&R);
   progress_end(&R.bar);

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "lmc/driver/mcmc_internal.h"
+#include "render/dist.h"
 
 uint64_t mcmc__boot_seq(int g, int64_t j) {
   return rng_hash64(((uint64_t)(g + 1) << 44) ^ (uint64_t)j);
@@ -20,20 +21,29 @@ uint64_t mcmc__chain_seq(int g, int i) {
 
 /* mc_boot_draw_fn over the families: draws bootstrap samples
  * [bt.n, to[g]) of every family g in parallel (each sample from its own
- * stream, so the values do not depend on threads); the cost is rays. */
+ * stream, so the values do not depend on threads); the cost is rays. Over
+ * several ranks each draws its block of every batch and the blocks are
+ * gathered exactly (dist_allsum over zeros elsewhere), so every rank holds
+ * every value, the same as one process would, and the cost is summed. */
 static void mcmc__bootstrap_draw(void *ctx, mc_boot *boot, int n_fam, const int64_t *to) {
   mcmc_render *R = ctx;
   for (int g = 0; g < n_fam; g++) {
     const mc_target *T = &R->fam[g].sf->target;
     mc_boot *B = &boot[g];
-    int64_t from = B->n;
+    int64_t from = B->n, lo, hi, cost = 0;
+    dist_block(from, to[g], &lo, &hi);
+    for (int64_t j = from; j < to[g]; j++) {
+      if (j >= lo && j < hi) continue;
+      B->f[j] = 0.0;
+      if (B->has_fe) B->fe[j] = 0.0;
+    }
     const uint64_t seed = R->crs.seed;
 #pragma omp parallel num_threads(R->nthreads)
     {
       void *sc = T->scratch_create(T);
       int tid = omp_get_thread_num();
 #pragma omp for schedule(dynamic, 256)
-      for (int64_t j = from; j < to[g]; j++) {
+      for (int64_t j = lo; j < hi; j++) {
         B->f[j] = sc ? mc_eval_independent(T, sc, seed, mcmc__boot_seq(g, j), NULL) : 0.0;
         if (B->has_fe) {
           /* An independent sample for b (the one above picks starting states). */
@@ -48,10 +58,16 @@ static void mcmc__bootstrap_draw(void *ctx, mc_boot *boot, int n_fam, const int6
 #pragma omp atomic
         R->cnt[tid].rays += rays;
 #pragma omp atomic
-        B->cost += (double)rays;
+        cost += rays;
       }
       T->scratch_destroy(sc);
     }
+    if (dist_active()) {
+      dist_allsum(B->f + from, (size_t)(to[g] - from));
+      if (B->has_fe) dist_allsum(B->fe + from, (size_t)(to[g] - from));
+      dist_allsum_i64(&cost, 1);
+    }
+    B->cost += (double)cost;
   }
 }
 

@@ -1,7 +1,7 @@
 /*
  * mcmc_internal.h: the MCMC driver's own types, shared by its files:
- * mcmc.c (the flow of a render) and mcmc_b.c (the bootstrap and the
- * normalisation b). Not part of the API.
+ * mcmc.c (the flow of a render), mcmc_b.c (the bootstrap and the
+ * normalisation b) and mcmc_dist.c (over MPI ranks). Not part of the API.
  */
 #ifndef LMC_MCMC_MCMC_INTERNAL_H
 #define LMC_MCMC_MCMC_INTERNAL_H
@@ -89,6 +89,8 @@ typedef struct mcmc_render {
   int64_t per_chain, done_per_chain;
   int ls_pending;       /* --largestep-scale not yet in force */
   double chain_seconds;
+  int n_snapshots;
+  double snapshot_seconds; /* preparing them: b, the counters and splats of every rank */
 } mcmc_render;
 
 /* The streams of family g's bootstrap sample j and of its chain i. */
@@ -105,5 +107,12 @@ double mcmc__refine_b(mcmc_render *R, double *OUT_var);
 /* The chains' image after `done` mutations per chain into the film
  * (compose: per-family buffers summed in) (mcmc_b.c). */
 void mcmc__publish(mcmc_render *R, int64_t done, int compose);
+
+/* Over several MPI ranks (mcmc_dist.c): every chain's counters from the
+ * rank that steps it, onto every rank (collective; a no-op under one). */
+void mcmc__sync_chains(mcmc_render *R);
+/* A snapshot: the image so far, every rank's, to rs->snapshot_fn on rank 0
+ * (collective). */
+void mcmc__snapshot(mcmc_render *R, double seconds);
 
 #endif

@@ -19,7 +19,10 @@
  * return 1: every chain restarts from its starting state, splats and
  * counts kept, note_restart_chain first); it must then give the same mix
  * (the driver scales the large step's probability itself). Every function
- * pointer but name and chain_kernels may be NULL.
+ * pointer but name and chain_kernels may be NULL. Over several MPI ranks
+ * every rank calls them all, the same way (mcmc_chain_here below); report
+ * only on rank 0, whose view of per-chain state the integrator keeps
+ * itself is its own chains'.
  */
 #ifndef LMC_MCMC_METHOD_H
 #define LMC_MCMC_METHOD_H
@@ -75,12 +78,24 @@ typedef struct mc_method {
   /* The most mutations per chain the next round may make (INT64_MAX: no limit). */
   int64_t (*round_limit)(void *run, int64_t done, int64_t budget);
   /* After a round (done / budget mutations per chain, budget INT64_MAX
-   * under --time; elapsed seconds of the render): 1 restarts the chains. */
-  int (*after_round)(void *run, int64_t done, int64_t budget, double elapsed);
+   * under --time; elapsed seconds of the render and of the chains, the
+   * same on every rank): 1 restarts the chains. It must decide from its
+   * arguments alone, so that every rank decides the same. */
+  int (*after_round)(void *run, int64_t done, int64_t budget, double elapsed,
+                     double chains_elapsed);
   void (*note_restart_chain)(void *run, const mc_chain *c);
   /* Statistics lines (stderr) after the driver's. */
   void (*report)(void *run, mc_chain *const *chains, int n, double chain_seconds);
 } mc_method;
+
+/* Whether chain i runs in this process. Over several MPI ranks
+ * (render/dist.h) every rank holds every chain, started from the same
+ * state, but steps only its own (i modulo the ranks); the driver shares
+ * the chains' statistics (mc_chain's counters) before after_round's
+ * restart, snapshots and the report. What an integrator keeps per chain
+ * beyond those is its own to share (integrator_lmc.c: stage 1's records).
+ * Under one process every chain is here. */
+int mcmc_chain_here(int i);
 
 /* The integrators built on the driver, by --integrator name (NULL: none). */
 const mc_method *mc_method_find(const char *name);

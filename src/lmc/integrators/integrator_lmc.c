@@ -21,6 +21,7 @@
 #include "lmc/kernels/lmc_kernel.h"
 #include "lmc/driver/method.h"
 #include "lmc/states/states.h"
+#include "render/dist.h"
 
 #define LMC_CACHE_DOUBLES (16 * 1024 * 1024) /* stage-1 records of all chains: 128 MB */
 #define LMC_ANCHORS 256                      /* independence proposal anchors */
@@ -57,7 +58,6 @@ struct lmc_run {
   int64_t stage1_mutations;
   double stage1_seconds, build_seconds;
   int64_t stage1_grad_evals; /* gradient evaluations when stage 2 began */
-  double chains_start;   /* omp_get_wtime() when the chains were set up */
 };
 
 static void lmc_run_destroy(lmc_run *run);
@@ -165,7 +165,6 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
   if (!run->mala || !run->cwalk || !run->rec || !run->chain_fam)
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "lmc: out of memory");
   run->n = n;
-  run->chains_start = omp_get_wtime();
   if (!run->stage1 && run->ls.adapt == LMC_ADAPT_CACHE) {
     /* --cache-fraction 0: stage 2 with empty caches. */
     for (int g = 0; g < run->n_fam; g++)
@@ -228,14 +227,44 @@ static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *
   return n;
 }
 
+/* Over several MPI ranks (dist.h) each rank's chains recorded their own
+ * stage 1: the records of every chain another rank ran are copied into
+ * this rank's (empty) record of it, so that every rank merges every
+ * chain's records in chain order and freezes the cache one process would. */
+static void lmc__share_records(lmc_run *run) {
+  if (!dist_active()) return;
+  int64_t *at = calloc((size_t)run->n + 1, sizeof *at);
+  if (!at) dist_abort(1);
+  for (int i = 0; i < run->n; i++) {
+    int64_t n = 0;
+    if (mcmc_chain_here(i) && run->rec[i]) gcache_records(run->rec[i], &n);
+    at[i + 1] = n;
+  }
+  dist_allsum_i64(at + 1, (size_t)run->n);
+  for (int i = 0; i < run->n; i++) at[i + 1] += at[i];
+  double *buf = calloc((size_t)(at[run->n] > 0 ? at[run->n] : 1), sizeof *buf);
+  if (!buf) dist_abort(1);
+  for (int i = 0; i < run->n; i++) {
+    int64_t n = 0;
+    const double *r = mcmc_chain_here(i) && run->rec[i] ? gcache_records(run->rec[i], &n) : NULL;
+    if (n > 0) memcpy(buf + at[i], r, (size_t)n * sizeof *buf);
+  }
+  dist_allsum(buf, (size_t)at[run->n]);
+  for (int i = 0; i < run->n; i++)
+    if (!mcmc_chain_here(i) && run->rec[i]) gcache_add_records(run->rec[i], buf + at[i], at[i + 1] - at[i]);
+  free(buf);
+  free(at);
+}
+
 /* Ends stage 1: merge per family, freeze, switch every chain's kernel to
  * its family's cache. */
-static void lmc__end_stage1(lmc_run *run, int64_t done) {
+static void lmc__end_stage1(lmc_run *run, int64_t done, double chains_elapsed) {
   double t0 = omp_get_wtime();
   lmc_error err;
   run->stage1 = 0;
   run->stage1_mutations = done;
-  run->stage1_seconds = omp_get_wtime() - run->chains_start;
+  run->stage1_seconds = chains_elapsed;
+  lmc__share_records(run);
   for (int g = 0; g < run->n_fam; g++) {
     lmc__family *F = &run->fam[g];
     int dim = F->target->dim;
@@ -290,19 +319,19 @@ static int64_t lmc_run_round_limit(const lmc_run *run, int64_t done, int64_t bud
 
 /* After a round: 1 when stage 1 ended now (the driver then restarts the
  * chains from their starting states; splats and counts carry on). */
-static int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed) {
+static int lmc_run_after_round(lmc_run *run, int64_t done, int64_t budget, double elapsed,
+                               double chains_elapsed) {
   if (!run->stage1) return 0;
   int end;
   /* Under --time, stage 1 gets its share of the time the chains have
    * (what the bootstrap left of the budget). */
-  double chains_elapsed = omp_get_wtime() - run->chains_start;
   double chain_time = run->rs.time_limit - (elapsed - chains_elapsed);
   if (run->rs.time_limit > 0.0 && budget == INT64_MAX)
     end = chains_elapsed >= run->ls.cache_fraction * chain_time;
   else
     end = done >= lmc__stage1_budget(run, budget);
   if (!end) return 0;
-  lmc__end_stage1(run, done);
+  lmc__end_stage1(run, done, chains_elapsed);
   return 1;
 }
 
@@ -496,8 +525,9 @@ static int lmc__m_chain_kernels(void *run, const mc_method_setup *setup, int i,
 static int64_t lmc__m_round_limit(void *run, int64_t done, int64_t budget) {
   return lmc_run_round_limit(run, done, budget);
 }
-static int lmc__m_after_round(void *run, int64_t done, int64_t budget, double elapsed) {
-  return lmc_run_after_round(run, done, budget, elapsed);
+static int lmc__m_after_round(void *run, int64_t done, int64_t budget, double elapsed,
+                              double chains_elapsed) {
+  return lmc_run_after_round(run, done, budget, elapsed, chains_elapsed);
 }
 static void lmc__m_note_restart(void *run, const mc_chain *c) { lmc_run_note_stage1_chain(run, c); }
 static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chain_seconds) {

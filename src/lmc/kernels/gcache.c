@@ -128,14 +128,26 @@ int gcache_add(gcache *c, int dim, const double *u, const double *m1, const doub
   return 1;
 }
 
-void gcache_merge(gcache *dst, const gcache *src) {
-  if (dst->frozen || src->frozen) return;
-  for (int64_t at = 0; at < src->rec_top;) {
-    const double *r = src->rec + at;
-    int dim = (int)r[0], L = src->len[dim];
-    if (!gcache_add(dst, dim, r + 2, r + 2 + L, r + 2 + 2 * L, r[1])) return;
-    at += 3 * (int64_t)L + 2;
+int gcache_add_records(gcache *c, const double *rec, int64_t n) {
+  for (int64_t at = 0; at < n;) {
+    const double *r = rec + at;
+    int dim = (int)r[0];
+    if (dim < 1 || dim > c->max_dim) return 0;
+    int64_t L = c->len[dim];
+    if (at + 3 * L + 2 > n || !gcache_add(c, dim, r + 2, r + 2 + L, r + 2 + 2 * L, r[1])) return 0;
+    at += 3 * L + 2;
   }
+  return 1;
+}
+
+const double *gcache_records(const gcache *c, int64_t *OUT_n) {
+  *OUT_n = c->rec_top;
+  return c->rec;
+}
+
+void gcache_merge(gcache *dst, const gcache *src) {
+  if (src->frozen) return;
+  gcache_add_records(dst, src->rec, src->rec_top);
 }
 
 int gcache_frozen(const gcache *c) { return c->frozen; }

@@ -80,6 +80,13 @@ void gcache_destroy(gcache *c);
 int gcache_add(gcache *c, int dim, const double *u, const double *m1, const double *m2, double f);
 /* Appends src's entries to dst (both not frozen; stops when dst is full). */
 void gcache_merge(gcache *dst, const gcache *src);
+/* The entries as they are stored, n doubles at the pointer returned (an
+ * entry of dimension d: d, f, then u, m1 and m2, 3 d + 2 in all): what
+ * gcache_add_records appends to a cache of the same dimensions (another
+ * process's copy, render/dist.h). Returns 1, or 0 at the first entry that
+ * does not fit or is malformed (those before it stay). */
+const double *gcache_records(const gcache *c, int64_t *OUT_n);
+int gcache_add_records(gcache *c, const double *rec, int64_t n);
 
 /* Builds the k-d trees and picks up to `anchors` independence anchors;
  * after this the cache is read-only. max_per_dim > 0 keeps at most that

@@ -60,6 +60,7 @@
 #include "lmc/states/mmlt_states.h"
 #include "lmc/driver/space.h"
 #include "lmc/states/states.h"
+#include "render/dist.h"
 #include "render/integrators/path.h"
 
 typedef mc_states_scratch mms__scratch;
@@ -265,10 +266,16 @@ typedef struct mms__shared {
   double *sum, *sum2; /* [block][length] */
 } mms__shared;
 
-/* Draws blocks [from, to) of the shared samples. */
+/* Draws blocks [from, to) of the shared samples: over several ranks each
+ * draws its share and the sums are gathered exactly (dist.h), so every
+ * rank holds every block. */
 static void mms__shared_draw(const mc_target *T, const mc_bdpt_states *ctx, int kmin,
                              uint64_t seed, int nthreads, mms__shared *sb, int64_t from,
                              int64_t to, render_counters *cnt) {
+  const int w = sb->n_len + 1;
+  int64_t lo, hi;
+  dist_block(from, to, &lo, &hi);
+  for (int64_t k = from * w; k < to * w; k++) sb->sum[k] = sb->sum2[k] = 0.0;
 #pragma omp parallel num_threads(nthreads)
   {
     void *sc = T->scratch_create(T);
@@ -276,10 +283,8 @@ static void mms__shared_draw(const mc_target *T, const mc_bdpt_states *ctx, int 
     double *f = malloc((size_t)sb->n_len * sizeof *f);
     int tid = omp_get_thread_num();
 #pragma omp for schedule(dynamic, 1)
-    for (int64_t blk = from; blk < to; blk++) {
-      int w = sb->n_len + 1;
+    for (int64_t blk = lo; blk < hi; blk++) {
       double *s1 = sb->sum + blk * w, *s2 = sb->sum2 + blk * w;
-      for (int k = 0; k < w; k++) s1[k] = s2[k] = 0.0;
       if (!sc || !cb || !f) continue;
       for (int j = 0; j < MMLT_SHARED_BLOCK; j++) {
         lmc_indep_sampler smp;
@@ -304,6 +309,8 @@ static void mms__shared_draw(const mc_target *T, const mc_bdpt_states *ctx, int 
     T->scratch_destroy(sc);
     free(cb), free(f);
   }
+  dist_allsum(sb->sum + from * w, (size_t)((to - from) * w));
+  dist_allsum(sb->sum2 + from * w, (size_t)((to - from) * w));
 }
 
 typedef struct mms__space {
@@ -334,10 +341,12 @@ static int64_t mms__estimate_b(const mc_space *sp, mc_boot *boot, const mc_space
   int64_t fixed = rq->fixed;
   int64_t want = fixed > 0 ? (fixed + MMLT_SHARED_BLOCK - 1) / MMLT_SHARED_BLOCK : cap;
   int status = 0;
+  /* Four blocks per thread of every rank (the same on every rank). */
+  const int64_t batch = 4 * (int64_t)dist_size() * (int64_t)dist_max((double)rq->nthreads);
   for (;;) {
     /* The next batch: the pilot, then batches of blocks for every thread. */
     int64_t to = sb.blocks == 0 ? (fixed > 0 ? want : MMLT_SHARED_PILOT)
-                                : sb.blocks + 4 * (int64_t)rq->nthreads;
+                                : sb.blocks + batch;
     if (to > want) to = want;
     if (to <= sb.blocks) break;
     if (to > sb.cap) {
@@ -355,10 +364,11 @@ static int64_t mms__estimate_b(const mc_space *sp, mc_boot *boot, const mc_space
     int first = sb.blocks == 0;
     sb.blocks = to;
     if (fixed > 0) break;
-    if (render_stop_signal()) break;
-    if (isfinite(rq->seconds)) {
-      if (omp_get_wtime() - t0 >= rq->seconds) break;
-    } else if (first) {
+    /* (Over several ranks the first to see the time or a stop decides.) */
+    if (dist_any(render_stop_signal() ||
+                 (isfinite(rq->seconds) && omp_get_wtime() - t0 >= rq->seconds)))
+      break;
+    if (!isfinite(rq->seconds) && first) {
       /* Plan the count from the pilot alone: the standard error of
        * sum_k b_k is sigma / sqrt(N). */
       double s1 = 0.0, s2 = 0.0, n = (double)sb.blocks * MMLT_SHARED_BLOCK;

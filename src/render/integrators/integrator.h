@@ -86,6 +86,8 @@ typedef struct render_stats {
   double mcmc_b_boot, mcmc_b_boot_se; /* MCMC: b (sum over families) from the bootstrap alone, its SE */
   int64_t mcmc_boot_paths;            /* MCMC: bootstrap paths drawn (over all families) */
   double mcmc_b, mcmc_b_se;           /* MCMC: b the image uses (refined with large steps), its SE */
+  int64_t rank_rays, rank_samples;    /* this process's own share (over MPI ranks, render/dist.h;
+                                         the counts above are every rank's, on rank 0) */
 } render_stats;
 
 /* Renders with pt or bdpt according to rs->integrator into `out` (created

@@ -304,6 +304,7 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
     st->samples += counters[t].c.samples;
     st->nan_samples += counters[t].c.nan_samples;
   }
+  st->rank_rays = st->rays, st->rank_samples = st->samples;
   /* Every rank's film and counts, on rank 0. */
   int64_t totals[3] = {st->rays, st->samples, st->nan_samples};
   dist_sum_to_root_i64(totals, 3);
