@@ -88,7 +88,10 @@ for i in $integrators; do
     rm -f "$out"/*-[0-9]*.[0-9]s.exr
   done
   awk -v i="$i" -v a="$a" -v b="$b" -v c="$c" -v sa="$sa" -v sb="$sb" 'BEGIN {
-    printf "| %s | %.4g | %.4g | %.4g | %.3f | %.3f | %s | %s |\n", i, a, b, c,
-      a > 0 ? b / a : 0, c > 0 ? b / c : 0, sa, sb }' >> "$table"
+    ra = 0; rc = 0
+    if (a > 0) ra = b / a
+    if (c > 0) rc = b / c
+    printf "| %s | %.4g | %.4g | %.4g | %.3f | %.3f | %s | %s |\n", i, a, b, c, ra, rc, sa, sb
+  }' >> "$table"
 done
 cat "$table"

@@ -14,7 +14,9 @@
  *  - the kernel leaves the cube with the probability the Gaussian gives:
  *    from u0 = 1e-3 with the prior alone (sigma 0.01), P(u0 + d < 0) =
  *    Phi(-0.1); 20,000 proposals, within 4.5 binomial standard errors,
- *    each such proposal returning -INFINITY.
+ *    each such proposal returning -INFINITY;
+ *  - the Gaussians the kernel keeps (h2mc_slot) are those a fresh kernel
+ *    builds, bit for bit, and it builds only for a state it does not hold.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -226,12 +228,124 @@ static void test_outside_rejected(void **state) {
   h2mc_kernel_free(&k);
 }
 
+/* A 2-D state at u with f, gradient g and Hessian h (packed: h00, h01,
+ * h11) of f. */
+typedef struct tstate {
+  double u[2], grad[2], hess[3];
+  int hidx[2];
+  mc_state s;
+} tstate;
+
+static void tstate_set(tstate *t, double u0, double u1, double f, int hess_ok) {
+  memset(t, 0, sizeof *t);
+  t->u[0] = u0, t->u[1] = u1;
+  /* log f curving down steeply (|H| far above the prior's 1e4), so that
+   * the model, not the prior, makes the Gaussian; its derivatives depend
+   * on f (those of f do not), so another f is another Gaussian. */
+  t->grad[0] = 30.0, t->grad[1] = -20.0;
+  t->hess[0] = -4e4, t->hess[1] = 5e3, t->hess[2] = -3e4;
+  t->hidx[0] = 0, t->hidx[1] = 1;
+  t->s.dim = 2;
+  t->s.u = t->u;
+  t->s.v.f = f;
+  t->s.grad = t->grad;
+  t->s.grad_ok = 1;
+  t->s.grad_eval = 2;
+  t->s.hess_ok = hess_ok;
+  t->s.hn = 2;
+  t->s.hidx = t->hidx;
+  t->s.hess = t->hess;
+}
+
+static int flat2_eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
+                      double *OUT_grad, int *OUT_grad_ok) {
+  (void)t, (void)scratch;
+  sampler_use_stream(smp, 0);
+  OUT_value->f = 1.0;
+  OUT_value->value = (rgb){1, 1, 1};
+  OUT_value->rx = sampler_next(smp);
+  OUT_value->ry = sampler_next(smp);
+  if (OUT_grad) OUT_grad[0] = OUT_grad[1] = 0.0, *OUT_grad_ok = 1;
+  return 0;
+}
+
+/* The kernel keeps the Gaussians of the last two states (h2mc_slot): every
+ * proposal and density it gives equals, bit for bit, that of a fresh
+ * kernel that builds them anew, and it builds only for a state it does not
+ * hold (a changed f, coordinate or Hessian counts as another state). */
+static void test_kept_gaussians_are_rebuilt_ones(void **state) {
+  (void)state;
+  mc_target tg;
+  memset(&tg, 0, sizeof tg);
+  tg.dim = 2;
+  tg.stream_dim[0] = 2;
+  tg.eval = flat2_eval;
+  h2mc_params p = h2mc_params_default();
+  lmc_error err;
+  h2mc_kernel k;
+  assert_int_equal(h2mc_kernel_init(&k, &tg, &p, &err), LMC_OK);
+  mc_kernel kn = h2mc_kernel_make(&k);
+  tstate a, b, c, a_f, a_u, a_noh;
+  tstate_set(&a, 0.4, 0.5, 2.0, 1);
+  tstate_set(&b, 0.41, 0.49, 1.5, 1);
+  tstate_set(&c, 0.39, 0.52, 3.0, 1);
+  tstate_set(&a_f, 0.4, 0.5, 2.5, 1);       /* a with another f */
+  tstate_set(&a_u, 0.4, 0.5 + 1e-12, 2.0, 1); /* a moved by 1e-12 */
+  tstate_set(&a_noh, 0.4, 0.5, 2.0, 0);     /* a without its Hessian */
+  /* A chain's calls: propose at the current state, the reverse density at
+   * the proposal; (state, 1: propose / 0: density, builds so far). */
+  const struct {
+    const tstate *t;
+    int propose;
+    int built;
+  } seq[] = {
+      {&a, 1, 1},     /* first: built */
+      {&b, 0, 2},     /* the proposal: built */
+      {&a, 1, 2},     /* rejected: a kept */
+      {&c, 0, 3},     /* another proposal: built over b */
+      {&c, 1, 3},     /* accepted: c kept */
+      {&a, 0, 3},     /* a again: still held in the other slot */
+      {&a_f, 1, 4},   /* same u, another f */
+      {&a_u, 1, 5},   /* another u */
+      {&a_noh, 1, 6}, /* no Hessian: the prior's Gaussian */
+      {&a_noh, 0, 6},
+  };
+  const int n = (int)(sizeof seq / sizeof seq[0]);
+  rng r;
+  rng_seed(&r, 9, 2);
+  int compared = 0;
+  for (int i = 0; i < n; i++) {
+    h2mc_kernel fresh;
+    assert_int_equal(h2mc_kernel_init(&fresh, &tg, &p, &err), LMC_OK);
+    mc_kernel fk = h2mc_kernel_make(&fresh);
+    double to[2] = {0.405, 0.497}, y1[2], y2[2], l1, l2;
+    if (seq[i].propose) {
+      rng r2 = r;
+      l1 = kn.propose(kn.self, &r, &seq[i].t->s, y1);
+      l2 = fk.propose(fk.self, &r2, &seq[i].t->s, y2);
+      assert_memory_equal(y1, y2, sizeof y1);
+    } else {
+      l1 = kn.log_density(kn.self, &seq[i].t->s, to);
+      l2 = fk.log_density(fk.self, &seq[i].t->s, to);
+    }
+    assert_true(isfinite(l1));
+    assert_memory_equal(&l1, &l2, sizeof l1);
+    assert_int_equal(k.st.built, seq[i].built);
+    h2mc_kernel_free(&fresh);
+    compared++;
+  }
+  assert_int_equal(compared, n);
+  assert_true(k.st.model > 0); /* the model, not only the prior, was compared */
+  h2mc_kernel_free(&k);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_integrates_to_one),
       cmocka_unit_test(test_samples_match_moments),
       cmocka_unit_test(test_closed_form),
       cmocka_unit_test(test_outside_rejected),
+      cmocka_unit_test(test_kept_gaussians_are_rebuilt_ones),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -119,20 +119,22 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
           run->space->name, run->n > 0 ? run->h2[0].p.sigma : 0.0,
           run->n > 0 ? run->h2[0].p.L : 0.0, run->hs.iso_prob,
           run->space->n_fam > 0 ? mc_step_scale_min(&run->space->fam[0].target) : 1.0);
-  int64_t hp = 0, hm = 0, ho = 0, hf = 0;
+  int64_t hp = 0, hm = 0, ho = 0, hf = 0, hb = 0;
   for (int i = 0; i < run->n; i++) {
     hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
-    ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail;
+    ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail, hb += run->h2[i].st.built;
   }
   mc_counts c = {0};
   for (int i = 0; i < n && i < run->n; i++)
     mc_space_counts(&run->space->fam[run->chain_fam[i]], chains[i]->scratch, &c);
   fprintf(stderr,
           "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
-          "%.1f%% outside the unit cube (rejected unevaluated), %lld failed eigendecompositions; "
+          "%.1f%% outside the unit cube (rejected unevaluated), %.2f Gaussians built per proposal "
+          "(the rest kept), %lld failed eigendecompositions; "
           "%lld Hessian evaluations (%.4g/s), %lld with the gradient alone\n",
           (long long)hp, 100.0 * (double)hm / fmax(1.0, (double)hp),
-          100.0 * (double)ho / fmax(1.0, (double)hp), (long long)hf, (long long)c.hess_evals,
+          100.0 * (double)ho / fmax(1.0, (double)hp), (double)hb / fmax(1.0, (double)hp),
+          (long long)hf, (long long)c.hess_evals,
           (double)c.hess_evals / fmax(chain_seconds, 1e-9),
           (long long)(c.grad_evals - c.hess_evals));
 }

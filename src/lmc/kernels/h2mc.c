@@ -121,14 +121,17 @@ lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_
   k->p = *p;
   k->target = target;
   k->dim = target->dim;
+  k->subset = !target->local_coords && target->n_labels > 0 && target->label_coords;
   if (!(p->sigma > 0.0) || !(p->L > 0.0))
     return lmc_error_set(err, LMC_EINVAL, NULL, 0, "h2mc: sigma and L must be positive");
   int n = MC_HESS_MAX > target->dim ? target->dim : MC_HESS_MAX;
   if (n < 1) n = 1;
   k->lwork = h2mc_lwork(n);
-  /* One block: g, H, work, z, d, the two Gaussians (doubles), then idx. */
-  size_t m = (size_t)n, doubles = m + m * m + (size_t)k->lwork + 2 * m + 2 * (m * m + 2 * m);
-  double *blk = malloc(doubles * sizeof(double) + (size_t)target->dim * sizeof(int));
+  /* One block: g, H, work, z, d, the two slots' Gaussians and values
+   * (doubles), then idx and the slots' idx. */
+  size_t m = (size_t)n, dim = (size_t)(target->dim > 0 ? target->dim : 1);
+  size_t doubles = m + m * m + (size_t)k->lwork + 2 * m + 2 * (m * m + 2 * m) + 2 * dim;
+  double *blk = malloc(doubles * sizeof(double) + (dim + 2 * m) * sizeof(int));
   if (!blk) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the h2mc kernel");
   k->g = blk;
   k->H = k->g + m;
@@ -136,9 +139,14 @@ lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_
   k->z = k->work + k->lwork;
   k->d = k->z + m;
   double *rest = k->d + m;
-  h2mc__carve_gauss(&k->gx, &rest, m);
-  h2mc__carve_gauss(&k->gy, &rest, m);
+  for (int q = 0; q < 2; q++) {
+    h2mc__carve_gauss(&k->slot[q].G, &rest, m);
+    k->slot[q].u = rest;
+    rest += dim;
+  }
   k->idx = (int *)rest;
+  k->slot[0].idx = k->idx + dim;
+  k->slot[1].idx = k->slot[0].idx + m;
   return LMC_OK;
 }
 
@@ -215,20 +223,50 @@ static void h2mc__gauss_at(h2mc_kernel *k, const mc_state *s, const int *idx, in
   if (h2mc_gauss_build(&k->p, n, k->g, k->H, k->work, k->lwork, G) != 0) k->st.eig_fail++;
 }
 
+/* Whether slot S was built at state s (moving idx[0 .. n-1]). */
+static int h2mc__slot_holds(const h2mc_kernel *k, const h2mc_slot *S, const mc_state *s,
+                            const int *idx, int n) {
+  if (!S->valid || S->label != s->label || S->n != n || S->ok != (s->grad_ok && s->hess_ok) ||
+      memcmp(&S->f, &s->v.f, sizeof S->f) != 0 || memcmp(S->idx, idx, (size_t)n * sizeof *idx))
+    return 0;
+  if (!k->subset) return memcmp(S->u, s->u, (size_t)k->dim * sizeof *s->u) == 0;
+  for (int a = 0; a < n; a++)
+    if (memcmp(&S->u[a], &s->u[idx[a]], sizeof *s->u) != 0) return 0;
+  return 1;
+}
+
+/* The Gaussian at state s over the n coordinates idx: a slot that holds it
+ * already, else built into slot `into` (the other one is kept). Returns
+ * the slot. */
+static int h2mc__gauss_of(h2mc_kernel *k, const mc_state *s, const int *idx, int n, int into) {
+  for (int q = 0; q < 2; q++)
+    if (h2mc__slot_holds(k, &k->slot[q], s, idx, n)) return q;
+  h2mc_slot *S = &k->slot[into];
+  h2mc__gauss_at(k, s, idx, n, &S->G);
+  k->st.built++;
+  S->valid = 1, S->label = s->label, S->n = n, S->ok = s->grad_ok && s->hess_ok, S->f = s->v.f;
+  memcpy(S->idx, idx, (size_t)n * sizeof *idx);
+  if (!k->subset) memcpy(S->u, s->u, (size_t)k->dim * sizeof *s->u);
+  else
+    for (int a = 0; a < n; a++) S->u[a] = s->u[idx[a]];
+  return into;
+}
+
 static double h2mc__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   h2mc_kernel *k = self;
   const double *c = k->target->step_scale;
   int n = h2mc__coords(k, x, k->idx);
-  h2mc__gauss_at(k, x, k->idx, n, &k->gx);
+  k->cur = h2mc__gauss_of(k, x, k->idx, n, k->cur);
+  const h2mc_gauss *G = &k->slot[k->cur].G;
   k->st.proposed++;
-  k->st.model += !k->gx.isotropic;
+  k->st.model += !G->isotropic;
   for (int a = 0; a < n; a += 2) {
     double z0, z1;
     mala_std_normal_pair(r, &z0, &z1);
     k->z[a] = z0;
     if (a + 1 < n) k->z[a + 1] = z1;
   }
-  h2mc_gauss_sample(&k->gx, k->z, k->p.sigma, k->d);
+  h2mc_gauss_sample(G, k->z, k->p.sigma, k->d);
   /* Coordinates not moved keep x's values (the chain reads all of OUT_y
    * from a kernel without a coordinate subset). */
   memcpy(OUT_y, x->u, (size_t)k->dim * sizeof(double));
@@ -244,14 +282,15 @@ static double h2mc__propose(void *self, rng *r, const mc_state *x, double *OUT_y
     OUT_y[i] = y;
     log_c += log(ci);
   }
-  return h2mc_gauss_log_density(&k->gx, k->d, k->p.sigma) - log_c;
+  return h2mc_gauss_log_density(G, k->d, k->p.sigma) - log_c;
 }
 
 static double h2mc__log_density(void *self, const mc_state *from, const double *to_u) {
   h2mc_kernel *k = self;
   const double *c = k->target->step_scale;
   int n = h2mc__coords(k, from, k->idx);
-  h2mc__gauss_at(k, from, k->idx, n, &k->gy);
+  /* (Built into the slot that is not the current state's.) */
+  const h2mc_gauss *G = &k->slot[h2mc__gauss_of(k, from, k->idx, n, 1 - k->cur)].G;
   double log_c = 0.0;
   for (int a = 0; a < n; a++) {
     int i = k->idx[a];
@@ -259,7 +298,7 @@ static double h2mc__log_density(void *self, const mc_state *from, const double *
     k->d[a] = (to_u[i] - from->u[i]) / ci;
     log_c += log(ci);
   }
-  return h2mc_gauss_log_density(&k->gy, k->d, k->p.sigma) - log_c;
+  return h2mc_gauss_log_density(G, k->d, k->p.sigma) - log_c;
 }
 
 mc_kernel h2mc_kernel_make(h2mc_kernel *k) {

@@ -42,7 +42,8 @@
  *
  * Cost: one evaluation with gradient and Hessian per proposal (about 7 to
  * 60 times a plain one, bench_grad) and a symmetric eigendecomposition
- * (LAPACK dsyev) of the n x n Hessian of the proposed state.
+ * (LAPACK dsyev) of the n x n Hessian of the proposed state; the current
+ * state's Gaussian is kept from when it was built (h2mc_slot).
  */
 #ifndef LMC_MCMC_H2MC_H
 #define LMC_MCMC_H2MC_H
@@ -75,7 +76,20 @@ typedef struct h2mc_stats {
   int64_t model;      /* ... from the Hessian's model (the rest: the prior alone) */
   int64_t outside;    /* ... that left [0,1)^n (rejected unevaluated) */
   int64_t eig_fail;   /* eigendecompositions that failed (the prior was used) */
+  int64_t built;      /* Gaussians built (the rest of the 2 per proposal were kept) */
 } h2mc_stats;
+
+/* A state's Gaussian, kept with what identifies the state: its label, f,
+ * whether it had derivatives, the coordinates moved and their values (all
+ * coordinates' values when the kernel moves every one the chain keeps up
+ * to date). */
+typedef struct h2mc_slot {
+  h2mc_gauss G;
+  int valid, label, ok, n;
+  double f;
+  int *idx; /* the coordinates moved (room for MC_HESS_MAX) */
+  double *u; /* the values compared (room for dim) */
+} h2mc_slot;
 
 typedef struct h2mc_kernel {
   h2mc_params p;
@@ -85,7 +99,14 @@ typedef struct h2mc_kernel {
   int *idx;                /* the coordinates moved */
   double *g, *H, *work, *z, *d;
   int lwork;
-  h2mc_gauss gx, gy;       /* the Gaussians at the current and at the proposed state */
+  int subset;              /* the chain keeps only the moved coordinates up to date (coords) */
+  /* The Gaussians of the last two states met: the current state's (cur)
+   * and the last proposal's. A Gaussian is a pure function of its state,
+   * so the one kept for a state is the one that would be built anew (the
+   * same numbers, bit for bit): after a rejection the current state's is
+   * used again, after an accepted H2MC step the proposal's. */
+  h2mc_slot slot[2];
+  int cur;
   h2mc_stats st;
 } h2mc_kernel;
 
