@@ -163,6 +163,22 @@ static void render__snapshot(const render_settings *rs, const film *out, int has
   film_free(&tmp);
 }
 
+/* The threads' counts into st (this rank's own in rank_rays and
+ * rank_samples), then every rank's film and counts on rank 0. */
+static void render__totals(render_stats *st, film *out, int nthreads,
+                           const render__counters_slot *counters) {
+  for (int t = 0; t < nthreads; t++) {
+    st->rays += counters[t].c.rays;
+    st->samples += counters[t].c.samples;
+    st->nan_samples += counters[t].c.nan_samples;
+  }
+  st->rank_rays = st->rays, st->rank_samples = st->samples;
+  int64_t totals[3] = {st->rays, st->samples, st->nan_samples};
+  dist_sum_to_root_i64(totals, 3);
+  film_sum_to_root(out);
+  if (dist_rank() == 0) st->rays = totals[0], st->samples = totals[1], st->nan_samples = totals[2];
+}
+
 /* --- the pass loop ----------------------------------------------------------- */
 
 lmc_status render_run(const scene *s, const render_settings *rs, film *out, render_stats *st,
@@ -299,17 +315,7 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
   /* Totals, and the splat normalisation: one light subpath per sample, and
    * each light subpath (with the per-pixel importance of camera.h) is an
    * estimate of every pixel, so splats are divided by their total number. */
-  for (int t = 0; t < nthreads; t++) {
-    st->rays += counters[t].c.rays;
-    st->samples += counters[t].c.samples;
-    st->nan_samples += counters[t].c.nan_samples;
-  }
-  st->rank_rays = st->rays, st->rank_samples = st->samples;
-  /* Every rank's film and counts, on rank 0. */
-  int64_t totals[3] = {st->rays, st->samples, st->nan_samples};
-  dist_sum_to_root_i64(totals, 3);
-  film_sum_to_root(out);
-  if (rank == 0) st->rays = totals[0], st->samples = totals[1], st->nan_samples = totals[2];
+  render__totals(st, out, nthreads, counters);
   st->passes = st->samples / ((int64_t)W * H);
   if (use_bdpt) {
     int64_t lost = 0;
