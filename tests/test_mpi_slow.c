@@ -333,7 +333,9 @@ static void test_interrupted_job_writes_its_image(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
 #ifdef LMC_MPIEXEC
-  /* Ctrl-C on the launcher: mpirun passes the signal on, every rank stops
+  /* Ctrl-C on the launcher, 10 s in (past start-up and the signal
+   * handlers' installation even on a loaded machine; at 4 s a CI run under
+   * ctest -j2 killed pssmlt before it rendered): mpirun passes the signal on, every rank stops
    * (pt at its next row, the MCMC chains at the end of their round, which
    * every rank drops) and rank 0 writes the image of both. */
   static const char *const which[] = {"pt", "pssmlt", "lmc"};
@@ -343,7 +345,7 @@ static void test_interrupted_job_writes_its_image(void **state) {
     snprintf(cmd, sizeof cmd,
              MPI_ENV "timeout -k 5 60 '%s' --bind-to none -n 2 '%s' render '%s' --integrator %s "
                      "--time 40 --threads 1 -q -o '%s/int_%s.exr' > /dev/null 2> "
-                     "'%s/int_%s.err' & sleep 4; kill -INT $!; wait $!",
+                     "'%s/int_%s.err' & sleep 10; kill -INT $!; wait $!",
              LMC_MPIEXEC, LMC_BINARY, CORNELL, which[k], tmp_dir, which[k], tmp_dir, which[k]);
     time_t t0 = time(NULL);
     int rc = system(cmd);
