@@ -57,6 +57,10 @@ double lmc_exposure_scale(const lmc_exposure *e, const lmc_image *img);
 
 /* The commands (argv[1] is the command's name). */
 int lmc_cmd_render(int argc, char **argv);
+/* SIGINT and SIGTERM ask a render to stop (render_request_stop) from now
+ * on; `lmc render` calls it before joining an MPI job, whose start-up can
+ * take seconds, so that a Ctrl-C then still ends with the image. */
+void lmc_render_catch_signals(void);
 int lmc_cmd_compare(int argc, char **argv);
 int lmc_cmd_merge(int argc, char **argv);
 int lmc_cmd_convert(int argc, char **argv);

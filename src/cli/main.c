@@ -37,6 +37,7 @@ static const char *lmc_usage =
 int main(int argc, char **argv) {
   /* Under an MPI launcher, one rank of the job (dist.h); rank 0 alone
    * speaks: the others' warnings would repeat its own. */
+  if (argc > 1 && !strcmp(argv[1], "render")) lmc_render_catch_signals();
   dist_init(&argc, &argv);
   if (dist_rank() != 0) lmc_warn_set_quiet(1);
   if (argc < 2) {

@@ -77,7 +77,7 @@ static int lmc_integrator_known(const char *name) {
 
 static void lmc_on_signal(int sig) { render_request_stop(sig); }
 
-static void lmc_install_signals(void) {
+void lmc_render_catch_signals(void) {
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = lmc_on_signal;
@@ -215,7 +215,6 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   /* -o OUT.png names the preview: the EXR is OUT.exr beside it. */
   size_t len = strlen(out_exr);
   if (len > 4 && strcasecmp(out_exr + len - 4, ".png") == 0) memcpy(out_exr + len - 4, ".exr", 4);
-  lmc_install_signals();
   lmc_snapshot_ctx snap = {out_exr};
   if (rs->snapshot > 0.0) {
     rs->snapshot_fn = lmc_write_snapshot;
@@ -344,6 +343,9 @@ int lmc_cmd_render(int argc, char **argv) {
   lmc_exposure exposure = {0, 0.0};
   lmc_args a = {argc, 2, argv, NULL};
   if (!defines) return EXIT_FAIL;
+  /* Ctrl-C while the scene loads: the render then ends at once and
+   * writes what it has (main installed the handlers before MPI too). */
+  lmc_render_catch_signals();
 
   /* Parse the flags; the scene's own settings are merged below. The flags
    * of the tables are checked into cli now and applied to the scene's
