@@ -100,6 +100,35 @@ static void read_image(const char *name, lmc_image *img) {
   assert_int_equal(image_read_exr(path, img, &err), LMC_OK);
 }
 
+/* Drops every rate ("4.27e+04/s", "1.2 Mrays/s") from line, in place. */
+static void strip_rates(char *line) {
+  char *s;
+  while ((s = strstr(line, "/s"))) {
+    char *a = s;
+    while (a > line && a[-1] != ' ' && a[-1] != '(') a--;
+    memmove(a, s + 2, strlen(s + 2) + 1);
+  }
+}
+
+/* The integrator's own count line (h2mc's proposals, lmc's gradient
+ * evaluations), rates dropped; 0 for the other integrators. */
+static int count_line(const char *integrator, const char *name, char *line, size_t size) {
+  const char *key = !strcmp(integrator, "h2mc")  ? "h2mc: " /* then "proposals" */
+                    : !strcmp(integrator, "lmc") ? "gradient evaluations ("
+                                                 : NULL;
+  if (!key) return 0;
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s.err", tmp_dir, name);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  int found = 0;
+  while (!found && fgets(line, (int)size, f))
+    found = strstr(line, key) && (strcmp(integrator, "h2mc") || strstr(line, "proposals"));
+  fclose(f);
+  if (found) strip_rates(line);
+  return found;
+}
+
 /* Pixel channels whose bits differ between two renders. */
 static int64_t differing(const char *a, const char *b) {
   lmc_image ia = {0}, ib = {0};
@@ -179,12 +208,13 @@ static void test_two_ranks_independent_of_threads(void **state) {
  * tallies shared), printed to the last digit, and the same image up to
  * the order its splats are added in: a relative 1e-6 per channel, the
  * float rounding of sums that differ in their last bits (one mutation's
- * splat weighs about 1e-3 of a pixel here). */
+ * splat weighs about 1e-3 of a pixel here). lmc's and h2mc's own count
+ * lines, summed over the ranks, are the one process's too. */
 static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
   static const int rank_counts[] = {2, 3};
-  int compared = 0;
+  int compared = 0, owns = 0;
   for (int k = 2; k < N_INTEGRATORS; k++) {
     char flags[256], plain[64], line[512], b_plain[512], bl_plain[512];
     snprintf(flags, sizeof flags,
@@ -194,6 +224,8 @@ static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
     assert_int_equal(render_v(0, CORNELL, flags, plain, 0), 0);
     assert_true(log_line(plain, "b = ", b_plain, sizeof b_plain));
     int refined = log_line(plain, "b with large steps = ", bl_plain, sizeof bl_plain);
+    char own_plain[1024], own[1024];
+    int has_own = count_line(integrators[k], plain, own_plain, sizeof own_plain);
     lmc_image ip = {0};
     read_image(plain, &ip);
     for (int q = 0; q < 2; q++) {
@@ -207,6 +239,12 @@ static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
       if (refined) {
         assert_true(log_line(name, "b with large steps = ", line, sizeof line));
         assert_string_equal(line, bl_plain);
+      }
+      /* The integrator's own counts, summed over the ranks. */
+      if (has_own) {
+        assert_true(count_line(integrators[k], name, own, sizeof own));
+        assert_string_equal(own, own_plain);
+        owns++;
       }
       lmc_image ir = {0};
       read_image(name, &ir);
@@ -227,6 +265,7 @@ static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
     image_free(&ip);
   }
   assert_int_equal(compared, 2 * (N_INTEGRATORS - 2));
+  assert_int_equal(owns, 2 * 2); /* lmc and h2mc */
 }
 
 /* The mean over the pixels and channels of tmp_dir/NAME.exr, and the
@@ -333,18 +372,20 @@ static void test_interrupted_job_writes_its_image(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
 #ifdef LMC_MPIEXEC
-  /* Ctrl-C on the launcher, 10 s in (past start-up and the signal
-   * handlers' installation even on a loaded machine; at 4 s a CI run under
-   * ctest -j2 killed pssmlt before it rendered): mpirun passes the signal on, every rank stops
-   * (pt at its next row, the MCMC chains at the end of their round, which
-   * every rank drops) and rank 0 writes the image of both. */
+  /* Ctrl-C on the launcher, 10 s in: mpirun passes the signal on, every
+   * rank stops (pt at its next row, the MCMC chains at the end of their
+   * round, which every rank drops), rank 0 writes the image of both and the
+   * others wait for it. timeout runs in --foreground so that the signal
+   * reaches mpirun once: without it timeout also sends it to its whole
+   * process group, and mpirun takes a second SIGINT as an order to kill the
+   * ranks at once (1 run in 6 ended without an image that way). */
   static const char *const which[] = {"pt", "pssmlt", "lmc"};
   int checked = 0;
   for (int k = 0; k < 3; k++) {
     char cmd[4096];
     snprintf(cmd, sizeof cmd,
-             MPI_ENV "timeout -k 5 60 '%s' --bind-to none -n 2 '%s' render '%s' --integrator %s "
-                     "--time 40 --threads 1 -q -o '%s/int_%s.exr' > /dev/null 2> "
+             MPI_ENV "timeout --foreground -k 5 60 '%s' --bind-to none -n 2 '%s' render '%s' "
+                     "--integrator %s --time 40 --threads 1 -q -o '%s/int_%s.exr' > /dev/null 2> "
                      "'%s/int_%s.err' & sleep 10; kill -INT $!; wait $!",
              LMC_MPIEXEC, LMC_BINARY, CORNELL, which[k], tmp_dir, which[k], tmp_dir, which[k]);
     time_t t0 = time(NULL);

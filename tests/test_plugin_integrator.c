@@ -76,7 +76,9 @@ static int indep_chain_kernels(void *run, const mc_method_setup *setup, int i,
   return 1;
 }
 
-static void indep_report(void *run, mc_chain *const *chains, int n, double seconds) {
+static void indep_report(void *run, mc_chain *const *chains, int n, double seconds,
+                         const mc_counts *counts) {
+  (void)counts;
   (void)chains, (void)n, (void)seconds;
   ((indep_run *)run)->reports++;
 }

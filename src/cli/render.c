@@ -203,6 +203,42 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
   return LMC_OK;
 }
 
+/* Rank 0's end of a render: writes the image and prints the summary
+ * (per_rank: every rank's rays and samples, NULL in one process); the
+ * exit status. */
+static int render__finish(const scene *s, const render_settings *rs, const film *f,
+                          const render_stats *st, const int64_t *per_rank, const char *out_exr,
+                          char *out_png, size_t png_size, const lmc_exposure *exposure,
+                          const char *scene_path, double t_load) {
+  int black = 0;
+  int ok = lmc_write_outputs(f, out_exr, out_png, png_size, exposure, scene_path,
+                             s->n_lights > 0, &black);
+  if (dist_active()) {
+    fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
+            dist_size());
+    for (int r = 0; r < dist_size(); r++)
+      fprintf(stderr, "lmc: rank %d: %.4g rays, %lld %s\n", r, (double)per_rank[2 * r],
+              (long long)per_rank[2 * r + 1],
+              mcmc_is_integrator(rs->integrator) ? "mutations" : "camera samples");
+  }
+  fprintf(stderr,
+          "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
+          "%.3g Mrays/s%s%s\n",
+          rs->integrator, f->width, f->height, (long long)st->passes, (long long)st->samples,
+          st->seconds, t_load, (double)st->rays, st->rays / fmax(st->seconds, 1e-9) / 1e6,
+          st->interrupted ? ", interrupted" : "", st->timed_out ? ", time limit reached" : "");
+  if (st->nan_samples > 0)
+    fprintf(stderr, "lmc: dropped %lld non-finite samples\n", (long long)st->nan_samples);
+  if (ok) printf("wrote %s\nwrote %s\n", out_exr, out_png);
+  if (!ok) return EXIT_FAIL;
+  if (st->interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
+  if (black && rs->strict) {
+    fprintf(stderr, "lmc: --strict: the image is black\n");
+    return EXIT_BADINPUT;
+  }
+  return EXIT_OK;
+}
+
 /* Renders s with rs, then writes what there is even when interrupted;
  * the exit status. */
 static int render__run(scene *s, render_settings *rs, const char *output, const char *scene_path,
@@ -241,39 +277,23 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   }
   if (dist_rank() != 0) {
     free(per_rank);
-    /* Rank 0 holds the image of every rank (dist.h) and writes it. */
     film_free(&f);
-    return st.interrupted ? (render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT) : EXIT_OK;
+    /* Rank 0 holds the image of every rank (dist.h) and writes it; the
+     * others wait for it and exit with its status (a launcher ends the
+     * whole job when a rank exits with a failure, even Ctrl-C's 130). */
+    double c = EXIT_FAIL;
+    dist_broadcast(&c, 1);
+    return (int)c;
   }
-  int black = 0;
-  int ok = lmc_write_outputs(&f, out_exr, out_png, sizeof out_png, exposure, scene_path,
-                             s->n_lights > 0, &black);
-  if (dist_active()) {
-    fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
-            dist_size());
-    for (int r = 0; r < dist_size(); r++)
-      fprintf(stderr, "lmc: rank %d: %.4g rays, %lld %s\n", r, (double)per_rank[2 * r],
-              (long long)per_rank[2 * r + 1],
-              mcmc_is_integrator(rs->integrator) ? "mutations" : "camera samples");
-    free(per_rank);
-  }
-  fprintf(stderr,
-          "lmc: %s %dx%d, %lld spp (%lld samples) in %.2f s (load %.2f s), %.3g rays, "
-          "%.3g Mrays/s%s%s\n",
-          rs->integrator, f.width, f.height, (long long)st.passes, (long long)st.samples,
-          st.seconds, t_load, (double)st.rays, st.rays / fmax(st.seconds, 1e-9) / 1e6,
-          st.interrupted ? ", interrupted" : "", st.timed_out ? ", time limit reached" : "");
-  if (st.nan_samples > 0)
-    fprintf(stderr, "lmc: dropped %lld non-finite samples\n", (long long)st.nan_samples);
-  if (ok) printf("wrote %s\nwrote %s\n", out_exr, out_png);
+  int code = render__finish(s, rs, &f, &st, per_rank, out_exr, out_png, sizeof out_png, exposure,
+                            scene_path, t_load);
+  free(per_rank);
   film_free(&f);
-  if (!ok) return EXIT_FAIL;
-  if (st.interrupted) return render_stop_signal() == SIGTERM ? EXIT_SIGTERM : EXIT_SIGINT;
-  if (black && rs->strict) {
-    fprintf(stderr, "lmc: --strict: the image is black\n");
-    return EXIT_BADINPUT;
+  if (dist_active()) {
+    double c = code;
+    dist_broadcast(&c, 1);
   }
-  return EXIT_OK;
+  return code;
 }
 
 /* What the command line gives the render besides the flag tables. */

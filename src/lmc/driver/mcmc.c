@@ -547,9 +547,29 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
   return LMC_OK;
 }
 
+/* The scene targets' counters of every chain summed over the ranks, and
+ * the integrator's own statistics shared (method.h), on every rank. */
+static void mcmc__share_stats(mcmc_render *R, mc_counts *OUT) {
+  mc_counts c = {0};
+  for (int i = 0; i < R->n_slots; i++) {
+    const mc_chain *ch = R->slots[i].chain;
+    if (!ch || !mcmc_chain_here(i)) continue;
+    const mcmc_family *F = &R->fam[R->slots[i].family];
+    mc_space_counts(F->sf, ch->scratch, &c);
+    mc_space_counts(F->sf, ch->scratch_alt, &c);
+  }
+  if (dist_active()) {
+    int64_t v[3] = {c.grad_evals, c.hess_evals, c.nan_samples};
+    dist_allsum_i64(v, 3);
+    c.grad_evals = v[0], c.hess_evals = v[1], c.nan_samples = v[2];
+    if (R->M->share_stats) R->M->share_stats(R->mrun);
+  }
+  *OUT = c;
+}
+
 /* Statistics (stderr): per kernel, per family of a per-length space,
  * mutations per second, b; then the integrator's. */
-static void mcmc__report(mcmc_render *R) {
+static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
   const char *names[MC_MAX_KERNELS] = {0};
   mc_kernel_stats tot[MC_MAX_KERNELS];
   memset(tot, 0, sizeof tot);
@@ -616,13 +636,10 @@ static void mcmc__report(mcmc_render *R) {
   if (overflow > 0)
     fprintf(stderr, "lmc: %lld coordinates drawn past the state's blocks\n", (long long)overflow);
   if (R->M->report) {
-    if (dist_active())
-      fprintf(stderr, "lmc: %s's own lines below count rank 0's %d of the %d chains\n",
-              R->M->name, (R->n_slots + dist_size() - 1) / dist_size(), R->n_slots);
     mc_chain **chains = malloc((size_t)R->n_slots * sizeof *chains);
     if (chains) {
       for (int i = 0; i < R->n_slots; i++) chains[i] = R->slots[i].chain;
-      R->M->report(R->mrun, chains, R->n_slots, R->chain_seconds);
+      R->M->report(R->mrun, chains, R->n_slots, R->chain_seconds, counts);
       free(chains);
     }
   }
@@ -712,7 +729,11 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   } else if (!status) {
     status = mcmc__start_chains(&R, err);
     if (!status) status = mcmc__rounds(&R, err);
-    if (!status && !rs->quiet && dist_rank() == 0) mcmc__report(&R);
+    if (!status) {
+      mc_counts counts;
+      mcmc__share_stats(&R, &counts);
+      if (!rs->quiet && dist_rank() == 0) mcmc__report(&R, &counts);
+    }
   }
   if (!status) mcmc__count(&R);
   progress_end(&R.bar);

@@ -84,8 +84,17 @@ typedef struct mc_method {
   int (*after_round)(void *run, int64_t done, int64_t budget, double elapsed,
                      double chains_elapsed);
   void (*note_restart_chain)(void *run, const mc_chain *c);
-  /* Statistics lines (stderr) after the driver's. */
-  void (*report)(void *run, mc_chain *const *chains, int n, double chain_seconds);
+  /* Over several MPI ranks, once the chains have run: every rank calls it
+   * (collective, render/dist.h) to sum into every rank what report counts
+   * per chain beyond mc_chain's counters; a chain's own counters are
+   * non-zero only on the rank that stepped it, so dist_allsum_i64 over
+   * all chains' gives the totals. */
+  void (*share_stats)(void *run);
+  /* Statistics lines (stderr) after the driver's, on rank 0; counts: the
+   * scene targets' counters (evaluations with gradients and Hessians) of
+   * every chain, summed over the ranks. */
+  void (*report)(void *run, mc_chain *const *chains, int n, double chain_seconds,
+                 const mc_counts *counts);
 } mc_method;
 
 /* Whether chain i runs in this process. Over several MPI ranks

@@ -15,10 +15,12 @@
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "lmc/kernels/h2mc.h"
 #include "lmc/kernels/lmc_kernel.h"
 #include "lmc/driver/method.h"
+#include "render/dist.h"
 
 #define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
 
@@ -113,7 +115,22 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
   return n;
 }
 
-static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_seconds) {
+/* Every chain's kernel counters summed over the ranks (method.h). */
+static void h2mc__share_stats(void *r) {
+  h2mc_run *run = r;
+  enum { W = sizeof(h2mc_stats) / sizeof(int64_t) };
+  _Static_assert(sizeof(h2mc_stats) == W * sizeof(int64_t), "h2mc_stats holds int64_t only");
+  int64_t *buf = malloc((size_t)(run->n > 0 ? run->n : 1) * W * sizeof *buf);
+  if (!buf) dist_abort(1); /* (collective: the others would wait) */
+  for (int i = 0; i < run->n; i++) memcpy(buf + (size_t)i * W, &run->h2[i].st, sizeof(h2mc_stats));
+  dist_allsum_i64(buf, (size_t)run->n * W);
+  for (int i = 0; i < run->n; i++) memcpy(&run->h2[i].st, buf + (size_t)i * W, sizeof(h2mc_stats));
+  free(buf);
+}
+
+static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_seconds,
+                         const mc_counts *counts) {
+  (void)chains, (void)n;
   const h2mc_run *run = r;
   fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, iso %g, light-triangle step scale %g\n",
           run->space->name, run->n > 0 ? run->h2[0].p.sigma : 0.0,
@@ -124,9 +141,7 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
     hp += run->h2[i].st.proposed, hm += run->h2[i].st.model;
     ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail, hb += run->h2[i].st.built;
   }
-  mc_counts c = {0};
-  for (int i = 0; i < n && i < run->n; i++)
-    mc_space_counts(&run->space->fam[run->chain_fam[i]], chains[i]->scratch, &c);
+  const mc_counts c = *counts;
   fprintf(stderr,
           "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
           "%.1f%% outside the unit cube (rejected unevaluated), %.2f Gaussians built per proposal "
@@ -157,5 +172,6 @@ const mc_method mc_method_h2mc = {
     .destroy = h2mc__destroy,
     .set_chains = h2mc__set_chains,
     .chain_kernels = h2mc__chain_kernels,
+    .share_stats = h2mc__share_stats,
     .report = h2mc__report,
 };

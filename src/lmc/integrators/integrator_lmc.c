@@ -120,6 +120,7 @@ static void lmc_run_destroy(lmc_run *run) {
 static int64_t lmc__grad_evals(const lmc_run *run, const mc_chain *c) {
   mc_counts n = {0};
   mc_space_counts(run->fam[0].sf, c->scratch, &n);
+  mc_space_counts(run->fam[0].sf, c->scratch_alt, &n);
   return n.grad_evals;
 }
 
@@ -365,7 +366,31 @@ static int lmc__key_length(const lmc_run *run, const mc_space_family *SF, int fa
   return len >= 0 && len < MAXL ? len : MAXL - 1;
 }
 
-static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds) {
+/* Every chain's kernel counters and stage 1's gradient evaluations summed
+ * over the ranks (method.h). */
+static void lmc_run_share_stats(lmc_run *run) {
+  enum { WM = sizeof(lmc_mala_stats) / sizeof(int64_t), WC = sizeof(lmc_cwalk_stats) / sizeof(int64_t) };
+  _Static_assert(sizeof(lmc_mala_stats) == WM * sizeof(int64_t), "int64_t only");
+  _Static_assert(sizeof(lmc_cwalk_stats) == WC * sizeof(int64_t), "int64_t only");
+  size_t n = (size_t)run->n, w = WM + (run->cwalk ? WC : 0);
+  int64_t *buf = malloc((n * w + 1) * sizeof *buf);
+  if (!buf) dist_abort(1); /* (collective: the others would wait) */
+  for (size_t i = 0; i < n; i++) {
+    memcpy(buf + i * w, &run->mala[i].st, sizeof(lmc_mala_stats));
+    if (run->cwalk) memcpy(buf + i * w + WM, &run->cwalk[i].st, sizeof(lmc_cwalk_stats));
+  }
+  buf[n * w] = run->stage1_grad_evals;
+  dist_allsum_i64(buf, n * w + 1);
+  for (size_t i = 0; i < n; i++) {
+    memcpy(&run->mala[i].st, buf + i * w, sizeof(lmc_mala_stats));
+    if (run->cwalk) memcpy(&run->cwalk[i].st, buf + i * w + WM, sizeof(lmc_cwalk_stats));
+  }
+  run->stage1_grad_evals = buf[n * w];
+  free(buf);
+}
+
+static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds,
+                           const mc_counts *counts) {
   static const char *mode[] = {"none", "adam (biased)", "diminish", "cache"};
   int adapt = run->ls.adapt >= 0 && run->ls.adapt <= 3 ? (int)run->ls.adapt : 0;
   const lmc__family *F0 = &run->fam[0];
@@ -386,7 +411,8 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
       entries += gcache_size(c);
       bytes += (double)gcache_bytes(c);
     }
-    int64_t cw_pr = 0, cw_ac = 0, s2_lookups = 0, s2_hits = 0, s2_grads = -run->stage1_grad_evals;
+    int64_t cw_pr = 0, cw_ac = 0, s2_lookups = 0, s2_hits = 0;
+    int64_t s2_grads = counts->grad_evals - run->stage1_grad_evals;
     for (int i = 0; i < run->n; i++) {
       if (run->cwalk_on) {
         s2_lookups += run->cwalk[i].st.lookups, s2_hits += run->cwalk[i].st.hits;
@@ -394,7 +420,6 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
       }
       s2_lookups += run->mala[i].st.lookups, s2_hits += run->mala[i].st.lookup_hits;
     }
-    for (int i = 0; i < n; i++) s2_grads += lmc__grad_evals(run, chains[i]);
     double s2_rate = lmc__steps(chains, n) /
                      fmax(1e-9, chain_seconds - run->stage1_seconds - run->build_seconds);
     char what[96];
@@ -416,7 +441,7 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
   }
   /* Per proposal type and path length (of the state proposed from). */
   int64_t pr[2][MAXL] = {{0}}, ac[2][MAXL] = {{0}};
-  int64_t stalled = 0, grad_evals = 0;
+  int64_t stalled = 0, grad_evals = counts->grad_evals;
   for (int i = 0; i < run->n; i++) {
     const lmc_mala_stats *st = &run->mala[i].st;
     const mc_space_family *SF = run->fam[run->chain_fam[i]].sf;
@@ -431,7 +456,6 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
   }
   int64_t regrad = 0, screened = 0, passed = 0;
   for (int i = 0; i < n; i++) {
-    grad_evals += lmc__grad_evals(run, chains[i]);
     regrad += chains[i]->regrad;
     screened += chains[i]->screened;
     passed += chains[i]->screen_passed;
@@ -530,8 +554,10 @@ static int lmc__m_after_round(void *run, int64_t done, int64_t budget, double el
   return lmc_run_after_round(run, done, budget, elapsed, chains_elapsed);
 }
 static void lmc__m_note_restart(void *run, const mc_chain *c) { lmc_run_note_stage1_chain(run, c); }
-static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chain_seconds) {
-  lmc_run_report(run, chains, n, chain_seconds);
+static void lmc__m_share_stats(void *run) { lmc_run_share_stats(run); }
+static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chain_seconds,
+                          const mc_counts *counts) {
+  lmc_run_report(run, chains, n, chain_seconds, counts);
 }
 
 const mc_method mc_method_lmc = {
@@ -545,5 +571,6 @@ const mc_method mc_method_lmc = {
     .round_limit = lmc__m_round_limit,
     .after_round = lmc__m_after_round,
     .note_restart_chain = lmc__m_note_restart,
+    .share_stats = lmc__m_share_stats,
     .report = lmc__m_report,
 };
