@@ -43,30 +43,25 @@
  * with room to spare. The cost of an evaluation scales with the n actually
  * used, never with the capacity.
  *
- * Second order. An arena made with ad_arena_init2 gives every dual the
- * Hessian H = d^2 v / du^2 as well, stored after the gradient in the same
- * tangent block: the lower triangle, row by row (entry (i, j), i <= j, at
- * j (j + 1) / 2 + i), padded to AD_LANES, then a header lane group whose
- * first double is the dual's width w: the number of leading variables its
- * value may depend on (0 for constants, index + 1 for variable `index`, the
- * largest width of the operands for a result). Only the first pad(w)
- * gradient entries and pad(w (w + 1) / 2) Hessian entries of a block are
- * written and read (zero beyond w); with this layout a width-w Hessian is
- * the first entries of the block. Variables enter a path evaluation in
- * the order it draws its numbers, so the dual of an early vertex has a
- * small width, and an operation costs O(w^2), not O(n^2). The chain rule for
- * f(x, y) is
- *   H_f = f_x H_x + f_y H_y                                   (linear part)
- *       + f_xx g_x g_x^T + f_xy (g_x g_y^T + g_y g_x^T) + f_yy g_y g_y^T
- * with g the gradients. The linear part is the first-order rule applied to
- * the whole block, so the kernels below serve both orders; every operation
- * adds its second-order terms after the linear kernel through ad__h_sq and
- * ad__h_sym, which do nothing in a first-order arena (AD__H2 is false), so
- * the first-order cost and results do not change. One implementation of
- * each path formula thus gives value, gradient and, on request, Hessian
- * (Griewank and Walther, chapter 13, "Taylor and tensor coefficients":
- * the second-order forward mode with dense Hessians). Its cost grows as n^2
- * per nonlinear operation, so AD_H_CAPACITY = 96 bounds n there.
+ * Second order. An arena made with ad_arena_init2 also records a tape from
+ * which ad_hessian gives the Hessian H = d^2 v / du^2 of any of its duals.
+ * Every tangent block then ends in a header lane group: the dual's width w
+ * (the number of leading variables its value may depend on: 0 for
+ * constants, index + 1 for variable `index`, the largest width of the
+ * operands for a result; only the first pad(w) gradient entries are
+ * written and read) and its node on the tape. Variables enter a path
+ * evaluation in the order it draws its numbers, so the dual of an early
+ * vertex has a small width and costs little. Each operation appends a
+ * term per operand (its partial f_x) and one per non-zero second
+ * derivative (f_xx through ad__h_sq, f_xy through ad__h_sym, added after
+ * the linear kernel; nothing in a first-order arena, whose cost and results
+ * do not change). ad_hessian then sweeps the tape backwards
+ * (forward-over-reverse: the adjoints and their tangents, Griewank and
+ * Walther, chapter 5), O(n) per term, where the second-order forward mode
+ * this replaced carried w (w + 1) / 2 Hessian entries through every
+ * operation. The arena keeps every dual until it is reset (the sweep reads
+ * the operands' gradients), so rewinds do nothing there and it must hold a
+ * whole evaluation; AD_H_CAPACITY = 96 bounds n.
  *
  * Model: Ceres' Jet (value plus tangent, derivative rule per operation,
  * comparisons on the value); see also Griewank and Walther, "Evaluating
@@ -98,25 +93,46 @@ typedef struct ad_arena {
   size_t glanes; /* doubles of the gradient: n rounded up to AD_LANES */
   size_t woff;   /* second order: offset of the width in a block (after the Hessian) */
   int n;         /* tangent length given to ad_arena_init */
-  int order;     /* 1: gradients; 2: gradients and Hessians */
+  int order;     /* 1: gradients; 2: gradients and the tape for Hessians */
   int overflow;  /* set when an allocation did not fit */
+  /* Second order: the tape and the reverse sweep's storage, in buf past
+   * the tangents (doubles throughout; node numbers are exact in them). */
+  double *node_at; /* node -> offset in buf of its tangent block */
+  double *terms;   /* AD__TERM doubles per term (ad__term) */
+  double *adj;     /* the sweep: adjoint per node */
+  double *bw;      /* ... padded width of its B vector (0: untouched) */
+  double *bv;      /* ... B vectors, glanes doubles per node */
+  size_t n_nodes, node_cap, n_terms, term_cap;
 } ad_arena;
 
 /* n rounded up to a multiple of AD_LANES. */
 static inline size_t ad__pad(size_t n) { return (n + AD_LANES - 1) & ~(size_t)(AD_LANES - 1); }
 
-/* Doubles of one tangent block of an arena of tangent length n and order. */
+/* Doubles of one tangent block of an arena of tangent length n and order:
+ * the gradient, and at second order a header lane group (width, node). */
 static inline size_t ad__block(int n, int order) {
   size_t m = (size_t)(n < 0 ? 0 : n);
-  return ad__pad(m) + (order == 2 ? ad__pad(m * (m + 1) / 2) + AD_LANES : 0);
+  return ad__pad(m) + (order == 2 ? AD_LANES : 0);
+}
+
+#define AD__TERM 4      /* doubles per term of the tape: c, node, x, 8 y + kind */
+#define AD__TERMS_PER 4 /* terms per dual the tape has room for (2.3 on paths) */
+
+/* Second order: doubles per dual of the arena's storage (its tangent
+ * block, node table, terms, and the sweep's adjoint, width and B). */
+static inline size_t ad__per2(int n) {
+  size_t g = ad__pad((size_t)(n < 0 ? 0 : n));
+  return ad__block(n, 2) + 1 + AD__TERM * AD__TERMS_PER + 2 + g;
 }
 
 /* Doubles of arena storage needed for `count` duals of tangent length n
  * (plus the shared zero tangent). */
 static inline size_t ad_arena_size(int n, size_t count) { return ad__block(n, 1) * (count + 1); }
 
-/* The same for a second-order arena (gradients and Hessians). */
-static inline size_t ad_arena_size2(int n, size_t count) { return ad__block(n, 2) * (count + 1); }
+/* The same for a second-order arena (gradients, the tape and the sweep's
+ * storage for ad_hessian); count is every dual of an evaluation, as a
+ * second-order arena never rewinds. */
+static inline size_t ad_arena_size2(int n, size_t count) { return ad__per2(n) * (count + 1); }
 
 static inline int ad__arena_init(ad_arena *A, double *buf, size_t cap, int n, int order) {
   A->buf = buf;
@@ -125,7 +141,23 @@ static inline int ad__arena_init(ad_arena *A, double *buf, size_t cap, int n, in
   A->order = order;
   A->glanes = ad__pad((size_t)n);
   A->lanes = ad__block(n, order);
-  A->woff = order == 2 ? A->lanes - AD_LANES : 0;
+  A->woff = order == 2 ? A->glanes : 0;
+  A->n_nodes = A->n_terms = A->node_cap = A->term_cap = 0;
+  A->node_at = A->terms = A->adj = A->bw = A->bv = NULL;
+  if (order == 2) {
+    /* buf: the tangents of node_cap duals, then the node table, the
+     * terms, the adjoints, the widths and the B vectors. */
+    size_t nodes = cap / ad__per2(n);
+    if (nodes < 2) return -1;
+    A->cap = cap = nodes * A->lanes;
+    A->node_cap = nodes;
+    A->term_cap = nodes * AD__TERMS_PER;
+    A->node_at = buf + cap;
+    A->terms = A->node_at + nodes;
+    A->adj = A->terms + AD__TERM * A->term_cap;
+    A->bw = A->adj + nodes;
+    A->bv = A->bw + nodes;
+  }
   if (cap < A->lanes) return -1;
   memset(buf, 0, A->lanes * sizeof(double));
   A->base = A->lanes;
@@ -153,6 +185,7 @@ static inline int ad_arena_init2(ad_arena *A, double *buf, size_t cap, int n) {
 static inline void ad_arena_reset(ad_arena *A) {
   A->top = A->base;
   A->overflow = 0;
+  A->n_nodes = A->n_terms = 0;
   A->lanes = ad__block(A->n, A->order);
 }
 
@@ -165,7 +198,13 @@ static inline int ad_arena_n(const ad_arena *A) { return A->overflow ? 0 : A->n;
 /* Position to rewind to; duals made after it die at ad_arena_rewind. */
 static inline size_t ad_arena_mark(const ad_arena *A) { return A->top; }
 
+/* 1 when A keeps every dual until ad_arena_reset (second order: the
+ * reverse sweep reads the tangents of every operation); rewinds then do
+ * nothing. */
+static inline int ad_arena_keeps_all(const ad_arena *A) { return A->order == 2; }
+
 static inline void ad_arena_rewind(ad_arena *A, size_t mark) {
+  if (ad_arena_keeps_all(A)) return;
   if (mark >= A->base && mark <= A->top) A->top = mark;
 }
 
@@ -173,7 +212,7 @@ static inline void ad_arena_rewind(ad_arena *A, size_t mark) {
  * above it. Typical use: one bounce of a path makes hundreds of temporaries
  * and hands one throughput to the next bounce. x must come from A. */
 static inline ad ad_arena_rewind_keep(ad_arena *A, size_t mark, ad x) {
-  if (mark < A->base || mark > A->top) return x;
+  if (ad_arena_keeps_all(A) || mark < A->base || mark > A->top) return x;
   size_t at = (size_t)(x.d - A->buf);
   if (at < mark) {
     A->top = mark;
@@ -196,6 +235,12 @@ static inline double *ad__alloc(ad_arena *A) {
   }
   double *r = A->buf + A->top;
   A->top += A->lanes;
+  if (A->order == 2 && A->lanes) {
+    /* A new node of the tape (at most one per block: never past node_cap). */
+    size_t k = ++A->n_nodes;
+    A->node_at[k] = (double)(size_t)(r - A->buf);
+    r[A->woff + 1] = (double)k;
+  }
   return r;
 }
 
@@ -256,28 +301,41 @@ static inline void ad__k6(size_t nb, double *restrict r, const double c[6],
                          c5 * g[k_]);
 }
 
-/* True when A carries Hessians (second order, no overflow). */
+/* True when A records the tape for Hessians (second order, no overflow). */
 #define AD__H2(A) ((A)->order == 2 && (A)->lanes != 0)
-
-/* w (w + 1) / 2: Hessian entries of width w. */
-static inline size_t ad__tri(size_t w) { return w * (w + 1) / 2; }
 
 /* Width of a tangent of a second-order arena (AD__H2). */
 static inline size_t ad__w(const ad_arena *A, const double *d) { return (size_t)d[A->woff]; }
 
-/* Second order: zeroes r's gradient and Hessian entries from width `from`
- * up to width `to` (padded lengths) and gives r width `to`. */
+/* Its node on the tape (0: a constant, the shared zero tangent). */
+static inline size_t ad__node(const ad_arena *A, const double *d) {
+  return (size_t)d[A->woff + 1];
+}
+
+/* Second order: zeroes r's gradient entries from width `from` up to
+ * width `to` (padded lengths) and gives r width `to`. */
 static inline void ad__zero_w(const ad_arena *A, double *r, size_t from, size_t to) {
   for (size_t k = ad__pad(from); k < ad__pad(to); k++) r[k] = 0.0;
-  double *H = r + A->glanes;
-  for (size_t k = ad__pad(ad__tri(from)); k < ad__pad(ad__tri(to)); k++) H[k] = 0.0;
   r[A->woff] = (double)to;
 }
 
-/* Second order: r = sum_i c_i d_i over m <= 6 tangents, gradient and
- * Hessian, each over its operands' widths: the part every operand covers
- * in one pass, the rest operand by operand. */
-static inline void ad__lin_w(const ad_arena *A, double *restrict r, int m, const double *c,
+/* Appends a term to the tape: node k's result depends on node x (and y)
+ * as kind says, with coefficient c. A full tape counts as an overflow. */
+enum { AD__LIN, AD__SQ, AD__SYM, AD__VAR, AD__SEED };
+static inline void ad__term(ad_arena *A, int kind, double c, size_t k, size_t x, size_t y) {
+  if (A->n_terms >= A->term_cap) {
+    A->overflow = 1;
+    A->lanes = 0;
+    return;
+  }
+  double *t = A->terms + AD__TERM * A->n_terms++;
+  t[0] = c, t[1] = (double)k, t[2] = (double)x, t[3] = (double)(8 * y + (size_t)kind);
+}
+
+/* Second order: r = sum_i c_i d_i over m <= 6 tangents, each over its
+ * operand's width (the part every operand covers in one pass, the rest
+ * operand by operand), and a linear term on the tape per operand. */
+static inline void ad__lin_w(ad_arena *A, double *restrict r, int m, const double *c,
                              const double *const *d) {
   size_t w[6], lo = (size_t)-1, hi = 0;
   for (int i = 0; i < m; i++) {
@@ -285,32 +343,31 @@ static inline void ad__lin_w(const ad_arena *A, double *restrict r, int m, const
     if (w[i] < lo) lo = w[i];
     if (w[i] > hi) hi = w[i];
   }
-  for (int part = 0; part < 2; part++) {
-    size_t off = part ? A->glanes : 0;
-    size_t a = part ? ad__pad(ad__tri(lo)) : ad__pad(lo);
-    size_t b = part ? ad__pad(ad__tri(hi)) : ad__pad(hi);
-    double *restrict rr = r + off;
-    size_t nb = a / AD_LANES;
-    switch (m) {
-    case 1: ad__k1(nb, rr, c[0], d[0] + off); break;
-    case 2: ad__k2(nb, rr, c[0], d[0] + off, c[1], d[1] + off); break;
-    case 3: ad__k3(nb, rr, c[0], d[0] + off, c[1], d[1] + off, c[2], d[2] + off); break;
-    case 4: ad__k4(nb, rr, c, d[0] + off, d[1] + off, d[2] + off, d[3] + off); break;
-    default: ad__k6(nb, rr, c, d[0] + off, d[1] + off, d[2] + off, d[3] + off, d[4] + off, d[5] + off);
-    }
-    if (b > a) {
-      /* Summed in the operands' order, as the fused kernels do (the same
-       * value up to the sign of a zero). */
-      for (size_t k = a; k < b; k += AD_LANES) AD__BLOCK(k, rr[k_] = 0.0);
-      for (int i = 0; i < m; i++) {
-        size_t e = part ? ad__pad(ad__tri(w[i])) : ad__pad(w[i]);
-        const double *restrict di = d[i] + off;
-        double ci = c[i];
-        for (size_t k = a; k < e; k += AD_LANES) AD__BLOCK(k, rr[k_] += ci * di[k_]);
-      }
+  size_t a = ad__pad(lo), b = ad__pad(hi), nb = a / AD_LANES;
+  switch (m) {
+  case 1: ad__k1(nb, r, c[0], d[0]); break;
+  case 2: ad__k2(nb, r, c[0], d[0], c[1], d[1]); break;
+  case 3: ad__k3(nb, r, c[0], d[0], c[1], d[1], c[2], d[2]); break;
+  case 4: ad__k4(nb, r, c, d[0], d[1], d[2], d[3]); break;
+  default: ad__k6(nb, r, c, d[0], d[1], d[2], d[3], d[4], d[5]);
+  }
+  if (b > a) {
+    /* Summed in the operands' order, as the fused kernels do (the same
+     * value up to the sign of a zero). */
+    for (size_t k = a; k < b; k += AD_LANES) AD__BLOCK(k, r[k_] = 0.0);
+    for (int i = 0; i < m; i++) {
+      size_t e = ad__pad(w[i]);
+      const double *restrict di = d[i];
+      double ci = c[i];
+      for (size_t k = a; k < e; k += AD_LANES) AD__BLOCK(k, r[k_] += ci * di[k_]);
     }
   }
   r[A->woff] = (double)hi;
+  size_t kr = ad__node(A, r);
+  for (int i = 0; i < m; i++) {
+    size_t x = ad__node(A, d[i]);
+    if (x && c[i] != 0.0) ad__term(A, AD__LIN, c[i], kr, x, 0);
+  }
 }
 
 /* (v, ca d_a) */
@@ -376,64 +433,21 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
 }
 
 /* ---- Second-order terms ---------------------------------------------------
- * Added to a freshly made result r after its linear kernel; r's block is
- * the caller's own (just allocated), so writing through it is safe. */
+ * Recorded for a freshly made result r after its linear kernel, before
+ * anything uses r (the reverse sweep relies on that order). */
 
-/* A loop GCC should vectorise (OpenMP's simd; clang, which reports the
- * loops it cannot vectorise as warnings, goes without). */
-#if defined(_OPENMP) && !defined(__clang__)
-#define AD__SIMD _Pragma("omp simd")
-#else
-#define AD__SIMD
-#endif
-
-/* Widens r (fresh, the caller's own) to width w: zero gradient and
- * Hessian entries up to w's padded lengths. */
-static inline void ad__widen(const ad_arena *A, double *r, size_t w) {
-  size_t wr = ad__w(A, r);
-  if (wr >= w) return;
-  ad__zero_w(A, r, wr, w);
+/* r's second derivative f_xx = c: H_r gains c g_x g_x^T. */
+static inline void ad__h_sq(ad_arena *A, ad r, double c, ad x) {
+  if (!AD__H2(A) || c == 0.0) return;
+  size_t nx = ad__node(A, x.d);
+  if (nx) ad__term(A, AD__SQ, c, ad__node(A, r.d), nx, 0);
 }
 
-/* H_r += c g_x g_x^T (a second derivative f_xx = c). */
-static inline void ad__h_sq(const ad_arena *A, ad r, double c, ad x) {
+/* r's mixed second derivative f_xy = c: H_r gains c (g_x g_y^T + g_y g_x^T). */
+static inline void ad__h_sym(ad_arena *A, ad r, double c, ad x, ad y) {
   if (!AD__H2(A) || c == 0.0) return;
-  size_t w = ad__w(A, x.d);
-  ad__widen(A, (double *)r.d, w);
-  double *restrict H = (double *)r.d + A->glanes;
-  const double *restrict g = x.d;
-  for (size_t j = 0; j < w; j++) {
-    double cj = c * g[j];
-    if (cj == 0.0) continue;
-    double *restrict row = H + ad__tri(j);
-    AD__SIMD
-    for (size_t i = 0; i <= j; i++) row[i] += cj * g[i];
-  }
-}
-
-/* H_r += c (g_x g_y^T + g_y g_x^T) (a mixed second derivative f_xy = c). */
-static inline void ad__h_sym(const ad_arena *A, ad r, double c, ad x, ad y) {
-  if (!AD__H2(A) || c == 0.0) return;
-  size_t wx = ad__w(A, x.d), wy = ad__w(A, y.d), w = wx > wy ? wx : wy;
-  ad__widen(A, (double *)r.d, w);
-  double *restrict H = (double *)r.d + A->glanes;
-  /* The narrower gradient, zero up to w (its block holds junk past its width). */
-  double pad[AD_H_CAPACITY];
-  const double *gx = x.d, *gy = y.d;
-  if (wx < w) {
-    for (size_t k = 0; k < w; k++) pad[k] = k < wx ? gx[k] : 0.0;
-    gx = pad;
-  } else if (wy < w) {
-    for (size_t k = 0; k < w; k++) pad[k] = k < wy ? gy[k] : 0.0;
-    gy = pad;
-  }
-  for (size_t j = 0; j < w; j++) {
-    double a = c * gx[j], b = c * gy[j];
-    if (a == 0.0 && b == 0.0) continue;
-    double *restrict row = H + ad__tri(j);
-    AD__SIMD
-    for (size_t i = 0; i <= j; i++) row[i] += a * gy[i] + b * gx[i];
-  }
+  size_t nx = ad__node(A, x.d), ny = ad__node(A, y.d);
+  if (nx && ny) ad__term(A, AD__SYM, c, ad__node(A, r.d), nx, ny);
 }
 
 /* A unary operation's result with f' = c and f'' = h: (v, c d_a), plus
@@ -456,7 +470,10 @@ static inline ad ad_var(ad_arena *A, double v, int index) {
   if (AD__H2(A)) {
     size_t w = index >= 0 && index < A->n ? (size_t)index + 1 : 0;
     ad__zero_w(A, r, 0, w);
-    if (w) r[index] = 1.0;
+    if (w) {
+      r[index] = 1.0;
+      ad__term(A, AD__VAR, 1.0, ad__node(A, r), (size_t)index, 0);
+    }
     return (ad){v, r};
   }
   size_t m = A->lanes;
@@ -473,7 +490,10 @@ static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
     size_t w = (size_t)A->n;
     while (w > 0 && tangent[w - 1] == 0.0) w--;
     ad__zero_w(A, r, 0, w);
-    if (w) memcpy(r, tangent, w * sizeof(double));
+    if (w) {
+      memcpy(r, tangent, w * sizeof(double));
+      ad__term(A, AD__SEED, 1.0, ad__node(A, r), 0, 0);
+    }
     return (ad){v, r};
   }
   size_t m = A->lanes;
@@ -483,10 +503,10 @@ static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
   return (ad){v, r};
 }
 
-/* Dual with value v and the whole tangent block (gradient and, in a
- * second-order arena, Hessian: A->lanes doubles) copied from block, which
- * may lie in A above the top or outside it. For duals saved across a
- * rewind; ad_make would drop their Hessians. */
+/* Dual with value v and the whole tangent block (A->lanes doubles; at
+ * second order its header too, so the copy is the same node of the tape)
+ * copied from block, which may lie in A above the top or outside it. For
+ * duals saved across a rewind. */
 static inline ad ad_from_block(ad_arena *A, double v, const double *block) {
   double *r = ad__alloc(A);
   if (A->lanes) memmove(r, block, A->lanes * sizeof(double));
@@ -497,18 +517,97 @@ static inline ad ad_from_block(ad_arena *A, double v, const double *block) {
  * storage at the top of A; x must come from A. */
 static inline ad ad_copy(ad_arena *A, ad x) { return ad_from_block(A, x.v, x.d); }
 
-/* Second derivative d^2 x / du_i du_j of a dual from a second-order arena
- * (0 outside [0, n) or in a first-order arena). */
-static inline double ad_hess(const ad_arena *A, ad x, int i, int j) {
-  int n = ad_arena_n(A);
-  if (A->order != 2 || i < 0 || j < 0 || i >= n || j >= n) return 0.0;
-  if (i > j) {
-    int t = i;
-    i = j;
-    j = t;
+/* B_x (the sweep's vector of node x) widened to w padded entries: the
+ * entries past its width zeroed first. */
+static inline double *ad__bgrow(ad_arena *A, size_t x, size_t w) {
+  double *b = A->bv + x * A->glanes;
+  size_t have = (size_t)A->bw[x];
+  if (have < w) {
+    for (size_t k = have; k < w; k += AD_LANES) AD__BLOCK(k, b[k_] = 0.0);
+    A->bw[x] = (double)w;
   }
-  if ((size_t)j >= ad__w(A, x.d)) return 0.0;
-  return x.d[A->glanes + ad__tri((size_t)j) + (size_t)i];
+  return b;
+}
+
+/* b[0 .. w) += c g[0 .. w), w a multiple of AD_LANES. */
+static inline void ad__axpy(size_t w, double *restrict b, double c, const double *restrict g) {
+  for (size_t k = 0; k < w; k += AD_LANES) AD__BLOCK(k, b[k_] += c * g[k_]);
+}
+
+/* The tangent block of node x (second order). */
+static inline const double *ad__block_of(const ad_arena *A, size_t x) {
+  return A->buf + (size_t)A->node_at[x];
+}
+
+/* The Hessian d^2 x / du^2 of a dual of a second-order arena into H (n x n,
+ * row-major, symmetric; n = ad_arena_n). Returns 0, or -1 (H untouched)
+ * for a first-order arena or after an overflow.
+ *
+ * The reverse sweep over the tape (forward-over-reverse, Griewank and
+ * Walther, chapter 5): with a_k = dx / dv_k, the adjoint of node k, and
+ * B_k = da_k / du its tangent, a term of node k whose result depends on x
+ * with coefficient c (a linear term) gives a_x += c a_k and
+ * B_x += c B_k; a second derivative f_xx = c gives B_x += a_k c g_x, a
+ * mixed one f_xy = c gives B_x += a_k c g_y and B_y += a_k c g_x (g the
+ * forward tangents); variable i gives row i of the Hessian, B_i, and a
+ * dual made with ad_make (gradient g, Hessian 0) gives g B^T. Terms are
+ * visited from the last, so every term of a node's users comes before the
+ * node's own. A term costs O(n), the Hessian's entries O(n^2) once. */
+static inline int ad_hessian(ad_arena *A, ad x, double *H) {
+  if (A->order != 2 || !ad_arena_ok(A)) return -1;
+  size_t n = (size_t)A->n, g = A->glanes;
+  memset(H, 0, n * n * sizeof *H);
+  size_t k0 = ad__node(A, x.d);
+  if (k0 == 0) return 0;
+  size_t nn = A->n_nodes + 1;
+  memset(A->adj, 0, nn * sizeof *A->adj);
+  memset(A->bw, 0, nn * sizeof *A->bw);
+  A->adj[k0] = 1.0;
+  for (size_t t = A->n_terms; t-- > 0;) {
+    const double *T = A->terms + AD__TERM * t;
+    size_t k = (size_t)T[1];
+    if (k > k0) continue; /* made after x: x does not depend on it */
+    double a = A->adj[k];
+    size_t wb = (size_t)A->bw[k];
+    if (a == 0.0 && wb == 0) continue;
+    double c = T[0];
+    size_t xk = (size_t)T[2], yk = (size_t)T[3] >> 3;
+    const double *bk = A->bv + k * g;
+    switch ((int)((size_t)T[3] & 7u)) {
+    case AD__LIN:
+      A->adj[xk] += c * a;
+      if (wb) ad__axpy(wb, ad__bgrow(A, xk, wb), c, bk);
+      break;
+    case AD__SQ:
+      if (a != 0.0) {
+        const double *gx = ad__block_of(A, xk);
+        size_t w = ad__pad(ad__w(A, gx));
+        ad__axpy(w, ad__bgrow(A, xk, w), a * c, gx);
+      }
+      break;
+    case AD__SYM:
+      if (a != 0.0) {
+        const double *gx = ad__block_of(A, xk), *gy = ad__block_of(A, yk);
+        size_t wx = ad__pad(ad__w(A, gx)), wy = ad__pad(ad__w(A, gy));
+        ad__axpy(wy, ad__bgrow(A, xk, wy), a * c, gy);
+        ad__axpy(wx, ad__bgrow(A, yk, wx), a * c, gx);
+      }
+      break;
+    case AD__VAR: /* row xk of the Hessian */
+      for (size_t j = 0; j < wb && j < n; j++) H[xk * n + j] += bk[j];
+      break;
+    default: { /* AD__SEED: g_k B_k^T */
+      const double *gk = ad__block_of(A, k);
+      size_t w = ad__w(A, gk);
+      for (size_t i = 0; i < w && i < n; i++)
+        for (size_t j = 0; j < wb && j < n; j++) H[i * n + j] += gk[i] * bk[j];
+    }
+    }
+  }
+  /* The sum is symmetric; its rounding is not: the mean of both sides. */
+  for (size_t i = 0; i < n; i++)
+    for (size_t j = i + 1; j < n; j++) H[i * n + j] = H[j * n + i] = 0.5 * (H[i * n + j] + H[j * n + i]);
+  return 0;
 }
 
 /* Derivative of x with respect to variable i (0 outside [0, n), and in a

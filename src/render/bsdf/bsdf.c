@@ -299,6 +299,7 @@ int bsdf_is_rough(const bsdf *b, double rough_min) {
  * at least one tangent above the mark (the kept dual it came from did), so
  * each move reads from above what it writes and never overlaps its source. */
 static void bsdf__ad_keep(ad_arena *A, size_t mark, ad **xs, int count) {
+  if (ad_arena_keeps_all(A)) return; /* second order: no rewinds */
   if (ad_arena_n(A) == 0 || mark < A->base || mark > A->top) {
     ad_arena_rewind(A, mark);
     return;

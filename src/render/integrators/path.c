@@ -77,7 +77,7 @@ void path_scratch_destroy(path_scratch *ps) {
   if (!ps) return;
   free(ps->arena_buf);
   free(ps->arena2_buf);
-  free(ps->keep2_buf);
+  free(ps->hfull);
   free(ps);
 }
 
@@ -127,24 +127,21 @@ ad path__draw(path__ctx *c, int diff) {
   return ad_const(c->A, u);
 }
 
-/* Makes the second-order arena and keep buffer of ps large enough for
- * tangent length n; 1 on success, 0 when memory is short (the caller then
- * evaluates the gradient only). */
-static int path__arena2(path_scratch *ps, int n) {
-  size_t cap = ad_arena_size2(n, PATH__ARENA2_DUALS);
-  size_t kcap = ad_arena_size2(n, 0) * PATH__KEEP;
+/* Makes the second-order arena of ps large enough for tangent length n
+ * and `duals` duals (at least the last size); 1 on success, 0 when memory
+ * is short (the caller then evaluates the gradient only). */
+static int path__arena2(path_scratch *ps, int n, size_t duals) {
+  if (duals < ps->arena2_duals) duals = ps->arena2_duals;
+  size_t cap = ad_arena_size2(n, duals);
   if (ps->arena2_cap < cap) {
     double *b = realloc(ps->arena2_buf, cap * sizeof(double));
     if (!b) return 0;
     ps->arena2_buf = b;
     ps->arena2_cap = cap;
   }
-  if (ps->keep2_cap < kcap) {
-    double *b = realloc(ps->keep2_buf, kcap * sizeof(double));
-    if (!b) return 0;
-    ps->keep2_buf = b;
-    ps->keep2_cap = kcap;
-  }
+  if (!ps->hfull) ps->hfull = malloc((size_t)AD_H_CAPACITY * AD_H_CAPACITY * sizeof(double));
+  if (!ps->hfull) return 0;
+  ps->arena2_duals = duals;
   return 1;
 }
 
@@ -153,11 +150,12 @@ static int path__arena2(path_scratch *ps, int n) {
 void path__keep(path__ctx *c, size_t mark, ad *const *v, int n) {
   ad_arena *A = c->A;
   size_t lanes = A->lanes;
+  if (ad_arena_keeps_all(A)) return; /* second order: no rewinds */
   if (lanes == 0 || n > PATH__KEEP) {
     if (lanes == 0) ad_arena_rewind(A, mark);
     return;
   }
-  double *tmp = A->order == 2 ? c->ps->keep2_buf : c->ps->keep_tmp;
+  double *tmp = c->ps->keep_tmp;
   for (int i = 0; i < n; i++) memcpy(tmp + (size_t)i * lanes, v[i]->d, lanes * sizeof(double));
   ad_arena_rewind(A, mark);
   for (int i = 0; i < n; i++) *v[i] = ad_from_block(A, v[i]->v, tmp + (size_t)i * lanes);
@@ -418,14 +416,22 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
   /* Pass 2: the same function on the record, with tangents (and with
    * Hessians in a second-order arena when they are asked for). */
   int n_var = c.n_var;
-  int order2 = want_grad >= PATH_WANT_HESS && n_var <= AD_H_CAPACITY && path__arena2(ps, n_var);
-  path__ctx_init(&c, sc, rs, ps, NULL, 1);
-  c.arg = arg;
-  if (order2)
-    ad_arena_init2(&ps->A, ps->arena2_buf, ps->arena2_cap, n_var);
-  else
-    ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
-  est(&c, &L, &rx, &ry);
+  int order2 = want_grad >= PATH_WANT_HESS && n_var <= AD_H_CAPACITY &&
+               path__arena2(ps, n_var, PATH__ARENA2_DUALS);
+  for (;;) {
+    path__ctx_init(&c, sc, rs, ps, NULL, 1);
+    c.arg = arg;
+    if (order2)
+      ad_arena_init2(&ps->A, ps->arena2_buf, ps->arena2_cap, n_var);
+    else
+      ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
+    est(&c, &L, &rx, &ry);
+    /* A second-order arena keeps every dual of the path: when they do not
+     * fit, again in one four times as large. */
+    if (ad_arena_ok(&ps->A) || !order2 || 4 * ps->arena2_duals > PATH__ARENA2_MAX ||
+        !path__arena2(ps, n_var, 4 * ps->arena2_duals))
+      break;
+  }
   ev->n_diff = n_var;
   if (!ad_arena_ok(&ps->A)) return;
   ad lum = adrgb_luminance(&ps->A, L);
@@ -441,11 +447,11 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
     pc->dry = ad_deriv(A, ry, j);
   }
   ev->grad_ok = ad_arena_ok(&ps->A);
-  if (order2 && ev->grad_ok) {
+  if (order2 && ev->grad_ok && ad_hessian(&ps->A, lum, ps->hfull) == 0) {
     /* path_eval.hlum's layout: the upper triangle row by row. */
     size_t q = 0;
     for (int i = 0; i < n_var; i++)
-      for (int j = i; j < n_var; j++) ps->hlum[q++] = ad_hess(&ps->A, lum, i, j);
+      for (int j = i; j < n_var; j++) ps->hlum[q++] = ps->hfull[(size_t)i * (size_t)n_var + (size_t)j];
     ev->hlum = ps->hlum;
     ev->hess_ok = 1;
   }

@@ -99,8 +99,8 @@ typedef struct path_eval {
   int n_diff;       /* tangent length of pass 2 */
   int hess_ok;      /* hlum present: asked for (PATH_WANT_HESS), grad_ok, n_diff <= AD_H_CAPACITY */
   const double *hlum; /* d^2 luminance / du_i du_j over the tangent slots i <= j, the upper
-                         triangle row by row (ad_hess's layout: (i, j) at
-                         i n - i (i - 1) / 2 + j - i, n = n_diff); borrowed like coords */
+                         triangle row by row ((i, j) at i n - i (i - 1) / 2 + j - i,
+                         n = n_diff); borrowed like coords */
   double jac;       /* path_eval_bdpt_abs: the Jacobian of the absolute directions that
                        value includes (value / jac is path_eval_bdpt's); 1 otherwise */
   uint64_t topology; /* hash of the discrete choices: triangles hit, shadow rays,

@@ -58,17 +58,20 @@ typedef struct path__bdv {
 #define PATH__MAX_VIS 1024
 #define PATH__ARENA_DUALS 16384 /* duals of length AD_CAPACITY one bounce may hold */
 #define PATH__KEEP 48           /* duals carried from one bounce to the next */
-#define PATH__ARENA2_DUALS 2048 /* duals of a second-order arena (a bounce holds ~700 at most) */
+#define PATH__ARENA2_DUALS 4096 /* duals of a second-order arena at first (it keeps every dual
+                                   of an evaluation: ~1500 at length 5); grown when short */
+#define PATH__ARENA2_MAX (1 << 20) /* ... up to this many */
 
 struct path_scratch {
   double *arena_buf; /* owned */
   size_t arena_cap;
   /* Second-order pass (PATH_WANT_HESS), allocated on first use and grown
-   * with the tangent length: its arena and the keep buffer of its blocks. */
+   * with the tangent length and the path's operations: its arena (with the
+   * tape) and the dense Hessian of the sweep. */
   double *arena2_buf; /* owned */
   size_t arena2_cap;
-  double *keep2_buf; /* owned: PATH__KEEP blocks */
-  size_t keep2_cap;
+  size_t arena2_duals; /* duals it was last sized for (0: none yet) */
+  double *hfull;       /* owned: AD_H_CAPACITY^2 */
   ad_arena A;
   /* The record of pass 1. */
   int n_draw;
