@@ -115,7 +115,7 @@ static inline size_t ad__block(int n, int order) {
   return ad__pad(m) + (order == 2 ? AD_LANES : 0);
 }
 
-#define AD__TERM 4      /* doubles per term of the tape: c, node, x, 8 y + kind */
+#define AD__TERM 4      /* doubles per term of the tape (ad__term) */
 #define AD__TERMS_PER 4 /* terms per dual the tape has room for (2.3 on paths) */
 
 /* Second order: doubles per dual of the arena's storage (its tangent
@@ -319,17 +319,22 @@ static inline void ad__zero_w(const ad_arena *A, double *r, size_t from, size_t 
   r[A->woff] = (double)to;
 }
 
-/* Appends a term to the tape: node k's result depends on node x (and y)
- * as kind says, with coefficient c. A full tape counts as an overflow. */
+/* Appends a term to the tape: node k's result depends on node x (and y),
+ * of widths wx (and wy), as kind says, with coefficient c. Stored as
+ * c, k, 128 x + wx, 8 (128 y + wy) + kind (widths <= AD_H_CAPACITY < 128),
+ * so that the sweep finds the widths without visiting the operands'
+ * blocks. A full tape counts as an overflow. */
 enum { AD__LIN, AD__SQ, AD__SYM, AD__VAR, AD__SEED };
-static inline void ad__term(ad_arena *A, int kind, double c, size_t k, size_t x, size_t y) {
+static inline void ad__term(ad_arena *A, int kind, double c, size_t k, size_t x, size_t wx,
+                            size_t y, size_t wy) {
   if (A->n_terms >= A->term_cap) {
     A->overflow = 1;
     A->lanes = 0;
     return;
   }
   double *t = A->terms + AD__TERM * A->n_terms++;
-  t[0] = c, t[1] = (double)k, t[2] = (double)x, t[3] = (double)(8 * y + (size_t)kind);
+  t[0] = c, t[1] = (double)k, t[2] = (double)(128 * x + wx);
+  t[3] = (double)(8 * (128 * y + wy) + (size_t)kind);
 }
 
 /* Second order: r = sum_i c_i d_i over m <= 6 tangents, each over its
@@ -366,7 +371,7 @@ static inline void ad__lin_w(ad_arena *A, double *restrict r, int m, const doubl
   size_t kr = ad__node(A, r);
   for (int i = 0; i < m; i++) {
     size_t x = ad__node(A, d[i]);
-    if (x && c[i] != 0.0) ad__term(A, AD__LIN, c[i], kr, x, 0);
+    if (x && c[i] != 0.0) ad__term(A, AD__LIN, c[i], kr, x, w[i], 0, 0);
   }
 }
 
@@ -440,14 +445,15 @@ static inline ad ad__lin6(ad_arena *A, double v, const double c[6], ad a, ad b, 
 static inline void ad__h_sq(ad_arena *A, ad r, double c, ad x) {
   if (!AD__H2(A) || c == 0.0) return;
   size_t nx = ad__node(A, x.d);
-  if (nx) ad__term(A, AD__SQ, c, ad__node(A, r.d), nx, 0);
+  if (nx) ad__term(A, AD__SQ, c, ad__node(A, r.d), nx, ad__w(A, x.d), 0, 0);
 }
 
 /* r's mixed second derivative f_xy = c: H_r gains c (g_x g_y^T + g_y g_x^T). */
 static inline void ad__h_sym(ad_arena *A, ad r, double c, ad x, ad y) {
   if (!AD__H2(A) || c == 0.0) return;
   size_t nx = ad__node(A, x.d), ny = ad__node(A, y.d);
-  if (nx && ny) ad__term(A, AD__SYM, c, ad__node(A, r.d), nx, ny);
+  if (nx && ny)
+    ad__term(A, AD__SYM, c, ad__node(A, r.d), nx, ad__w(A, x.d), ny, ad__w(A, y.d));
 }
 
 /* A unary operation's result with f' = c and f'' = h: (v, c d_a), plus
@@ -472,7 +478,7 @@ static inline ad ad_var(ad_arena *A, double v, int index) {
     ad__zero_w(A, r, 0, w);
     if (w) {
       r[index] = 1.0;
-      ad__term(A, AD__VAR, 1.0, ad__node(A, r), (size_t)index, 0);
+      ad__term(A, AD__VAR, 1.0, ad__node(A, r), (size_t)index, 0, 0, 0);
     }
     return (ad){v, r};
   }
@@ -492,7 +498,7 @@ static inline ad ad_make(ad_arena *A, double v, const double *tangent) {
     ad__zero_w(A, r, 0, w);
     if (w) {
       memcpy(r, tangent, w * sizeof(double));
-      ad__term(A, AD__SEED, 1.0, ad__node(A, r), 0, 0);
+      ad__term(A, AD__SEED, 1.0, ad__node(A, r), 0, 0, 0, 0);
     }
     return (ad){v, r};
   }
@@ -517,7 +523,12 @@ static inline ad ad_from_block(ad_arena *A, double v, const double *block) {
  * storage at the top of A; x must come from A. */
 static inline ad ad_copy(ad_arena *A, ad x) { return ad_from_block(A, x.v, x.d); }
 
-/* B_x (the sweep's vector of node x) widened to w padded entries: the
+/* The tangent block of node x (second order). */
+static inline const double *ad__block_of(const ad_arena *A, size_t x) {
+  return A->buf + (size_t)A->node_at[x];
+}
+
+/* B_x (the sweep's vector of node x) widened to w padded entries, the
  * entries past its width zeroed first. */
 static inline double *ad__bgrow(ad_arena *A, size_t x, size_t w) {
   double *b = A->bv + x * A->glanes;
@@ -529,14 +540,15 @@ static inline double *ad__bgrow(ad_arena *A, size_t x, size_t w) {
   return b;
 }
 
-/* b[0 .. w) += c g[0 .. w), w a multiple of AD_LANES. */
-static inline void ad__axpy(size_t w, double *restrict b, double c, const double *restrict g) {
-  for (size_t k = 0; k < w; k += AD_LANES) AD__BLOCK(k, b[k_] += c * g[k_]);
-}
-
-/* The tangent block of node x (second order). */
-static inline const double *ad__block_of(const ad_arena *A, size_t x) {
-  return A->buf + (size_t)A->node_at[x];
+/* B_x += c v over v's first w entries (padded), cut to x's own width wx
+ * (padded): entries of B_x past it reach only Hessian entries above the
+ * diagonal (ad_hessian). */
+static inline void ad__badd(ad_arena *A, size_t x, size_t wx, size_t w, double c,
+                            const double *restrict v) {
+  wx = ad__pad(wx);
+  if (w > wx) w = wx;
+  double *restrict b = ad__bgrow(A, x, w);
+  for (size_t k = 0; k < w; k += AD_LANES) AD__BLOCK(k, b[k_] += c * v[k_]);
 }
 
 /* The Hessian d^2 x / du^2 of a dual of a second-order arena into H (n x n,
@@ -552,7 +564,10 @@ static inline const double *ad__block_of(const ad_arena *A, size_t x) {
  * forward tangents); variable i gives row i of the Hessian, B_i, and a
  * dual made with ad_make (gradient g, Hessian 0) gives g B^T. Terms are
  * visited from the last, so every term of a node's users comes before the
- * node's own. A term costs O(n), the Hessian's entries O(n^2) once. */
+ * node's own. Only the lower triangle is swept (H_ij, j <= i, then
+ * mirrored): B_x ends in rows i below x's width w_x, so its entries from
+ * w_x on are never read and B_x is kept to w_x entries. A term costs
+ * O(w) with w its node's width; the Hessian's entries O(n^2) once. */
 static inline int ad_hessian(ad_arena *A, ad x, double *H) {
   if (A->order != 2 || !ad_arena_ok(A)) return -1;
   size_t n = (size_t)A->n, g = A->glanes;
@@ -571,42 +586,36 @@ static inline int ad_hessian(ad_arena *A, ad x, double *H) {
     size_t wb = (size_t)A->bw[k];
     if (a == 0.0 && wb == 0) continue;
     double c = T[0];
-    size_t xk = (size_t)T[2], yk = (size_t)T[3] >> 3;
+    size_t tx = (size_t)T[2], ty = (size_t)T[3] >> 3;
+    size_t xk = tx >> 7, wx = tx & 127u, yk = ty >> 7, wy = ty & 127u;
     const double *bk = A->bv + k * g;
     switch ((int)((size_t)T[3] & 7u)) {
     case AD__LIN:
       A->adj[xk] += c * a;
-      if (wb) ad__axpy(wb, ad__bgrow(A, xk, wb), c, bk);
+      if (wb) ad__badd(A, xk, wx, wb, c, bk);
       break;
     case AD__SQ:
-      if (a != 0.0) {
-        const double *gx = ad__block_of(A, xk);
-        size_t w = ad__pad(ad__w(A, gx));
-        ad__axpy(w, ad__bgrow(A, xk, w), a * c, gx);
-      }
+      if (a != 0.0) ad__badd(A, xk, wx, ad__pad(wx), a * c, ad__block_of(A, xk));
       break;
     case AD__SYM:
       if (a != 0.0) {
-        const double *gx = ad__block_of(A, xk), *gy = ad__block_of(A, yk);
-        size_t wx = ad__pad(ad__w(A, gx)), wy = ad__pad(ad__w(A, gy));
-        ad__axpy(wy, ad__bgrow(A, xk, wy), a * c, gy);
-        ad__axpy(wx, ad__bgrow(A, yk, wx), a * c, gx);
+        ad__badd(A, xk, wx, ad__pad(wy), a * c, ad__block_of(A, yk));
+        ad__badd(A, yk, wy, ad__pad(wx), a * c, ad__block_of(A, xk));
       }
       break;
-    case AD__VAR: /* row xk of the Hessian */
-      for (size_t j = 0; j < wb && j < n; j++) H[xk * n + j] += bk[j];
+    case AD__VAR: /* row xk of the Hessian, up to the diagonal */
+      for (size_t j = 0; j < wb && j <= xk; j++) H[xk * n + j] += bk[j];
       break;
     default: { /* AD__SEED: g_k B_k^T */
       const double *gk = ad__block_of(A, k);
       size_t w = ad__w(A, gk);
       for (size_t i = 0; i < w && i < n; i++)
-        for (size_t j = 0; j < wb && j < n; j++) H[i * n + j] += gk[i] * bk[j];
+        for (size_t j = 0; j < wb && j <= i; j++) H[i * n + j] += gk[i] * bk[j];
     }
     }
   }
-  /* The sum is symmetric; its rounding is not: the mean of both sides. */
   for (size_t i = 0; i < n; i++)
-    for (size_t j = i + 1; j < n; j++) H[i * n + j] = H[j * n + i] = 0.5 * (H[i * n + j] + H[j * n + i]);
+    for (size_t j = 0; j < i; j++) H[j * n + i] = H[i * n + j];
   return 0;
 }
 
