@@ -188,7 +188,7 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
   b->variant = WARD_BALANCED;
   /* Conductors: Cu against air (Mitsuba divides eta and k by extEta). */
   const double air = 1.000277;
-  rgb ce, ck;
+  rgb ce = rgb_gray(0.0), ck = rgb_gray(0.0); /* (Cu is in the table) */
   conductor_lookup("Cu", &ce, &ck);
   b->cond_eta = rgb_scale(ce, 1.0 / air);
   b->cond_k = rgb_scale(ck, 1.0 / air);

@@ -489,7 +489,7 @@ static void bdpt__join_light(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt_
   BDPT_JOIN_PROLOGUE
   const scene *sc = j->sc;
   const BDPT_VERTEX *pt = &cam[t - 1];
-  REAL u[3];
+  REAL u[3] = {0}; /* (set when have) */
   int have = BDPT_J_NUMBERS(t, u);
   if (!bdpt__connectible(pt) || !have || sc->n_lights == 0) return;
   double pmf, u_remap;
