@@ -68,6 +68,7 @@ static int g_direct; /* --direct separate for the renders (the CLI's default; 0:
 static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
 static const char *g_states; /* --states for the renders (NULL: the integrator's) */
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
+static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -96,6 +97,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   assert_int_equal(mcmc_set(&rs, "allocate", g_even ? "even" : "b", &err), LMC_OK);
   assert_int_equal(mcmc_set(&rs, "direct", g_direct ? "separate" : "mcmc", &err), LMC_OK);
   if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
+  if (g_delayed) assert_int_equal(mcmc_set(&rs, "delayed", "on", &err), LMC_OK);
   return rs;
 }
 
@@ -211,6 +213,25 @@ static void test_h2mc(void **state) {
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.003);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
   g_states = NULL;
+  /* Delayed acceptance (a first test on f alone): the same expectations,
+   * from chains that do move differently (the images of one seed differ). */
+  g_delayed = 1;
+  check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);
+  check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
+  scene *s = load("diffuse_sphere.xml");
+  film fd, fp;
+  render_stats st;
+  lmc_error err;
+  render_settings rs = settings(s, "h2mc", 4, 7, 1);
+  assert_int_equal(mcmc_render_run(s, &rs, &fd, &st, &err), LMC_OK);
+  g_delayed = 0;
+  rs = settings(s, "h2mc", 4, 7, 1);
+  assert_int_equal(mcmc_render_run(s, &rs, &fp, &st, &err), LMC_OK);
+  size_t n = 3 * (size_t)fd.width * (size_t)fd.height;
+  assert_true(memcmp(fd.splat, fp.splat, n * sizeof *fd.splat) != 0);
+  film_free(&fd);
+  film_free(&fp);
+  scene_destroy(s);
 }
 
 /* Mitsuba's mask (mask.xml: the environment, a masked square seen

@@ -28,9 +28,10 @@
 typedef struct h2mc_settings {
   double sigma;    /* the prior's standard deviation (0: h2mc.h's default) */
   double iso_prob; /* Kelemen's isotropic small step's probability */
+  int delayed;     /* delayed acceptance (h2mc_params.delayed) */
 } h2mc_settings;
 
-static const h2mc_settings h2mc__defaults = {0.0, 0.4};
+static const h2mc_settings h2mc__defaults = {0.0, 0.4, 0};
 static const lmc_opt_table h2mc__options; /* (below) */
 
 typedef struct h2mc_run {
@@ -83,6 +84,7 @@ static lmc_status h2mc__set_chains(void *r, int n, const int *family, lmc_error 
   if (!run->h2 || !run->chain_fam) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "h2mc: out of memory");
   h2mc_params hp = h2mc_params_default();
   if (run->hs.sigma > 0.0) hp.sigma = run->hs.sigma;
+  hp.delayed = run->hs.delayed;
   for (int i = 0; i < n; i++) {
     run->chain_fam[i] = family[i];
     lmc_status st = h2mc_kernel_init(&run->h2[i], &run->space->fam[family[i]].target, &hp, err);
@@ -130,7 +132,6 @@ static void h2mc__share_stats(void *r) {
 
 static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_seconds,
                          const mc_counts *counts) {
-  (void)chains, (void)n;
   const h2mc_run *run = r;
   fprintf(stderr, "h2mc: %s states, prior sigma %g, L %g, iso %g, light-triangle step scale %g\n",
           run->space->name, run->n > 0 ? run->h2[0].p.sigma : 0.0,
@@ -142,6 +143,12 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
     ho += run->h2[i].st.outside, hf += run->h2[i].st.eig_fail, hb += run->h2[i].st.built;
   }
   const mc_counts c = *counts;
+  int64_t screened = 0, passed = 0;
+  for (int i = 0; i < n; i++) screened += chains[i]->screened, passed += chains[i]->screen_passed;
+  if (screened)
+    fprintf(stderr, "h2mc: delayed acceptance: %lld first tests (f alone), %.1f%% passed (then "
+                    "evaluated with the Hessian)\n",
+            (long long)screened, 100.0 * (double)passed / (double)screened);
   fprintf(stderr,
           "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
           "%.1f%% outside the unit cube (rejected unevaluated), %.2f Gaussians built per proposal "
@@ -154,14 +161,20 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
           (long long)(c.grad_evals - c.hess_evals));
 }
 
+static const char *const h2mc__off_on[] = {"off", "on", NULL};
+
 static const lmc_opt h2mc__opts[] = {
     {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(h2mc_settings, sigma), 0, 1e-6, 0.5, NULL, NULL, 0,
      "S", "0.01", "the prior's standard deviation on the proposal's offset", NULL},
     {"iso-prob", LMC_OPT_DOUBLE, offsetof(h2mc_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
+    {"delayed", LMC_OPT_CHOICE, offsetof(h2mc_settings, delayed), 0, 0, 0, h2mc__off_on, NULL, 0,
+     NULL, NULL,
+     "proposals first tested on f alone, their Hessian only when they pass (delayed acceptance, "
+     "exact; lmc, h2mc)", NULL},
 };
 
-static const lmc_opt_table h2mc__options = {"H2MC (--integrator h2mc)", h2mc__opts, 2,
+static const lmc_opt_table h2mc__options = {"H2MC (--integrator h2mc)", h2mc__opts, 3,
                                             &h2mc__defaults, sizeof(h2mc_settings)};
 
 const mc_method mc_method_h2mc = {

@@ -16,7 +16,7 @@ extern void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, 
 #define H2MC_TINY 1e-10 /* |eigenvalue| below this: no curvature */
 
 h2mc_params h2mc_params_default(void) {
-  h2mc_params p = {0.01, 1.57079632679489661923};
+  h2mc_params p = {0.01, 1.57079632679489661923, 0};
   return p;
 }
 
@@ -301,6 +301,14 @@ static double h2mc__log_density(void *self, const mc_state *from, const double *
   return h2mc_gauss_log_density(G, k->d, k->p.sigma) - log_c;
 }
 
+/* Delayed acceptance's first test (chain.h): the ratio of f alone, which
+ * needs no derivative at y. Any function of the two states keeps the chain
+ * exact; this one passes what a symmetric proposal would accept. */
+static double h2mc__log_screen(void *self, const mc_state *from, const double *to_u, double f_to) {
+  (void)self, (void)to_u;
+  return log(f_to) - log(from->v.f);
+}
+
 mc_kernel h2mc_kernel_make(h2mc_kernel *k) {
   mc_kernel kn;
   memset(&kn, 0, sizeof kn);
@@ -310,6 +318,7 @@ mc_kernel h2mc_kernel_make(h2mc_kernel *k) {
   kn.self = k;
   kn.propose = h2mc__propose;
   kn.log_density = h2mc__log_density;
+  if (k->p.delayed) kn.log_screen = h2mc__log_screen;
   /* Labelled targets: the chain keeps only the label's coordinates up to
    * date (the others take the lazy small step). local_coords depend on
    * coordinates, which a lazy step would move: there the kernel writes all

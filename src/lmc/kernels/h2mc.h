@@ -56,6 +56,8 @@
 typedef struct h2mc_params {
   double sigma; /* the prior's standard deviation (the paper's implementation: 0.01) */
   double L;     /* the time w t of every direction (pi / 2) */
+  int delayed;  /* delayed acceptance (chain.h): a first test on f's ratio alone, the
+                   Hessian at y only for the proposals that pass it (0: off) */
 } h2mc_params;
 
 h2mc_params h2mc_params_default(void);
