@@ -68,7 +68,7 @@ static int g_direct; /* --direct separate for the renders (the CLI's default; 0:
 static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
 static const char *g_states; /* --states for the renders (NULL: the integrator's) */
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
-static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance) */
+static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance; h2mc's default) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -97,7 +97,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   assert_int_equal(mcmc_set(&rs, "allocate", g_even ? "even" : "b", &err), LMC_OK);
   assert_int_equal(mcmc_set(&rs, "direct", g_direct ? "separate" : "mcmc", &err), LMC_OK);
   if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
-  if (g_delayed) assert_int_equal(mcmc_set(&rs, "delayed", "on", &err), LMC_OK);
+  assert_int_equal(mcmc_set(&rs, "delayed", g_delayed ? "on" : "off", &err), LMC_OK);
   return rs;
 }
 
@@ -395,10 +395,11 @@ static void test_count(void **state) {
   (void)state;
   /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, mlt's sphere 2 groups
    * and furnace, mask 5 x 3 groups,
-   * h2mc furnace and sphere 2 groups on two state spaces, then separate:
-   * furnace 2, sphere 3 x 2 groups; 3 channels each; and the refined b. */
+   * h2mc furnace and sphere 2 groups on two state spaces and with delayed
+   * acceptance, then separate: furnace 2, sphere 3 x 2 groups; 3 channels
+   * each; and the refined b. */
   assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 1) * 3 + 5 * 3 * 3 +
-                                 2 * (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
+                                 3 * (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
 }
 
 static int reset_direct(void **state) {

@@ -174,8 +174,8 @@ static void test_parse(void **state) {
   }
   fprintf(stderr, "  %d flags in %d tables, %d parse checks\n", flags, nt, checks);
   assert_int_equal(checks, 3 * flags);
-  assert_int_equal(flags, 46); /* render 8, driver 13, bdpt states 1, path states 1, lmc 16,
-                                  h2mc 2, mlt 5 */
+  assert_int_equal(flags, 47); /* render 8, driver 13, bdpt states 1, path states 1, lmc 16,
+                                  h2mc 3, mlt 5 */
 }
 
 static void test_binary(void **state) {
@@ -352,7 +352,7 @@ static void test_readme(void **state) {
       if (!strstr(out_text, row)) fail_msg("no row for --%s", t[ti]->opts[i].name);
       rows++;
     }
-  assert_int_equal(rows, 46);
+  assert_int_equal(rows, 47);
 }
 
 int main(void) {

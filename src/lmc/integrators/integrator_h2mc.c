@@ -31,7 +31,7 @@ typedef struct h2mc_settings {
   int delayed;     /* delayed acceptance (h2mc_params.delayed) */
 } h2mc_settings;
 
-static const h2mc_settings h2mc__defaults = {0.0, 0.4, 0};
+static const h2mc_settings h2mc__defaults = {0.0, 0.4, 1};
 static const lmc_opt_table h2mc__options; /* (below) */
 
 typedef struct h2mc_run {
@@ -170,8 +170,8 @@ static const lmc_opt h2mc__opts[] = {
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
     {"delayed", LMC_OPT_CHOICE, offsetof(h2mc_settings, delayed), 0, 0, 0, h2mc__off_on, NULL, 0,
      NULL, NULL,
-     "proposals first tested on f alone, their Hessian only when they pass (delayed acceptance, "
-     "exact; lmc, h2mc)", NULL},
+     "H2MC proposals first tested on f alone, the Hessian at the proposal only when they pass "
+     "(delayed acceptance, exact)", NULL},
 };
 
 static const lmc_opt_table h2mc__options = {"H2MC (--integrator h2mc)", h2mc__opts, 3,
