@@ -8,7 +8,7 @@
  * with the gradient, and with gradient and Hessian (PATH_WANT_HESS; one
  * thread). Printed: microseconds per evaluation, the gradient's and the
  * Hessian's ratio to f alone (gradient target: at most 4 at length 5), and
- * gradient evaluations per second per core. Then the same for
+ * gradient and Hessian evaluations per second per core. Then the same for
  * bidirectional strategies (s, t) of path_eval_bdpt at lengths 3, 5 and 8
  * (a quarter as many paths).
  *
@@ -38,7 +38,7 @@ static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps)
   printf("\nbidirectional strategies (path_eval_bdpt), %d paths per strategy, best of %d\n",
          n_paths, reps);
   printf("length  (s,t)   f [us]  f+grad [us]  ratio  f+grad+Hess [us]  ratio  n_diff  grad "
-         "evals/s/core\n");
+         "evals/s/core  Hess evals/s/core\n");
   const int lengths[3] = {3, 5, 8};
   bench_vec *vecs = calloc((size_t)n_paths, sizeof *vecs);
   for (int li = 0; li < 3; li++) {
@@ -90,9 +90,9 @@ static void bench_bdpt(const scene *sc, path_scratch *ps, int n_paths, int reps)
       }
       double tf = got ? best[0] / got : 0.0, tg = got ? best[1] / got : 0.0;
       double th = got ? best[2] / got : 0.0;
-      printf("%6d  (%d,%d)  %7.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f", len, s, t, 1e6 * tf,
-             1e6 * tg, tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0, n_diff,
-             tg > 0.0 ? 1.0 / tg : 0.0);
+      printf("%6d  (%d,%d)  %7.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f  %17.0f", len, s, t,
+             1e6 * tf, 1e6 * tg, tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0,
+             n_diff, tg > 0.0 ? 1.0 / tg : 0.0, th > 0.0 ? 1.0 / th : 0.0);
       if (got < n_paths) printf("   (only %d paths found)", got);
       printf("\n");
       if (!(checksum >= 0.0)) printf("        (non-finite checksum)\n");
@@ -118,7 +118,8 @@ int main(int argc, char **argv) {
   path_scratch *ps;
   if (path_scratch_create(&ps, &err)) return 1;
   printf("ring-caustics, one thread, %d paths per length, best of %d\n", n_paths, reps);
-  printf("length  f [us]  f+grad [us]  ratio  f+grad+Hess [us]  ratio  n_diff  grad evals/s/core\n");
+  printf("length  f [us]  f+grad [us]  ratio  f+grad+Hess [us]  ratio  n_diff  grad evals/s/core  "
+         "Hess evals/s/core\n");
   const int lengths[3] = {3, 5, 8};
   for (int li = 0; li < 3; li++) {
     int len = lengths[li];
@@ -163,9 +164,9 @@ int main(int argc, char **argv) {
     }
     double tf = got ? best[0] / got : 0.0, tg = got ? best[1] / got : 0.0;
     double th = got ? best[2] / got : 0.0;
-    printf("%6d  %6.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f\n", len, 1e6 * tf, 1e6 * tg,
-           tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0, n_diff,
-           tg > 0.0 ? 1.0 / tg : 0.0);
+    printf("%6d  %6.2f  %11.2f  %5.2f  %16.2f  %5.1f  %6d  %17.0f  %17.0f\n", len, 1e6 * tf,
+           1e6 * tg, tf > 0.0 ? tg / tf : 0.0, 1e6 * th, tf > 0.0 ? th / tf : 0.0, n_diff,
+           tg > 0.0 ? 1.0 / tg : 0.0, th > 0.0 ? 1.0 / th : 0.0);
     if (got < n_paths) printf("        (only %d paths of length %d found)\n", got, len);
     if (!(checksum >= 0.0)) printf("        (non-finite checksum)\n");
     path_vec_sampler_free(&vs);
