@@ -28,6 +28,7 @@
 
 #include <cmocka.h>
 
+#include "render/integrators/path_internal.h" /* (the arena's size) */
 #include "render/io/io.h"
 #include "render/integrators/path.h"
 #include "test_util.h"
@@ -300,6 +301,38 @@ static void test_pt_hessian_matches_fd(void **state) {
   hess_report("pt", &st, 100);
 }
 
+/* Long paths (up to 24 bounces, no roulette): a second-order arena keeps
+ * every dual of the evaluation, more than its first size (4096) here, so
+ * the evaluator grows it and evaluates again; the Hessians still match the
+ * differences. Counts: at least 5 paths of 16+ segments, every one with its
+ * Hessian. */
+static void test_pt_hessian_long_paths(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.maxdepth = 24;
+  rs.rrdepth = 1000;
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 47, NULL);
+  pg_hess_stats st = {0};
+  int tries = 0, long_paths = 0;
+  while (long_paths < 5 && tries < 200000) {
+    tries++;
+    path_vec_sampler_clear(&vs);
+    path_eval ev;
+    path_eval_pt(fx->sc, &rs, &vs.base, PATH_WANT_HESS, fx->ps, &ev, NULL);
+    if (!ev.grad_ok || ev.length < 16 || ev.n_diff > AD_H_CAPACITY) continue;
+    assert_true(ev.hess_ok);
+    long_paths++;
+    pg_hess_check(fx->sc, fx->ps, &rs, &vs, PG_PT, &ev, &st);
+  }
+  path_vec_sampler_free(&vs);
+  print_message("long paths: %d of 16+ segments in %d tries, the arena grown to %zu duals\n",
+                long_paths, tries, fx->ps->arena2_duals);
+  assert_int_equal(long_paths, 5);
+  assert_true(fx->ps->arena2_duals > PATH__ARENA2_DUALS);
+  hess_report("pt, long paths", &st, 5);
+}
+
 /* The same for bidirectional strategies, 25 paths per group. */
 static void test_bdpt_hessian_matches_fd(void **state) {
   fixture *fx = *state;
@@ -343,6 +376,7 @@ int main(void) {
       cmocka_unit_test(test_bdpt_value_matches_bdpt_connect),
       cmocka_unit_test(test_bdpt_gradient_matches_fd),
       cmocka_unit_test(test_pt_hessian_matches_fd),
+      cmocka_unit_test(test_pt_hessian_long_paths),
       cmocka_unit_test(test_bdpt_hessian_matches_fd),
   };
   return cmocka_run_group_tests(tests, setup, teardown);

@@ -133,6 +133,7 @@ ad path__draw(path__ctx *c, int diff) {
 static int path__arena2(path_scratch *ps, int n, size_t duals) {
   if (duals < ps->arena2_duals) duals = ps->arena2_duals;
   size_t cap = ad_arena_size2(n, duals);
+  if (cap > PATH__ARENA2_MAX_BYTES / sizeof(double)) return 0;
   if (ps->arena2_cap < cap) {
     double *b = realloc(ps->arena2_buf, cap * sizeof(double));
     if (!b) return 0;
@@ -428,8 +429,7 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
     est(&c, &L, &rx, &ry);
     /* A second-order arena keeps every dual of the path: when they do not
      * fit, again in one four times as large. */
-    if (ad_arena_ok(&ps->A) || !order2 || 4 * ps->arena2_duals > PATH__ARENA2_MAX ||
-        !path__arena2(ps, n_var, 4 * ps->arena2_duals))
+    if (ad_arena_ok(&ps->A) || !order2 || !path__arena2(ps, n_var, 4 * ps->arena2_duals))
       break;
   }
   ev->n_diff = n_var;

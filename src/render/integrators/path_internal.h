@@ -60,7 +60,7 @@ typedef struct path__bdv {
 #define PATH__KEEP 48           /* duals carried from one bounce to the next */
 #define PATH__ARENA2_DUALS 4096 /* duals of a second-order arena at first (it keeps every dual
                                    of an evaluation: ~1500 at length 5); grown when short */
-#define PATH__ARENA2_MAX (1 << 20) /* ... up to this many */
+#define PATH__ARENA2_MAX_BYTES ((size_t)256 << 20) /* ... up to this size (then gradient only) */
 
 struct path_scratch {
   double *arena_buf; /* owned */
