@@ -177,27 +177,36 @@ static void test_closed_form(void **state) {
   assert_int_equal(checked, 3);
 }
 
-/* A one-coordinate toy target for the kernel: f = 1 everywhere. */
+/* A toy target for the kernel over its dim (1 or 2) coordinates: f = 1
+ * everywhere, the coordinates as the raster position. */
 static int flat_eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
                      double *OUT_grad, int *OUT_grad_ok) {
-  (void)t, (void)scratch;
+  (void)scratch;
   sampler_use_stream(smp, 0);
-  double u = sampler_next(smp);
   OUT_value->f = 1.0;
   OUT_value->value = (rgb){1, 1, 1};
-  OUT_value->rx = u;
-  OUT_value->ry = 0.0;
-  if (OUT_grad) OUT_grad[0] = 0.0, *OUT_grad_ok = 1;
+  OUT_value->rx = sampler_next(smp);
+  OUT_value->ry = t->dim > 1 ? sampler_next(smp) : 0.0;
+  if (OUT_grad) {
+    for (int i = 0; i < t->dim; i++) OUT_grad[i] = 0.0;
+    *OUT_grad_ok = 1;
+  }
   return 0;
+}
+
+/* The flat target over dim coordinates. */
+static mc_target flat_target(int dim) {
+  mc_target tg;
+  memset(&tg, 0, sizeof tg);
+  tg.dim = dim;
+  tg.stream_dim[0] = dim;
+  tg.eval = flat_eval;
+  return tg;
 }
 
 static void test_outside_rejected(void **state) {
   (void)state;
-  mc_target tg;
-  memset(&tg, 0, sizeof tg);
-  tg.dim = 1;
-  tg.stream_dim[0] = 1;
-  tg.eval = flat_eval;
+  mc_target tg = flat_target(1);
   h2mc_params p = h2mc_params_default();
   h2mc_kernel k;
   lmc_error err;
@@ -257,29 +266,13 @@ static void tstate_set(tstate *t, double u0, double u1, double f, int hess_ok) {
   t->s.hess = t->hess;
 }
 
-static int flat2_eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
-                      double *OUT_grad, int *OUT_grad_ok) {
-  (void)t, (void)scratch;
-  sampler_use_stream(smp, 0);
-  OUT_value->f = 1.0;
-  OUT_value->value = (rgb){1, 1, 1};
-  OUT_value->rx = sampler_next(smp);
-  OUT_value->ry = sampler_next(smp);
-  if (OUT_grad) OUT_grad[0] = OUT_grad[1] = 0.0, *OUT_grad_ok = 1;
-  return 0;
-}
-
 /* The kernel keeps the Gaussians of the last two states (h2mc_slot): every
  * proposal and density it gives equals, bit for bit, that of a fresh
  * kernel that builds them anew, and it builds only for a state it does not
  * hold (a changed f, coordinate or Hessian counts as another state). */
 static void test_kept_gaussians_are_rebuilt_ones(void **state) {
   (void)state;
-  mc_target tg;
-  memset(&tg, 0, sizeof tg);
-  tg.dim = 2;
-  tg.stream_dim[0] = 2;
-  tg.eval = flat2_eval;
+  mc_target tg = flat_target(2);
   h2mc_params p = h2mc_params_default();
   lmc_error err;
   h2mc_kernel k;

@@ -99,3 +99,15 @@ void mcmc__snapshot(mcmc_render *R, double seconds) {
   memcpy(R->out->splat, keep, n * sizeof *keep);
   free(keep);
 }
+
+void mc_share_counters(void *first, int n, size_t stride, size_t size) {
+  if (!dist_active() || n <= 0) return;
+  size_t w = size / sizeof(int64_t);
+  int64_t *buf = malloc((size_t)n * w * sizeof *buf);
+  if (!buf) dist_abort(1); /* (collective: the others would wait) */
+  char *p = first;
+  for (int i = 0; i < n; i++) memcpy(buf + (size_t)i * w, p + (size_t)i * stride, size);
+  dist_allsum_i64(buf, (size_t)n * w);
+  for (int i = 0; i < n; i++) memcpy(p + (size_t)i * stride, buf + (size_t)i * w, size);
+  free(buf);
+}

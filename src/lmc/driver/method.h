@@ -106,6 +106,12 @@ typedef struct mc_method {
  * Under one process every chain is here. */
 int mcmc_chain_here(int i);
 
+/* For share_stats: n counter structs of `size` bytes (int64_t counters
+ * only) at first, first + stride, ..., each summed over the ranks into
+ * every rank (a chain's counters are non-zero only where it runs).
+ * Collective; nothing in one process. */
+void mc_share_counters(void *first, int n, size_t stride, size_t size);
+
 /* The integrators built on the driver, by --integrator name (NULL: none). */
 const mc_method *mc_method_find(const char *name);
 

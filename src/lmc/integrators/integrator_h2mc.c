@@ -15,12 +15,10 @@
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "lmc/kernels/h2mc.h"
 #include "lmc/kernels/lmc_kernel.h"
 #include "lmc/driver/method.h"
-#include "render/dist.h"
 
 #define H2MC_MIN_LENGTH 3       /* per-length states: shorter paths take Kelemen's step */
 
@@ -120,14 +118,8 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
 /* Every chain's kernel counters summed over the ranks (method.h). */
 static void h2mc__share_stats(void *r) {
   h2mc_run *run = r;
-  enum { W = sizeof(h2mc_stats) / sizeof(int64_t) };
-  _Static_assert(sizeof(h2mc_stats) == W * sizeof(int64_t), "h2mc_stats holds int64_t only");
-  int64_t *buf = malloc((size_t)(run->n > 0 ? run->n : 1) * W * sizeof *buf);
-  if (!buf) dist_abort(1); /* (collective: the others would wait) */
-  for (int i = 0; i < run->n; i++) memcpy(buf + (size_t)i * W, &run->h2[i].st, sizeof(h2mc_stats));
-  dist_allsum_i64(buf, (size_t)run->n * W);
-  for (int i = 0; i < run->n; i++) memcpy(&run->h2[i].st, buf + (size_t)i * W, sizeof(h2mc_stats));
-  free(buf);
+  _Static_assert(sizeof(h2mc_stats) % sizeof(int64_t) == 0, "h2mc_stats holds int64_t only");
+  if (run->n > 0) mc_share_counters(&run->h2[0].st, run->n, sizeof *run->h2, sizeof(h2mc_stats));
 }
 
 static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_seconds,

@@ -369,24 +369,13 @@ static int lmc__key_length(const lmc_run *run, const mc_space_family *SF, int fa
 /* Every chain's kernel counters and stage 1's gradient evaluations summed
  * over the ranks (method.h). */
 static void lmc_run_share_stats(lmc_run *run) {
-  enum { WM = sizeof(lmc_mala_stats) / sizeof(int64_t), WC = sizeof(lmc_cwalk_stats) / sizeof(int64_t) };
-  _Static_assert(sizeof(lmc_mala_stats) == WM * sizeof(int64_t), "int64_t only");
-  _Static_assert(sizeof(lmc_cwalk_stats) == WC * sizeof(int64_t), "int64_t only");
-  size_t n = (size_t)run->n, w = WM + (run->cwalk ? WC : 0);
-  int64_t *buf = malloc((n * w + 1) * sizeof *buf);
-  if (!buf) dist_abort(1); /* (collective: the others would wait) */
-  for (size_t i = 0; i < n; i++) {
-    memcpy(buf + i * w, &run->mala[i].st, sizeof(lmc_mala_stats));
-    if (run->cwalk) memcpy(buf + i * w + WM, &run->cwalk[i].st, sizeof(lmc_cwalk_stats));
-  }
-  buf[n * w] = run->stage1_grad_evals;
-  dist_allsum_i64(buf, n * w + 1);
-  for (size_t i = 0; i < n; i++) {
-    memcpy(&run->mala[i].st, buf + i * w, sizeof(lmc_mala_stats));
-    if (run->cwalk) memcpy(&run->cwalk[i].st, buf + i * w + WM, sizeof(lmc_cwalk_stats));
-  }
-  run->stage1_grad_evals = buf[n * w];
-  free(buf);
+  _Static_assert(sizeof(lmc_mala_stats) % sizeof(int64_t) == 0, "int64_t only");
+  _Static_assert(sizeof(lmc_cwalk_stats) % sizeof(int64_t) == 0, "int64_t only");
+  if (run->n <= 0) return;
+  mc_share_counters(&run->mala[0].st, run->n, sizeof *run->mala, sizeof(lmc_mala_stats));
+  if (run->cwalk)
+    mc_share_counters(&run->cwalk[0].st, run->n, sizeof *run->cwalk, sizeof(lmc_cwalk_stats));
+  mc_share_counters(&run->stage1_grad_evals, 1, sizeof(int64_t), sizeof(int64_t));
 }
 
 static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, double chain_seconds,

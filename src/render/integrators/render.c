@@ -181,6 +181,39 @@ static void render__totals(render_stats *st, film *out, int nthreads,
 
 /* --- the pass loop ----------------------------------------------------------- */
 
+/* One sample of pixel (x, y) in pass `pass`, from the pixel's own stream:
+ * pt's or bdpt's estimate (bdpt's splats to row_splats); a non-finite or
+ * float-overflowing one counted and dropped (0). */
+static rgb render__sample(const scene *s, const render_settings *rs, int x, int y, int64_t pass,
+                          double diff_scale, int use_bdpt, film *row_splats,
+                          render_counters *cnt) {
+  union {
+    lmc_indep_sampler indep;
+    lmc_sobol_sampler sobol;
+  } smp_store;
+  lmc_sampler *smp;
+  uint64_t pixel = (uint64_t)y * (uint64_t)s->cam.width + (uint64_t)x;
+  if (rs->sampler == LMC_SAMPLER_SOBOL) {
+    sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
+                       use_bdpt ? &sampler_layout_bdpt : &sampler_layout_pt);
+    smp = &smp_store.sobol.base;
+  } else {
+    indep_sampler_init(&smp_store.indep, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
+    smp = &smp_store.indep.base;
+  }
+  double dx, dy;
+  double u1 = sampler_next(smp), u2 = sampler_next(smp);
+  filter_sample(&s->filter, u1, u2, &dx, &dy);
+  double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
+  rgb L = use_bdpt ? bdpt_li(s, rs, smp, rx, ry, row_splats, cnt)
+                   : render__pt(s, rs, smp, rx, ry, diff_scale, cnt);
+  if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX || fabs(L.b) > FLT_MAX) {
+    cnt->nan_samples++;
+    L = rgb_zero();
+  }
+  return L;
+}
+
 lmc_status render_run(const scene *s, const render_settings *rs, film *out, render_stats *st,
                       lmc_error *err) {
   memset(st, 0, sizeof *st);
@@ -257,34 +290,8 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
           row_splats.height = H;
           row_splats.log = logs ? &logs[y - yb] : NULL;
           for (int x = 0; x < W; x++) {
-            /* One sample of pixel (x, y) in this pass, from its own stream. */
-            union {
-              lmc_indep_sampler indep;
-              lmc_sobol_sampler sobol;
-            } smp_store;
-            lmc_sampler *smp;
-            uint64_t pixel = (uint64_t)y * (uint64_t)W + (uint64_t)x;
-            if (rs->sampler == LMC_SAMPLER_SOBOL) {
-              sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
-                                 use_bdpt ? &sampler_layout_bdpt : &sampler_layout_pt);
-              smp = &smp_store.sobol.base;
-            } else {
-              indep_sampler_init(&smp_store.indep, rs->seed,
-                                 pixel * 0x100000001b3ull + (uint64_t)pass);
-              smp = &smp_store.indep.base;
-            }
-            double dx, dy;
-            double u1 = sampler_next(smp), u2 = sampler_next(smp);
-            filter_sample(&s->filter, u1, u2, &dx, &dy);
-            double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
-            rgb L = use_bdpt ? bdpt_li(s, rs, smp, rx, ry, &row_splats, cnt)
-                             : render__pt(s, rs, smp, rx, ry, diff_scale, cnt);
-            if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX ||
-                fabs(L.b) > FLT_MAX) {
-              cnt->nan_samples++;
-              L = rgb_zero();
-            }
-            film_add(out, x, y, L);
+            film_add(out, x, y,
+                     render__sample(s, rs, x, y, pass, diff_scale, use_bdpt, &row_splats, cnt));
             cnt->samples++;
           }
           if (tid == 0) {
