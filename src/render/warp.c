@@ -14,7 +14,7 @@
 #endif
 
 /* Wraps an angle in (-pi, pi] into [0, 1) as a fraction of a turn. */
-static double warp__turn(double phi) {
+double warp_turn(double phi) {
   double t = phi / (2.0 * M_PI);
   if (t < 0.0) t += 1.0;
   if (t >= 1.0) t -= 1.0;
@@ -97,7 +97,7 @@ double warp_square_to_uniform_sphere_pdf(vec3 w) {
 
 void warp_uniform_sphere_to_square(vec3 w, double *u1, double *u2) {
   *u1 = warp__clamp01(0.5 * (1.0 - w.z));
-  *u2 = warp__turn(atan2(w.y, w.x));
+  *u2 = warp_turn(atan2(w.y, w.x));
 }
 
 /* z = u1, phi = 2 pi u2. */
@@ -112,7 +112,7 @@ double warp_square_to_uniform_hemisphere_pdf(vec3 w) { return w.z > 0.0 ? 1.0 / 
 
 void warp_uniform_hemisphere_to_square(vec3 w, double *u1, double *u2) {
   *u1 = warp__clamp01(w.z);
-  *u2 = warp__turn(atan2(w.y, w.x));
+  *u2 = warp_turn(atan2(w.y, w.x));
 }
 
 /* cos(theta) = 1 - u1 (1 - cos_max), phi = 2 pi u2. */
@@ -130,7 +130,7 @@ double warp_square_to_uniform_cone_pdf(vec3 w, double cos_max) {
 
 void warp_uniform_cone_to_square(vec3 w, double cos_max, double *u1, double *u2) {
   *u1 = warp__clamp01((1.0 - w.z) / (1.0 - cos_max));
-  *u2 = warp__turn(atan2(w.y, w.x));
+  *u2 = warp_turn(atan2(w.y, w.x));
 }
 
 /* Uniform triangle by the square-root parameterisation:

@@ -39,6 +39,9 @@ void warp_uniform_cone_to_square(vec3 w, double cos_max, double *u1, double *u2)
 void warp_square_to_triangle(double u1, double u2, double *b1, double *b2);
 void warp_triangle_to_square(double b1, double b2, double *u1, double *u2);
 
+/* An angle in radians as a fraction of a turn in [0, 1) (what 2 pi u maps to). */
+double warp_turn(double phi);
+
 /* Tent on [-1, 1] (pdf 1 - |x|). */
 double warp_interval_to_tent(double u);
 double warp_interval_to_tent_pdf(double x);

@@ -175,6 +175,18 @@ rgb bsdf_eval_pdf(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transpo
 /* Samples wi; returns 1 on success, 0 when the sample is absorbed or invalid. */
 int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, double u1,
                   double u2, transport_mode mode, bsdf_sample *out);
+/* The inverse of bsdf_sample_f (Bitterli et al. 2017's inverse path
+ * sampling): numbers OUT_u = (u_lobe, u1, u2) in [0, 1)^3 with which
+ * bsdf_sample_f(b, tu, tv, wo, ...) returns wi by a lobe that is a delta
+ * when `delta` is set (as the sample that made wi said: flags &
+ * BSDF_DELTA). The inverse is stochastic, from four uniform numbers r:
+ * where several lobes give wi, r[0] picks one with its share of the
+ * density (or probability) at wi; u_lobe is uniform in that lobe's
+ * interval (r[1]); numbers the sampler does not read (a delta lobe's u1,
+ * u2: r[2], r[3]) are copied from r. So u drawn uniformly, mapped to wi
+ * and inverted is uniform again. Returns 0 when no such lobe gives wi. */
+int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                const double r[4], double OUT_u[3]);
 /* Union of the lobe flags the model has. */
 int bsdf_flags(const bsdf *b);
 /* Does a footprint change one of b's textures (tex_is_filtered)? */

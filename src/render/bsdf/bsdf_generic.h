@@ -368,3 +368,81 @@ done:;
 #endif
   return ok;
 }
+
+/* ---- The inverse of bsdf_sample_f (values only) ------------------------------ */
+
+#if !R_DUAL
+double bsdf__lobe_u(double lo, double hi, double r) {
+  double x = lo + r * (hi - lo);
+  return x < hi ? x : nextafter(hi, lo);
+}
+
+int bsdf__invert_cosine(vec3 wi, double lo, double hi, const double r[4], double OUT_u[3]) {
+  if (!(wi.z > 0.0)) return 0;
+  OUT_u[0] = bsdf__lobe_u(lo, hi, r[1]);
+  warp_cosine_hemisphere_to_square(wi, &OUT_u[1], &OUT_u[2]);
+  return 1;
+}
+
+int bsdf__invert_mixture(vec3 wi, double w, double pdf, const double r[4], double OUT_u[3],
+                         int *OUT_glossy) {
+  *OUT_glossy = 0;
+  if (!(pdf > 0.0) || !(wi.z > 0.0)) return 0;
+  double diff = (1.0 - w) * wi.z / M_PI / pdf;
+  if (r[0] < diff) return bsdf__invert_cosine(wi, w, 1.0, r, OUT_u);
+  *OUT_glossy = 1;
+  OUT_u[0] = bsdf__lobe_u(0.0, w, r[1]);
+  return 1;
+}
+
+/* The model's own inverse (bsdf_invert without the mask). */
+static int bsdf__invert_model(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                              const double r[4], double OUT_u[3], double *OUT_pmf) {
+  if (bsdf__flip(b, wo)) {
+    wo.z = -wo.z;
+    wi.z = -wi.z;
+  }
+  *OUT_pmf = 1.0;
+  switch (b->type) {
+#define BSDF__CASE(TYPE, NAME)                                                                     \
+  case TYPE:                                                                                       \
+    return bsdf__##NAME##_invert(b, tu, tv, wo, wi, delta, r, OUT_u, OUT_pmf);
+    BSDF__CASES
+#undef BSDF__CASE
+  default:
+    return 0;
+  }
+}
+
+int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                const double r[4], double OUT_u[3]) {
+  if (!b->masked) return bsdf__invert_model(b, tu, tv, wo, wi, delta, r, OUT_u, &(double){0.0});
+  /* A mask: the pass-through lobe makes wi = -wo (delta, probability
+   * 1 - P); the wrapped lobes have u_lobe scaled into [0, P). */
+  rgb alpha;
+  double prob = bsdf__mask_prob(b, tu, tv, &alpha);
+  double pass_w = delta && wo.z != 0.0 && v3_len2(v3_add(wo, wi)) < 1e-18 ? 1.0 - prob : 0.0;
+  double u[3], pmf = 0.0;
+  int ok = prob > 0.0 && bsdf__invert_model(b, tu, tv, wo, wi, delta, r, u, &pmf);
+  double wrapped_w = ok ? (delta ? prob * pmf : 1.0) : 0.0;
+  if (pass_w > 0.0) {
+    /* Between the pass-through and a wrapped delta lobe that also gives
+     * -wo, each with its probability; r[0] rescaled for the model's own
+     * choice when the wrapped lobe wins. */
+    double t = r[0] * (pass_w + wrapped_w);
+    if (!(t < wrapped_w)) {
+      OUT_u[0] = bsdf__lobe_u(prob, 1.0, r[1]);
+      OUT_u[1] = r[2];
+      OUT_u[2] = r[3];
+      return 1;
+    }
+    double rr[4] = {fmin(t / wrapped_w, nextafter(1.0, 0.0)), r[1], r[2], r[3]};
+    ok = bsdf__invert_model(b, tu, tv, wo, wi, delta, rr, u, &pmf);
+  }
+  if (!ok) return 0;
+  OUT_u[0] = fmin(u[0] * prob, nextafter(prob, 0.0));
+  OUT_u[1] = u[1];
+  OUT_u[2] = u[2];
+  return 1;
+}
+#endif

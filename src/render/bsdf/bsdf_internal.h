@@ -73,8 +73,40 @@ BSDF__MODEL_EVAL_PDF(roughconductor)
 BSDF__MODEL_EVAL_PDF(roughdielectric)
 BSDF__MODEL_EVAL_PDF(roughplastic)
 
+/* The models' inverses of their samplers (bsdf_invert's contract, per
+ * model, wo and wi already flipped by twosided): *OUT_pmf gets the
+ * probability of the delta lobe found (delta only). */
+#define BSDF__MODEL_INVERT(NAME)                                                                 \
+  int bsdf__##NAME##_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,  \
+                            const double r[4], double OUT_u[3], double *OUT_pmf);
+BSDF__MODEL_INVERT(diffuse)
+BSDF__MODEL_INVERT(phong)
+BSDF__MODEL_INVERT(conductor)
+BSDF__MODEL_INVERT(roughconductor)
+BSDF__MODEL_INVERT(dielectric)
+BSDF__MODEL_INVERT(roughdielectric)
+BSDF__MODEL_INVERT(plastic)
+BSDF__MODEL_INVERT(roughdiffuse)
+BSDF__MODEL_INVERT(ward)
+BSDF__MODEL_INVERT(roughplastic)
+BSDF__MODEL_INVERT(thindielectric)
+
 #undef BSDF__MODEL
 #undef BSDF__MODEL_EVAL_PDF
+#undef BSDF__MODEL_INVERT
+
+/* Helpers of the inverses (bsdf_generic.h). bsdf__lobe_u: a number uniform
+ * in the lobe's interval [lo, hi) of u_lobe from r in [0, 1). */
+double bsdf__lobe_u(double lo, double hi, double r);
+/* The numbers of a cosine-weighted direction wi (wi.z > 0): u_lobe from
+ * r[1] in [lo, hi), (u1, u2) by the concentric map's inverse. */
+int bsdf__invert_cosine(vec3 wi, double lo, double hi, const double r[4], double OUT_u[3]);
+/* A glossy lobe chosen with probability w (u_lobe in [0, w)) mixed with a
+ * cosine-weighted one ([w, 1)), whose mixture density at wi is pdf: picks
+ * the diffuse lobe with its share (1 - w) cos(wi) / (pi pdf) by r[0], else
+ * *OUT_glossy = 1 and u_lobe in [0, w) for the caller to fill (u1, u2). */
+int bsdf__invert_mixture(vec3 wi, double w, double pdf, const double r[4], double OUT_u[3],
+                         int *OUT_glossy);
 
 /* The models by type, for the dispatchers (bsdf_generic.h): each
  * BSDF__CASE(TYPE, name) stands for one model. */

@@ -422,3 +422,53 @@ int R_FN(bsdf__roughplastic_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3
   BSDF_R_SET_REV(out, pdf_rev);
   return ok;
 }
+
+/* ---- The inverses of the samplers (values only; bsdf_invert) ---------------- */
+
+#if !R_DUAL
+int bsdf__roughconductor_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                                const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)tu, (void)tv, (void)OUT_pmf;
+  if (delta || !(wo.z > 0.0) || !(wi.z > 0.0)) return 0;
+  vec3 m = v3_normalize(v3_add(wo, wi));
+  OUT_u[0] = r[1];
+  return mf_invert(b->dist, b->alpha, wo, b->sample_visible, m, &OUT_u[1], &OUT_u[2]);
+}
+
+int bsdf__roughdielectric_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                                 const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)tu, (void)tv, (void)OUT_pmf;
+  if (delta || wo.z == 0.0) return 0;
+  /* The normal the sampler drew is the (generalised) half vector. */
+  vec3 m;
+  double e;
+  int reflect;
+  if (!bsdf__rd_half(b, wo, wi, &m, &e, &reflect)) return 0;
+  double wom = v3_dot(wo, m);
+  if (!(wom * wo.z > 0.0)) return 0;
+  double fr = fresnel_dielectric(wom, b->eta, NULL);
+  vec3 v = wo.z > 0.0 ? wo : v3_neg(wo);
+  if (!mf_invert(b->dist, bsdf__rd_sample_alpha(b, wo.z), v, b->sample_visible, m, &OUT_u[1],
+                 &OUT_u[2]))
+    return 0;
+  if (reflect ? !(fr > 0.0) : !(fr < 1.0)) return 0;
+  OUT_u[0] = reflect ? bsdf__lobe_u(0.0, fr, r[1]) : bsdf__lobe_u(fr, 1.0, r[1]);
+  return 1;
+}
+
+int bsdf__roughplastic_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                              const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)OUT_pmf;
+  if (delta || !(wo.z > 0.0) || !(wi.z > 0.0)) return 0;
+  double w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  double ps = bsdf__rp_prob_specular(w, bsdf__rtrans_eval(bsdf__rtrans_get(b), wo.z));
+  double pdf;
+  bsdf__rp_eval_pdf(b, tu, tv, wo, wi, 0, &pdf, NULL);
+  int glossy;
+  if (!bsdf__invert_mixture(wi, ps, pdf, r, OUT_u, &glossy)) return 0;
+  if (!glossy) return 1;
+  vec3 m = v3_normalize(v3_add(wo, wi));
+  return v3_dot(wo, m) > 0.0 &&
+         mf_invert(b->dist, b->alpha, wo, b->sample_visible, m, &OUT_u[1], &OUT_u[2]);
+}
+#endif

@@ -450,3 +450,110 @@ int R_FN(bsdf__ward_sample)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REA
   RRGB f = R_FN(bsdf__ward_eval_pdf)(R_ARG b, tu, tv, wo, wi, 1, &pdf);
   return R_FN(bsdf__finish)(R_ARG out, wi, f, pdf, 1.0, flags);
 }
+
+/* ---- The inverses of the samplers (values only; bsdf_invert) ---------------- */
+
+#if !R_DUAL
+/* 1 when unit directions agree to rounding (a delta lobe's wi). */
+static int bsdf__same_dir(vec3 a, vec3 b) { return v3_len2(v3_sub(a, b)) < 1e-10; }
+
+/* A delta lobe chosen for u_lobe in [lo, hi); the direction numbers are r's. */
+static int bsdf__invert_delta(double lo, double hi, const double r[4], double OUT_u[3],
+                              double *OUT_pmf) {
+  if (!(hi > lo)) return 0;
+  OUT_u[0] = bsdf__lobe_u(lo, hi, r[1]);
+  OUT_u[1] = r[2];
+  OUT_u[2] = r[3];
+  *OUT_pmf = hi - lo;
+  return 1;
+}
+
+int bsdf__diffuse_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                         const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)b, (void)tu, (void)tv, (void)OUT_pmf;
+  if (delta || !(wo.z > 0.0)) return 0;
+  return bsdf__invert_cosine(wi, 0.0, 1.0, r, OUT_u);
+}
+
+int bsdf__roughdiffuse_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                              const double r[4], double OUT_u[3], double *OUT_pmf) {
+  return bsdf__diffuse_invert(b, tu, tv, wo, wi, delta, r, OUT_u, OUT_pmf);
+}
+
+int bsdf__phong_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                       const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)OUT_pmf;
+  if (delta || !(wo.z > 0.0) || !(wi.z > 0.0)) return 0;
+  double pdf, w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  bsdf__ph_eval_pdf(b, tu, tv, wo, wi, 0, &pdf);
+  int glossy;
+  if (!bsdf__invert_mixture(wi, w, pdf, r, OUT_u, &glossy)) return 0;
+  if (!glossy) return 1;
+  /* The lobe's cos(a) = u2^(1/(n+1)) and azimuth 2 pi u1 about the mirror direction. */
+  frame fr = frame_from_z(bsdf__mirror(wo));
+  vec3 l = frame_to_local(&fr, wi);
+  if (!(l.z > 0.0)) return 0;
+  OUT_u[1] = warp_turn(atan2(l.y, l.x));
+  OUT_u[2] = fmin(pow(fmin(l.z, 1.0), b->exponent + 1.0), nextafter(1.0, 0.0));
+  return 1;
+}
+
+int bsdf__conductor_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                           const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)b, (void)tu, (void)tv;
+  if (!delta || !(wo.z > 0.0) || !bsdf__same_dir(wi, bsdf__mirror(wo))) return 0;
+  return bsdf__invert_delta(0.0, 1.0, r, OUT_u, OUT_pmf);
+}
+
+int bsdf__dielectric_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                            const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)tu, (void)tv;
+  if (!delta || wo.z == 0.0) return 0;
+  double cos_t, fr = fresnel_dielectric(wo.z, b->eta, &cos_t);
+  if (wo.z * wi.z > 0.0) {
+    if (!bsdf__same_dir(wi, bsdf__mirror(wo))) return 0;
+    return bsdf__invert_delta(0.0, fr, r, OUT_u, OUT_pmf);
+  }
+  double s = wo.z > 0.0 ? 1.0 / b->eta : b->eta;
+  if (cos_t == 0.0 || !bsdf__same_dir(wi, v3(-s * wo.x, -s * wo.y, cos_t))) return 0;
+  return bsdf__invert_delta(fr, 1.0, r, OUT_u, OUT_pmf);
+}
+
+int bsdf__thindielectric_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                                const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)tu, (void)tv;
+  if (!delta || wo.z == 0.0) return 0;
+  double refl = bsdf__thin_reflectance(b, wo.z);
+  if (wo.z * wi.z > 0.0)
+    return bsdf__same_dir(wi, bsdf__mirror(wo)) && bsdf__invert_delta(0.0, refl, r, OUT_u, OUT_pmf);
+  return bsdf__same_dir(wi, v3_neg(wo)) && bsdf__invert_delta(refl, 1.0, r, OUT_u, OUT_pmf);
+}
+
+int bsdf__plastic_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                         const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)tu, (void)tv;
+  if (!(wo.z > 0.0)) return 0;
+  double p = bsdf__plastic_prob_specular(b, fresnel_dielectric(wo.z, b->eta, NULL));
+  if (delta)
+    return bsdf__same_dir(wi, bsdf__mirror(wo)) && bsdf__invert_delta(0.0, p, r, OUT_u, OUT_pmf);
+  return p < 1.0 && bsdf__invert_cosine(wi, p, 1.0, r, OUT_u);
+}
+
+int bsdf__ward_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                      const double r[4], double OUT_u[3], double *OUT_pmf) {
+  (void)OUT_pmf;
+  if (delta || !(wo.z > 0.0) || !(wi.z > 0.0)) return 0;
+  double pdf, w = bsdf__specular_weight(&b->specular, &b->diffuse);
+  bsdf__ward_eval_pdf(b, tu, tv, wo, wi, 0, &pdf);
+  int glossy;
+  if (!bsdf__invert_mixture(wi, w, pdf, r, OUT_u, &glossy)) return 0;
+  if (!glossy) return 1;
+  /* The half vector h ~ (r au cos t, r av sin t, 1), r^2 = -log u1, t = 2 pi u2. */
+  vec3 h = v3_add(wo, wi);
+  if (!(h.z > 0.0)) return 0;
+  double x = h.x / (h.z * b->alpha_u), y = h.y / (h.z * b->alpha_v);
+  OUT_u[1] = fmin(exp(-(x * x + y * y)), nextafter(1.0, 0.0));
+  OUT_u[2] = warp_turn(atan2(y, x));
+  return OUT_u[1] > 0.0;
+}
+#endif

@@ -15,6 +15,7 @@
  */
 #include "render/bsdf/microfacet.h"
 #include "render/bsdf/microfacet_ad.h"
+#include "render/warp.h"
 
 #include <math.h>
 
@@ -84,3 +85,68 @@ static double mf__beckmann_slope_x(double cos_t, double sin_t, double u1) {
 #define R_DUAL 1
 #include "render/real.h"
 #include "render/bsdf/microfacet_generic.h"
+
+/* ---- The inverse of mf_sample (values only) ---------------------------- */
+
+static double mf__clamp01(double x) { return x < 0.0 ? 0.0 : (x >= 1.0 ? nextafter(1.0, 0.0) : x); }
+
+/* The standard-configuration Beckmann visible slopes (sx, sy) to (u1, u2):
+ * u1 = C(sx) / C(a) with mf__beckmann_slope_x's CDF, u2 = (1 + erf(sy)) / 2. */
+static int mf__beckmann_visible_invert(double cos_t, double sin_t, double sx, double sy,
+                                       double *OUT_u1, double *OUT_u2) {
+  *OUT_u2 = mf__clamp01(0.5 * erfc(-sy));
+  if (sin_t < 1e-9) {
+    *OUT_u1 = mf__clamp01(0.5 * erfc(-sx));
+    return 1;
+  }
+  double a = cos_t / sin_t;
+  if (!(sx < a)) return 0;
+  double c_hi = 0.5 * (cos_t * erfc(-a) + sin_t * exp(-a * a) * MF_INV_SQRT_PI);
+  double c = 0.5 * (cos_t * erfc(-sx) + sin_t * exp(-sx * sx) * MF_INV_SQRT_PI);
+  if (!(c_hi > 0.0)) return 0;
+  *OUT_u1 = mf__clamp01(c / c_hi);
+  return 1;
+}
+
+int mf_invert(mf_dist dist, double alpha, vec3 v, int visible, vec3 m, double *OUT_u1,
+              double *OUT_u2) {
+  if (!(m.z > 0.0) || !(alpha > 0.0)) return 0;
+  if (!visible) {
+    /* tan^2 = (m.x^2 + m.y^2) / m.z^2 through the CDF the sampler inverts. */
+    double a2 = alpha * alpha;
+    double t2 = (m.x * m.x + m.y * m.y) / (m.z * m.z);
+    *OUT_u1 = mf__clamp01(dist == MF_BECKMANN ? -expm1(-t2 / a2) : t2 / (a2 + t2));
+    *OUT_u2 = warp_turn(atan2(m.y, m.x));
+    return 1;
+  }
+  if (!(v.z > 0.0) || !(v3_dot(v, m) > 0.0)) return 0;
+  vec3 vh = v3_normalize(v3(alpha * v.x, alpha * v.y, v.z));
+  if (dist == MF_GGX) {
+    /* Undo the unstretch, project on the disk's axes, undo the squeeze. */
+    vec3 nh = v3_normalize(v3(m.x / alpha, m.y / alpha, m.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? v3_scale(v3(-vh.y, vh.x, 0.0), 1.0 / sqrt(lensq)) : v3(1.0, 0.0, 0.0);
+    vec3 t2 = v3_cross(vh, t1);
+    double p1 = v3_dot(nh, t1), p2 = v3_dot(nh, t2);
+    double s = 0.5 * (vh.z + 1.0);
+    p2 = (p2 - (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1))) / s;
+    double r2 = p1 * p1 + p2 * p2;
+    if (!(r2 <= 1.0 + 1e-12)) return 0;
+    *OUT_u1 = mf__clamp01(r2);
+    *OUT_u2 = warp_turn(atan2(p2, p1));
+    return 1;
+  }
+  /* Beckmann: the slopes of m, unscaled and rotated back to phi = 0. */
+  double cos_t = vh.z, sin_t = sqrt(fmax(0.0, 1.0 - cos_t * cos_t));
+  double cos_p = 1.0, sin_p = 0.0;
+  if (sin_t > 0.0) {
+    double l = sqrt(vh.x * vh.x + vh.y * vh.y);
+    if (l > 0.0) {
+      cos_p = vh.x / l;
+      sin_p = vh.y / l;
+    }
+  }
+  double rx = -m.x / (m.z * alpha), ry = -m.y / (m.z * alpha);
+  double sx = cos_p * rx + sin_p * ry, sy = -sin_p * rx + cos_p * ry;
+  return mf__beckmann_visible_invert(cos_t, sin_t, sx, sy, OUT_u1, OUT_u2);
+}

@@ -41,6 +41,11 @@ double mf_pdf(mf_dist dist, double alpha, vec3 v, vec3 m, int visible);
 /* mf_pdf from d = D(m) and, when visible, g1 = G1(v, m) that the caller
  * already has (the same value, bit for bit). */
 double mf_pdf_known(double d, double g1, vec3 v, vec3 m, int visible);
+/* The inverse of mf_sample: the (u1, u2) in [0, 1)^2 from which mf_sample
+ * returns the unit normal m (m.z > 0; when visible, v.m > 0). Returns 0
+ * when m is outside what mf_sample produces. */
+int mf_invert(mf_dist dist, double alpha, vec3 v, int visible, vec3 m, double *OUT_u1,
+              double *OUT_u2);
 
 /* Inverse error function on (-1, 1) (erfinv(+-1) = +-inf). */
 double mf_erfinv(double x);
