@@ -94,3 +94,11 @@ double camera_pdf_dir(const camera *c, vec3 dir) {
   double a = 4.0 * c->tan_half_x * c->tan_half_y;
   return 1.0 / (a * d.z * d.z * d.z);
 }
+
+int camera_invert(const camera *c, vec3 dir, double *OUT_u1, double *OUT_u2) {
+  double rx, ry;
+  if (!(camera_we(c, dir, &rx, &ry) > 0.0)) return 0;
+  *OUT_u1 = fmin(rx / c->width, nextafter(1.0, 0.0));
+  *OUT_u2 = fmin(ry / c->height, nextafter(1.0, 0.0));
+  return *OUT_u1 >= 0.0 && *OUT_u2 >= 0.0;
+}

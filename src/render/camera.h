@@ -43,6 +43,10 @@ void camera_generate_ray(const camera *c, double rx, double ry, vec3 *org, vec3 
 /* Importance We along world direction dir leaving the pinhole, and the
  * raster point it passes through; 0 when it misses the film. */
 double camera_we(const camera *c, vec3 dir, double *rx, double *ry);
+/* The inverse of the film sample: the numbers (u1, u2) in [0, 1)^2 whose
+ * raster point (u1 W, u2 H) gives the ray along world direction dir;
+ * returns 0 when dir misses the film. */
+int camera_invert(const camera *c, vec3 dir, double *OUT_u1, double *OUT_u2);
 /* Solid-angle density of camera_generate_ray producing dir, for a raster
  * point chosen uniformly over the film (the BDPT s=... pdf). */
 double camera_pdf_dir(const camera *c, vec3 dir);

@@ -151,6 +151,14 @@ int distrib1d_sample_discrete(const distrib1d *d, double u, double *pmf, double 
   return i;
 }
 
+double distrib1d_invert_discrete(const distrib1d *d, int index, double u_remap) {
+  if (index < 0 || index >= d->n) return -1.0;
+  double lo = d->cdf[index], hi = d->cdf[index + 1];
+  if (!(hi > lo)) return -1.0;
+  double u = lo + u_remap * (hi - lo);
+  return u < hi ? u : nextafter(hi, lo);
+}
+
 double distrib1d_pmf(const distrib1d *d, int index) {
   if (index < 0 || index >= d->n) return 0.0;
   return d->func[index] / (d->integral * d->n);

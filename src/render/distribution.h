@@ -28,6 +28,9 @@ double distrib1d_sample_cont(const distrib1d *d, double u, double *pdf, int *ind
  * *u_remap (may be NULL) is u rescaled to [0,1) inside the chosen cell. */
 int distrib1d_sample_discrete(const distrib1d *d, double u, double *pmf, double *u_remap);
 double distrib1d_pmf(const distrib1d *d, int index);
+/* The inverse of sample_discrete: the u that picks cell index with
+ * *u_remap = u_remap (u_remap in [0, 1)); -1 when the cell has probability 0. */
+double distrib1d_invert_discrete(const distrib1d *d, int index, double u_remap);
 double distrib1d_pdf_cont(const distrib1d *d, double x);
 /* The u that sample_cont maps to x. */
 double distrib1d_invert_cont(const distrib1d *d, double x);

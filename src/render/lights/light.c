@@ -181,6 +181,13 @@ vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
   return v3_add(s->center, v3_scale(v3_sub(offset, dir), s->radius));
 }
 
+void light_disk_invert(const struct scene *s, vec3 dir, vec3 p, double *OUT_u1, double *OUT_u2) {
+  /* p = center + r (x s + y t - dir) */
+  frame f = frame_from_z(dir);
+  vec3 offset = v3_add(v3_scale(v3_sub(p, s->center), 1.0 / s->radius), dir);
+  warp_disk_concentric_to_square(v3_dot(offset, f.s), v3_dot(offset, f.t), OUT_u1, OUT_u2);
+}
+
 double light_disk_pdf(const struct scene *s) {
   return 1.0 / (M_PI * s->radius * s->radius);
 }
@@ -592,4 +599,101 @@ int light_sample_dir(const light *l, vec3 n, double u3, double u4, vec3 *OUT_dir
   default:
     return 0;
   }
+}
+
+/* ---------------------------------------------------------------------------
+ * The inverses of the samplers.
+ */
+
+/* The (u1, u2) of light__sample_area_point giving p on triangle tri: its
+ * barycentrics (least squares in the triangle's plane) through
+ * warp_triangle_to_square, u1 moved into the triangle's cell. */
+static int light__invert_area_point(const light *l, const struct scene *s, int64_t tri, vec3 p,
+                                    double *OUT_u1, double *OUT_u2) {
+  if (tri < 0 || tri >= l->tri_dist.n) return 0;
+  vec3 a, b, c;
+  light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
+  vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), d = v3_sub(p, a);
+  double d11 = v3_dot(e1, e1), d12 = v3_dot(e1, e2), d22 = v3_dot(e2, e2);
+  double d1 = v3_dot(d, e1), d2 = v3_dot(d, e2);
+  double den = d11 * d22 - d12 * d12;
+  if (!(den > 0.0)) return 0;
+  double b1 = (d22 * d1 - d12 * d2) / den, b2 = (d11 * d2 - d12 * d1) / den;
+  double ur;
+  warp_triangle_to_square(b1, b2, &ur, OUT_u2);
+  *OUT_u1 = distrib1d_invert_discrete(&l->tri_dist, (int)tri, fmin(ur, nextafter(1.0, 0.0)));
+  return *OUT_u1 >= 0.0;
+}
+
+/* The (u, v) of the envmap's importance sampling towards world direction w. */
+static int light__invert_env(const light *l, vec3 w, double *OUT_u1, double *OUT_u2) {
+  double uv[2], sin_theta, out[2];
+  if (!light__env_dir_to_uv(l, w, &uv[0], &uv[1], &sin_theta) || !(sin_theta > 0.0)) return 0;
+  if (!(distrib2d_pdf(&l->env_dist, uv[0], uv[1]) > 0.0)) return 0;
+  distrib2d_invert(&l->env_dist, uv[0], uv[1], out);
+  *OUT_u1 = out[0];
+  *OUT_u2 = out[1];
+  return 1;
+}
+
+int light_invert_li(const light *l, const struct scene *s, vec3 ref, vec3 wi, vec3 p,
+                    int64_t tri, const double r[2], double OUT_u[2]) {
+  OUT_u[0] = r[0];
+  OUT_u[1] = r[1];
+  switch (l->type) {
+  case LIGHT_AREA: {
+    vec3 a, b, c;
+    if (tri < 0 || tri >= l->tri_dist.n) return 0;
+    light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
+    /* The sampler refuses points whose emitting side faces away from ref. */
+    if (!(v3_dot(mesh_corners_normal(&s->meshes[l->mesh], a, b, c), v3_sub(ref, p)) > 0.0)) return 0;
+    return light__invert_area_point(l, s, tri, p, &OUT_u[0], &OUT_u[1]);
+  }
+  case LIGHT_CONSTANT:
+    warp_uniform_sphere_to_square(wi, &OUT_u[0], &OUT_u[1]);
+    return 1;
+  case LIGHT_ENVMAP:
+    return light__invert_env(l, wi, &OUT_u[0], &OUT_u[1]);
+  default:
+    return 1; /* delta lights read no numbers */
+  }
+}
+
+int light_invert_le(const light *l, const struct scene *s, vec3 p, vec3 dir, int64_t tri,
+                    const double r[4], double OUT_u[4]) {
+  for (int i = 0; i < 4; i++) OUT_u[i] = r[i];
+  switch (l->type) {
+  case LIGHT_AREA: {
+    if (!light__invert_area_point(l, s, tri, p, &OUT_u[0], &OUT_u[1])) return 0;
+    vec3 a, b, c;
+    light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
+    frame f = frame_from_z(mesh_corners_normal(&s->meshes[l->mesh], a, b, c));
+    vec3 local = frame_to_local(&f, dir);
+    if (!(local.z > 0.0)) return 0;
+    warp_cosine_hemisphere_to_square(local, &OUT_u[2], &OUT_u[3]);
+    return 1;
+  }
+  case LIGHT_POINT:
+    warp_uniform_sphere_to_square(dir, &OUT_u[2], &OUT_u[3]);
+    return 1;
+  case LIGHT_SPOT: {
+    vec3 local = frame_to_local(&l->frm, dir);
+    if (!(light__spot_falloff(l, local.z) > 0.0)) return 0;
+    warp_uniform_cone_to_square(local, l->cos_cutoff, &OUT_u[2], &OUT_u[3]);
+    return 1;
+  }
+  case LIGHT_DIRECTIONAL:
+    if (!(v3_len2(v3_sub(dir, l->frm.n)) < 1e-10)) return 0;
+    light_disk_invert(s, dir, p, &OUT_u[0], &OUT_u[1]);
+    return 1;
+  case LIGHT_CONSTANT:
+    warp_uniform_sphere_to_square(dir, &OUT_u[2], &OUT_u[3]);
+    light_disk_invert(s, dir, p, &OUT_u[0], &OUT_u[1]);
+    return 1;
+  case LIGHT_ENVMAP:
+    if (!light__invert_env(l, v3_neg(dir), &OUT_u[2], &OUT_u[3])) return 0;
+    light_disk_invert(s, dir, p, &OUT_u[0], &OUT_u[1]);
+    return 1;
+  }
+  return 0;
 }

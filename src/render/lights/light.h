@@ -26,6 +26,8 @@
 #ifndef LMC_RENDER_LIGHT_H
 #define LMC_RENDER_LIGHT_H
 
+#include <stdint.h>
+
 #include "render/distribution.h"
 #include "render/frame.h"
 #include "render/image.h"
@@ -124,6 +126,25 @@ void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 di
 vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2);
 /* Its density, 1 / (pi r^2). */
 double light_disk_pdf(const struct scene *s);
+
+/* The inverse of light_disk_point: the (u1, u2) that give the point p of
+ * the disk of direction dir. */
+void light_disk_invert(const struct scene *s, vec3 dir, vec3 p, double *OUT_u1, double *OUT_u2);
+
+/* The inverses of the samplers (inverse path sampling): the numbers with
+ * which a sampler produces a given point or direction. Numbers the
+ * sampler does not read (a delta light's) are copied from r; a point on
+ * an area light names its triangle `tri` of the light's mesh. Each
+ * returns 0 when the sampler cannot produce what it is given.
+ * light_invert_li: (u1, u2) of light_sample_li reaching p (area) or
+ * arriving along wi (constant, envmap) from ref. */
+int light_invert_li(const light *l, const struct scene *s, vec3 ref, vec3 wi, vec3 p,
+                    int64_t tri, const double r[2], double OUT_u[2]);
+/* light_invert_le: (u1, u2, u3, u4) of light_sample_le emitting the ray
+ * from p along dir (for infinite and directional lights, p on the disk of
+ * light_disk_point). */
+int light_invert_le(const light *l, const struct scene *s, vec3 p, vec3 dir, int64_t tri,
+                    const double r[4], double OUT_u[4]);
 
 /* The direction part of light_sample_le at a given point of a finite light
  * (area: cosine-weighted about the point's normal n; point: uniform; spot:
