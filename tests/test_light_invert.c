@@ -65,8 +65,11 @@ static void test_le_round_trip(void **state) {
       double u[4] = {inner(&g), inner(&g), inner(&g), inner(&g)};
       light_le_sample a;
       if (!light_sample_le(l, g_scene, u[0], u[1], u[2], u[3], &a)) continue;
-      int64_t tri = -1;
-      if (l->type == LIGHT_AREA) tri = distrib1d_sample_discrete(&l->tri_dist, u[0], NULL, NULL);
+      /* The sample names its triangle (the discrete choice u1 made). */
+      int64_t tri = a.tri;
+      assert_int_equal(tri, l->type == LIGHT_AREA
+                                ? distrib1d_sample_discrete(&l->tri_dist, u[0], NULL, NULL)
+                                : -1);
       double r[4] = {rng_uniform(&g), rng_uniform(&g), rng_uniform(&g), rng_uniform(&g)};
       double v[4];
       assert_true(light_invert_le(l, g_scene, a.p, a.dir, tri, r, v));
@@ -110,8 +113,10 @@ static void test_li_round_trip(void **state) {
         double u[2] = {inner(&g), inner(&g)};
         light_li_sample a;
         if (!light_sample_li(l, g_scene, refs[ri], u[0], u[1], &a)) continue;
-        int64_t tri = -1;
-        if (l->type == LIGHT_AREA) tri = distrib1d_sample_discrete(&l->tri_dist, u[0], NULL, NULL);
+        int64_t tri = a.tri;
+        assert_int_equal(tri, l->type == LIGHT_AREA
+                                  ? distrib1d_sample_discrete(&l->tri_dist, u[0], NULL, NULL)
+                                  : -1);
         double r[2] = {rng_uniform(&g), rng_uniform(&g)}, v[2];
         assert_true(light_invert_li(l, g_scene, refs[ri], a.wi, a.p, tri, r, v));
         assert_near(v[0], reads ? u[0] : r[0], 1e-9);

@@ -184,7 +184,9 @@ int bsdf_sample_f(const bsdf *b, double tu, double tv, vec3 wo, double u_lobe, d
  * density (or probability) at wi; u_lobe is uniform in that lobe's
  * interval (r[1]); numbers the sampler does not read (a delta lobe's u1,
  * u2: r[2], r[3]) are copied from r. So u drawn uniformly, mapped to wi
- * and inverted is uniform again. Returns 0 when no such lobe gives wi. */
+ * and inverted is uniform again. Returns 0 when no such lobe gives wi or
+ * when bsdf_sample_f from the numbers found does not give wi back to 1e-7
+ * (a direction the sampler cannot reach, deep in a clamped tail). */
 int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
                 const double r[4], double OUT_u[3]);
 /* Union of the lobe flags the model has. */

@@ -414,8 +414,9 @@ static int bsdf__invert_model(const bsdf *b, double tu, double tv, vec3 wo, vec3
   }
 }
 
-int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
-                const double r[4], double OUT_u[3]) {
+/* bsdf_invert without the check that the sampler gives wi back. */
+static int bsdf__invert_unchecked(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi,
+                                  int delta, const double r[4], double OUT_u[3]) {
   if (!b->masked) return bsdf__invert_model(b, tu, tv, wo, wi, delta, r, OUT_u, &(double){0.0});
   /* A mask: the pass-through lobe makes wi = -wo (delta, probability
    * 1 - P); the wrapped lobes have u_lobe scaled into [0, P). */
@@ -444,5 +445,16 @@ int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta
   OUT_u[1] = u[1];
   OUT_u[2] = u[2];
   return 1;
+}
+
+int bsdf_invert(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, int delta,
+                const double r[4], double OUT_u[3]) {
+  if (!bsdf__invert_unchecked(b, tu, tv, wo, wi, delta, r, OUT_u)) return 0;
+  /* Where a sampler clamps (Beckmann's slopes beyond 9, numbers at the
+   * square's edge) the inverse of a direction deep in a tail is not
+   * sampled back to it: refused, as the sampler never makes it. */
+  bsdf_sample s;
+  return bsdf_sample_f(b, tu, tv, wo, OUT_u[0], OUT_u[1], OUT_u[2], TRANSPORT_RADIANCE, &s) &&
+         ((s.flags & BSDF_DELTA) != 0) == (delta != 0) && v3_len2(v3_sub(s.wi, wi)) < 1e-14;
 }
 #endif

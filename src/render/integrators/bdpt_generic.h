@@ -523,6 +523,10 @@ static void bdpt__join_light(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt_
   v->beta = RRGB_SCALE(ls.li, inv_pdf);
   v->pdf_rev = R_C(0.0);
   v->pdf_fwd = bdpt__pdf_light_origin(BDPT_C, v, pt);
+#if !R_DUAL
+  v->hit.mesh = l->type == LIGHT_AREA ? l->mesh : -1;
+  v->hit.prim = ls.tri;
+#endif
   J->has_sampled = 1;
   J->emit = BDPT_J_EMIT(l);
   J->lobes |= BDPT_J_LOBES(pt);
@@ -599,6 +603,11 @@ static int bdpt__light_walk(BDPT_WALK_CTX, int max_vertices, BDPT_VERTEX *path) 
   y0->wo = R3_CONST(0.0, 0.0, 0.0);
   y0->beta = RRGB_SCALE_S(les.le, 1.0 / (pmf * les.pdf_pos));
   y0->pdf_rev = R_C(0.0);
+#if !R_DUAL
+  /* Where on an area light (its inverse, bdpt_invert_light_subpath, needs the triangle). */
+  y0->hit.mesh = l->type == LIGHT_AREA ? l->mesh : -1;
+  y0->hit.prim = les.tri;
+#endif
 
   /* beta = Le cos0 / (pmf pdf_pos pdf_dir). */
   REAL cos0 = l->type == LIGHT_AREA ? R_FABS(R3_DOT_C(les.n, les.dir)) : R_C(1.0);

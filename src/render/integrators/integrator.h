@@ -239,6 +239,41 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
                          int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
                          render_counters *cnt);
 
+/* The inverses of the subpaths (inverse path sampling; Bitterli, Jakob,
+ * Novak and Jarosz 2017): the numbers from which the walks above, with
+ * the same settings and parametrization, make the first n vertices of
+ * `path` again (to rounding). path is one subpath as the walks write it,
+ * or a full path's vertices re-split at another strategy: surfaces with
+ * their hit, wo (towards the previous vertex of this subpath) and delta
+ * flag; the light endpoint with its light index (-1: the infinite lights,
+ * one of which is then chosen in proportion to its share of the density),
+ * p, n, dir and, on an area light, hit.prim (its triangle). Where the walk
+ * has a choice (a lobe, a light, a number the vertices do not fix: the
+ * last vertex's four, a delta lobe's direction, Russian roulette below
+ * its survival probability), the number is drawn from g so that uniform
+ * numbers, walked and inverted, are uniform again. Each returns 0 when the
+ * walk cannot make those vertices.
+ * bdpt_invert_camera_subpath (n >= 2): the raster point (*OUT_rx,
+ * *OUT_ry) and BDPT_DIMS_PER_VERTEX numbers per surface vertex 1 .. n - 1. */
+int bdpt_invert_camera_subpath(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                               const bdpt_vertex *path, int n, rng *g, double *OUT_rx,
+                               double *OUT_ry, double *OUT_u);
+/* bdpt_invert_light_subpath (n >= 2): BDPT_DIMS_LIGHT_START numbers for the
+ * emitter, then BDPT_DIMS_PER_VERTEX per surface vertex 1 .. n - 1. */
+int bdpt_invert_light_subpath(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                              const bdpt_vertex *path, int n, rng *g, double *OUT_u);
+/* bdpt_invert_connect: the s = 1 strategy's numbers (light choice, point)
+ * with which camera vertex ref samples the light vertex y. */
+int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vertex *y, rng *g,
+                        double OUT_u[BDPT_DIMS_CONNECT]);
+
+/* The subpaths of strategy (s, t), s + t = k + 1, of the full path x_0 ..
+ * x_k (camera first, vertex records as the walks or ps_path keep them):
+ * cam[i] = x_i with wo towards x_{i-1}, lp[j] = x_{k-j} with wo towards
+ * x_{k-j+1}, for the inverses above. Delta flags are the path's. */
+void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
+                  bdpt_vertex *OUT_cam, bdpt_vertex *OUT_lp);
+
 /* Evaluates the single strategy (s, t): the first t vertices of cam joined
  * with the first s of lp (for s = 1 the light is sampled afresh from
  * u_connect, which may be NULL otherwise). Returns the MIS-weighted

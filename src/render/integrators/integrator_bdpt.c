@@ -240,6 +240,196 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
 }
 
 /* ---------------------------------------------------------------------------
+ * The inverses of the subpaths (inverse path sampling).
+ */
+
+/* A number uniform in [lo, hi) from r in [0, 1). */
+static double bdpt__uniform_in(double lo, double hi, double r) {
+  double x = lo + r * (hi - lo);
+  return x < hi ? x : nextafter(hi, lo);
+}
+
+/* The light endpoint's light (y: a light vertex, or a surface on an area
+ * light, as the end of a camera walk) and the triangle of its point. The
+ * infinite lights together (light -1, an escaped camera ray) resolve to
+ * one of them with probability in proportion to its share of the density
+ * of the direction: dens(l) is that light's (emission or direct sampling). */
+static int bdpt__invert_which_light(const scene *sc, const bdpt_vertex *y, vec3 w, int emission,
+                                    double r, int *OUT_li, int64_t *OUT_tri) {
+  *OUT_tri = -1;
+  if (y->type == BDPT_VERTEX_SURFACE) {
+    *OUT_li = y->hit.light;
+    *OUT_tri = y->hit.prim;
+    return *OUT_li >= 0;
+  }
+  if (y->type != BDPT_VERTEX_LIGHT) return 0;
+  if (y->light >= 0) {
+    *OUT_li = y->light;
+    if (sc->lights[y->light].type == LIGHT_AREA) *OUT_tri = y->hit.prim;
+    return 1;
+  }
+  double dens[64], total = 0.0;
+  int idx[64], m = 0;
+  for (int i = 0; i < sc->n_lights && m < 64; i++) {
+    const light *l = &sc->lights[i];
+    if (!light_is_infinite(l)) continue;
+    double d, pos;
+    if (emission)
+      light_pdf_le(l, sc, y->p, v3(0.0, 0.0, 0.0), w, &pos, &d);
+    else
+      d = light_pdf_li(l, sc, v3(0.0, 0.0, 0.0), w, y->p, v3(0.0, 0.0, 0.0));
+    dens[m] = scene_light_pmf(sc, i) * d;
+    idx[m++] = i;
+    total += dens[m - 1];
+  }
+  if (!(total > 0.0)) return 0;
+  double acc = 0.0, t = r * total;
+  for (int k = 0; k < m; k++) {
+    acc += dens[k];
+    if (t < acc || k == m - 1) {
+      *OUT_li = idx[k];
+      return dens[k] > 0.0;
+    }
+  }
+  return 0;
+}
+
+/* The numbers of the walk's step at surface vertex path[i] (i >= 1) to
+ * path[i + 1], and the walk's throughput after it (*beta, *eta_scale; beta1
+ * the throughput at y_1 of a light walk): the BSDF's numbers by
+ * bsdf_invert (or the absolute direction's coordinates), the roulette
+ * number uniform below its survival probability. 0 when the walk cannot
+ * take that step. */
+static int bdpt__invert_step(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                             transport_mode mode, const bdpt_vertex *path, int i, rgb beta1,
+                             rgb *beta, double *eta_scale, rng *g, double u[4]) {
+  const bdpt_vertex *v = &path[i];
+  const surface_hit *h = &v->hit;
+  if (v->type != BDPT_VERTEX_SURFACE || !h->bsdf) return 0;
+  vec3 wi = bdpt__dir_to(sc, v, &path[i + 1]), wo_l, wi_l;
+  if (!bdpt__side_ok(h, v->wo, &wo_l) || !bdpt__side_ok(h, wi, &wi_l)) return 0;
+  double r[4] = {rng_uniform(g), rng_uniform(g), rng_uniform(g), rng_uniform(g)};
+  int rough = par && bsdf_is_rough(h->bsdf, par->rough_min);
+  rgb weight;
+  int flags;
+  double eta = 1.0;
+  if (rough && i < par->abs_until) {
+    /* The walk reads the direction's spherical coordinates. */
+    u[0] = r[0];
+    bdpt_sphere_coords(wi, &u[1], &u[2], NULL);
+    double pdf;
+    rgb f = bsdf_eval_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l, mode, &pdf);
+    if (!(pdf > 0.0) || !isfinite(pdf)) return 0;
+    weight = rgb_scale(f, fabs(wi_l.z) / pdf);
+    int trans = wi_l.z * wo_l.z < 0.0;
+    flags = trans ? BSDF_TRANSMISSION : BSDF_REFLECTION;
+    if (trans) eta = wi_l.z < 0.0 ? h->bsdf->eta : 1.0 / h->bsdf->eta;
+  } else {
+    bsdf_sample bs;
+    if (!bsdf_invert(h->bsdf, h->tu, h->tv, wo_l, wi_l, v->delta, r, u) ||
+        !bsdf_sample_f(h->bsdf, h->tu, h->tv, wo_l, u[0], u[1], u[2], mode, &bs))
+      return 0;
+    weight = bs.weight, flags = bs.flags, eta = bs.eta;
+  }
+  if (!rgb_isfinite(weight) || rgb_is_black(weight)) return 0;
+  if (mode == TRANSPORT_IMPORTANCE) weight = rgb_scale(weight, bdpt__shading_correction(h, v->wo, wi));
+  *beta = rgb_mul(*beta, weight);
+  if (mode == TRANSPORT_RADIANCE && (flags & BSDF_TRANSMISSION)) *eta_scale *= eta * eta;
+  if (rgb_is_black(*beta)) return 0;
+  u[3] = r[3];
+  if (i >= rs->rrdepth) {
+    double q = bdpt__rr_q(mode, *beta, beta1, *eta_scale);
+    if (!(q > 0.0)) return 0;
+    u[3] = bdpt__uniform_in(0.0, q, r[3]);
+    *beta = rgb_scale(*beta, 1.0 / q);
+  }
+  return 1;
+}
+
+/* The walk from path[1] on: steps 1 .. n - 2, then the last vertex's
+ * numbers, which shape nothing here, drawn from g. */
+static int bdpt__invert_walk(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                             transport_mode mode, const bdpt_vertex *path, int n, rgb beta,
+                             rng *g, double *OUT_u) {
+  rgb beta1 = beta;
+  double eta_scale = 1.0;
+  for (int i = 1; i < n - 1; i++)
+    if (!bdpt__invert_step(sc, rs, par, mode, path, i, beta1, &beta, &eta_scale, g,
+                           OUT_u + BDPT_DIMS_PER_VERTEX * (i - 1)))
+      return 0;
+  for (int k = 0; k < BDPT_DIMS_PER_VERTEX; k++)
+    OUT_u[BDPT_DIMS_PER_VERTEX * (n - 2) + k] = rng_uniform(g);
+  return 1;
+}
+
+int bdpt_invert_camera_subpath(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                               const bdpt_vertex *path, int n, rng *g, double *OUT_rx,
+                               double *OUT_ry, double *OUT_u) {
+  if (n < 2 || path[0].type != BDPT_VERTEX_CAMERA) return 0;
+  if (!(camera_we(&sc->cam, bdpt__dir_to(sc, &path[0], &path[1]), OUT_rx, OUT_ry) > 0.0)) return 0;
+  return bdpt__invert_walk(sc, rs, par, TRANSPORT_RADIANCE, path, n, rgb_gray(1.0), g, OUT_u);
+}
+
+int bdpt_invert_light_subpath(const scene *sc, const render_settings *rs, const bdpt_param *par,
+                              const bdpt_vertex *path, int n, rng *g, double *OUT_u) {
+  if (n < 2) return 0;
+  const bdpt_vertex *y0 = &path[0];
+  /* The emitted ray: from y0 towards y1, or for a light at infinity along
+   * its travel from the disk point whose ray passes through y1. */
+  vec3 p = y0->p, dir;
+  int far = y0->type == BDPT_VERTEX_LIGHT &&
+            (y0->light < 0 || light_is_infinite(&sc->lights[y0->light]) ||
+             sc->lights[y0->light].type == LIGHT_DIRECTIONAL);
+  if (far) {
+    dir = y0->dir;
+    p = v3_fma(path[1].p, dir, -(v3_dot(v3_sub(path[1].p, sc->center), dir) + sc->radius));
+  } else {
+    dir = v3_normalize(v3_sub(path[1].p, y0->p));
+  }
+  int li;
+  int64_t tri;
+  if (!bdpt__invert_which_light(sc, y0, dir, 1, rng_uniform(g), &li, &tri)) return 0;
+  const light *l = &sc->lights[li];
+  OUT_u[0] = distrib1d_invert_discrete(&sc->light_select, li, rng_uniform(g));
+  double r[4] = {rng_uniform(g), rng_uniform(g), rng_uniform(g), rng_uniform(g)};
+  if (!(OUT_u[0] >= 0.0) || !light_invert_le(l, sc, p, dir, tri, r, OUT_u + 1)) return 0;
+  /* The walk's first throughput, from the same numbers. */
+  light_le_sample les;
+  double pmf = scene_light_pmf(sc, li);
+  if (!light_sample_le(l, sc, OUT_u[1], OUT_u[2], OUT_u[3], OUT_u[4], &les) ||
+      !(les.pdf_pos > 0.0 && les.pdf_dir > 0.0 && pmf > 0.0))
+    return 0;
+  double cos0 = l->type == LIGHT_AREA ? fabs(v3_dot(les.n, les.dir)) : 1.0;
+  rgb beta = rgb_scale(les.le, cos0 / (les.pdf_dir * pmf * les.pdf_pos));
+  return bdpt__invert_walk(sc, rs, par, TRANSPORT_IMPORTANCE, path, n, beta, g,
+                           OUT_u + BDPT_DIMS_LIGHT_START);
+}
+
+int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vertex *y, rng *g,
+                        double OUT_u[BDPT_DIMS_CONNECT]) {
+  vec3 wi = bdpt__dir_to(sc, ref, y);
+  int li;
+  int64_t tri;
+  if (!bdpt__invert_which_light(sc, y, wi, 0, rng_uniform(g), &li, &tri)) return 0;
+  OUT_u[0] = distrib1d_invert_discrete(&sc->light_select, li, rng_uniform(g));
+  double r[2] = {rng_uniform(g), rng_uniform(g)};
+  return OUT_u[0] >= 0.0 && light_invert_li(&sc->lights[li], sc, ref->p, wi, y->p, tri, r, OUT_u + 1);
+}
+
+void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
+                  bdpt_vertex *OUT_cam, bdpt_vertex *OUT_lp) {
+  for (int i = 0; i < t; i++) {
+    OUT_cam[i] = x[i];
+    if (i > 0 && x[i].type == BDPT_VERTEX_SURFACE) OUT_cam[i].wo = bdpt__dir_to(sc, &x[i], &x[i - 1]);
+  }
+  for (int j = 0; j < s; j++) {
+    OUT_lp[j] = x[k - j];
+    if (j > 0 && x[k - j].type == BDPT_VERTEX_SURFACE)
+      OUT_lp[j].wo = bdpt__dir_to(sc, &x[k - j], &x[k - j + 1]);
+  }
+}
+
+/* ---------------------------------------------------------------------------
  * MIS weights.
  */
 

@@ -89,8 +89,8 @@ static void light__triangle(const mesh *m, int64_t tri, vec3 *a, vec3 *b, vec3 *
 /* A point on an area light, uniform by area: a triangle chosen by area
  * with u1 (reused inside the cell), a uniform point on it with (u1', u2).
  * *n is the emitting side's normal. */
-static void light__sample_area_point(const light *l, const struct scene *s, double u1, double u2,
-                                     vec3 *p, vec3 *n) {
+static int64_t light__sample_area_point(const light *l, const struct scene *s, double u1,
+                                        double u2, vec3 *p, vec3 *n) {
   const mesh *m = &s->meshes[l->mesh];
   double u1r;
   int tri = distrib1d_sample_discrete(&l->tri_dist, u1, NULL, &u1r); /* pmf unused: one load less */
@@ -100,6 +100,7 @@ static void light__sample_area_point(const light *l, const struct scene *s, doub
   light__triangle(m, tri, &a, &b, &c);
   *p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
   *n = mesh_corners_normal(m, a, b, c);
+  return tri;
 }
 
 /* Mitsuba's spot falloff as a function of the cosine to the axis. */
@@ -339,11 +340,12 @@ double light_power(const light *l, const struct scene *s) {
 int light_sample_li(const light *l, const struct scene *s, vec3 ref, double u1, double u2,
                     light_li_sample *out) {
   memset(out, 0, sizeof *out);
+  out->tri = -1;
   switch (l->type) {
   case LIGHT_AREA: {
     /* Choose a triangle by area, then a uniform point on it. */
     vec3 p, n;
-    light__sample_area_point(l, s, u1, u2, &p, &n);
+    int64_t tri = light__sample_area_point(l, s, u1, u2, &p, &n);
     /* Convert the area density 1/A to solid angle: d^2 / cos_l. */
     vec3 d = v3_sub(p, ref);
     double dist2 = v3_len2(d);
@@ -359,6 +361,7 @@ int light_sample_li(const light *l, const struct scene *s, vec3 ref, double u1, 
     out->li = l->value;
     out->pdf = dist2 / (cos_l * l->area);
     out->delta = 0;
+    out->tri = tri;
     return isfinite(out->pdf) && out->pdf > 0.0;
   }
   case LIGHT_POINT:
@@ -474,10 +477,11 @@ rgb light_le_pdf_infinite(const light *l, const struct scene *s, vec3 dir, doubl
 int light_sample_le(const light *l, const struct scene *s, double u1, double u2, double u3,
                     double u4, light_le_sample *out) {
   memset(out, 0, sizeof *out);
+  out->tri = -1;
   switch (l->type) {
   case LIGHT_AREA: {
     /* Position by area (u1, u2), direction cosine-weighted (u3, u4). */
-    light__sample_area_point(l, s, u1, u2, &out->p, &out->n);
+    out->tri = light__sample_area_point(l, s, u1, u2, &out->p, &out->n);
     vec3 local = warp_square_to_cosine_hemisphere(u3, u4);
     frame f = frame_from_z(out->n);
     out->dir = v3_normalize(frame_to_world(&f, local));

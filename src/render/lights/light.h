@@ -71,6 +71,7 @@ typedef struct light_li_sample {
   rgb li;      /* radiance arriving (intensity / dist^2 for point lights) */
   double pdf;  /* solid-angle density (1 for delta lights) */
   int delta;
+  int64_t tri; /* area lights: the triangle of p in the light's mesh; else -1 */
 } light_li_sample;
 
 typedef struct light_le_sample {
@@ -81,6 +82,7 @@ typedef struct light_le_sample {
   double pdf_pos; /* area density of p (1 for delta positions) */
   double pdf_dir; /* solid-angle density of dir (1 for delta directions) */
   int delta_pos, delta_dir;
+  int64_t tri;    /* area lights: the triangle of p in the light's mesh; else -1 */
 } light_le_sample;
 
 /* Prepares sampling distributions once the scene's geometry and bounds are
