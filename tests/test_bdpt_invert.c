@@ -1,8 +1,8 @@
 /*
  * test_bdpt_invert.c: the inverse of BDPT's subpaths (integrator.h:
  * bdpt_invert_camera_subpath, bdpt_invert_light_subpath,
- * bdpt_invert_connect, bdpt_resplit), on a scene built here with every
- * kind of vertex the walks make: a glossy phong floor, a rough gold
+ * bdpt_invert_connect, bdpt_resplit), on tests/data/invert/mixed.xml, with
+ * every kind of vertex the walks make: a glossy phong floor, a rough gold
  * sphere, a rough glass sphere (absolute directions when rough), a smooth
  * glass sphere (delta lobes, total internal reflection), a plastic box
  * (delta coating and diffuse base on one surface), a diffuse sphere, an
@@ -35,7 +35,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -45,44 +44,6 @@
 #include "render/rng.h"
 #include "test_util.h"
 
-static const char *scene_xml =
-    "<scene version=\"0.6.0\">\n"
-    "  <sensor type=\"perspective\">\n"
-    "    <float name=\"fov\" value=\"50\"/>\n"
-    "    <transform name=\"toWorld\"><lookat origin=\"0, 2, 5\" target=\"0, 0.5, 0\" up=\"0, 1, 0\"/></transform>\n"
-    "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" value=\"24\"/></film>\n"
-    "  </sensor>\n"
-    "  <shape type=\"rectangle\">\n"
-    "    <transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/><scale x=\"4\" y=\"1\" z=\"4\"/></transform>\n"
-    "    <bsdf type=\"phong\"><rgb name=\"diffuseReflectance\" value=\"0.5, 0.4, 0.3\"/>"
-    "<rgb name=\"specularReflectance\" value=\"0.3, 0.3, 0.3\"/><float name=\"exponent\" value=\"40\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"sphere\"><point name=\"center\" x=\"0.8\" y=\"0.6\" z=\"0.2\"/><float name=\"radius\" value=\"0.6\"/>\n"
-    "    <bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/>"
-    "<string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0.2\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"sphere\"><point name=\"center\" x=\"-0.9\" y=\"0.5\" z=\"0.4\"/><float name=\"radius\" value=\"0.5\"/>\n"
-    "    <bsdf type=\"roughdielectric\"><float name=\"intIOR\" value=\"1.5\"/><float name=\"alpha\" value=\"0.1\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"sphere\"><point name=\"center\" x=\"0.0\" y=\"0.4\" z=\"1.3\"/><float name=\"radius\" value=\"0.4\"/>\n"
-    "    <bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"sphere\"><point name=\"center\" x=\"-0.2\" y=\"1.6\" z=\"-0.8\"/><float name=\"radius\" value=\"0.5\"/>\n"
-    "    <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7, 0.7, 0.6\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"cube\">\n"
-    "    <transform name=\"toWorld\"><scale x=\"0.3\" y=\"0.3\" z=\"0.3\"/><translate x=\"1.4\" y=\"0.3\" z=\"1.4\"/></transform>\n"
-    "    <bsdf type=\"plastic\"><rgb name=\"diffuseReflectance\" value=\"0.2, 0.5, 0.3\"/></bsdf>\n"
-    "  </shape>\n"
-    "  <shape type=\"rectangle\">\n"
-    "    <transform name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/><scale x=\"0.5\" y=\"1\" z=\"0.5\"/>"
-    "<translate x=\"0.3\" y=\"3\" z=\"0.5\"/></transform>\n"
-    "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"20, 18, 15\"/></emitter>\n"
-    "  </shape>\n"
-    "  <emitter type=\"point\"><point name=\"position\" x=\"-1.5\" y=\"2.5\" z=\"1.5\"/>"
-    "<rgb name=\"intensity\" value=\"5, 5, 5\"/></emitter>\n"
-    "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.2, 0.25, 0.3\"/></emitter>\n"
-    "</scene>\n";
 
 enum { MAXV = 7, DIM_CAM = 2 + BDPT_DIMS_PER_VERTEX * MAXV, DIM_LIGHT = BDPT_DIMS_LIGHT_START +
                                                                             BDPT_DIMS_PER_VERTEX * MAXV };
@@ -92,16 +53,9 @@ static render_settings g_rs;
 
 static int setup(void **state) {
   (void)state;
-  char path[64];
-  snprintf(path, sizeof path, "/tmp/lmc_test_bdpt_invert_%d.xml", (int)getpid());
-  FILE *f = fopen(path, "w");
-  if (!f) return -1;
-  fputs(scene_xml, f);
-  fclose(f);
   lmc_error err;
-  lmc_status st = scene_load_xml(path, NULL, 0, &g_sc, &err);
-  remove(path);
-  if (st != LMC_OK) {
+  if (scene_load_xml(LMC_SOURCE_DIR "/tests/data/invert/mixed.xml", NULL, 0, &g_sc, &err) !=
+      LMC_OK) {
     fprintf(stderr, "%s\n", err.msg);
     return -1;
   }

@@ -22,8 +22,11 @@
  * allocation (mutations per length in proportion to b_k) and with
  * --allocate even. With R = 6 the t statistic has 5 degrees of
  * freedom, P(|t_5| > 8) = 5e-4 per check, about 0.9% over the 18 checks
- * that are not exact. Every render must also make spp mutations per pixel
+ * that are not exact (1.8% with the 18 of mmlt's jumps). Every render must also make spp mutations per pixel
  * (up to less than 10% of whole rounds).
+ *
+ * mmlt with reversible jumps (--technique-jump 0.5): the furnace, the
+ * sphere and the mask, and a seed's image differs from the one without.
  *
  * --direct separate (the default of the command line): the same image
  * means on both scenes with pt rendering the paths of one and two segments
@@ -69,6 +72,7 @@ static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's di
 static const char *g_states; /* --states for the renders (NULL: the integrator's) */
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
 static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance; h2mc's default) */
+static const char *g_jump; /* mmlt's --technique-jump (NULL: not given) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -98,6 +102,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   assert_int_equal(mcmc_set(&rs, "direct", g_direct ? "separate" : "mcmc", &err), LMC_OK);
   if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
   assert_int_equal(mcmc_set(&rs, "delayed", g_delayed ? "on" : "off", &err), LMC_OK);
+  if (g_jump) assert_int_equal(mcmc_set(&rs, "technique-jump", g_jump, &err), LMC_OK);
   return rs;
 }
 
@@ -231,6 +236,36 @@ static void test_h2mc(void **state) {
   assert_true(memcmp(fd.splat, fp.splat, n * sizeof *fd.splat) != 0);
   film_free(&fd);
   film_free(&fp);
+  scene_destroy(s);
+}
+
+/* mmlt with reversible jumps between strategies (--technique-jump, half
+ * of the mutations that are not large steps): the furnace, the sphere's
+ * two groups and the mask's three (whose pass-through is a delta lobe no
+ * connection may end on); and the jumps do move the chains (one seed's
+ * images with and without differ). */
+static void test_mmlt_jump(void **state) {
+  (void)state;
+  rgb one = rgb_gray(1.0);
+  rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
+  rgb em[3] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.875, 1.5, 2.5), rgb_make(1.0, 2.0, 4.0)};
+  g_jump = "0.5";
+  check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
+  check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
+  check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
+  scene *s = load("furnace.xml");
+  film fj, fn;
+  render_stats st;
+  lmc_error err;
+  render_settings rs = settings(s, "mmlt", 4, 7, 1);
+  assert_int_equal(mcmc_render_run(s, &rs, &fj, &st, &err), LMC_OK);
+  g_jump = NULL;
+  rs = settings(s, "mmlt", 4, 7, 1);
+  assert_int_equal(mcmc_render_run(s, &rs, &fn, &st, &err), LMC_OK);
+  size_t n = 3 * (size_t)fj.width * (size_t)fj.height;
+  assert_true(memcmp(fj.splat, fn.splat, n * sizeof *fj.splat) != 0);
+  film_free(&fj);
+  film_free(&fn);
   scene_destroy(s);
 }
 
@@ -396,10 +431,12 @@ static void test_count(void **state) {
   /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, mlt's sphere 2 groups
    * and furnace, mask 5 x 3 groups,
    * h2mc furnace and sphere 2 groups on two state spaces and with delayed
-   * acceptance, then separate: furnace 2, sphere 3 x 2 groups; 3 channels
-   * each; and the refined b. */
+   * acceptance, mmlt's jumps furnace, sphere 2 and mask 3 groups, then
+   * separate: furnace 2, sphere 3 x 2 groups; 3 channels each; and the
+   * refined b. */
   assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 1) * 3 + 5 * 3 * 3 +
-                                 3 * (1 + 2) * 3 + (2 + 3 * 2) * 3 + 2 * RUNS);
+                                 3 * (1 + 2) * 3 + (1 + 2 + 3) * 3 + (2 + 3 * 2) * 3 +
+                                 2 * RUNS);
 }
 
 static int reset_direct(void **state) {
@@ -418,6 +455,7 @@ int main(void) {
       cmocka_unit_test(test_mlt_environment),
       cmocka_unit_test(test_mask),
       cmocka_unit_test(test_h2mc),
+      cmocka_unit_test(test_mmlt_jump),
       cmocka_unit_test_teardown(test_direct_separate, reset_direct),
       cmocka_unit_test(test_refined_b),
       cmocka_unit_test_teardown(test_determinism, reset_direct),

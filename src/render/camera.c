@@ -72,6 +72,14 @@ static vec3 camera__local(const camera *c, vec3 dir) {
   return v3_normalize(xform_inv_vector(&c->to_world, dir));
 }
 
+int camera_raster(const camera *c, vec3 dir, double *rx, double *ry) {
+  vec3 d = camera__local(c, dir);
+  if (!(d.z > 0.0)) return 0;
+  *rx = (1.0 - d.x / d.z / c->tan_half_x) * 0.5 * c->width;
+  *ry = (1.0 - d.y / d.z / c->tan_half_y) * 0.5 * c->height;
+  return isfinite(*rx) && isfinite(*ry);
+}
+
 double camera_we(const camera *c, vec3 dir, double *rx, double *ry) {
   vec3 d = camera__local(c, dir);
   if (!(d.z > 0.0)) return 0.0;

@@ -43,6 +43,9 @@ void camera_generate_ray(const camera *c, double rx, double ry, vec3 *org, vec3 
 /* Importance We along world direction dir leaving the pinhole, and the
  * raster point it passes through; 0 when it misses the film. */
 double camera_we(const camera *c, vec3 dir, double *rx, double *ry);
+/* The raster point of world direction dir leaving the pinhole, inside the
+ * film or not (what camera_generate_ray inverts); 0 behind the camera. */
+int camera_raster(const camera *c, vec3 dir, double *rx, double *ry);
 /* The inverse of the film sample: the numbers (u1, u2) in [0, 1)^2 whose
  * raster point (u1 W, u2 H) gives the ray along world direction dir;
  * returns 0 when dir misses the film. */

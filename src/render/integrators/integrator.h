@@ -254,7 +254,9 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
  * numbers, walked and inverted, are uniform again. Each returns 0 when the
  * walk cannot make those vertices.
  * bdpt_invert_camera_subpath (n >= 2): the raster point (*OUT_rx,
- * *OUT_ry) and BDPT_DIMS_PER_VERTEX numbers per surface vertex 1 .. n - 1. */
+ * *OUT_ry; outside the film when the camera ray is, as the MCMC states'
+ * film grown by the filter's radius allows) and BDPT_DIMS_PER_VERTEX
+ * numbers per surface vertex 1 .. n - 1. */
 int bdpt_invert_camera_subpath(const scene *sc, const render_settings *rs, const bdpt_param *par,
                                const bdpt_vertex *path, int n, rng *g, double *OUT_rx,
                                double *OUT_ry, double *OUT_u);
@@ -270,7 +272,9 @@ int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vert
 /* The subpaths of strategy (s, t), s + t = k + 1, of the full path x_0 ..
  * x_k (camera first, vertex records as the walks or ps_path keep them):
  * cam[i] = x_i with wo towards x_{i-1}, lp[j] = x_{k-j} with wo towards
- * x_{k-j+1}, for the inverses above. Delta flags are the path's. */
+ * x_{k-j+1}, for the inverses above. Delta flags are the path's; an
+ * area light the camera walk hit (a surface) becomes, as lp[0], the light
+ * endpoint the light walks make (type LIGHT), which MIS weights expect. */
 void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
                   bdpt_vertex *OUT_cam, bdpt_vertex *OUT_lp);
 

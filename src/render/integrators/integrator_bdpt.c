@@ -366,7 +366,7 @@ int bdpt_invert_camera_subpath(const scene *sc, const render_settings *rs, const
                                const bdpt_vertex *path, int n, rng *g, double *OUT_rx,
                                double *OUT_ry, double *OUT_u) {
   if (n < 2 || path[0].type != BDPT_VERTEX_CAMERA) return 0;
-  if (!(camera_we(&sc->cam, bdpt__dir_to(sc, &path[0], &path[1]), OUT_rx, OUT_ry) > 0.0)) return 0;
+  if (!camera_raster(&sc->cam, bdpt__dir_to(sc, &path[0], &path[1]), OUT_rx, OUT_ry)) return 0;
   return bdpt__invert_walk(sc, rs, par, TRANSPORT_RADIANCE, path, n, rgb_gray(1.0), g, OUT_u);
 }
 
@@ -426,6 +426,16 @@ void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
     OUT_lp[j] = x[k - j];
     if (j > 0 && x[k - j].type == BDPT_VERTEX_SURFACE)
       OUT_lp[j].wo = bdpt__dir_to(sc, &x[k - j], &x[k - j + 1]);
+  }
+  /* An area light the camera walk hit, as the light endpoint the light
+   * walk and the s = 1 connection make (the MIS weights read it so). */
+  if (s >= 1 && x[k].type == BDPT_VERTEX_SURFACE && x[k].hit.light >= 0) {
+    bdpt_vertex *y = &OUT_lp[0];
+    y->type = BDPT_VERTEX_LIGHT;
+    y->light = x[k].hit.light;
+    y->n = x[k].hit.ng;
+    y->dir = y->wo = v3(0.0, 0.0, 0.0);
+    y->delta = 0;
   }
 }
 

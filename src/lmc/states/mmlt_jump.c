@@ -1,0 +1,226 @@
+/*
+ * mmlt_jump.c: the reversible jump between strategies of the mmlt states
+ * (mmlt_jump.h says what it does and why it is exact).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lmc/states/mmlt_jump.h"
+#include "lmc/states/mmlt_states.h"
+
+enum { MMJ_N = BDPT_MAX_VERTICES + 1 };
+
+/* A sampler over a state's coordinates, stream by stream (a number past a
+ * stream's block marks the replay as incomplete). */
+typedef struct mmj__vec {
+  lmc_sampler base;
+  const mc_target *t;
+  const double *u;
+  int stream, pos[LMC_STREAM_COUNT];
+  int past;
+} mmj__vec;
+
+static double mmj__next(lmc_sampler *self) {
+  mmj__vec *v = (mmj__vec *)self;
+  int k = v->stream, p = v->pos[k]++;
+  if (p >= v->t->stream_dim[k]) {
+    v->past = 1;
+    return 0.5;
+  }
+  return v->u[mc_target_stream_offset(v->t, k) + p];
+}
+
+static void mmj__stream(lmc_sampler *self, int stream) { ((mmj__vec *)self)->stream = stream; }
+
+/* A vertex that can end a connection: a surface scattering through a smooth lobe. */
+static int mmj__connectible(const bdpt_vertex *v) {
+  return v->type == BDPT_VERTEX_SURFACE && !v->delta && !bsdf_is_delta(v->hit.bsdf);
+}
+
+/* An endpoint a camera walk can end on: an area light's surface or the
+ * infinite lights. */
+static int mmj__hittable(const scene *sc, const bdpt_vertex *e) {
+  if (e->type == BDPT_VERTEX_SURFACE) return e->hit.light >= 0;
+  if (e->type != BDPT_VERTEX_LIGHT) return 0;
+  if (e->light < 0) return 1;
+  const light *l = &sc->lights[e->light];
+  return light_is_infinite(l) || l->type == LIGHT_AREA;
+}
+
+/* The MIS weight of strategy (s, t) for the full path X_0 .. X_k (0 when
+ * the strategy cannot make it); cam and lp are scratch. */
+static double mmj__weight(const scene *sc, const bdpt_vertex *X, int k, int s, int t,
+                          bdpt_vertex *cam, bdpt_vertex *lp) {
+  if (s == 0 && !mmj__hittable(sc, &X[k])) return 0.0;
+  if (s >= 1 && t >= 2 && !mmj__connectible(&X[t - 1])) return 0.0;
+  if (s >= 2 && !mmj__connectible(&X[t])) return 0.0;
+  bdpt_resplit(sc, X, k, s, t, cam, lp);
+  bdpt_path_pdfs(sc, cam, t, lp, s);
+  double w = bdpt_mis_weight(sc, cam, t, lp, s, NULL);
+  return w > 0.0 && isfinite(w) ? w : 0.0;
+}
+
+/* Walks the state u's strategy (s, t) again into X_0 .. X_k, as
+ * mc_mmlt_contribution makes it (for s = 1 the light vertex its connect
+ * numbers sample). Returns 0 when the walk does not make a full path. */
+static int mmj__path(const mc_target *T, const double *u, int s, int t, bdpt_vertex *X,
+                     bdpt_vertex *cam, bdpt_vertex *lp) {
+  const mc_mmlt_states *st = T->ctx;
+  const scene *sc = st->s;
+  int k = st->length;
+  mmj__vec v = {{mmj__next, mmj__stream, NULL}, T, u, LMC_STREAM_CAMERA, {0}, 0};
+  render_counters cnt = {0};
+  double rx = -st->margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * st->margin);
+  double ry = -st->margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * st->margin);
+  if (bdpt_camera_subpath(sc, &st->rs, &v.base, rx, ry, t, cam, &cnt) < t) return 0;
+  for (int i = 0; i < t; i++) X[i] = cam[i];
+  if (s >= 2) {
+    sampler_use_stream(&v.base, LMC_STREAM_LIGHT);
+    if (bdpt_light_subpath(sc, &st->rs, &v.base, s, lp, &cnt) < s) return 0;
+    for (int j = 0; j < s; j++) X[k - j] = lp[j];
+  } else if (s == 1) {
+    const double *uc = u + mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 1;
+    double pmf, ur;
+    int li = scene_sample_light(sc, uc[0], &pmf, &ur);
+    light_li_sample ls;
+    if (li < 0 || !light_sample_li(&sc->lights[li], sc, cam[t - 1].p, uc[1], uc[2], &ls)) return 0;
+    bdpt_vertex *y = &X[k];
+    memset(y, 0, sizeof *y);
+    y->type = BDPT_VERTEX_LIGHT;
+    y->light = li;
+    y->p = ls.p;
+    y->n = sc->lights[li].type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+    y->dir = v3_neg(ls.wi);
+    y->hit.mesh = sc->lights[li].type == LIGHT_AREA ? sc->lights[li].mesh : -1;
+    y->hit.prim = ls.tri;
+  }
+  /* The connection's ends scatter through smooth lobes (ps_from_bdpt's rule). */
+  if (s > 0 && t >= 1) X[t - 1].delta = X[t].delta = 0;
+  return !v.past;
+}
+
+/* The numbers of strategy (s, t) for the path X into y (every number X
+ * does not fix already a fresh uniform there). Returns 0 when a subpath
+ * cannot be inverted. */
+static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, int t, double *y) {
+  const mc_target *T = j->target;
+  const mc_mmlt_states *st = T->ctx;
+  const scene *sc = st->s;
+  int k = st->length, n = st->n_strategies;
+  bdpt_vertex *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
+  double *uc = y + mc_target_stream_offset(T, LMC_STREAM_CAMERA);
+  double *ul = y + mc_target_stream_offset(T, LMC_STREAM_LIGHT);
+  double *ux = y + mc_target_stream_offset(T, LMC_STREAM_CONNECT);
+  /* The technique coordinate: uniform in t's interval. */
+  double lo = (double)(t - 1) / n, hi = (double)t / n;
+  ux[0] = lo + rng_uniform(r) * (hi - lo);
+  if (!(ux[0] < hi)) ux[0] = nextafter(hi, lo);
+  bdpt_resplit(sc, X, k, s, t, cam, lp);
+  double buf[2 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * MMJ_N];
+  if (t >= 2) {
+    double rx, ry;
+    j->st.inversions++;
+    if (!bdpt_invert_camera_subpath(sc, &st->rs, NULL, cam, t, r, &rx, &ry, buf)) return 0;
+    /* The film grown by the filter's radius, as the states sample it. */
+    uc[0] = (rx + st->margin) / (sc->cam.width + 2.0 * st->margin);
+    uc[1] = (ry + st->margin) / (sc->cam.height + 2.0 * st->margin);
+    if (!(uc[0] >= 0.0 && uc[0] < 1.0 && uc[1] >= 0.0 && uc[1] < 1.0)) return 0;
+    int m = BDPT_DIMS_PER_VERTEX * (t - 1);
+    if (2 + m > T->stream_dim[LMC_STREAM_CAMERA]) return 0;
+    memcpy(uc + 2, buf, (size_t)m * sizeof *buf);
+  }
+  if (s >= 2) {
+    j->st.inversions++;
+    if (!bdpt_invert_light_subpath(sc, &st->rs, NULL, lp, s, r, buf)) return 0;
+    int m = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (s - 1);
+    if (m > T->stream_dim[LMC_STREAM_LIGHT]) return 0;
+    memcpy(ul, buf, (size_t)m * sizeof *buf);
+  } else if (s == 1) {
+    j->st.inversions++;
+    if (!bdpt_invert_connect(sc, &cam[t - 1], &X[k], r, ux + 1)) return 0;
+  }
+  return 1;
+}
+
+static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  mc_mmlt_jump *j = self;
+  const mc_target *T = j->target;
+  const mc_mmlt_states *st = T->ctx;
+  int k = st->length, n = st->n_strategies;
+  j->st.proposed++;
+  for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
+  if (n < 2 || !(x->v.f > 0.0)) return -INFINITY;
+  int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
+  if (idx >= n) idx = n - 1;
+  int t = idx + 1, s = k + 1 - t;
+  bdpt_vertex *X = j->v, *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
+  if (!mmj__path(T, x->u, s, t, X, cam, lp)) return -INFINITY;
+
+  /* Every strategy's weight; t' != t drawn with w_t' / (W - w_t). */
+  double w[MMJ_N], sum = 0.0;
+  for (int tp = 1; tp <= k + 1; tp++) {
+    w[tp] = mmj__weight(st->s, X, k, k + 1 - tp, tp, cam, lp);
+    sum += w[tp];
+  }
+  double rest = sum - w[t];
+  if (!(w[t] > 0.0) || !(rest > 0.0)) {
+    j->st.lone++;
+    return -INFINITY;
+  }
+  double pick = rng_uniform(r) * rest, acc = 0.0;
+  int t2 = -1;
+  for (int tp = 1; tp <= k + 1 && t2 < 0; tp++) {
+    if (tp == t || !(w[tp] > 0.0)) continue;
+    acc += w[tp];
+    if (pick < acc) t2 = tp;
+  }
+  if (t2 < 0)
+    for (int tp = k + 1; tp >= 1 && t2 < 0; tp--)
+      if (tp != t && w[tp] > 0.0) t2 = tp;
+  if (!mmj__numbers(j, r, X, k + 1 - t2, t2, OUT_y)) {
+    j->st.refused++;
+    return -INFINITY;
+  }
+  j->log_rest_to = log(sum - w[t2]);
+  j->rx = x->v.rx, j->ry = x->v.ry;
+  return -log(x->v.f) - log(rest);
+}
+
+static double mmj__log_density(void *self, const mc_state *from, const double *to_u) {
+  (void)to_u;
+  mc_mmlt_jump *j = self;
+  /* The same path seen from the same raster point, or a walk that went elsewhere. */
+  const mc_mmlt_states *st = j->target->ctx;
+  double tol = 1e-6 * (st->s->cam.width + st->s->cam.height);
+  if (!(fabs(from->v.rx - j->rx) <= tol && fabs(from->v.ry - j->ry) <= tol)) {
+    j->st.mismatch++;
+    return -INFINITY;
+  }
+  return -log(from->v.f) - j->log_rest_to;
+}
+
+lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, lmc_error *err) {
+  memset(j, 0, sizeof *j);
+  j->target = mmlt_target;
+  j->v = malloc(4 * MMJ_N * sizeof *j->v);
+  if (!j->v) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the technique jumps");
+  return LMC_OK;
+}
+
+void mc_mmlt_jump_free(mc_mmlt_jump *j) {
+  if (!j) return;
+  free(j->v);
+  j->v = NULL;
+}
+
+mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
+  mc_kernel k;
+  memset(&k, 0, sizeof k);
+  k.name = "jump";
+  k.kind = MC_KERNEL_FULL;
+  k.self = j;
+  k.propose = mmj__propose;
+  k.log_density = mmj__log_density;
+  return k;
+}

@@ -1,0 +1,69 @@
+/*
+ * mmlt_jump.h: the reversible jump between the strategies of the mmlt
+ * states (Bitterli, Jakob, Novak and Jarosz 2017, "Reversible Jump
+ * Metropolis Light Transport using Inverse Mappings"): a move that keeps
+ * the state's path and changes the strategy (s, t) that makes it.
+ *
+ * The move. From a state of strategy t (its path x = x_0 .. x_k, walked
+ * again from its numbers), the MIS weights w_t'(x) of every strategy of
+ * length k are computed (bdpt_resplit, bdpt_path_pdfs, bdpt_mis_weight;
+ * zero where a strategy cannot make x: a connection at a delta vertex, a
+ * camera walk ending on a point light). A strategy t' != t is drawn with
+ * probability w_t' / (W - w_t), W = sum of the weights, and x is mapped
+ * into t''s numbers by the inverse of BDPT's subpaths (integrator.h,
+ * bdpt_invert_*): the technique coordinate uniform in t''s interval, the
+ * film, camera, light and connect numbers that make x, and every number
+ * x does not fix a fresh uniform, so that the new numbers are distributed
+ * as a uniform sample given that it makes x.
+ *
+ * Why the ratio is (W - w_t) / (W - w_t'). The states' f is n_k times a
+ * strategy's MIS-weighted estimate, f_t(u) = n_k w_t(x) C(x) / p_t(x)
+ * with p_t the density with which t's numbers make x (the states'
+ * estimate is unbiased, so p_t is the true density of that map). In the
+ * coordinates (t, x, numbers not fixed by x) the target is proportional
+ * to w_t(x) C(x) times the conditional density of the free numbers, which
+ * the inverse draws from; the move is then a Metropolised Gibbs step on t
+ * given x (Liu 1996), whose acceptance is min(1, (W - w_t) / (W - w_t')).
+ * The chain's formula f(y) q(x|y) / (f(x) q(y|x)) is made to give that:
+ * propose returns log q(y|x) = -log f(x) - log(W - w_t), log_density
+ * -log f(y) - log(W - w_t') (the same x: cached by propose).
+ *
+ * Refusals. A re-split whose numbers a walk cannot reach (a direction
+ * deep in a sampler's clamped tail, bsdf_invert) is refused: the state
+ * stays, as a proposal of zero density. A proposal whose walk does not
+ * land on the same raster point (a ray that grazed an edge) is rejected
+ * too. Both are counted; they should be near zero.
+ */
+#ifndef LMC_MCMC_MMLT_JUMP_H
+#define LMC_MCMC_MMLT_JUMP_H
+
+#include <stdint.h>
+
+#include "lmc/kernels/chain.h"
+#include "render/error.h"
+#include "render/integrators/integrator.h"
+
+/* What the jumps of one chain counted (int64_t only: summed over MPI ranks). */
+typedef struct mc_mmlt_jump_stats {
+  int64_t proposed;    /* jumps tried */
+  int64_t lone;        /* the state's strategy is the only one with weight: nothing to jump to */
+  int64_t refused;     /* the new strategy's numbers could not be found (a tail, see above) */
+  int64_t mismatch;    /* the new numbers walked to another raster point: rejected */
+  int64_t inversions;  /* subpaths inverted */
+} mc_mmlt_jump_stats;
+
+/* One chain's jump: its target (an mmlt family's), scratch and counts. */
+typedef struct mc_mmlt_jump {
+  const mc_target *target; /* borrowed; target->ctx is the family's mc_mmlt_states */
+  bdpt_vertex *v;          /* scratch: 4 arrays of BDPT_MAX_VERTICES + 1 vertices */
+  double log_rest_to;      /* log(W - w_t') of the last proposal, for log_density */
+  double rx, ry;           /* the raster point of its path */
+  mc_mmlt_jump_stats st;
+} mc_mmlt_jump;
+
+lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, lmc_error *err);
+void mc_mmlt_jump_free(mc_mmlt_jump *j);
+/* The kernel (MC_KERNEL_FULL, "jump") over j, which must outlive it. */
+mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j);
+
+#endif
