@@ -21,6 +21,8 @@
  *     of the connect numbers) land on the path's vertices; a re-split that
  *     does not invert must have a step whose direction BSDF sampling
  *     cannot reach (a smooth lobe's density below 1e-12 there);
+ *   - every strategy's MIS weight at once (bdpt_mis_weights) equals
+ *     bdpt_mis_weight on each re-split (1e-9), and they sum to 1;
  *   - the inverse is the posterior of u given the vertices: numbers that
  *     made at least m vertices, the part that shaped them replaced by the
  *     inverse (the rest kept), are uniform coordinate by coordinate
@@ -200,7 +202,7 @@ static void test_strategies(void **state) {
   (void)state;
   rng g;
   rng_seed(&g, 11, 0);
-  long paths = 0, splits = 0, refused = 0, by_s[4] = {0};
+  long paths = 0, splits = 0, refused = 0, weights = 0, by_s[4] = {0};
   for (int it = 0; it < 8000; it++) {
     double uc[DIM_CAM], ul[DIM_LIGHT], ux[BDPT_DIMS_CONNECT];
     for (int i = 0; i < DIM_CAM; i++) uc[i] = rng_uniform(&g);
@@ -237,6 +239,24 @@ static void test_strategies(void **state) {
     for (int j = 0; j < s; j++) x[k - j] = lp[j];
     if (s > 0) x[t - 1].delta = x[t].delta = 0;
     paths++;
+    /* Every strategy's MIS weight at once equals the ratio walk's on each
+     * re-split, and the weights sum to one. */
+    {
+      double wa[2 * MAXV + 3], sum = 0.0;
+      bdpt_vertex sc2[2 * MAXV + 3], c2[2 * MAXV + 2], l2[2 * MAXV + 2];
+      bdpt_mis_weights(g_sc, x, k, sc2, wa);
+      for (int t2 = 1; t2 <= k + 1; t2++) {
+        int s2 = k + 1 - t2;
+        sum += wa[t2];
+        if (!(wa[t2] > 0.0)) continue;
+        bdpt_resplit(g_sc, x, k, s2, t2, c2, l2);
+        bdpt_path_pdfs(g_sc, c2, t2, l2, s2);
+        double w1 = bdpt_mis_weight(g_sc, c2, t2, l2, s2, NULL);
+        assert_near(wa[t2], w1, 1e-9 * fmax(1.0, w1));
+        weights++;
+      }
+      assert_near(sum, 1.0, 1e-9);
+    }
     /* Every other strategy with a camera subpath of two or more vertices. */
     for (int t2 = 2; t2 <= k + 1; t2++) {
       int s2 = k + 1 - t2;
@@ -287,8 +307,9 @@ static void test_strategies(void **state) {
     }
   }
   print_message("strategies: %ld paths, %ld re-splits (s' = 0: %ld, 1: %ld, 2: %ld, >2: %ld), "
-                "%ld refused\n",
-                paths, splits, by_s[0], by_s[1], by_s[2], by_s[3], refused);
+                "%ld refused; %ld MIS weights compared\n",
+                paths, splits, by_s[0], by_s[1], by_s[2], by_s[3], refused, weights);
+  assert_true(weights > 2 * paths);
   assert_true(paths > 600);
   for (int i = 0; i < 4; i++) assert_true(by_s[i] > 50);
 }

@@ -33,34 +33,6 @@ static double mmj__next(lmc_sampler *self) {
 
 static void mmj__stream(lmc_sampler *self, int stream) { ((mmj__vec *)self)->stream = stream; }
 
-/* A vertex that can end a connection: a surface scattering through a smooth lobe. */
-static int mmj__connectible(const bdpt_vertex *v) {
-  return v->type == BDPT_VERTEX_SURFACE && !v->delta && !bsdf_is_delta(v->hit.bsdf);
-}
-
-/* An endpoint a camera walk can end on: an area light's surface or the
- * infinite lights. */
-static int mmj__hittable(const scene *sc, const bdpt_vertex *e) {
-  if (e->type == BDPT_VERTEX_SURFACE) return e->hit.light >= 0;
-  if (e->type != BDPT_VERTEX_LIGHT) return 0;
-  if (e->light < 0) return 1;
-  const light *l = &sc->lights[e->light];
-  return light_is_infinite(l) || l->type == LIGHT_AREA;
-}
-
-/* The MIS weight of strategy (s, t) for the full path X_0 .. X_k (0 when
- * the strategy cannot make it); cam and lp are scratch. */
-static double mmj__weight(const scene *sc, const bdpt_vertex *X, int k, int s, int t,
-                          bdpt_vertex *cam, bdpt_vertex *lp) {
-  if (s == 0 && !mmj__hittable(sc, &X[k])) return 0.0;
-  if (s >= 1 && t >= 2 && !mmj__connectible(&X[t - 1])) return 0.0;
-  if (s >= 2 && !mmj__connectible(&X[t])) return 0.0;
-  bdpt_resplit(sc, X, k, s, t, cam, lp);
-  bdpt_path_pdfs(sc, cam, t, lp, s);
-  double w = bdpt_mis_weight(sc, cam, t, lp, s, NULL);
-  return w > 0.0 && isfinite(w) ? w : 0.0;
-}
-
 /* Walks the state u's strategy (s, t) again into X_0 .. X_k, as
  * mc_mmlt_contribution makes it (for s = 1 the light vertex its connect
  * numbers sample). Returns 0 when the walk does not make a full path. */
@@ -158,11 +130,9 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
   if (!mmj__path(T, x->u, s, t, X, cam, lp)) return -INFINITY;
 
   /* Every strategy's weight; t' != t drawn with w_t' / (W - w_t). */
-  double w[MMJ_N], sum = 0.0;
-  for (int tp = 1; tp <= k + 1; tp++) {
-    w[tp] = mmj__weight(st->s, X, k, k + 1 - tp, tp, cam, lp);
-    sum += w[tp];
-  }
+  double w[MMJ_N + 1], sum = 0.0;
+  bdpt_mis_weights(st->s, X, k, cam, w);
+  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp];
   double rest = sum - w[t];
   if (!(w[t] > 0.0) || !(rest > 0.0)) {
     j->st.lone++;

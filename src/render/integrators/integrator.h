@@ -278,6 +278,15 @@ int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vert
 void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
                   bdpt_vertex *OUT_cam, bdpt_vertex *OUT_lp);
 
+/* The power-heuristic MIS weights of every strategy t = 1 .. k + 1 (s =
+ * k + 1 - t) of the full path x_0 .. x_k at once, into OUT_w[t] (0 where a
+ * delta vertex at the joint makes the strategy impossible): the densities
+ * of every vertex from both sides once (bdpt_path_pdfs), then the ratio
+ * walk's sums for all t. The same numbers, to rounding, as bdpt_mis_weight
+ * on each re-split. scratch: room for k + 2 vertices. */
+void bdpt_mis_weights(const scene *sc, const bdpt_vertex *x, int k, bdpt_vertex *scratch,
+                      double *OUT_w);
+
 /* Evaluates the single strategy (s, t): the first t vertices of cam joined
  * with the first s of lp (for s = 1 the light is sampled afresh from
  * u_connect, which may be NULL otherwise). Returns the MIS-weighted

@@ -482,6 +482,48 @@ void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, i
   }
 }
 
+void bdpt_mis_weights(const scene *sc, const bdpt_vertex *x, int k, bdpt_vertex *scratch,
+                      double *OUT_w) {
+  for (int t = 0; t <= k + 1; t++) OUT_w[t] = 0.0;
+  if (k < 1 || k + 1 > 2 * BDPT_MAX_VERTICES) return;
+  /* Every vertex's densities from either side, once: the split (k, 1). */
+  bdpt_vertex *cam = scratch, *lp = scratch + 1;
+  bdpt_resplit(sc, x, k, k, 1, cam, lp);
+  bdpt_path_pdfs(sc, cam, 1, lp, k);
+  /* fc[i], fl[i]: x_i sampled from the camera side and from the light side
+   * (zero read as one, as the ratio walk does); d[i]: its delta flag. */
+  double fc[2 * BDPT_MAX_VERTICES], fl[2 * BDPT_MAX_VERTICES];
+  int d[2 * BDPT_MAX_VERTICES];
+  for (int i = 0; i <= k; i++) {
+    const bdpt_vertex *v = i == 0 ? &cam[0] : &lp[k - i];
+    fc[i] = bdpt__remap0(i == 0 ? v->pdf_fwd : v->pdf_rev);
+    fl[i] = bdpt__remap0(i == 0 ? v->pdf_rev : v->pdf_fwd);
+    d[i] = v->delta;
+  }
+  /* Strategy t joins x_{t-1} and x_t (t = k + 1: the camera walk ends on
+   * the emitter): possible unless a delta vertex is at the joint, and
+   * (1, 1) is not used. Its density relative to t = 1's: the product of
+   * fc / fl over x_1 .. x_{t-1}, as logs. */
+  double lr[2 * BDPT_MAX_VERTICES + 1];
+  int ok[2 * BDPT_MAX_VERTICES + 1];
+  lr[1] = 0.0;
+  for (int t = 2; t <= k + 1; t++) lr[t] = lr[t - 1] + log(fc[t - 1]) - log(fl[t - 1]);
+  for (int t = 1; t <= k + 1; t++) {
+    if (t <= k)
+      ok[t] = !d[t - 1] && !d[t] && !(t == 1 && k == 1);
+    else
+      ok[t] = !d[k] && !bdpt__is_delta_light(sc, &lp[0]);
+  }
+  /* The power heuristic: w_t = 1 / sum_j (p_j / p_t)^2 over the possible j. */
+  for (int t = 1; t <= k + 1; t++) {
+    if (!ok[t]) continue;
+    double sum = 0.0;
+    for (int j = 1; j <= k + 1; j++)
+      if (ok[j]) sum += exp(2.0 * (lr[j] - lr[t]));
+    OUT_w[t] = 1.0 / sum;
+  }
+}
+
 /* ---------------------------------------------------------------------------
  * The densities and the walk for other samplers of whole paths (integrator.h).
  */
