@@ -22,11 +22,13 @@
  * allocation (mutations per length in proportion to b_k) and with
  * --allocate even. With R = 6 the t statistic has 5 degrees of
  * freedom, P(|t_5| > 8) = 5e-4 per check, about 0.9% over the 18 checks
- * that are not exact (1.8% with the 18 of mmlt's jumps). Every render must also make spp mutations per pixel
+ * that are not exact (2.6% with the 33 of mmlt's jumps and perturbations). Every render must also make spp mutations per pixel
  * (up to less than 10% of whole rounds).
  *
  * mmlt with reversible jumps (--technique-jump 0.5): the furnace, the
- * sphere and the mask, and a seed's image differs from the one without.
+ * sphere and the mask, and a seed's image differs from the one without;
+ * with the fused path perturbations too (--path-mutations 0.3), the sphere
+ * and the mask.
  *
  * --direct separate (the default of the command line): the same image
  * means on both scenes with pt rendering the paths of one and two segments
@@ -73,6 +75,7 @@ static const char *g_states; /* --states for the renders (NULL: the integrator's
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
 static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance; h2mc's default) */
 static const char *g_jump; /* mmlt's --technique-jump (NULL: not given) */
+static const char *g_perturb; /* mmlt's --path-mutations (NULL: not given) */
 
 static scene *load(const char *name) {
   char path[1024];
@@ -103,6 +106,7 @@ static render_settings settings(const scene *s, const char *integrator, int64_t 
   if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
   assert_int_equal(mcmc_set(&rs, "delayed", g_delayed ? "on" : "off", &err), LMC_OK);
   if (g_jump) assert_int_equal(mcmc_set(&rs, "technique-jump", g_jump, &err), LMC_OK);
+  if (g_perturb) assert_int_equal(mcmc_set(&rs, "path-mutations", g_perturb, &err), LMC_OK);
   return rs;
 }
 
@@ -242,8 +246,9 @@ static void test_h2mc(void **state) {
 /* mmlt with reversible jumps between strategies (--technique-jump, half
  * of the mutations that are not large steps): the furnace, the sphere's
  * two groups and the mask's three (whose pass-through is a delta lobe no
- * connection may end on); and the jumps do move the chains (one seed's
- * images with and without differ). */
+ * connection may end on); with the fused path perturbations too
+ * (--path-mutations 0.3) the sphere and the mask; and the jumps do move
+ * the chains (one seed's images with and without differ). */
 static void test_mmlt_jump(void **state) {
   (void)state;
   rgb one = rgb_gray(1.0);
@@ -253,6 +258,11 @@ static void test_mmlt_jump(void **state) {
   check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
   check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
   check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
+  /* The fused path perturbations with the jumps. */
+  g_perturb = "0.3";
+  check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
+  check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
+  g_perturb = NULL;
   scene *s = load("furnace.xml");
   film fj, fn;
   render_stats st;
@@ -431,11 +441,12 @@ static void test_count(void **state) {
   /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, mlt's sphere 2 groups
    * and furnace, mask 5 x 3 groups,
    * h2mc furnace and sphere 2 groups on two state spaces and with delayed
-   * acceptance, mmlt's jumps furnace, sphere 2 and mask 3 groups, then
+   * acceptance, mmlt's jumps furnace, sphere 2 and mask 3 groups and with
+   * the perturbations sphere 2 and mask 3, then
    * separate: furnace 2, sphere 3 x 2 groups; 3 channels each; and the
    * refined b. */
   assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 1) * 3 + 5 * 3 * 3 +
-                                 3 * (1 + 2) * 3 + (1 + 2 + 3) * 3 + (2 + 3 * 2) * 3 +
+                                 3 * (1 + 2) * 3 + (1 + 2 + 3 + 2 + 3) * 3 + (2 + 3 * 2) * 3 +
                                  2 * RUNS);
 }
 

@@ -1,24 +1,27 @@
 /*
- * test_mmlt_jump.c: mmlt's reversible jump between strategies
- * (src/lmc/states/mmlt_jump.h) leaves the mmlt states' target invariant.
+ * test_mmlt_jump.c: the moves of src/lmc/states/mmlt_jump.h on the mmlt
+ * states, the strategy jump and the fused path perturbation, leave the
+ * target invariant.
  *
  * One-step invariance. Independent uniform states u_i (a chain started by
  * mc_chain_start draws one as a large step does), weighted by f(u_i), are
- * a weighted sample of the target; one jump from each gives u'_i. If the
- * jump leaves the target invariant, every strategy j is as frequent,
- * weighted, before and after:
- *     E[ f(u) (1{t(u') = j} - 1{t(u) = j}) ] = 0.
- * Each such mean is compared with 0 in units of its standard error over N
- * independent starts, on tests/data/invert/mixed.xml (glossy, rough,
- * delta and mixed lobes, area, point and infinite lights) at lengths 2, 3
- * and 4: |z| below the normal quantile of a Sidak level of 1% over all
- * strategies of all lengths, from 400000 starts each. The jumps must move
- * the weighted states (at least 5% change strategy), and a negative
- * control, the same move with every proposal accepted, must fail the same
- * test (|z| > 8 for some strategy). This test found that an area light hit
- * by the camera walk, re-split as a light endpoint, must take the light
- * walk's record (bdpt_resplit) for its MIS weight. LMC_TEST_SCENE=FILE runs
- * it on another scene (for diagnosis).
+ * a weighted sample of the target; one move from each gives u'_i. If the
+ * move leaves the target invariant, every class q of states is as
+ * frequent, weighted, before and after:
+ *     E[ f(u) (1{u' in q} - 1{u in q}) ] = 0,
+ * for the classes: the strategy, a 4 x 3 grid of the film (the raster
+ * point) and f's quintiles (from a pilot). Each such mean is compared with
+ * 0 in units of its standard error over 400000 independent starts, on
+ * tests/data/invert/mixed.xml (glossy, rough, delta and mixed lobes, area,
+ * point and infinite lights) at lengths 2, 3 and 4, for both moves: |z|
+ * below the normal quantile of a Sidak level of 1% over all of them. The
+ * moves must move the weighted states (at least 5%), and negative
+ * controls, the same moves with every proposal accepted, must fail the
+ * same test (|z| > 8 for the jump, > 5 for the perturbation, whose ratio
+ * is mostly near 1). This test found that an area light hit by the camera
+ * walk, re-split as a light endpoint, must take the light walk's record
+ * (bdpt_resplit) for its MIS weight. LMC_TEST_SCENE=FILE runs it on
+ * another scene (for diagnosis).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -61,13 +64,14 @@ static int teardown(void **state) {
 typedef struct wrap {
   mc_kernel inner;
   int off;
-  double tech_before;
+  double tech_before, rx_before, ry_before;
   int accept_all;
 } wrap;
 
 static double wrap_propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   wrap *w = self;
   w->tech_before = x->u[w->off];
+  w->rx_before = x->v.rx, w->ry_before = x->v.ry;
   return w->inner.propose(w->inner.self, r, x, OUT_y);
 }
 
@@ -82,9 +86,34 @@ static int strategy(double tech, int n) {
   return i < n ? i : n - 1;
 }
 
-/* The largest |z| over the strategies of length k after N starts and one
- * jump each; *OUT_moved: the weighted share of states whose strategy changed. */
-static double worst_z(int k, int n_starts, int accept_all, uint64_t seed, double *OUT_moved) {
+/* f's class among the NFB value classes split at fq[0 .. NFB - 2]. */
+enum { NFB = 5 };
+static int f_class(double f, const double *fq) {
+  int c = 0;
+  while (c < NFB - 1 && f >= fq[c]) c++;
+  return c;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* A coarse cell of the film (4 x 3, the margin folded into the border cells). */
+enum { NCX = 4, NCY = 3 };
+static int film_cell(double rx, double ry) {
+  int cx = (int)(rx / g_sc->cam.width * NCX), cy = (int)(ry / g_sc->cam.height * NCY);
+  cx = cx < 0 ? 0 : cx >= NCX ? NCX - 1 : cx;
+  cy = cy < 0 ? 0 : cy >= NCY ? NCY - 1 : cy;
+  return cy * NCX + cx;
+}
+
+/* The largest |z| over the strategies and the film cells of length k after
+ * N starts and one move each (perturb: the fused path perturbation, else
+ * the strategy jump); *OUT_moved: the weighted share of states that moved
+ * (changed strategy; or for perturb, raster point). */
+static double worst_z(int k, int n_starts, int accept_all, int perturb, uint64_t seed,
+                      double *OUT_moved) {
   render_settings rs = render_settings_default();
   rs.maxdepth = 6;
   mc_target T;
@@ -92,9 +121,9 @@ static double worst_z(int k, int n_starts, int accept_all, uint64_t seed, double
   lmc_error err;
   assert_int_equal(mc_mmlt_states_init(&T, &ctx, g_sc, &rs, k, &err), LMC_OK);
   mc_mmlt_jump j;
-  assert_int_equal(mc_mmlt_jump_init(&j, &T, &err), LMC_OK);
-  wrap w = {mc_mmlt_jump_kernel(&j), mc_target_stream_offset(&T, LMC_STREAM_CONNECT), 0.0,
-            accept_all};
+  assert_int_equal(mc_mmlt_jump_init(&j, &T, perturb, &err), LMC_OK);
+  wrap w = {mc_mmlt_jump_kernel(&j), mc_target_stream_offset(&T, LMC_STREAM_CONNECT), 0.0, 0.0,
+            0.0, accept_all};
   mc_kernel kw = w.inner;
   kw.self = &w;
   kw.propose = wrap_propose;
@@ -102,8 +131,18 @@ static double worst_z(int k, int n_starts, int accept_all, uint64_t seed, double
   double prob = 1.0;
   mc_chain *c;
   assert_int_equal(mc_chain_create(&c, &T, &kw, &prob, 1, &err), LMC_OK);
-  int n = ctx.n_strategies;
-  double sum[8] = {0}, sum2[8] = {0}, moved = 0.0, total = 0.0;
+  int n = ctx.n_strategies, nq = n + NCX * NCY + NFB;
+  double sum[8 + NCX * NCY + NFB] = {0}, sum2[8 + NCX * NCY + NFB] = {0}, moved = 0.0,
+         total = 0.0;
+  /* The value classes: f's quintiles over a pilot of states. */
+  double fs[2000], fq[NFB - 1];
+  int np = 0;
+  for (int i = 0; np < 2000 && i < 200000; i++) {
+    double f = mc_chain_start(c, seed + 1, (uint64_t)i, (uint64_t)i);
+    if (f > 0.0) fs[np++] = f;
+  }
+  qsort(fs, (size_t)np, sizeof fs[0], cmp_double);
+  for (int q = 0; q < NFB - 1; q++) fq[q] = fs[(q + 1) * np / NFB];
   int used = 0;
   for (int i = 0; i < n_starts; i++) {
     double f = mc_chain_start(c, seed, (uint64_t)i, (uint64_t)i);
@@ -112,27 +151,30 @@ static double worst_z(int k, int n_starts, int accept_all, uint64_t seed, double
     mc_chain_step(c, NULL, NULL);
     if (w.tech_before < 0.0) continue; /* (the kernel always proposes: never here) */
     int a = strategy(w.tech_before, n), b = strategy(c->x.u[w.off], n);
-    for (int q = 0; q < n; q++) {
-      double d = f * ((b == q) - (a == q));
+    int ca = n + film_cell(w.rx_before, w.ry_before), cb = n + film_cell(c->x.v.rx, c->x.v.ry);
+    int va = n + NCX * NCY + f_class(f, fq), vb = n + NCX * NCY + f_class(c->x.v.f, fq);
+    for (int q = 0; q < nq; q++) {
+      double d = f * ((b == q || cb == q || vb == q) - (a == q || ca == q || va == q));
       sum[q] += d;
       sum2[q] += d * d;
     }
-    moved += f * (a != b);
+    moved += f * (perturb ? (c->x.v.rx != w.rx_before) : (a != b));
     total += f;
     used++;
   }
   assert_true(used > 3000);
   double worst = 0.0;
-  for (int q = 0; q < n; q++) {
+  for (int q = 0; q < nq; q++) {
     double mean = sum[q] / n_starts;
     double var = sum2[q] / n_starts - mean * mean;
     double z = var > 0.0 ? mean / sqrt(var / n_starts) : 0.0;
     if (fabs(z) > worst) worst = fabs(z);
   }
-  print_message("length %d%s: %d states with f > 0, %.1f%% (weighted) changed strategy, "
-                "worst |z| %.2f; jumps refused %lld, walked elsewhere %lld\n",
-                k, accept_all ? " (accept all)" : "", used, 100.0 * moved / total, worst,
-                (long long)j.st.refused, (long long)j.st.mismatch);
+  print_message("%s, length %d%s: %d states with f > 0, %.1f%% (weighted) moved, worst |z| "
+                "%.2f; no move %lld, refused %lld, walked elsewhere %lld\n",
+                perturb ? "perturbation" : "jump", k, accept_all ? " (accept all)" : "", used,
+                100.0 * moved / total, worst, (long long)j.st.lone, (long long)j.st.refused,
+                (long long)j.st.mismatch);
   *OUT_moved = moved / total;
   mc_chain_destroy(c);
   mc_mmlt_jump_free(&j);
@@ -140,29 +182,36 @@ static double worst_z(int k, int n_starts, int accept_all, uint64_t seed, double
   return worst;
 }
 
+/* The critical |z| of m two-sided normal tests at an overall 1% (Sidak). */
+static double critical_z(int m) {
+  double alpha = chi2_sidak(0.01, m);
+  for (double z = 0.0; z < 10.0; z += 1e-3)
+    if (erfc(z / sqrt(2.0)) < alpha) return z;
+  return 10.0;
+}
+
 static void test_invariance(void **state) {
   (void)state;
-  /* Strategies: 3 + 4 + 5 = 12 means; two-sided normal at Sidak 1%. */
-  double alpha = chi2_sidak(0.01, 12);
-  double zc = 0.0;
-  for (double z = 0.0; z < 10.0; z += 1e-3)
-    if (erfc(z / sqrt(2.0)) < alpha) {
-      zc = z;
-      break;
-    }
+  /* Strategies, film cells and value classes: (3 + 4 + 5) + 3 x (12 + 5)
+   * means per move. */
+  double zc = critical_z(2 * (12 + 3 * (NCX * NCY + NFB)));
   int checked = 0;
-  for (int k = 2; k <= 4; k++) {
-    double moved;
-    double z = worst_z(k, 400000, 0, 300 + (uint64_t)k, &moved);
-    assert_true(z < zc);
-    assert_true(moved > 0.05);
-    checked++;
-  }
+  for (int perturb = 0; perturb < 2; perturb++)
+    for (int k = 2; k <= 4; k++) {
+      double moved;
+      double z = worst_z(k, 400000, 0, perturb, 300 + (uint64_t)(10 * perturb + k), &moved);
+      assert_true(z < zc);
+      assert_true(moved > 0.05);
+      checked++;
+    }
   double moved;
-  double zbad = worst_z(3, 400000, 1, 999, &moved);
-  print_message("critical |z| %.2f; the control's %.2f\n", zc, zbad);
-  assert_int_equal(checked, 3);
+  double zbad = worst_z(3, 400000, 1, 0, 999, &moved);
+  double zbad2 = worst_z(2, 400000, 1, 1, 998, &moved);
+  print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (perturbation)\n", zc, zbad,
+                zbad2);
+  assert_int_equal(checked, 6);
   assert_true(zbad > 8.0);
+  assert_true(zbad2 > 5.0);
 }
 
 int main(void) {

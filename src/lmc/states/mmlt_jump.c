@@ -170,27 +170,99 @@ static double mmj__log_density(void *self, const mc_state *from, const double *t
   return -log(from->v.f) - j->log_rest_to;
 }
 
-lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, lmc_error *err) {
+/* The fused move: the state's path perturbed in path space (Veach's lens,
+ * multi-chain or caustic perturbation, one drawn uniformly; none that does
+ * not apply), then a strategy for the new path drawn by its MIS weights and
+ * its numbers found by the inverses. The ratio is the perturbation's own
+ * f(y) T(y -> x) / (f(x) T(x -> y)) (mmlt_jump.h). */
+static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  mc_mmlt_jump *j = self;
+  const mc_target *T = j->target;
+  const mc_mmlt_states *st = T->ctx;
+  int k = st->length, n = st->n_strategies;
+  j->st.proposed++;
+  for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
+  if (!(x->v.f > 0.0)) return -INFINITY;
+  int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
+  if (idx >= n) idx = n - 1;
+  int t = k == 1 ? 2 : idx + 1, s = k + 1 - t;
+  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N, *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
+  if (!mmj__path(T, x->u, s, t, X, cam, lp)) return -INFINITY;
+  ps_path *P = j->px, *Y = j->py;
+  mut_perturb_kind kind = (mut_perturb_kind)(int)(rng_uniform(r) * 3.0);
+  double ratio = 0.0;
+  int64_t rays = 0;
+  if (!ps_from_bdpt(&j->ctx, X, k + 1, NULL, 0, P) || !(P->lum > 0.0) ||
+      !mut_perturb_applies(&j->mp, kind, P) ||
+      !mut_perturb_propose(&j->mp, kind, r, P, Y, &ratio, &rays, NULL) || !(ratio > 0.0) ||
+      Y->k != k) {
+    j->st.lone++;
+    return -INFINITY;
+  }
+  /* The new path's strategy, by its MIS weights. */
+  double w[MMJ_N + 1], sum = 0.0;
+  for (int i = 0; i <= k; i++) Xy[i] = Y->x[i].v;
+  bdpt_mis_weights(st->s, Xy, k, cam, w);
+  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp];
+  if (!(sum > 0.0)) {
+    j->st.lone++;
+    return -INFINITY;
+  }
+  double pick = rng_uniform(r) * sum, acc = 0.0;
+  int t2 = -1;
+  for (int tp = 1; tp <= k + 1 && t2 < 0; tp++) {
+    acc += w[tp];
+    if (w[tp] > 0.0 && pick < acc) t2 = tp;
+  }
+  if (t2 < 0)
+    for (int tp = k + 1; tp >= 1 && t2 < 0; tp--)
+      if (w[tp] > 0.0) t2 = tp;
+  if (k == 1) t2 = 2;
+  if (!mmj__numbers(j, r, Xy, k + 1 - t2, t2, OUT_y)) {
+    j->st.refused++;
+    return -INFINITY;
+  }
+  j->log_rest_to = 0.0;
+  j->rx = Y->rx, j->ry = Y->ry;
+  return -log(x->v.f) - log(ratio);
+}
+
+lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int perturb,
+                             lmc_error *err) {
   memset(j, 0, sizeof *j);
   j->target = mmlt_target;
+  j->perturb = perturb;
   j->v = malloc(4 * MMJ_N * sizeof *j->v);
-  if (!j->v) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the technique jumps");
+  if (perturb) {
+    const mc_mmlt_states *st = mmlt_target->ctx;
+    ps_context_init(&j->ctx, st->s, &st->rs);
+    mut_perturb_init(&j->mp, &j->ctx);
+    j->px = malloc(sizeof *j->px);
+    j->py = malloc(sizeof *j->py);
+  }
+  if (!j->v || (perturb && (!j->px || !j->py))) {
+    mc_mmlt_jump_free(j);
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the mmlt moves");
+  }
   return LMC_OK;
 }
 
 void mc_mmlt_jump_free(mc_mmlt_jump *j) {
   if (!j) return;
   free(j->v);
+  free(j->px);
+  free(j->py);
   j->v = NULL;
+  j->px = j->py = NULL;
 }
 
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   mc_kernel k;
   memset(&k, 0, sizeof k);
-  k.name = "jump";
+  k.name = j->perturb ? "perturb" : "jump";
   k.kind = MC_KERNEL_FULL;
   k.self = j;
-  k.propose = mmj__propose;
+  k.propose = j->perturb ? mmj__propose_perturb : mmj__propose;
   k.log_density = mmj__log_density;
   return k;
 }

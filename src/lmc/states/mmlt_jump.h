@@ -28,6 +28,20 @@
  * propose returns log q(y|x) = -log f(x) - log(W - w_t), log_density
  * -log f(y) - log(W - w_t') (the same x: cached by propose).
  *
+ * The fused move (perturb = 1; Otsu, Kaplanyan, Hanika, Dachsbacher and
+ * Hachisuka 2017's fusion of the two spaces). The state's path x is
+ * perturbed in path space by one of Veach's perturbations (lens,
+ * multi-chain, caustic; mut_perturb.h), drawn uniformly, into y (the chain
+ * stays when the one drawn does not apply); y's strategy t' is drawn with
+ * probability w_t'(y) (the full conditional) and its numbers found as
+ * above. In the coordinates above the target is w_t(x) C(x) times the free
+ * numbers' density, the strategy's draw is its conditional, so the ratio is
+ * the perturbation's own, C(y) T(y -> x) / (C(x) T(x -> y)) (with C the
+ * path's measurement contribution, pathspace.h): propose returns log q(y|x)
+ * = -log f(x) - log that ratio, log_density -log f(y). A state whose path
+ * has no contribution in path space (its camera ray in the film's margin,
+ * which the states sample) stays.
+ *
  * Refusals. A re-split whose numbers a walk cannot reach (a direction
  * deep in a sampler's clamped tail, bsdf_invert) is refused: the state
  * stays, as a proposal of zero density. A proposal whose walk does not
@@ -40,6 +54,7 @@
 #include <stdint.h>
 
 #include "lmc/kernels/chain.h"
+#include "lmc/path/mut_perturb.h"
 #include "render/error.h"
 #include "render/integrators/integrator.h"
 
@@ -52,18 +67,24 @@ typedef struct mc_mmlt_jump_stats {
   int64_t inversions;  /* subpaths inverted */
 } mc_mmlt_jump_stats;
 
-/* One chain's jump: its target (an mmlt family's), scratch and counts. */
+/* One chain's jump or fused move: its target (an mmlt family's), scratch
+ * and counts. */
 typedef struct mc_mmlt_jump {
   const mc_target *target; /* borrowed; target->ctx is the family's mc_mmlt_states */
+  int perturb;             /* 0: the strategy jump; 1: the fused path perturbation */
+  ps_context ctx;          /* perturb: the path space of the family's paths */
+  mut_perturb mp;          /* perturb: the perturbations' sizes */
+  ps_path *px, *py;        /* perturb: the state's path and the proposal's (owned) */
   bdpt_vertex *v;          /* scratch: 4 arrays of BDPT_MAX_VERTICES + 1 vertices */
   double log_rest_to;      /* log(W - w_t') of the last proposal, for log_density */
   double rx, ry;           /* the raster point of its path */
   mc_mmlt_jump_stats st;
 } mc_mmlt_jump;
 
-lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, lmc_error *err);
+lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int perturb,
+                             lmc_error *err);
 void mc_mmlt_jump_free(mc_mmlt_jump *j);
-/* The kernel (MC_KERNEL_FULL, "jump") over j, which must outlive it. */
+/* The kernel (MC_KERNEL_FULL, "jump" or "perturb") over j, which must outlive it. */
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j);
 
 #endif
