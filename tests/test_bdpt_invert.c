@@ -21,6 +21,8 @@
  *     of the connect numbers) land on the path's vertices; a re-split that
  *     does not invert must have a step whose direction BSDF sampling
  *     cannot reach (a smooth lobe's density below 1e-12 there);
+ *   - both on the project's ring scenes and Cornell box and on the LMC
+ *     paper's torus (../shared; skipped when absent);
  *   - every strategy's MIS weight at once (bdpt_mis_weights) equals
  *     bdpt_mis_weight on each re-split (1e-9), and they sum to 1;
  *   - the inverse is the posterior of u given the vertices: numbers that
@@ -37,6 +39,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -130,15 +133,17 @@ static const bdpt_param g_abs = {100, 0.05};
 
 /* ---- Subpaths ------------------------------------------------------------------ */
 
-static void test_subpath_round_trip(void **state) {
-  (void)state;
+/* Round trips of subpaths from `iters` numbers per kind and
+ * parametrization; returns the prefixes checked, *OUT_deltas the delta
+ * vertices among them. */
+static long subpath_round_trips(int iters, long *OUT_deltas) {
   long checks = 0, prefixes = 0, deltas = 0;
   for (int is_cam = 0; is_cam < 2; is_cam++)
     for (int pa = 0; pa < 2; pa++) {
       const bdpt_param *par = pa ? &g_abs : NULL;
       rng g;
       rng_seed(&g, 7, (uint64_t)(2 * is_cam + pa));
-      for (int it = 0; it < 3000; it++) {
+      for (int it = 0; it < iters; it++) {
         double u[DIM_LIGHT], v[DIM_LIGHT];
         for (int i = 0; i < DIM_LIGHT; i++) u[i] = rng_uniform(&g);
         bdpt_vertex p[MAXV + 1], q[MAXV + 1];
@@ -165,6 +170,13 @@ static void test_subpath_round_trip(void **state) {
     }
   print_message("subpaths: %ld prefixes, %ld vertices, %ld delta vertices\n", prefixes, checks,
                 deltas);
+  *OUT_deltas = deltas;
+  return prefixes;
+}
+
+static void test_subpath_round_trip(void **state) {
+  (void)state;
+  long deltas, prefixes = subpath_round_trips(3000, &deltas);
   assert_true(prefixes > 4000 && deltas > 100);
 }
 
@@ -198,12 +210,14 @@ static int refused_in_tail(const bdpt_vertex *path, int n) {
   return 0;
 }
 
-static void test_strategies(void **state) {
-  (void)state;
+/* Full paths from `iters` BDPT samples re-split at every other strategy,
+ * inverted and walked again; returns the paths, *OUT_by_s the re-splits
+ * by s' (0, 1, 2, more). */
+static long strategy_round_trips(int iters, long OUT_by_s[4]) {
   rng g;
   rng_seed(&g, 11, 0);
   long paths = 0, splits = 0, refused = 0, weights = 0, by_s[4] = {0};
-  for (int it = 0; it < 8000; it++) {
+  for (int it = 0; it < iters; it++) {
     double uc[DIM_CAM], ul[DIM_LIGHT], ux[BDPT_DIMS_CONNECT];
     for (int i = 0; i < DIM_CAM; i++) uc[i] = rng_uniform(&g);
     for (int i = 0; i < DIM_LIGHT; i++) ul[i] = rng_uniform(&g);
@@ -310,8 +324,43 @@ static void test_strategies(void **state) {
                 "%ld refused; %ld MIS weights compared\n",
                 paths, splits, by_s[0], by_s[1], by_s[2], by_s[3], refused, weights);
   assert_true(weights > 2 * paths);
-  assert_true(paths > 600);
+  for (int i = 0; i < 4; i++) OUT_by_s[i] = by_s[i];
+  return paths;
+}
+
+static void test_strategies(void **state) {
+  (void)state;
+  long by_s[4];
+  assert_true(strategy_round_trips(8000, by_s) > 600);
   for (int i = 0; i < 4; i++) assert_true(by_s[i] > 50);
+}
+
+/* The same round trips on the project's scenes and the LMC paper's torus
+ * (../shared, skipped when absent). */
+static void test_scenes(void **state) {
+  (void)state;
+  static const char *const files[] = {
+      LMC_SOURCE_DIR "/scenes/ring-caustics/scene.xml",
+      LMC_SOURCE_DIR "/scenes/ring-caustics-glass/scene.xml",
+      LMC_SOURCE_DIR "/scenes/cornell-box/scene.xml", LMC_SHARED_DIR "/scenes/torus/lmc.xml"};
+  scene *mixed = g_sc;
+  int done = 0;
+  for (int f = 0; f < 4; f++) {
+    if (access(files[f], R_OK) != 0) {
+      print_message("%s: absent, skipped\n", files[f]);
+      continue;
+    }
+    lmc_error err;
+    assert_int_equal(scene_load_xml(files[f], NULL, 0, &g_sc, &err), LMC_OK);
+    print_message("%s\n", files[f]);
+    long deltas, by_s[4];
+    assert_true(subpath_round_trips(400, &deltas) > 300);
+    assert_true(strategy_round_trips(3000, by_s) > 30);
+    scene_destroy(g_sc);
+    done++;
+  }
+  g_sc = mixed;
+  assert_true(done >= 3);
 }
 
 /* ---- The posterior ------------------------------------------------------------------ */
@@ -380,6 +429,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_subpath_round_trip),
       cmocka_unit_test(test_strategies),
+      cmocka_unit_test(test_scenes),
       cmocka_unit_test(test_posterior),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
