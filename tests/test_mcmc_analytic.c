@@ -22,13 +22,8 @@
  * allocation (mutations per length in proportion to b_k) and with
  * --allocate even. With R = 6 the t statistic has 5 degrees of
  * freedom, P(|t_5| > 8) = 5e-4 per check, about 0.9% over the 18 checks
- * that are not exact (2.6% with the 33 of mmlt's jumps and perturbations). Every render must also make spp mutations per pixel
+ * that are not exact. Every render must also make spp mutations per pixel
  * (up to less than 10% of whole rounds).
- *
- * mmlt with reversible jumps (--technique-jump 0.5): the furnace, the
- * sphere and the mask, and a seed's image differs from the one without;
- * with the fused path perturbations too (--path-mutations 0.3), the sphere
- * and the mask.
  *
  * --direct separate (the default of the command line): the same image
  * means on both scenes with pt rendering the paths of one and two segments
@@ -66,131 +61,9 @@
 #include "render/io/io.h"
 #include "test_util.h"
 
-#define RUNS 6
-static int g_checks;
-static int g_even; /* --allocate even for the renders of check_scene */
-static int g_direct; /* --direct separate for the renders (the CLI's default; 0: mcmc) */
-static int g_mcmc_empty; /* the scene has no path for MCMC (all of it is pt's direct light) */
-static const char *g_states; /* --states for the renders (NULL: the integrator's) */
+#include "analytic_check.h"
+
 static int g_cache_gradient; /* lmc --cache-gradient on for render_film */
-static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance; h2mc's default) */
-static const char *g_jump; /* mmlt's --technique-jump (NULL: not given) */
-static const char *g_perturb; /* mmlt's --path-mutations (NULL: not given) */
-
-static scene *load(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/tests/data/analytic/%s", LMC_SOURCE_DIR, name);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
-  return s;
-}
-
-static render_settings settings(const scene *s, const char *integrator, int64_t spp,
-                                uint64_t seed, int threads) {
-  render_settings rs = s->settings;
-  snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
-  rs.spp = spp;
-  rs.set |= SET_SPP;
-  rs.time_limit = 0.0;
-  rs.threads = threads;
-  rs.seed = seed;
-  rs.quiet = 1;
-  lmc_error err;
-  assert_int_equal(mcmc_set(&rs, "bootstrap", "16384", &err), LMC_OK);
-  assert_int_equal(mcmc_set(&rs, "allocate", g_even ? "even" : "b", &err), LMC_OK);
-  assert_int_equal(mcmc_set(&rs, "direct", g_direct ? "separate" : "mcmc", &err), LMC_OK);
-  if (g_states) assert_int_equal(mcmc_set(&rs, "states", g_states, &err), LMC_OK);
-  assert_int_equal(mcmc_set(&rs, "delayed", g_delayed ? "on" : "off", &err), LMC_OK);
-  if (g_jump) assert_int_equal(mcmc_set(&rs, "technique-jump", g_jump, &err), LMC_OK);
-  if (g_perturb) assert_int_equal(mcmc_set(&rs, "path-mutations", g_perturb, &err), LMC_OK);
-  return rs;
-}
-
-/* Group of pixel (x, y): 0 environment, 1 + the mesh index of an object,
- * -1 mixed (probes at the corners and centre disagree). */
-static int pixel_group(const scene *s, int x, int y) {
-  static const double off[5][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}, {0.5, 0.5}};
-  int g = -2;
-  for (int k = 0; k < 5; k++) {
-    vec3 o, d;
-    camera_generate_ray(&s->cam, x + off[k][0], y + off[k][1], &o, &d);
-    surface_hit h;
-    int gk = scene_intersect(s, o, d, 0.0, INFINITY, &h) ? 1 + h.mesh : 0;
-    if (g == -2) g = gk;
-    else if (g != gk) return -1;
-  }
-  return g;
-}
-
-/* Renders R seeds and checks the per-group channel means against expect
- * (NULL entries: group not checked). */
-#define MAX_GROUPS 3
-static void check_scene(const char *file, const char *integrator, int64_t spp, const rgb *expect,
-                        int n_groups, double extra_tol) {
-  scene *s = load(file);
-  assert_true(n_groups <= MAX_GROUPS);
-  double sum[MAX_GROUPS][3] = {{0}}, sum2[MAX_GROUPS][3] = {{0}};
-  for (int r = 0; r < RUNS; r++) {
-    render_settings rs = settings(s, integrator, spp, 100 + (uint64_t)r, 2);
-    film f;
-    render_stats st;
-    lmc_error err;
-    lmc_error_clear(&err);
-    assert_int_equal(mcmc_render_run(s, &rs, &f, &st, &err), LMC_OK);
-    /* Whatever the allocation among mmlt's lengths, the budget is spp
-     * mutations per pixel, up to whole rounds of every chain. */
-    int64_t want = spp * (int64_t)s->cam.width * s->cam.height;
-    if (g_mcmc_empty) {
-      /* Nothing for the chains to render: b = 0 and no mutation made. */
-      assert_true(st.mcmc_b == 0.0 && st.samples == 0);
-    } else {
-      if (!(st.samples >= want && st.samples < want + want / 10))
-        fprintf(stderr, "  %s %s: %lld mutations for a budget of %lld\n", file, integrator,
-                (long long)st.samples, (long long)want);
-      assert_true(st.samples >= want && st.samples < want + want / 10);
-    }
-    lmc_image img;
-    assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
-    double gs[MAX_GROUPS][3] = {{0}};
-    int gn[MAX_GROUPS] = {0};
-    for (int y = 0; y < img.height; y++)
-      for (int x = 0; x < img.width; x++) {
-        int g = n_groups == 1 ? 0 : pixel_group(s, x, y);
-        if (g < 0 || g >= n_groups) continue;
-        const float *p = img.data + 3 * ((size_t)y * img.width + x);
-        for (int c = 0; c < 3; c++) gs[g][c] += p[c];
-        gn[g]++;
-      }
-    for (int g = 0; g < n_groups; g++) {
-      assert_true(gn[g] > 50);
-      for (int c = 0; c < 3; c++) {
-        double m = gs[g][c] / gn[g];
-        sum[g][c] += m;
-        sum2[g][c] += m * m;
-      }
-    }
-    image_free(&img);
-    film_free(&f);
-  }
-  for (int g = 0; g < n_groups; g++) {
-    double e[3] = {expect[g].r, expect[g].g, expect[g].b};
-    for (int c = 0; c < 3; c++) {
-      double mean = sum[g][c] / RUNS;
-      double var = fmax(0.0, (sum2[g][c] - RUNS * mean * mean) / (RUNS - 1));
-      double se = sqrt(var / RUNS);
-      fprintf(stderr, "  %s %s group %d channel %d: mean %.5f (exact %.5f), SE %.2g\n", file,
-              integrator, g, c, mean, e[c], se);
-      /* A group with no variance at all (pure environment) must be exact to rounding. */
-      assert_near(mean, e[c], 8.0 * se + extra_tol * e[c] + 1e-9 * e[c]);
-      g_checks++;
-    }
-  }
-  scene_destroy(s);
-}
 
 static void test_furnace_pssmlt(void **state) {
   (void)state;
@@ -227,56 +100,11 @@ static void test_h2mc(void **state) {
   g_delayed = 1;
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
-  scene *s = load("diffuse_sphere.xml");
   film fd, fp;
-  render_stats st;
-  lmc_error err;
-  render_settings rs = settings(s, "h2mc", 4, 7, 1);
-  assert_int_equal(mcmc_render_run(s, &rs, &fd, &st, &err), LMC_OK);
+  render_seed7("diffuse_sphere.xml", "h2mc", &fd);
   g_delayed = 0;
-  rs = settings(s, "h2mc", 4, 7, 1);
-  assert_int_equal(mcmc_render_run(s, &rs, &fp, &st, &err), LMC_OK);
-  size_t n = 3 * (size_t)fd.width * (size_t)fd.height;
-  assert_true(memcmp(fd.splat, fp.splat, n * sizeof *fd.splat) != 0);
-  film_free(&fd);
-  film_free(&fp);
-  scene_destroy(s);
-}
-
-/* mmlt with reversible jumps between strategies (--technique-jump, half
- * of the mutations that are not large steps): the furnace, the sphere's
- * two groups and the mask's three (whose pass-through is a delta lobe no
- * connection may end on); with the fused path perturbations too
- * (--path-mutations 0.3) the sphere and the mask; and the jumps do move
- * the chains (one seed's images with and without differ). */
-static void test_mmlt_jump(void **state) {
-  (void)state;
-  rgb one = rgb_gray(1.0);
-  rgb e[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
-  rgb em[3] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.875, 1.5, 2.5), rgb_make(1.0, 2.0, 4.0)};
-  g_jump = "0.5";
-  check_scene("furnace.xml", "mmlt", 16, &one, 1, 0.003);
-  check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
-  check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
-  /* The fused path perturbations with the jumps. */
-  g_perturb = "0.3";
-  check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
-  check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
-  g_perturb = NULL;
-  scene *s = load("furnace.xml");
-  film fj, fn;
-  render_stats st;
-  lmc_error err;
-  render_settings rs = settings(s, "mmlt", 4, 7, 1);
-  assert_int_equal(mcmc_render_run(s, &rs, &fj, &st, &err), LMC_OK);
-  g_jump = NULL;
-  rs = settings(s, "mmlt", 4, 7, 1);
-  assert_int_equal(mcmc_render_run(s, &rs, &fn, &st, &err), LMC_OK);
-  size_t n = 3 * (size_t)fj.width * (size_t)fj.height;
-  assert_true(memcmp(fj.splat, fn.splat, n * sizeof *fj.splat) != 0);
-  film_free(&fj);
-  film_free(&fn);
-  scene_destroy(s);
+  render_seed7("diffuse_sphere.xml", "h2mc", &fp);
+  assert_films_differ(&fd, &fp);
 }
 
 /* Mitsuba's mask (mask.xml: the environment, a masked square seen
@@ -441,12 +269,10 @@ static void test_count(void **state) {
   /* furnace pssmlt, mmlt twice, sphere 2 x 2 groups, mlt's sphere 2 groups
    * and furnace, mask 5 x 3 groups,
    * h2mc furnace and sphere 2 groups on two state spaces and with delayed
-   * acceptance, mmlt's jumps furnace, sphere 2 and mask 3 groups and with
-   * the perturbations sphere 2 and mask 3, then
-   * separate: furnace 2, sphere 3 x 2 groups; 3 channels each; and the
+   * acceptance, then separate: furnace 2, sphere 3 x 2 groups; 3 channels each; and the
    * refined b. */
   assert_int_equal(g_checks, 3 + 3 + 3 + 2 * 2 * 3 + (2 + 1) * 3 + 5 * 3 * 3 +
-                                 3 * (1 + 2) * 3 + (1 + 2 + 3 + 2 + 3) * 3 + (2 + 3 * 2) * 3 +
+                                 3 * (1 + 2) * 3 + (2 + 3 * 2) * 3 +
                                  2 * RUNS);
 }
 
@@ -466,7 +292,6 @@ int main(void) {
       cmocka_unit_test(test_mlt_environment),
       cmocka_unit_test(test_mask),
       cmocka_unit_test(test_h2mc),
-      cmocka_unit_test(test_mmlt_jump),
       cmocka_unit_test_teardown(test_direct_separate, reset_direct),
       cmocka_unit_test(test_refined_b),
       cmocka_unit_test_teardown(test_determinism, reset_direct),

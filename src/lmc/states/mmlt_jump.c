@@ -115,19 +115,29 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
   return 1;
 }
 
-static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
-  mc_mmlt_jump *j = self;
+/* What both moves do first: count the proposal, fill y with fresh
+ * uniforms (the numbers the new path will not fix), and walk the state x's
+ * path again into j->v (its strategy into *OUT_t). Returns 0 when x has no
+ * path to move (f = 0, or its walk reads past its blocks). */
+static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_t) {
   const mc_target *T = j->target;
   const mc_mmlt_states *st = T->ctx;
   int k = st->length, n = st->n_strategies;
   j->st.proposed++;
   for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
-  if (n < 2 || !(x->v.f > 0.0)) return -INFINITY;
+  if (!(x->v.f > 0.0)) return 0;
   int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
   if (idx >= n) idx = n - 1;
-  int t = idx + 1, s = k + 1 - t;
-  bdpt_vertex *X = j->v, *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
-  if (!mmj__path(T, x->u, s, t, X, cam, lp)) return -INFINITY;
+  *OUT_t = k == 1 ? 2 : idx + 1;
+  return mmj__path(T, x->u, k + 1 - *OUT_t, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+}
+
+static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
+  mc_mmlt_jump *j = self;
+  const mc_mmlt_states *st = j->target->ctx;
+  int k = st->length, t;
+  bdpt_vertex *X = j->v, *cam = j->v + 2 * MMJ_N;
+  if (st->n_strategies < 2 || !mmj__begin(j, r, x, OUT_y, &t)) return -INFINITY;
 
   /* Every strategy's weight; t' != t drawn with w_t' / (W - w_t). */
   double w[MMJ_N + 1], sum = 0.0;
@@ -177,17 +187,10 @@ static double mmj__log_density(void *self, const mc_state *from, const double *t
  * f(y) T(y -> x) / (f(x) T(x -> y)) (mmlt_jump.h). */
 static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
-  const mc_target *T = j->target;
-  const mc_mmlt_states *st = T->ctx;
-  int k = st->length, n = st->n_strategies;
-  j->st.proposed++;
-  for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
-  if (!(x->v.f > 0.0)) return -INFINITY;
-  int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
-  if (idx >= n) idx = n - 1;
-  int t = k == 1 ? 2 : idx + 1, s = k + 1 - t;
-  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N, *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
-  if (!mmj__path(T, x->u, s, t, X, cam, lp)) return -INFINITY;
+  const mc_mmlt_states *st = j->target->ctx;
+  int k = st->length, t;
+  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N, *cam = j->v + 2 * MMJ_N;
+  if (!mmj__begin(j, r, x, OUT_y, &t)) return -INFINITY;
   ps_path *P = j->px, *Y = j->py;
   mut_perturb_kind kind = (mut_perturb_kind)(int)(rng_uniform(r) * 3.0);
   double ratio = 0.0;
