@@ -1,7 +1,7 @@
 /*
  * test_mmlt_jump.c: the moves of src/lmc/states/mmlt_jump.h on the mmlt
- * states, the strategy jump and the fused path perturbation, leave the
- * target invariant.
+ * states, the strategy jump and the fused path move (each of path-space
+ * MLT's moves), leave the target invariant.
  *
  * One-step invariance. Independent uniform states u_i (a chain started by
  * mc_chain_start draws one as a large step does), weighted by f(u_i), are
@@ -13,12 +13,14 @@
  * point) and f's quintiles (from a pilot). Each such mean is compared with
  * 0 in units of its standard error over 400000 independent starts, on
  * tests/data/invert/mixed.xml (glossy, rough, delta and mixed lobes, area,
- * point and infinite lights) at lengths 2, 3 and 4, for both moves: |z|
+ * point and infinite lights) at lengths 2, 3 and 4, for both moves, and
+ * for each of the fused move's path moves alone at lengths 3 and 4: |z|
  * below the normal quantile of a Sidak level of 1% over all of them. The
- * moves must move the weighted states (at least 5%), and negative
- * controls, the same moves with every proposal accepted, must fail the
- * same test (|z| > 8 for the jump, > 5 for the perturbation, whose ratio
- * is mostly near 1). This test found that an area light hit by the camera
+ * moves must move the weighted states (at least 5%; a path move alone at
+ * least 0.1%), and negative controls, the same moves with every proposal
+ * accepted, must fail the same test (|z| > 8 for the jump, > 5 for the
+ * path moves, whose ratio is mostly near 1, and the bidirectional
+ * mutation alone beyond the critical |z|). This test found that an area light hit by the camera
  * walk, re-split as a light endpoint, must take the light walk's record
  * (bdpt_resplit) for its MIS weight. LMC_TEST_SCENE=FILE runs it on
  * another scene (for diagnosis).
@@ -112,7 +114,7 @@ static int film_cell(double rx, double ry) {
  * N starts and one move each (perturb: the fused path perturbation, else
  * the strategy jump); *OUT_moved: the weighted share of states that moved
  * (changed strategy; or for perturb, raster point). */
-static double worst_z(int k, int n_starts, int accept_all, int perturb, uint64_t seed,
+static double worst_z(int k, int n_starts, int accept_all, int perturb, int kind, uint64_t seed,
                       double *OUT_moved) {
   render_settings rs = render_settings_default();
   rs.maxdepth = 6;
@@ -122,6 +124,7 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, uint64_t
   assert_int_equal(mc_mmlt_states_init(&T, &ctx, g_sc, &rs, k, &err), LMC_OK);
   mc_mmlt_jump j;
   assert_int_equal(mc_mmlt_jump_init(&j, &T, perturb, &err), LMC_OK);
+  j.test_kind = kind;
   wrap w = {mc_mmlt_jump_kernel(&j), mc_target_stream_offset(&T, LMC_STREAM_CONNECT), 0.0, 0.0,
             0.0, accept_all};
   mc_kernel kw = w.inner;
@@ -158,7 +161,8 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, uint64_t
       sum[q] += d;
       sum2[q] += d * d;
     }
-    moved += f * (perturb ? (c->x.v.rx != w.rx_before) : (a != b));
+    /* An accepted move redraws the strategy coordinate in its interval. */
+    moved += f * (c->x.u[w.off] != w.tech_before);
     total += f;
     used++;
   }
@@ -170,9 +174,12 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, uint64_t
     double z = var > 0.0 ? mean / sqrt(var / n_starts) : 0.0;
     if (fabs(z) > worst) worst = fabs(z);
   }
-  print_message("%s, length %d%s: %d states with f > 0, %.1f%% (weighted) moved, worst |z| "
+  static const char *const kinds[MC_PATH_MOVE_COUNT] = {"bidirectional", "lens", "multi-chain",
+                                                        "caustic", "lens subpath"};
+  print_message("%s%s%s, length %d%s: %d states with f > 0, %.1f%% (weighted) moved, worst |z| "
                 "%.2f; no move %lld, refused %lld, walked elsewhere %lld\n",
-                perturb ? "perturbation" : "jump", k, accept_all ? " (accept all)" : "", used,
+                perturb ? "path move" : "jump", kind >= 0 ? ": " : "",
+                kind >= 0 ? kinds[kind] : "", k, accept_all ? " (accept all)" : "", used,
                 100.0 * moved / total, worst, (long long)j.st.lone, (long long)j.st.refused,
                 (long long)j.st.mismatch);
   *OUT_moved = moved / total;
@@ -193,25 +200,43 @@ static double critical_z(int m) {
 static void test_invariance(void **state) {
   (void)state;
   /* Strategies, film cells and value classes: (3 + 4 + 5) + 3 x (12 + 5)
-   * means per move. */
-  double zc = critical_z(2 * (12 + 3 * (NCX * NCY + NFB)));
+   * means per move at lengths 2 .. 4, and (4 + 5) + 2 x (12 + 5) for each
+   * path move alone at lengths 3 and 4. */
+  double zc = critical_z(2 * (12 + 3 * (NCX * NCY + NFB)) +
+                         MC_PATH_MOVE_COUNT * (9 + 2 * (NCX * NCY + NFB)));
   int checked = 0;
   for (int perturb = 0; perturb < 2; perturb++)
     for (int k = 2; k <= 4; k++) {
       double moved;
-      double z = worst_z(k, 400000, 0, perturb, 300 + (uint64_t)(10 * perturb + k), &moved);
+      double z = worst_z(k, 400000, 0, perturb, -1, 300 + (uint64_t)(10 * perturb + k), &moved);
       assert_true(z < zc);
       assert_true(moved > 0.05);
       checked++;
     }
+  /* Each of the fused move's path moves alone, at lengths 3 and 4: its own
+   * ratio (the multi-chain perturbation needs two chains: length 4). */
+  for (int kind = 0; kind < MC_PATH_MOVE_COUNT; kind++) {
+    double most = 0.0;
+    for (int k = 3; k <= 4; k++) {
+      double moved;
+      double z = worst_z(k, 400000, 0, 1, kind, 400 + (uint64_t)(10 * kind + k), &moved);
+      assert_true(z < zc);
+      most = moved > most ? moved : most;
+      checked++;
+    }
+    assert_true(most > 0.001); /* multi-chain: 0.2% (few paths with two chains here) */
+  }
   double moved;
-  double zbad = worst_z(3, 400000, 1, 0, 999, &moved);
-  double zbad2 = worst_z(2, 400000, 1, 1, 998, &moved);
-  print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (perturbation)\n", zc, zbad,
-                zbad2);
-  assert_int_equal(checked, 6);
+  double zbad = worst_z(3, 400000, 1, 0, -1, 999, &moved);
+  double zbad2 = worst_z(2, 400000, 1, 1, -1, 998, &moved);
+  double zbad3 = worst_z(3, 600000, 1, 1, MC_PATH_MOVE_BIDIR, 997, &moved);
+  print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (path moves), %.2f "
+                "(bidirectional)\n",
+                zc, zbad, zbad2, zbad3);
+  assert_int_equal(checked, 6 + 2 * MC_PATH_MOVE_COUNT);
   assert_true(zbad > 8.0);
   assert_true(zbad2 > 5.0);
+  assert_true(zbad3 > zc); /* fails the test itself */
 }
 
 int main(void) {

@@ -133,6 +133,18 @@ static const lmc_opt mcmc__opts[] = {
      NULL, 0, "P", NULL,
      "per-length states: the technique mutation's share of the steps that are not large",
      NULL},
+    {"technique-jump", LMC_OPT_DOUBLE, offsetof(mcmc_settings, jump_prob), 0, 0, 1, NULL, NULL,
+     0, "P", "0",
+     "mmlt states: share of the mutations that are not large steps made reversible jumps, the "
+     "path kept, its strategy redrawn by the MIS weights and its numbers found by inverting the "
+     "subpaths (exact)",
+     NULL},
+    {"path-mutations", LMC_OPT_DOUBLE, offsetof(mcmc_settings, path_prob), 0, 0, 1, NULL, NULL, 0,
+     "P", "0",
+     "mmlt states: share of the mutations that are not large steps made path-space mutations "
+     "of the state's path (bidirectional, lens, multi-chain, caustic, lens subpath), mapped "
+     "back to a strategy's numbers (exact)",
+     NULL},
     {"sigma", LMC_OPT_DOUBLE, offsetof(mcmc_settings, sigma), 0, 1e-9, 1, NULL, NULL, 0,
      "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S", NULL},
     {"chains", LMC_OPT_INT, offsetof(mcmc_settings, chains), 0, 1, 1 << 20, NULL, NULL,
@@ -238,6 +250,7 @@ static int64_t mcmc__mutations(const mcmc_render *R) {
 static int mcmc__kernels(mcmc_render *R, int i, mc_kernel *k, double *p) {
   const mcmc_family *F = &R->fam[R->slots[i].family];
   int n = R->M->chain_kernels(R->mrun, &R->setup, i, F->sf, k, p);
+  if (R->moves) n = R->sp.moves->add_kernels(R->moves, i, k, p, n);
   if (!R->ls_pending && R->ms.largestep_scale != 1.0)
     mc_kernels_scale_large(k, p, n, R->ms.largestep_scale);
   return n;
@@ -311,6 +324,16 @@ static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
   if (!lmc_opt_value(rs, "sigma"))
     R->ms.sigma = R->ms.small_gauss ? MCMC_GAUSS_SIGMA : R->sp.sigma > 0.0 ? R->sp.sigma : R->ms.sigma;
   R->setup = (mc_method_setup){R->s, &R->crs, &R->ms, &R->sp};
+  if ((R->ms.jump_prob > 0.0 || R->ms.path_prob > 0.0) && !R->sp.moves)
+    return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
+                         "--technique-jump and --path-mutations move the mmlt states (--states "
+                         "mmlt, mmlt's default), not the %s states",
+                         R->sp.name);
+  if (R->ms.jump_prob + R->ms.path_prob > 1.0)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                         "--technique-jump %g and --path-mutations %g share the mutations that "
+                         "are not large steps: together at most 1",
+                         R->ms.jump_prob, R->ms.path_prob);
   if (R->M->create) return R->M->create(&R->mrun, &R->setup, err);
   return LMC_OK;
 }
@@ -379,6 +402,9 @@ static lmc_status mcmc__start_chains(mcmc_render *R, lmc_error *err) {
       R->slots[R->fam[g].first_chain + i].family = g;
     }
   lmc_status status = R->M->set_chains ? R->M->set_chains(R->mrun, R->n_slots, family, err) : LMC_OK;
+  if (!status && R->sp.moves && (R->ms.jump_prob > 0.0 || R->ms.path_prob > 0.0))
+    status = R->sp.moves->create(&R->moves, &R->sp, R->n_slots, family, R->ms.jump_prob,
+                                 R->ms.path_prob, err);
   free(family);
   if (status) return status;
   const mcmc_settings *ms = &R->ms;
@@ -570,6 +596,7 @@ static void mcmc__share_stats(mcmc_render *R, mc_counts *OUT) {
     dist_allsum_i64(v, 3);
     c.grad_evals = v[0], c.hess_evals = v[1], c.nan_samples = v[2];
     if (R->M->share_stats) R->M->share_stats(R->mrun);
+    if (R->moves) R->sp.moves->share_stats(R->moves);
   }
   *OUT = c;
 }
@@ -642,11 +669,12 @@ static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
             dist_active() ? " of every rank" : "");
   if (overflow > 0)
     fprintf(stderr, "lmc: %lld coordinates drawn past the state's blocks\n", (long long)overflow);
-  if (R->M->report) {
+  if (R->M->report || R->moves) {
     mc_chain **chains = malloc((size_t)R->n_slots * sizeof *chains);
     if (chains) {
       for (int i = 0; i < R->n_slots; i++) chains[i] = R->slots[i].chain;
-      R->M->report(R->mrun, chains, R->n_slots, R->chain_seconds, counts);
+      if (R->M->report) R->M->report(R->mrun, chains, R->n_slots, R->chain_seconds, counts);
+      if (R->moves) R->sp.moves->report(R->moves, chains, R->n_slots, R->chain_seconds);
       free(chains);
     }
   }
@@ -675,6 +703,7 @@ static void mcmc__free(mcmc_render *R) {
     }
   free(R->slots);
   if (R->M && R->M->destroy) R->M->destroy(R->mrun);
+  if (R->moves) R->sp.moves->destroy(R->moves);
   for (int g = 0; R->fam && g < R->n_fam; g++) mc_boot_free(&R->fam[g].bt), free(R->fam[g].splat);
   free(R->fam);
   mc_space_free(&R->sp);

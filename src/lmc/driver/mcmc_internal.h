@@ -78,6 +78,7 @@ typedef struct mcmc_render {
   void *mrun;
   mc_method_setup setup;
   mc_space sp;
+  void *moves;               /* the space's moves (sp.moves; NULL: none asked) */
   int n_fam;
   mcmc_family *fam;
   mcmc_chain_slot *slots;

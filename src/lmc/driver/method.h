@@ -44,6 +44,8 @@ typedef struct mcmc_settings {
   double largestep_scale; /* --largestep-scale: it times this after a tenth of the budget */
   int small_gauss;        /* --small-step gauss: Gaussian small steps instead of Kelemen's */
   double technique_prob;  /* --technique-prob: the technique mutation's share of the rest */
+  double jump_prob;       /* --technique-jump: the space's reversible jumps' share of the rest */
+  double path_prob;       /* --path-mutations: the space's fused path mutations' share */
   double sigma;           /* --sigma: the small step's scale; an integrator sees it resolved
                              (the space's default, or 0.01 for gauss, when not given) */
   int chains;             /* --chains */

@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "lmc/driver/bootstrap.h"
+#include "lmc/kernels/chain.h"
 #include "lmc/kernels/target.h"
 #include "render/error.h"
 #include "render/integrators/integrator.h"
@@ -55,6 +56,25 @@ typedef struct mc_space_b_request {
 } mc_space_b_request;
 
 typedef struct mc_space mc_space;
+
+/* A state space's own moves: kernels that know its states (mmlt_jump.h's
+ * reversible jump and fused path mutation on the mmlt states), which the
+ * driver adds to every chain of whatever integrator runs on the space when
+ * --technique-jump or --path-mutations asks. */
+typedef struct mc_space_moves {
+  /* The moves of n chains, chain i of family[i], taking the shares jump
+   * and path (either may be 0) of the mutations that are not large steps. */
+  lmc_status (*create)(void **OUT_run, const mc_space *sp, int n, const int *family, double jump,
+                       double path, lmc_error *err);
+  void (*destroy)(void *run);
+  /* Appends chain i's moves to its n kernels k[], p[] (k[0] the large
+   * step), the others' probabilities scaled to make room; the new count. */
+  int (*add_kernels)(void *run, int i, mc_kernel *k, double *p, int n);
+  /* As mc_method's share_stats and report (method.h). */
+  void (*share_stats)(void *run);
+  void (*report)(void *run, mc_chain *const *chains, int n, double chain_seconds);
+} mc_space_moves;
+
 struct mc_space {
   const char *name;      /* --states NAME */
   int n_fam;
@@ -70,6 +90,7 @@ struct mc_space {
    * drawn, or -1 when out of memory. */
   int64_t (*estimate_b)(const mc_space *sp, mc_boot *boot, const mc_space_b_request *rq,
                         render_counters *cnt);
+  const mc_space_moves *moves;   /* its own moves (NULL: none) */
   void (*destroy)(mc_space *sp); /* frees what create made (not sp itself) */
   void *ctx;                     /* the space's own data */
 };
@@ -104,6 +125,9 @@ extern const int mc_space_ids[];
  * (path_states.c). */
 extern const lmc_opt_table mc_space_bdpt_options;
 extern const lmc_opt_table mc_space_path_options;
+
+/* The mmlt states' moves (mmlt_moves.c). */
+extern const mc_space_moves mc_mmlt_moves;
 
 /* Frees what sp holds (accepts NULL and a space never created). */
 void mc_space_free(mc_space *sp);

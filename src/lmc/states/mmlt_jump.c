@@ -180,11 +180,67 @@ static double mmj__log_density(void *self, const mc_state *from, const double *t
   return -log(from->v.f) - j->log_rest_to;
 }
 
-/* The fused move: the state's path perturbed in path space (Veach's lens,
- * multi-chain or caustic perturbation, one drawn uniformly; none that does
- * not apply), then a strategy for the new path drawn by its MIS weights and
- * its numbers found by the inverses. The ratio is the perturbation's own
- * f(y) T(y -> x) / (f(x) T(x -> y)) (mmlt_jump.h). */
+/* Whether path move kind applies to P (the bidirectional mutation always
+ * does; test_kind: that kind alone). */
+static int mmj__applies(const mc_mmlt_jump *j, int kind, const ps_path *P) {
+  if (j->test_kind >= 0 && kind != j->test_kind) return 0;
+  switch ((mc_path_move)kind) {
+  case MC_PATH_MOVE_BIDIR: return 1;
+  case MC_PATH_MOVE_LENSSUB: return mut_lenssub_m(&j->ctx, P) > 0;
+  case MC_PATH_MOVE_LENS: return mut_perturb_applies(&j->mp, MUT_PERTURB_LENS, P);
+  case MC_PATH_MOVE_MULTICHAIN: return mut_perturb_applies(&j->mp, MUT_PERTURB_MULTICHAIN, P);
+  case MC_PATH_MOVE_CAUSTIC: return mut_perturb_applies(&j->mp, MUT_PERTURB_CAUSTIC, P);
+  default: return 0;
+  }
+}
+
+/* The number of path moves that apply to P. */
+static int mmj__n_applies(const mc_mmlt_jump *j, const ps_path *P) {
+  int n = 0;
+  for (int q = 0; q < MC_PATH_MOVE_COUNT; q++) n += mmj__applies(j, q, P);
+  return n;
+}
+
+/* One of path-space MLT's moves of P into Y, drawn uniformly among those
+ * that apply to P, as the mlt integrator draws them, with its ratio f(y)
+ * T(y -> x) / (f(x) T(x -> y)) times the selection's, n(x) / n(y) for the
+ * numbers n of moves that apply (0 when the move does not apply to y),
+ * into *OUT_ratio. The path space has the state's length alone, so a
+ * bidirectional mutation adds as many edges as it deletes and a lens
+ * subpath mutation keeps its subpath's length. Returns 0 when there is no
+ * proposal. */
+static int mmj__path_move(mc_mmlt_jump *j, rng *r, const ps_path *P, ps_path *Y,
+                          double *OUT_ratio) {
+  int n_x = mmj__n_applies(j, P), pick = (int)(rng_uniform(r) * n_x), kind = -1, ok;
+  int64_t rays = 0;
+  *OUT_ratio = 0.0;
+  if (n_x == 0) return 0;
+  if (pick >= n_x) pick = n_x - 1;
+  for (int q = 0; q < MC_PATH_MOVE_COUNT && kind < 0; q++)
+    if (mmj__applies(j, q, P) && pick-- == 0) kind = q;
+  j->st.kinds[kind]++;
+  if (kind == MC_PATH_MOVE_BIDIR) {
+    mut_bidir_record rec;
+    ok = mut_bidir_propose(&j->mb, r, P, Y, &rec, OUT_ratio) == MUT_BIDIR_OK;
+  } else if (kind == MC_PATH_MOVE_LENSSUB) {
+    ok = mut_lenssub_propose(&j->ml, r, P, Y, OUT_ratio, &rays);
+  } else {
+    mut_perturb_kind pk = kind == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
+                          : kind == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN
+                                                            : MUT_PERTURB_CAUSTIC;
+    ok = mut_perturb_propose(&j->mp, pk, r, P, Y, OUT_ratio, &rays, NULL);
+  }
+  if (!ok || !(*OUT_ratio > 0.0)) return 0;
+  int n_y = mmj__applies(j, kind, Y) ? mmj__n_applies(j, Y) : 0;
+  *OUT_ratio = n_y > 0 ? *OUT_ratio * n_x / n_y : 0.0;
+  return *OUT_ratio > 0.0;
+}
+
+/* The fused move: the state's path moved in path space by one of
+ * path-space MLT's moves (mmj__path_move), then a strategy for the new
+ * path drawn by its MIS weights and its numbers found by the inverses. The
+ * ratio is the path move's own f(y) T(y -> x) / (f(x) T(x -> y))
+ * (mmlt_jump.h). */
 static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
   const mc_mmlt_states *st = j->target->ctx;
@@ -192,13 +248,9 @@ static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double
   bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N, *cam = j->v + 2 * MMJ_N;
   if (!mmj__begin(j, r, x, OUT_y, &t)) return -INFINITY;
   ps_path *P = j->px, *Y = j->py;
-  mut_perturb_kind kind = (mut_perturb_kind)(int)(rng_uniform(r) * 3.0);
   double ratio = 0.0;
-  int64_t rays = 0;
   if (!ps_from_bdpt(&j->ctx, X, k + 1, NULL, 0, P) || !(P->lum > 0.0) ||
-      !mut_perturb_applies(&j->mp, kind, P) ||
-      !mut_perturb_propose(&j->mp, kind, r, P, Y, &ratio, &rays, NULL) || !(ratio > 0.0) ||
-      Y->k != k) {
+      !mmj__path_move(j, r, P, Y, &ratio) || !(ratio > 0.0) || Y->k != k) {
     j->st.lone++;
     return -INFINITY;
   }
@@ -235,11 +287,16 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
   memset(j, 0, sizeof *j);
   j->target = mmlt_target;
   j->perturb = perturb;
+  j->test_kind = -1;
   j->v = malloc(4 * MMJ_N * sizeof *j->v);
   if (perturb) {
     const mc_mmlt_states *st = mmlt_target->ctx;
     ps_context_init(&j->ctx, st->s, &st->rs);
+    /* The family's paths all have its length: so have the moves'. */
+    j->ctx.kmin = j->ctx.kmax = st->length;
     mut_perturb_init(&j->mp, &j->ctx);
+    mut_bidir_init(&j->mb, &j->ctx);
+    mut_lenssub_init(&j->ml, &j->ctx);
     j->px = malloc(sizeof *j->px);
     j->py = malloc(sizeof *j->py);
   }
@@ -262,7 +319,7 @@ void mc_mmlt_jump_free(mc_mmlt_jump *j) {
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   mc_kernel k;
   memset(&k, 0, sizeof k);
-  k.name = j->perturb ? "perturb" : "jump";
+  k.name = j->perturb ? "path" : "jump";
   k.kind = MC_KERNEL_FULL;
   k.self = j;
   k.propose = j->perturb ? mmj__propose_perturb : mmj__propose;

@@ -29,18 +29,25 @@
  * -log f(y) - log(W - w_t') (the same x: cached by propose).
  *
  * The fused move (perturb = 1; Otsu, Kaplanyan, Hanika, Dachsbacher and
- * Hachisuka 2017's fusion of the two spaces). The state's path x is
- * perturbed in path space by one of Veach's perturbations (lens,
- * multi-chain, caustic; mut_perturb.h), drawn uniformly, into y (the chain
- * stays when the one drawn does not apply); y's strategy t' is drawn with
- * probability w_t'(y) (the full conditional) and its numbers found as
- * above. In the coordinates above the target is w_t(x) C(x) times the free
- * numbers' density, the strategy's draw is its conditional, so the ratio is
- * the perturbation's own, C(y) T(y -> x) / (C(x) T(x -> y)) (with C the
- * path's measurement contribution, pathspace.h): propose returns log q(y|x)
- * = -log f(x) - log that ratio, log_density -log f(y). A state whose path
- * has no contribution in path space (its camera ray in the film's margin,
- * which the states sample) stays.
+ * Hachisuka 2017's fusion of the two spaces). The state's path x is moved
+ * in path space by one of path-space MLT's moves, drawn uniformly among
+ * those that apply to x (as the mlt integrator draws them): Veach's
+ * bidirectional mutation (mut_bidir.h), the lens, multi-chain and caustic
+ * perturbations (mut_perturb.h) and the lens subpath mutation
+ * (mut_lenssub.h), into y; the selection's ratio n(x) / n(y), n the number
+ * of moves that apply, joins the move's own. The moves' path space has the family's length alone, so a
+ * bidirectional mutation adds as many edges as it deletes (P(ka | kd) is
+ * then 1 at ka = kd, and kd = 1 makes no move) and a lens subpath mutation
+ * whose new subpath has another length makes no proposal. y's strategy t'
+ * is drawn with probability w_t'(y) (the full conditional) and its numbers
+ * found as above. In the coordinates above the target is w_t(x) C(x) times
+ * the free numbers' density, the strategy's draw is its conditional, so
+ * the ratio is the path move's own, C(y) T(y -> x) / (C(x) T(x -> y))
+ * n(x) / n(y) (with C the path's measurement contribution, pathspace.h):
+ * propose returns log q(y|x) = -log f(x) - log that ratio, log_density
+ * -log f(y).
+ * A state whose path has no contribution in path space (its camera ray in
+ * the film's margin, which the states sample) stays.
  *
  * Refusals. A re-split whose numbers a walk cannot reach (a direction
  * deep in a sampler's clamped tail, bsdf_invert) is refused: the state
@@ -54,7 +61,10 @@
 #include <stdint.h>
 
 #include "lmc/kernels/chain.h"
+#include "lmc/path/mut_bidir.h"
+#include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
+#include "lmc/states/path_states.h"
 #include "render/error.h"
 #include "render/integrators/integrator.h"
 
@@ -65,6 +75,7 @@ typedef struct mc_mmlt_jump_stats {
   int64_t refused;     /* the new strategy's numbers could not be found (a tail, see above) */
   int64_t mismatch;    /* the new numbers walked to another raster point: rejected */
   int64_t inversions;  /* subpaths inverted */
+  int64_t kinds[MC_PATH_MOVE_COUNT]; /* the fused move: path moves drawn, by mc_path_move */
 } mc_mmlt_jump_stats;
 
 /* One chain's jump or fused move: its target (an mmlt family's), scratch
@@ -74,17 +85,20 @@ typedef struct mc_mmlt_jump {
   int perturb;             /* 0: the strategy jump; 1: the fused path perturbation */
   ps_context ctx;          /* perturb: the path space of the family's paths */
   mut_perturb mp;          /* perturb: the perturbations' sizes */
+  mut_bidir mb;            /* perturb: the bidirectional mutation */
+  mut_lenssub ml;          /* perturb: the lens subpath mutation */
   ps_path *px, *py;        /* perturb: the state's path and the proposal's (owned) */
   bdpt_vertex *v;          /* scratch: 4 arrays of BDPT_MAX_VERTICES + 1 vertices */
   double log_rest_to;      /* log(W - w_t') of the last proposal, for log_density */
   double rx, ry;           /* the raster point of its path */
+  int test_kind;           /* tests only: the fused move's path move (mc_path_move; -1 in use: drawn) */
   mc_mmlt_jump_stats st;
 } mc_mmlt_jump;
 
 lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int perturb,
                              lmc_error *err);
 void mc_mmlt_jump_free(mc_mmlt_jump *j);
-/* The kernel (MC_KERNEL_FULL, "jump" or "perturb") over j, which must outlive it. */
+/* The kernel (MC_KERNEL_FULL, "jump" or "path") over j, which must outlive it. */
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j);
 
 #endif
