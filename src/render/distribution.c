@@ -32,6 +32,7 @@
  * weight is 0. Sampling uses u1 for the row (v) and u0 inside the row (u).
  */
 #include "render/distribution.h"
+#include "render/warp.h"
 
 #include <float.h>
 #include <math.h>
@@ -155,8 +156,7 @@ double distrib1d_invert_discrete(const distrib1d *d, int index, double u_remap) 
   if (index < 0 || index >= d->n) return -1.0;
   double lo = d->cdf[index], hi = d->cdf[index + 1];
   if (!(hi > lo)) return -1.0;
-  double u = lo + u_remap * (hi - lo);
-  return u < hi ? u : nextafter(hi, lo);
+  return warp_uniform_in(lo, hi, u_remap);
 }
 
 double distrib1d_pmf(const distrib1d *d, int index) {

@@ -14,6 +14,11 @@
 #endif
 
 /* Wraps an angle in (-pi, pi] into [0, 1) as a fraction of a turn. */
+double warp_uniform_in(double lo, double hi, double r) {
+  double x = lo + r * (hi - lo);
+  return x < hi ? x : nextafter(hi, lo);
+}
+
 double warp_turn(double phi) {
   double t = phi / (2.0 * M_PI);
   if (t < 0.0) t += 1.0;

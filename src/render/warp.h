@@ -39,6 +39,11 @@ void warp_uniform_cone_to_square(vec3 w, double cos_max, double *u1, double *u2)
 void warp_square_to_triangle(double u1, double u2, double *b1, double *b2);
 void warp_triangle_to_square(double b1, double b2, double *u1, double *u2);
 
+/* A number uniform in [lo, hi) from r in [0, 1): lo + r (hi - lo), kept
+ * below hi where rounding reaches it (the inverses' draw inside a discrete
+ * choice's interval). */
+double warp_uniform_in(double lo, double hi, double r);
+
 /* An angle in radians as a fraction of a turn in [0, 1) (what 2 pi u maps to). */
 double warp_turn(double phi);
 

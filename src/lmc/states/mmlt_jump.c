@@ -8,6 +8,7 @@
 
 #include "lmc/states/mmlt_jump.h"
 #include "lmc/states/mmlt_states.h"
+#include "render/warp.h"
 
 enum { MMJ_N = BDPT_MAX_VERTICES + 1 };
 
@@ -85,9 +86,7 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
   double *ul = y + mc_target_stream_offset(T, LMC_STREAM_LIGHT);
   double *ux = y + mc_target_stream_offset(T, LMC_STREAM_CONNECT);
   /* The technique coordinate: uniform in t's interval. */
-  double lo = (double)(t - 1) / n, hi = (double)t / n;
-  ux[0] = lo + rng_uniform(r) * (hi - lo);
-  if (!(ux[0] < hi)) ux[0] = nextafter(hi, lo);
+  ux[0] = warp_uniform_in((double)(t - 1) / n, (double)t / n, rng_uniform(r));
   bdpt_resplit(sc, X, k, s, t, cam, lp);
   double buf[2 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * MMJ_N];
   if (t >= 2) {

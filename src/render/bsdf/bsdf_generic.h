@@ -372,14 +372,9 @@ done:;
 /* ---- The inverse of bsdf_sample_f (values only) ------------------------------ */
 
 #if !R_DUAL
-double bsdf__lobe_u(double lo, double hi, double r) {
-  double x = lo + r * (hi - lo);
-  return x < hi ? x : nextafter(hi, lo);
-}
-
 int bsdf__invert_cosine(vec3 wi, double lo, double hi, const double r[4], double OUT_u[3]) {
   if (!(wi.z > 0.0)) return 0;
-  OUT_u[0] = bsdf__lobe_u(lo, hi, r[1]);
+  OUT_u[0] = warp_uniform_in(lo, hi, r[1]);
   warp_cosine_hemisphere_to_square(wi, &OUT_u[1], &OUT_u[2]);
   return 1;
 }
@@ -391,7 +386,7 @@ int bsdf__invert_mixture(vec3 wi, double w, double pdf, const double r[4], doubl
   double diff = (1.0 - w) * wi.z / M_PI / pdf;
   if (r[0] < diff) return bsdf__invert_cosine(wi, w, 1.0, r, OUT_u);
   *OUT_glossy = 1;
-  OUT_u[0] = bsdf__lobe_u(0.0, w, r[1]);
+  OUT_u[0] = warp_uniform_in(0.0, w, r[1]);
   return 1;
 }
 
@@ -432,7 +427,7 @@ static int bsdf__invert_unchecked(const bsdf *b, double tu, double tv, vec3 wo, 
      * choice when the wrapped lobe wins. */
     double t = r[0] * (pass_w + wrapped_w);
     if (!(t < wrapped_w)) {
-      OUT_u[0] = bsdf__lobe_u(prob, 1.0, r[1]);
+      OUT_u[0] = warp_uniform_in(prob, 1.0, r[1]);
       OUT_u[1] = r[2];
       OUT_u[2] = r[3];
       return 1;

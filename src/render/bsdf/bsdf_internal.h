@@ -15,6 +15,7 @@
 #define LMC_RENDER_BSDF_INTERNAL_H
 
 #include "render/bsdf/bsdf.h"
+#include "render/warp.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -95,10 +96,8 @@ BSDF__MODEL_INVERT(thindielectric)
 #undef BSDF__MODEL_EVAL_PDF
 #undef BSDF__MODEL_INVERT
 
-/* Helpers of the inverses (bsdf_generic.h). bsdf__lobe_u: a number uniform
- * in the lobe's interval [lo, hi) of u_lobe from r in [0, 1). */
-double bsdf__lobe_u(double lo, double hi, double r);
-/* The numbers of a cosine-weighted direction wi (wi.z > 0): u_lobe from
+/* Helpers of the inverses (bsdf_generic.h; a lobe's u_lobe in its interval
+ * [lo, hi) is warp_uniform_in). The numbers of a cosine-weighted direction wi (wi.z > 0): u_lobe from
  * r[1] in [lo, hi), (u1, u2) by the concentric map's inverse. */
 int bsdf__invert_cosine(vec3 wi, double lo, double hi, const double r[4], double OUT_u[3]);
 /* A glossy lobe chosen with probability w (u_lobe in [0, w)) mixed with a

@@ -452,7 +452,7 @@ int bsdf__roughdielectric_invert(const bsdf *b, double tu, double tv, vec3 wo, v
                  &OUT_u[2]))
     return 0;
   if (reflect ? !(fr > 0.0) : !(fr < 1.0)) return 0;
-  OUT_u[0] = reflect ? bsdf__lobe_u(0.0, fr, r[1]) : bsdf__lobe_u(fr, 1.0, r[1]);
+  OUT_u[0] = reflect ? warp_uniform_in(0.0, fr, r[1]) : warp_uniform_in(fr, 1.0, r[1]);
   return 1;
 }
 

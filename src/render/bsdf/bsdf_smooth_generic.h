@@ -461,7 +461,7 @@ static int bsdf__same_dir(vec3 a, vec3 b) { return v3_len2(v3_sub(a, b)) < 1e-10
 static int bsdf__invert_delta(double lo, double hi, const double r[4], double OUT_u[3],
                               double *OUT_pmf) {
   if (!(hi > lo)) return 0;
-  OUT_u[0] = bsdf__lobe_u(lo, hi, r[1]);
+  OUT_u[0] = warp_uniform_in(lo, hi, r[1]);
   OUT_u[1] = r[2];
   OUT_u[2] = r[3];
   *OUT_pmf = hi - lo;

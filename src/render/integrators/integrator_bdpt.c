@@ -64,6 +64,7 @@
  * power is not a probability).
  */
 #include "render/integrators/integrator.h"
+#include "render/warp.h"
 
 #include <string.h>
 
@@ -243,12 +244,6 @@ int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler
  * The inverses of the subpaths (inverse path sampling).
  */
 
-/* A number uniform in [lo, hi) from r in [0, 1). */
-static double bdpt__uniform_in(double lo, double hi, double r) {
-  double x = lo + r * (hi - lo);
-  return x < hi ? x : nextafter(hi, lo);
-}
-
 /* The light endpoint's light (y: a light vertex, or a surface on an area
  * light, as the end of a camera walk) and the triangle of its point. The
  * infinite lights together (light -1, an escaped camera ray) resolve to
@@ -340,7 +335,7 @@ static int bdpt__invert_step(const scene *sc, const render_settings *rs, const b
   if (i >= rs->rrdepth) {
     double q = bdpt__rr_q(mode, *beta, beta1, *eta_scale);
     if (!(q > 0.0)) return 0;
-    u[3] = bdpt__uniform_in(0.0, q, r[3]);
+    u[3] = warp_uniform_in(0.0, q, r[3]);
     *beta = rgb_scale(*beta, 1.0 / q);
   }
   return 1;
