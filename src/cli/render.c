@@ -16,6 +16,11 @@
 
 #include "cli/cli.h"
 #include "render/dist.h"
+#include "render/io/tev.h"
+
+/* Seconds the end of a render waits at most for its last image to reach
+ * the viewer of --display-server. */
+#define LMC_DISPLAY_LAST_WAIT 1.5
 
 static const char *lmc_render_usage =
     "usage: lmc render SCENE.xml [flags]   (every flag also as --flag=value)\n"
@@ -103,16 +108,25 @@ static void lmc_default_output(const char *scene_path, char *out, size_t size) {
   snprintf(out, size, "%s.exr", stem);
 }
 
-/* Writes the EXR and its PNG preview; *OUT_black tells whether every
- * pixel is 0 (with warn_black, also said as a warning naming the scene). */
+/* Writes the EXR and its PNG preview, and posts the image to the viewer
+ * (display; NULL: none); *OUT_black tells whether every pixel is 0 (with
+ * warn_black, also said as a warning naming the scene). */
 static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size,
                              const lmc_exposure *exposure, const char *scene_path,
-                             int warn_black, int *OUT_black) {
+                             int warn_black, lmc_tev *display, int *OUT_black) {
   lmc_error err;
   lmc_error_clear(&err);
   lmc_image img = {0};
   char msg[2048];
-  if (film_develop(f, &img, &err) || image_write_exr(exr_path, &img, &err)) {
+  if (film_develop(f, &img, &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
+    image_free(&img);
+    return 0;
+  }
+  /* The final image to the viewer first: it goes out while the files are written. */
+  tev_post(display, &img);
+  if (image_write_exr(exr_path, &img, &err)) {
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
     image_free(&img);
@@ -136,14 +150,20 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
   return 1;
 }
 
-/* --snapshot: writes OUTSTEM-<seconds>s.exr (safe write: temporary file
- * and rename, as the final output). */
+/* The drivers' snapshot hook (settings.h), shared by --snapshot, which
+ * writes OUTSTEM-<seconds>s.exr (safe write: temporary file and rename, as
+ * the final output), and --display-server, which sends the image to tev;
+ * each at its own interval, the film developed once for both. */
 typedef struct lmc_snapshot_ctx {
   const char *out_exr;
+  double file_every, next_file; /* --snapshot (0: none) */
+  lmc_tev *display;             /* --display-server (NULL: none) */
+  double display_every, next_display;
+  lmc_image img;                /* owned: the developed film, kept from one call to the next */
 } lmc_snapshot_ctx;
 
-static void lmc_write_snapshot(void *ctx, const struct film *f, double seconds) {
-  const lmc_snapshot_ctx *sc = ctx;
+static void lmc_write_snapshot(const lmc_snapshot_ctx *sc, const lmc_image *img,
+                               double seconds) {
   char path[1100], stem[1024];
   snprintf(stem, sizeof stem, "%s", sc->out_exr);
   size_t len = strlen(stem);
@@ -151,13 +171,50 @@ static void lmc_write_snapshot(void *ctx, const struct film *f, double seconds) 
   snprintf(path, sizeof path, "%s-%.1fs.exr", stem, seconds);
   lmc_error err;
   lmc_error_clear(&err);
-  lmc_image img = {0};
-  if (film_develop(f, &img, &err) || image_write_exr(path, &img, &err)) {
+  if (image_write_exr(path, img, &err)) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: snapshot: %s\n", msg);
   }
-  image_free(&img);
+}
+
+static void lmc_on_snapshot(void *ctx, const struct film *f, double seconds) {
+  lmc_snapshot_ctx *sc = ctx;
+  int file = sc->file_every > 0.0 && seconds >= sc->next_file;
+  int display = sc->display && seconds >= sc->next_display;
+  if (!file && !display) return;
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (!sc->img.data && image_init(&sc->img, f->width, f->height, 3, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: snapshot: %s\n", msg);
+  } else {
+    film_develop_to(f, sc->img.data);
+    if (file) lmc_write_snapshot(sc, &sc->img, seconds);
+    if (display) tev_post(sc->display, &sc->img);
+  }
+  while (file && sc->next_file <= seconds) sc->next_file += sc->file_every;
+  while (display && sc->next_display <= seconds) sc->next_display += sc->display_every;
+}
+
+/* --display-server: the client, showing the image under the output's
+ * file name (NULL, after a message, when it cannot start: the render
+ * goes on without it). Rank 0 alone shows the image. */
+static lmc_tev *lmc_display_start(const render_settings *rs, const scene *s, const char *out_exr) {
+  if (!rs->display_server[0] || dist_rank() != 0) return NULL;
+  const char *slash = strrchr(out_exr, '/');
+  lmc_tev *t = NULL;
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (tev_create(&t, rs->display_server, slash ? slash + 1 : out_exr, s->cam.width,
+                 s->cam.height, &err)) {
+    char msg[2048];
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: flag --display-server: %s (rendering without it)\n", msg);
+    return NULL;
+  }
+  return t;
 }
 
 /* A flag of the tables as given on the command line (checked). */
@@ -209,10 +266,10 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
 static int render__finish(const scene *s, const render_settings *rs, const film *f,
                           const render_stats *st, const int64_t *per_rank, const char *out_exr,
                           char *out_png, size_t png_size, const lmc_exposure *exposure,
-                          const char *scene_path, double t_load) {
+                          const char *scene_path, double t_load, lmc_tev *display) {
   int black = 0;
   int ok = lmc_write_outputs(f, out_exr, out_png, png_size, exposure, scene_path,
-                             s->n_lights > 0, &black);
+                             s->n_lights > 0, display, &black);
   if (dist_active()) {
     fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
             dist_size());
@@ -251,9 +308,16 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   /* -o OUT.png names the preview: the EXR is OUT.exr beside it. */
   size_t len = strlen(out_exr);
   if (len > 4 && strcasecmp(out_exr + len - 4, ".png") == 0) memcpy(out_exr + len - 4, ".exr", 4);
-  lmc_snapshot_ctx snap = {out_exr};
+  /* The snapshot hook: the files of --snapshot and the viewer of
+   * --display-server, the drivers calling at the shorter interval. */
+  lmc_snapshot_ctx snap = {out_exr, rs->snapshot, rs->snapshot, NULL, rs->display_interval,
+                           rs->display_interval, {0, 0, 0, NULL}};
+  snap.display = lmc_display_start(rs, s, out_exr);
+  /* (On every rank alike: the snapshots are collective.) */
+  if (rs->display_server[0] && (rs->snapshot <= 0.0 || rs->display_interval < rs->snapshot))
+    rs->snapshot = rs->display_interval;
   if (rs->snapshot > 0.0) {
-    rs->snapshot_fn = lmc_write_snapshot;
+    rs->snapshot_fn = lmc_on_snapshot;
     rs->snapshot_ctx = &snap;
   }
   film f;
@@ -266,8 +330,11 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
+    tev_destroy(snap.display, 0.0);
+    image_free(&snap.img);
     return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
   }
+  image_free(&snap.img); /* (the snapshots are over) */
   /* Every rank's own rays and samples, for rank 0's summary. */
   int64_t *per_rank = dist_active() ? calloc(2 * (size_t)dist_size(), sizeof *per_rank) : NULL;
   if (dist_active() && !per_rank) dist_abort(EXIT_FAIL);
@@ -286,7 +353,9 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     return (int)c;
   }
   int code = render__finish(s, rs, &f, &st, per_rank, out_exr, out_png, sizeof out_png, exposure,
-                            scene_path, t_load);
+                            scene_path, t_load, snap.display);
+  /* The last image to the viewer: a short wait at most. */
+  tev_destroy(snap.display, LMC_DISPLAY_LAST_WAIT);
   free(per_rank);
   film_free(&f);
   if (dist_active()) {

@@ -234,16 +234,20 @@ void film_sum_to_root(film *f) {
   dist_sum_to_root(f->splat, 3 * n);
 }
 
-lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err) {
-  lmc_status st = image_init(out, f->width, f->height, 3, err);
-  if (st) return st;
+void film_develop_to(const film *f, float *pixels) {
   size_t n = (size_t)f->width * (size_t)f->height;
   for (size_t i = 0; i < n; i++) {
     double c = f->count[i];
     for (int k = 0; k < 3; k++) {
       double v = (c > 0.0 ? f->sum[3 * i + k] / c : 0.0) + f->splat[3 * i + k] * f->splat_scale;
-      out->data[3 * i + k] = (float)v;
+      pixels[3 * i + k] = (float)v;
     }
   }
+}
+
+lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err) {
+  lmc_status st = image_init(out, f->width, f->height, 3, err);
+  if (st) return st;
+  film_develop_to(f, out->data);
   return LMC_OK;
 }

@@ -90,5 +90,8 @@ void film_merge(film *dst, const film *src);
 void film_sum_to_root(film *f);
 /* The image: sum / count + splat * splat_scale (out is initialised here). */
 lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err);
+/* The same pixels into `pixels` (room for width * height * 3 floats, caller's):
+ * for a caller that develops the same film again and again. */
+void film_develop_to(const film *f, float *pixels);
 
 #endif

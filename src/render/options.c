@@ -4,6 +4,7 @@
  */
 #include "render/options.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -39,6 +40,12 @@ static const lmc_opt opt__render[] = {
      "stratified across a pixel's samples)", NULL},
     {"snapshot", LMC_OPT_DOUBLE, offsetof(render_settings, snapshot), 0, 1e-3, 1e9, NULL, NULL, 0,
      "S", "none", "also write OUT-<seconds>s.exr every S seconds", NULL},
+    {"display-server", LMC_OPT_ADDRESS, offsetof(render_settings, display_server), 0, 1, 65535,
+     NULL, NULL, 0, "HOST:PORT", "none",
+     "show the image as it converges in the tev viewer listening there (port 14158 when "
+     "omitted); the render never waits for it", NULL},
+    {"display-interval", LMC_OPT_DOUBLE, offsetof(render_settings, display_interval), 0, 0.05,
+     1e9, NULL, NULL, 0, "S", NULL, "seconds between the images --display-server sends", NULL},
 };
 
 const lmc_opt_table lmc_render_options = {
@@ -72,6 +79,32 @@ static int opt__integer(const char *s, double lo, double hi, int64_t *out) {
   long long v = strtoll(s, &end, 10);
   if (errno || end == s || *end != '\0' || (double)v < lo || (double)v > hi) return 0;
   *out = v;
+  return 1;
+}
+
+int lmc_address_parse(const char *s, int port_lo, int port_hi, char *host, size_t n,
+                      int *OUT_port) {
+  /* The host: labels of letters, digits and hyphens joined by dots (a
+   * dotted IPv4 address is one such name); then an optional ":PORT". */
+  size_t len = strcspn(s, ":");
+  if (len == 0 || len >= n || len >= LMC_ADDRESS_MAX - 7) return 0;
+  for (size_t i = 0; i < len; i++) {
+    unsigned char c = (unsigned char)s[i];
+    if (!isalnum(c) && c != '-' && c != '.') return 0;
+    if (c == '.' && (i == 0 || s[i - 1] == '.' || i + 1 == len)) return 0;
+  }
+  int port = 0;
+  if (s[len] == ':') {
+    const char *p = s + len + 1;
+    if (!*p || strlen(p) > 5) return 0;
+    for (const char *q = p; *q; q++)
+      if (!isdigit((unsigned char)*q)) return 0;
+    port = atoi(p);
+    if (port < port_lo || port > port_hi) return 0;
+  }
+  memcpy(host, s, len);
+  host[len] = '\0';
+  *OUT_port = port;
   return 1;
 }
 
@@ -136,6 +169,19 @@ int lmc_opt_parse(const lmc_opt *o, const char *s, void *base, char *msg, size_t
     }
     *OPT_FIELD(base, o->offset, double) = x;
     *OPT_FIELD(base, o->offset2, double) = y;
+    break;
+  }
+  case LMC_OPT_ADDRESS: {
+    char host[LMC_ADDRESS_MAX];
+    int port;
+    if (!lmc_address_parse(s, (int)o->lo, (int)o->hi, host, sizeof host, &port)) {
+      snprintf(msg, n,
+               "flag --%s: '%s' is not HOST or HOST:PORT (a host name or IPv4 address, a port "
+               "in [%.0f, %.0f])",
+               o->name, s, o->lo, o->hi);
+      return 0;
+    }
+    snprintf(OPT_FIELD(base, o->offset, char), LMC_ADDRESS_MAX, "%s", s);
     break;
   }
   }
@@ -263,6 +309,11 @@ void lmc_opt_format(const lmc_opt *o, const void *rs, char *out, size_t n) {
     snprintf(out, n, "%g,%g", *OPT_FIELD((void *)rs, o->offset, double),
              *OPT_FIELD((void *)rs, o->offset2, double));
     break;
+  case LMC_OPT_ADDRESS: {
+    const char *a = OPT_FIELD((void *)rs, o->offset, char);
+    snprintf(out, n, "%s", a[0] ? a : "none");
+    break;
+  }
   }
 }
 

@@ -31,7 +31,9 @@ typedef enum lmc_opt_kind {
   LMC_OPT_INT64,   /* an int64_t in [lo, hi] */
   LMC_OPT_DOUBLE,  /* a finite double in [lo, hi] */
   LMC_OPT_CHOICE,  /* one of choices[]: stores values[i] (or i) as an int */
-  LMC_OPT_PAIR     /* "A,B": two doubles in [lo, hi] with A <= B, at offset and offset2 */
+  LMC_OPT_PAIR,    /* "A,B": two doubles in [lo, hi] with A <= B, at offset and offset2 */
+  LMC_OPT_ADDRESS  /* "HOST[:PORT]" (lmc_address_parse), the port in [lo, hi]: kept as given,
+                      in a char[LMC_ADDRESS_MAX] field */
 } lmc_opt_kind;
 
 typedef struct lmc_opt {
@@ -62,8 +64,17 @@ typedef struct lmc_opt_table {
 } lmc_opt_table;
 
 /* The renderer's own flags (options.c): --spp, --time, --threads, --seed,
- * --maxdepth, --rrdepth, --sampler, --snapshot. */
+ * --maxdepth, --rrdepth, --sampler, --snapshot, --display-server,
+ * --display-interval. */
 extern const lmc_opt_table lmc_render_options;
+
+/* Splits "HOST[:PORT]" (a network address: a host name or a dotted IPv4
+ * address, then optionally a colon and a decimal port in [port_lo,
+ * port_hi]) into host (room for n bytes, n <= LMC_ADDRESS_MAX) and
+ * *OUT_port (0 when no port is given). Returns 1, or 0 when s is not of
+ * that form. */
+int lmc_address_parse(const char *s, int port_lo, int port_hi, char *host, size_t n,
+                      int *OUT_port);
 
 /* The option `name` (without dashes) among tables[0 .. n-1], the first
  * that has it, and its table in *OUT_table (may be NULL); NULL when none

@@ -20,6 +20,9 @@ enum {
   SET_SAMPLER = 1 << 6
 };
 
+/* Room for a network address "HOST:PORT" (options.h's LMC_OPT_ADDRESS). */
+#define LMC_ADDRESS_MAX 264
+
 /* A plugin's own setting as checked text (render/options.h). */
 #define LMC_MAX_PARAMS 48
 typedef struct lmc_param {
@@ -39,9 +42,14 @@ typedef struct render_settings {
   uint64_t seed;
   int sampler;           /* pt and bdpt: LMC_SAMPLER_INDEPENDENT or _SOBOL (render/sampler.h) */
   double snapshot;       /* seconds between intermediate images (0: none) */
+  char display_server[LMC_ADDRESS_MAX]; /* --display-server HOST[:PORT] of a tev viewer ("": none) */
+  double display_interval;              /* seconds between the images sent to it */
   /* Called by the render drivers every `snapshot` seconds with the film
    * normalised as if the render stopped then (borrowed for the call) and
-   * the seconds since the render began; cli/render.c writes it. NULL: none. */
+   * the seconds since the render began. cli/render.c hooks the files of
+   * --snapshot and the images of --display-server here, each at its own
+   * interval: it sets `snapshot` to the shorter of the two for the
+   * drivers. NULL: none. */
   void (*snapshot_fn)(void *ctx, const struct film *f, double seconds);
   void *snapshot_ctx;
   /* The settings of the MCMC driver, the state spaces and the integrators,
@@ -61,6 +69,7 @@ static inline render_settings render_settings_default(void) {
   s.rrdepth = 5;
   s.spp = 16;
   s.seed = 1;
+  s.display_interval = 1.0;
   return s;
 }
 

@@ -142,25 +142,30 @@ static rgb render__pt(const scene *s, const render_settings *rs, lmc_sampler *sm
 }
 
 /* Hands rs->snapshot_fn the image so far: the camera estimates plus the
- * splats (already replayed into `out`), normalised as at the end. */
-static void render__snapshot(const render_settings *rs, const film *out, int has_splats,
-                             int nthreads, const render__counters_slot *counters, double seconds) {
-  film tmp;
+ * splats (already replayed into `out`), normalised as at the end. tmp is
+ * the caller's scratch film, kept from one snapshot to the next (zeroed
+ * storage at first): a film allocated afresh each time costs its pages
+ * again, which frequent snapshots (--display-interval) notice. */
+static void render__snapshot(const render_settings *rs, const film *out, film *tmp,
+                             int has_splats, int nthreads, const render__counters_slot *counters,
+                             double seconds) {
   lmc_error err;
   /* (Collective: a rank out of memory ends the job rather than leave the
    * others waiting in the sums.) */
-  if (film_init(&tmp, out->width, out->height, &err)) {
+  if (tmp->sum) {
+    film_clear(tmp);
+    tmp->splat_scale = 1.0;
+  } else if (film_init(tmp, out->width, out->height, &err)) {
     if (dist_active()) dist_abort(1);
     return;
   }
-  film_merge(&tmp, out);
-  film_sum_to_root(&tmp);
+  film_merge(tmp, out);
+  film_sum_to_root(tmp);
   int64_t samples = 0;
   for (int t = 0; t < nthreads; t++) samples += counters[t].c.samples;
   dist_sum_to_root_i64(&samples, 1);
-  if (has_splats) tmp.splat_scale = samples > 0 ? 1.0 / (double)samples : 0.0;
-  if (dist_rank() == 0) rs->snapshot_fn(rs->snapshot_ctx, &tmp, seconds);
-  film_free(&tmp);
+  if (has_splats) tmp->splat_scale = samples > 0 ? 1.0 / (double)samples : 0.0;
+  if (dist_rank() == 0) rs->snapshot_fn(rs->snapshot_ctx, tmp, seconds);
 }
 
 /* The threads' counts into st (this rank's own in rank_rays and
@@ -253,11 +258,13 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
    * rounds on the stop and the snapshots. */
   int64_t pass = 0, round;
   double next_snapshot = rs->snapshot;
+  film snap_film; /* (render__snapshot's scratch) */
+  memset(&snap_film, 0, sizeof snap_film);
   for (round = 0; !stop && (max_passes == INT64_MAX || round * ranks < max_passes); round++) {
     /* An intermediate image (--snapshot) between passes. */
     if (rs->snapshot > 0.0 && rs->snapshot_fn && round > 0 &&
         dist_any(omp_get_wtime() - t0 >= next_snapshot)) {
-      render__snapshot(rs, out, use_bdpt, nthreads, counters, omp_get_wtime() - t0);
+      render__snapshot(rs, out, &snap_film, use_bdpt, nthreads, counters, omp_get_wtime() - t0);
       while (next_snapshot <= omp_get_wtime() - t0) next_snapshot += rs->snapshot;
     }
     pass = round * ranks + rank;
@@ -318,6 +325,7 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
   if (stop == 1) st->interrupted = 1;
   if (stop == 2) st->timed_out = 1;
   progress_finish(&bar);
+  film_free(&snap_film);
 
   /* Totals, and the splat normalisation: one light subpath per sample, and
    * each light subpath (with the per-pixel importance of camera.h) is an
