@@ -101,6 +101,11 @@ static int cmp_double(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* The chains' own streams after their start, apart from the streams that
+ * drew the starting numbers (the same stream would make the move's random
+ * choices copies of the state's numbers). */
+#define CHAIN_STREAMS (1ull << 40)
+
 /* A coarse cell of the film (4 x 3, the margin folded into the border cells). */
 enum { NCX = 4, NCY = 3 };
 static int film_cell(double rx, double ry) {
@@ -141,14 +146,14 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, int kind
   double fs[2000], fq[NFB - 1];
   int np = 0;
   for (int i = 0; np < 2000 && i < 200000; i++) {
-    double f = mc_chain_start(c, seed + 1, (uint64_t)i, (uint64_t)i);
+    double f = mc_chain_start(c, seed + 1, (uint64_t)i, (uint64_t)i + CHAIN_STREAMS);
     if (f > 0.0) fs[np++] = f;
   }
   qsort(fs, (size_t)np, sizeof fs[0], cmp_double);
   for (int q = 0; q < NFB - 1; q++) fq[q] = fs[(q + 1) * np / NFB];
   int used = 0;
   for (int i = 0; i < n_starts; i++) {
-    double f = mc_chain_start(c, seed, (uint64_t)i, (uint64_t)i);
+    double f = mc_chain_start(c, seed, (uint64_t)i, (uint64_t)i + CHAIN_STREAMS);
     if (!(f > 0.0)) continue;
     w.tech_before = -1.0;
     mc_chain_step(c, NULL, NULL);
