@@ -590,6 +590,57 @@ static void test_time_limit(void **state) {
   image_free(&img);
 }
 
+/* --reference: a relmse line at each snapshot and one for the final
+ * image, which is lmc compare's relmse of the written EXR (to the 6
+ * digits printed); a missing reference or one of another size exits 2
+ * naming the flag. */
+static void test_render_reference(void **state) {
+  (void)state;
+  const char *ref = LMC_SOURCE_DIR "/scenes/ring-caustics/reference.exr";
+  char args[2048];
+  snprintf(args, sizeof args,
+           "render '" LMC_SOURCE_DIR "/scenes/ring-caustics/scene.xml' --time 1.3 --snapshot 0.4 "
+           "--reference '%s' -q -o " TMP "/ref_run.exr",
+           ref);
+  if (run_lmc(args) != 0) fail_msg("lmc %s: %s", args, err_text);
+  int snapshots = 0, finals = 0;
+  double final_rel = -1.0;
+  for (const char *p = err_text; (p = strstr(p, "lmc: ")) != NULL; p++) {
+    const char *r = strstr(p, ": relmse ");
+    const char *eol = strchr(p, '\n');
+    if (!r || (eol && r > eol)) continue;
+    double v = strtod(r + 9, NULL);
+    assert_true(isfinite(v) && v >= 0.0);
+    if (!strncmp(p + 5, "final image", 11)) {
+      finals++;
+      final_rel = v;
+    } else {
+      snapshots++;
+    }
+  }
+  print_message("--reference: %d snapshot lines, final relmse %g\n", snapshots, final_rel);
+  assert_true(snapshots >= 1);
+  assert_int_equal(finals, 1);
+  snprintf(args, sizeof args, "compare " TMP "/ref_run.exr '%s'", ref);
+  assert_int_equal(run_lmc(args), 0);
+  double rel = metric("relmse");
+  assert_true(fabs(rel - final_rel) <= 1e-5 * rel);
+
+  snprintf(args, sizeof args,
+           "render '" LMC_SOURCE_DIR "/scenes/ring-caustics/scene.xml' --spp 1 --reference "
+           TMP "/no_such.exr -q -o " TMP "/ref_bad.exr");
+  assert_int_equal(run_lmc(args), 2);
+  assert_non_null(strstr(err_text, "--reference"));
+  assert_non_null(strstr(err_text, "no_such.exr"));
+  snprintf(args, sizeof args,
+           "render '" LMC_SOURCE_DIR "/scenes/ring-caustics/scene.xml' --spp 1 --resolution 64x48 "
+           "--reference '%s' -q -o " TMP "/ref_bad.exr",
+           ref);
+  assert_int_equal(run_lmc(args), 2);
+  assert_non_null(strstr(err_text, "320x240"));
+  assert_non_null(strstr(err_text, "64x48"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_help_lists_every_flag),
@@ -599,6 +650,7 @@ int main(void) {
       cmocka_unit_test(test_flag_syntax_and_determinism),
       cmocka_unit_test(test_resolution_override),
       cmocka_unit_test(test_compare_metrics),
+      cmocka_unit_test(test_render_reference),
       cmocka_unit_test(test_merge_and_convert),
       cmocka_unit_test(test_exposure),
       cmocka_unit_test(test_torus_renders_unmodified),

@@ -27,12 +27,6 @@ static rgb lmc_heat_color(double t) {
                   stops[i][2] + f * (stops[i + 1][2] - stops[i][2]));
 }
 
-/* Ascending order of doubles, for qsort. */
-static int lmc_cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
 int lmc_cmd_compare(int argc, char **argv) {
   const char *paths[2] = {NULL, NULL}, *heatmap = NULL;
   int n_paths = 0;
@@ -82,42 +76,17 @@ int lmc_cmd_compare(int argc, char **argv) {
     return EXIT_BADINPUT;
   }
 
-  /* The metrics, over pixels and channels; rel[] keeps each pixel's
-   * relative squared error for the trimmed mean. */
   size_t n = (size_t)img[0].width * (size_t)img[0].height;
-  double mse = 0.0, relmse = 0.0, lum_i = 0.0, lum_r = 0.0;
-  double *rel = malloc(n * sizeof *rel);
-  if (!rel) {
-    fprintf(stderr, "lmc: out of memory\n");
+  lmc_image_error ie;
+  if (image_error(&img[0], &img[1], &ie, &err)) {
+    lmc_error_format(&err, msg, sizeof msg);
+    fprintf(stderr, "lmc: %s\n", msg);
     image_free(&img[0]);
     image_free(&img[1]);
     return EXIT_FAIL;
   }
-  for (size_t p = 0; p < n; p++) {
-    const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
-    rel[p] = 0.0;
-    for (int c = 0; c < 3; c++) {
-      double d = (double)I[c] - (double)R[c];
-      mse += d * d;
-      rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
-    }
-    relmse += rel[p];
-    lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));
-    lum_r += rgb_luminance(rgb_make(R[0], R[1], R[2]));
-  }
-  mse /= 3.0 * (double)n;
-  relmse /= (double)n;
-  /* The trimmed relative MSE: the mean over the pixels left when the
-   * largest 0.1% of the per-pixel errors are dropped (one firefly of a
-   * short render can outweigh the rest of the image). */
-  size_t drop = n / 1000;
-  qsort(rel, n, sizeof *rel, lmc_cmp_double);
-  double trimmed = 0.0;
-  for (size_t p = 0; p + drop < n; p++) trimmed += rel[p];
-  trimmed /= (double)(n - drop);
-  free(rel);
-  printf("mse: %.9g\nrelmse: %.9g\nrelmse_trimmed: %.9g\nmean_ratio: %.9g\n", mse, relmse, trimmed,
-         lum_r != 0.0 ? lum_i / lum_r : (lum_i == 0.0 ? 1.0 : INFINITY));
+  printf("mse: %.9g\nrelmse: %.9g\nrelmse_trimmed: %.9g\nmean_ratio: %.9g\n", ie.mse, ie.relmse,
+         ie.relmse_trimmed, ie.mean_ratio);
 
   /* The heatmap: per-pixel relative error, log scale from 1e-4 to 1. */
   int status = EXIT_OK;

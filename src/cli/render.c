@@ -18,6 +18,9 @@
 #include "render/dist.h"
 #include "render/io/tev.h"
 
+/* Seconds between --reference's figures without --snapshot or --display-server. */
+#define LMC_REFERENCE_EVERY 5.0
+
 /* Seconds the end of a render waits at most for its last image to reach
  * the viewer of --display-server. */
 #define LMC_DISPLAY_LAST_WAIT 1.5
@@ -35,6 +38,10 @@ static const char *lmc_render_usage =
     "  --exposure STOPS|auto    the PNG preview: radiance times 2^STOPS, clamped, sRGB\n"
     "                           (default 0, as Mitsuba and tev show the EXR); auto: the\n"
     "                           99th percentile of luminance maps to white\n"
+    "  --reference REF.exr      print the relative MSE against REF (lmc compare's\n"
+    "                           relmse) at each snapshot (--snapshot, else every\n"
+    "                           --display-interval with --display-server, else every\n"
+    "                           5 s) and of the final image\n"
     "  -q, --quiet              no progress bar\n"
     "  --spectra linear|mitsuba-0.6.0\n"
     "                           how sampled spectra are read: linear (default, as Mitsuba\n"
@@ -108,12 +115,27 @@ static void lmc_default_output(const char *scene_path, char *out, size_t size) {
   snprintf(out, size, "%s.exr", stem);
 }
 
+/* --reference: the error of img against it, one line on stderr (when is
+ * the time, or NULL for the final image). */
+static void lmc_report_error(const lmc_image *img, const lmc_image *ref, const char *ref_path,
+                             const double *when) {
+  lmc_image_error e;
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (image_error(img, ref, &e, &err)) return;
+  char at[64] = "final image";
+  if (when) snprintf(at, sizeof at, "%.1f s", *when);
+  fprintf(stderr, "lmc: %s: relmse %.6g (trimmed %.6g, mean ratio %.5f) against %s\n", at,
+          e.relmse, e.relmse_trimmed, e.mean_ratio, ref_path);
+}
+
 /* Writes the EXR and its PNG preview, and posts the image to the viewer
  * (display; NULL: none); *OUT_black tells whether every pixel is 0 (with
  * warn_black, also said as a warning naming the scene). */
 static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path, size_t png_size,
                              const lmc_exposure *exposure, const char *scene_path,
-                             int warn_black, lmc_tev *display, int *OUT_black) {
+                             int warn_black, lmc_tev *display, const lmc_image *ref,
+                             const char *ref_path, int *OUT_black) {
   lmc_error err;
   lmc_error_clear(&err);
   lmc_image img = {0};
@@ -126,6 +148,7 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
   }
   /* The final image to the viewer first: it goes out while the files are written. */
   tev_post(display, &img);
+  if (ref) lmc_report_error(&img, ref, ref_path, NULL);
   if (image_write_exr(exr_path, &img, &err)) {
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
@@ -160,6 +183,9 @@ typedef struct lmc_snapshot_ctx {
   lmc_tev *display;             /* --display-server (NULL: none) */
   double display_every, next_display;
   lmc_image img;                /* owned: the developed film, kept from one call to the next */
+  const lmc_image *ref;         /* --reference (NULL: none) */
+  const char *ref_path;
+  double ref_every, next_ref;
 } lmc_snapshot_ctx;
 
 static void lmc_write_snapshot(const lmc_snapshot_ctx *sc, const lmc_image *img,
@@ -182,7 +208,8 @@ static void lmc_on_snapshot(void *ctx, const struct film *f, double seconds) {
   lmc_snapshot_ctx *sc = ctx;
   int file = sc->file_every > 0.0 && seconds >= sc->next_file;
   int display = sc->display && seconds >= sc->next_display;
-  if (!file && !display) return;
+  int refd = sc->ref && seconds >= sc->next_ref;
+  if (!file && !display && !refd) return;
   lmc_error err;
   lmc_error_clear(&err);
   if (!sc->img.data && image_init(&sc->img, f->width, f->height, 3, &err)) {
@@ -193,9 +220,11 @@ static void lmc_on_snapshot(void *ctx, const struct film *f, double seconds) {
     film_develop_to(f, sc->img.data);
     if (file) lmc_write_snapshot(sc, &sc->img, seconds);
     if (display) tev_post(sc->display, &sc->img);
+    if (refd) lmc_report_error(&sc->img, sc->ref, sc->ref_path, &seconds);
   }
   while (file && sc->next_file <= seconds) sc->next_file += sc->file_every;
   while (display && sc->next_display <= seconds) sc->next_display += sc->display_every;
+  while (refd && sc->next_ref <= seconds) sc->next_ref += sc->ref_every;
 }
 
 /* --display-server: the client, showing the image under the output's
@@ -266,10 +295,10 @@ static lmc_status render__settings(const scene *s, const char *scene_path,
 static int render__finish(const scene *s, const render_settings *rs, const film *f,
                           const render_stats *st, const int64_t *per_rank, const char *out_exr,
                           char *out_png, size_t png_size, const lmc_exposure *exposure,
-                          const char *scene_path, double t_load, lmc_tev *display) {
+                          const char *scene_path, double t_load, const lmc_snapshot_ctx *snap) {
   int black = 0;
   int ok = lmc_write_outputs(f, out_exr, out_png, png_size, exposure, scene_path,
-                             s->n_lights > 0, display, &black);
+                             s->n_lights > 0, snap->display, snap->ref, snap->ref_path, &black);
   if (dist_active()) {
     fprintf(stderr, "lmc: %d processes (MPI ranks), the image and counts of all of them\n",
             dist_size());
@@ -299,7 +328,8 @@ static int render__finish(const scene *s, const render_settings *rs, const film 
 /* Renders s with rs, then writes what there is even when interrupted;
  * the exit status. */
 static int render__run(scene *s, render_settings *rs, const char *output, const char *scene_path,
-                       const lmc_exposure *exposure, double t_load) {
+                       const lmc_exposure *exposure, double t_load, const lmc_image *ref,
+                       const char *ref_path) {
   char out_exr[1024], out_png[1100];
   if (output)
     snprintf(out_exr, sizeof out_exr, "%s", output);
@@ -311,11 +341,20 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   /* The snapshot hook: the files of --snapshot and the viewer of
    * --display-server, the drivers calling at the shorter interval. */
   lmc_snapshot_ctx snap = {out_exr, rs->snapshot, rs->snapshot, NULL, rs->display_interval,
-                           rs->display_interval, {0, 0, 0, NULL}};
+                           rs->display_interval, {0, 0, 0, NULL}, NULL, NULL, 0.0, 0.0};
   snap.display = lmc_display_start(rs, s, out_exr);
+  /* --reference: at each snapshot, else with the viewer, else every 5 s. */
+  if (ref && dist_rank() == 0) {
+    snap.ref = ref, snap.ref_path = ref_path;
+    snap.ref_every = rs->snapshot > 0.0         ? rs->snapshot
+                     : rs->display_server[0] ? rs->display_interval
+                                             : LMC_REFERENCE_EVERY;
+    snap.next_ref = snap.ref_every;
+  }
   /* (On every rank alike: the snapshots are collective.) */
   if (rs->display_server[0] && (rs->snapshot <= 0.0 || rs->display_interval < rs->snapshot))
     rs->snapshot = rs->display_interval;
+  if (ref && rs->snapshot <= 0.0) rs->snapshot = LMC_REFERENCE_EVERY;
   if (rs->snapshot > 0.0) {
     rs->snapshot_fn = lmc_on_snapshot;
     rs->snapshot_ctx = &snap;
@@ -353,7 +392,7 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     return (int)c;
   }
   int code = render__finish(s, rs, &f, &st, per_rank, out_exr, out_png, sizeof out_png, exposure,
-                            scene_path, t_load, snap.display);
+                            scene_path, t_load, &snap);
   /* The last image to the viewer: a short wait at most. */
   tev_destroy(snap.display, LMC_DISPLAY_LAST_WAIT);
   free(per_rank);
@@ -373,6 +412,7 @@ typedef struct lmc_render_input {
   int res_w, res_h; /* --resolution (0: the scene's) */
   const scene_load_options *lopts;
   const lmc_exposure *exposure;
+  const char *reference; /* --reference (NULL: none) */
 } lmc_render_input;
 
 /* Loads the scene, merges its settings with the flags (given[] is owned
@@ -416,13 +456,34 @@ static int render__load_and_run(const lmc_render_input *in, const render_setting
     scene_destroy(s);
     return EXIT_BADINPUT;
   }
-  int status = render__run(s, &rs, in->output, in->scene_path, in->exposure, t_load);
+  /* --reference: an image of the film's size. */
+  lmc_image ref = {0};
+  if (in->reference) {
+    char msg[2048];
+    if (image_read(in->reference, 0, &ref, &err) || image_to_rgb(&ref, &err)) {
+      lmc_error_format(&err, msg, sizeof msg);
+      fprintf(stderr, "lmc: flag --reference: %s\n", msg);
+      image_free(&ref);
+      scene_destroy(s);
+      return EXIT_BADINPUT;
+    }
+    if (ref.width != s->cam.width || ref.height != s->cam.height) {
+      fprintf(stderr, "lmc: flag --reference: %s is %dx%d but the render is %dx%d\n",
+              in->reference, ref.width, ref.height, s->cam.width, s->cam.height);
+      image_free(&ref);
+      scene_destroy(s);
+      return EXIT_BADINPUT;
+    }
+  }
+  int status = render__run(s, &rs, in->output, in->scene_path, in->exposure, t_load,
+                           in->reference ? &ref : NULL, in->reference);
+  image_free(&ref);
   scene_destroy(s);
   return status;
 }
 
 int lmc_cmd_render(int argc, char **argv) {
-  const char *scene_path = NULL, *output = NULL;
+  const char *scene_path = NULL, *output = NULL, *reference = NULL;
   const char **defines = calloc((size_t)argc + 1, sizeof(char *));
   int n_defines = 0;
   render_settings cli = render_settings_default();
@@ -494,6 +555,8 @@ int lmc_cmd_render(int argc, char **argv) {
         goto bad;
       }
       defines[n_defines++] = d;
+    } else if (lmc_flag_is(&a, "--reference")) {
+      if (!(reference = lmc_flag_value(&a))) goto bad;
     } else if (lmc_flag_is(&a, "--exposure")) {
       if (!(v = lmc_flag_value(&a)) || !lmc_parse_exposure(v, &exposure)) goto bad;
     } else if (lmc_flag_is(&a, "-q") || lmc_flag_is(&a, "--quiet")) {
@@ -535,7 +598,8 @@ int lmc_cmd_render(int argc, char **argv) {
     goto bad;
   }
 
-  lmc_render_input in = {scene_path, output, defines, n_defines, res_w, res_h, &lopts, &exposure};
+  lmc_render_input in = {scene_path, output,  defines,   n_defines, res_w,
+                         res_h,      &lopts,  &exposure, reference};
   return render__load_and_run(&in, &cli, given, n_given);
 bad:
   free(defines), free(given);

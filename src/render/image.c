@@ -14,6 +14,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "render/image.h"
+#include "render/vec3.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -44,6 +45,45 @@ void image_free(lmc_image *img) {
   free(img->data);
   img->data = NULL;
   img->width = img->height = img->channels = 0;
+}
+
+static int image__cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+lmc_status image_error(const lmc_image *img, const lmc_image *ref, lmc_image_error *OUT,
+                       lmc_error *err) {
+  memset(OUT, 0, sizeof *OUT);
+  if (img->width != ref->width || img->height != ref->height || img->channels != 3 ||
+      ref->channels != 3)
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "images of %dx%d and %dx%d compared",
+                         img->width, img->height, ref->width, ref->height);
+  size_t n = (size_t)img->width * (size_t)img->height;
+  double *rel = malloc((n > 0 ? n : 1) * sizeof *rel);
+  if (!rel) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory comparing images");
+  double lum_i = 0.0, lum_r = 0.0;
+  for (size_t p = 0; p < n; p++) {
+    const float *I = img->data + 3 * p, *R = ref->data + 3 * p;
+    rel[p] = 0.0;
+    for (int c = 0; c < 3; c++) {
+      double d = (double)I[c] - (double)R[c];
+      OUT->mse += d * d;
+      rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+    }
+    OUT->relmse += rel[p];
+    lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));
+    lum_r += rgb_luminance(rgb_make(R[0], R[1], R[2]));
+  }
+  OUT->mse /= 3.0 * (double)(n > 0 ? n : 1);
+  OUT->relmse /= (double)(n > 0 ? n : 1);
+  size_t drop = n / 1000;
+  qsort(rel, n, sizeof *rel, image__cmp_double);
+  for (size_t p = 0; p + drop < n; p++) OUT->relmse_trimmed += rel[p];
+  OUT->relmse_trimmed /= (double)(n - drop > 0 ? n - drop : 1);
+  free(rel);
+  OUT->mean_ratio = lum_r != 0.0 ? lum_i / lum_r : (lum_i == 0.0 ? 1.0 : INFINITY);
+  return LMC_OK;
 }
 
 lmc_status image_to_rgb(lmc_image *img, lmc_error *err) {

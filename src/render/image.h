@@ -27,6 +27,18 @@ typedef struct lmc_image {
 lmc_status image_init(lmc_image *img, int width, int height, int channels, lmc_error *err);
 /* Frees the pixels; accepts NULL and an image that was never initialised to zero. */
 void image_free(lmc_image *img);
+/* The error of an image against a reference of its size (both 3
+ * channels): mse over pixels and channels, relmse the mean of (I - R)^2 /
+ * (R^2 + 0.01), relmse_trimmed the same without the 0.1% of pixels of
+ * largest error (one firefly of a short render can outweigh the rest),
+ * mean_ratio the mean luminance of img over ref's. */
+typedef struct lmc_image_error {
+  double mse, relmse, relmse_trimmed, mean_ratio;
+} lmc_image_error;
+/* Fails on a size or channel mismatch (LMC_EINVAL) or no memory. */
+lmc_status image_error(const lmc_image *img, const lmc_image *ref, lmc_image_error *OUT,
+                       lmc_error *err);
+
 /* Converts in place to 3 channels (grey is replicated, alpha dropped). */
 lmc_status image_to_rgb(lmc_image *img, lmc_error *err);
 /* Replaces img by channel `channel` (0 r, 1 g, 2 b, 3 alpha) repeated in 3
