@@ -116,8 +116,11 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
 
 /* What both moves do first: count the proposal, fill y with fresh
  * uniforms (the numbers the new path will not fix), and walk the state x's
- * path again into j->v (its strategy into *OUT_t). Returns 0 when x has no
- * path to move (f = 0, or its walk reads past its blocks). */
+ * path again into j->v (its strategy into *OUT_t). The walk is a function
+ * of x's numbers: when they are those of the last walk (x stayed since
+ * this kernel's last proposal from it), its path is still in j->v. Returns
+ * 0 when x has no path to move (f = 0, or its walk reads past its
+ * blocks). */
 static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_t) {
   const mc_target *T = j->target;
   const mc_mmlt_states *st = T->ctx;
@@ -128,7 +131,15 @@ static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y,
   int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
   if (idx >= n) idx = n - 1;
   *OUT_t = k == 1 ? 2 : idx + 1;
-  return mmj__path(T, x->u, k + 1 - *OUT_t, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+  size_t bytes = (size_t)x->dim * sizeof *x->u;
+  if (j->walked_ok && !memcmp(j->walked_u, x->u, bytes)) {
+    j->st.reused++;
+    return 1;
+  }
+  j->walked_ok =
+      mmj__path(T, x->u, k + 1 - *OUT_t, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+  if (j->walked_ok) memcpy(j->walked_u, x->u, bytes);
+  return j->walked_ok;
 }
 
 static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
@@ -288,6 +299,7 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
   j->perturb = perturb;
   j->test_kind = -1;
   j->v = malloc(4 * MMJ_N * sizeof *j->v);
+  j->walked_u = malloc((size_t)(mmlt_target->dim > 0 ? mmlt_target->dim : 1) * sizeof *j->walked_u);
   if (perturb) {
     const mc_mmlt_states *st = mmlt_target->ctx;
     ps_context_init(&j->ctx, st->s, &st->rs);
@@ -299,7 +311,7 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
     j->px = malloc(sizeof *j->px);
     j->py = malloc(sizeof *j->py);
   }
-  if (!j->v || (perturb && (!j->px || !j->py))) {
+  if (!j->v || !j->walked_u || (perturb && (!j->px || !j->py))) {
     mc_mmlt_jump_free(j);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the mmlt moves");
   }
@@ -309,9 +321,11 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
 void mc_mmlt_jump_free(mc_mmlt_jump *j) {
   if (!j) return;
   free(j->v);
+  free(j->walked_u);
   free(j->px);
   free(j->py);
   j->v = NULL;
+  j->walked_u = NULL;
   j->px = j->py = NULL;
 }
 

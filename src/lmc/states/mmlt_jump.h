@@ -49,6 +49,12 @@
  * A state whose path has no contribution in path space (its camera ray in
  * the film's margin, which the states sample) stays.
  *
+ * Cost. Each move walks the state's path again from its numbers; a
+ * kernel keeps the last path it walked with those numbers and skips the
+ * walk when the state has not moved since (a rejected proposal of any
+ * kernel leaves it), a function of the numbers alone, so the chain is
+ * the same, image for image.
+ *
  * Refusals. A re-split whose numbers a walk cannot reach (a direction
  * deep in a sampler's clamped tail, bsdf_invert) is refused: the state
  * stays, as a proposal of zero density. A proposal whose walk does not
@@ -75,6 +81,7 @@ typedef struct mc_mmlt_jump_stats {
   int64_t refused;     /* the new strategy's numbers could not be found (a tail, see above) */
   int64_t mismatch;    /* the new numbers walked to another raster point: rejected */
   int64_t inversions;  /* subpaths inverted */
+  int64_t reused;      /* proposals from a state whose path was still walked (no walk) */
   int64_t kinds[MC_PATH_MOVE_COUNT]; /* the fused move: path moves drawn, by mc_path_move */
 } mc_mmlt_jump_stats;
 
@@ -88,7 +95,10 @@ typedef struct mc_mmlt_jump {
   mut_bidir mb;            /* perturb: the bidirectional mutation */
   mut_lenssub ml;          /* perturb: the lens subpath mutation */
   ps_path *px, *py;        /* perturb: the state's path and the proposal's (owned) */
-  bdpt_vertex *v;          /* scratch: 4 arrays of BDPT_MAX_VERTICES + 1 vertices */
+  bdpt_vertex *v;          /* scratch: 4 arrays of BDPT_MAX_VERTICES + 1 vertices; the
+                              first holds the path of the state walked last */
+  double *walked_u;        /* owned: that state's numbers (target->dim) */
+  int walked_ok;           /* the first array holds walk(walked_u) */
   double log_rest_to;      /* log(W - w_t') of the last proposal, for log_density */
   double rx, ry;           /* the raster point of its path */
   int test_kind;           /* tests only: the fused move's path move (mc_path_move; -1 in use: drawn) */

@@ -94,7 +94,7 @@ static void mmm__report_moves(const mmm__run *run, const mc_mmlt_jump *mv, const
   for (int i = 0; i < run->n; i++) {
     t.proposed += mv[i].st.proposed, t.lone += mv[i].st.lone;
     t.refused += mv[i].st.refused, t.mismatch += mv[i].st.mismatch;
-    t.inversions += mv[i].st.inversions;
+    t.inversions += mv[i].st.inversions, t.reused += mv[i].st.reused;
     for (int q = 0; q < MC_PATH_MOVE_COUNT; q++) t.kinds[q] += mv[i].st.kinds[q];
   }
   int64_t acc = 0;
@@ -106,11 +106,12 @@ static void mmm__report_moves(const mmm__run *run, const mc_mmlt_jump *mv, const
   fprintf(stderr,
           "lmc: %s: %lld proposed, %.1f%% accepted, %.2f%% with no move to make, "
           "%.3f%% refused (a path its walks cannot reach), %.3f%% walked elsewhere; "
-          "%lld subpaths inverted (%.4g/s)\n",
+          "%lld subpaths inverted (%.4g/s); %.1f%% from a state whose path was kept\n",
           what, (long long)t.proposed, 100.0 * (double)acc / pr, 100.0 * (double)t.lone / pr,
           100.0 * (double)t.refused / pr, 100.0 * (double)t.mismatch / pr,
           (long long)t.inversions,
-          (double)t.inversions / (chain_seconds > 1e-9 ? chain_seconds : 1e-9));
+          (double)t.inversions / (chain_seconds > 1e-9 ? chain_seconds : 1e-9),
+          100.0 * (double)t.reused / pr);
   if (mv[0].perturb)
     fprintf(stderr,
             "lmc: %s drawn: %lld bidirectional, %lld lens, %lld multi-chain, %lld caustic, "
