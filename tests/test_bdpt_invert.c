@@ -47,6 +47,7 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/rng.h"
+#include "arr_sampler.h"
 #include "test_util.h"
 
 
@@ -74,23 +75,6 @@ static int teardown(void **state) {
   (void)state;
   scene_destroy(g_sc);
   return 0;
-}
-
-/* A sampler that replays one array (0.5 past its end). */
-typedef struct arr_smp {
-  lmc_sampler base;
-  const double *u;
-  int n, pos;
-} arr_smp;
-
-static double arr_next(lmc_sampler *self) {
-  arr_smp *a = (arr_smp *)self;
-  return a->pos < a->n ? a->u[a->pos++] : 0.5;
-}
-static void arr_stream(lmc_sampler *self, int stream) { (void)self, (void)stream; }
-static arr_smp arr_at(const double *u, int n) {
-  arr_smp a = {{arr_next, arr_stream, NULL}, u, n, 0};
-  return a;
 }
 
 static int walk_camera(const double *u, int max_v, const bdpt_param *par, bdpt_vertex *path) {

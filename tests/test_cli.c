@@ -35,21 +35,12 @@
  * out/err_text read back. Returns the exit status. */
 static char out_text[65536], err_text[65536];
 
-static void slurp(const char *path, char *buf, size_t size) {
-  buf[0] = '\0';
-  FILE *f = fopen(path, "rb");
-  if (!f) return;
-  size_t n = fread(buf, 1, size - 1, f);
-  buf[n] = '\0';
-  fclose(f);
-}
-
 static int run_lmc(const char *args) {
   char cmd[4096];
   snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
   int rc = system(cmd);
-  slurp(TMP "/out.txt", out_text, sizeof out_text);
-  slurp(TMP "/err.txt", err_text, sizeof err_text);
+  slurp_text(TMP "/out.txt", out_text, sizeof out_text);
+  slurp_text(TMP "/err.txt", err_text, sizeof err_text);
   if (rc == -1 || !WIFEXITED(rc)) return -1;
   return WEXITSTATUS(rc);
 }

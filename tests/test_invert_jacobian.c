@@ -50,24 +50,12 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/rng.h"
+#include "arr_sampler.h"
 #include "test_util.h"
 
 enum { MAXV = 4, DIM = 2 + 4 * MAXV + 8, NV = 2 * MAXV };
 
 static const double H = 1e-6;
-
-/* A sampler that replays one array (0.5 past its end). */
-typedef struct arr_smp {
-  lmc_sampler base;
-  const double *u;
-  int n, pos;
-} arr_smp;
-
-static double arr_next(lmc_sampler *self) {
-  arr_smp *a = (arr_smp *)self;
-  return a->pos < a->n ? a->u[a->pos++] : 0.5;
-}
-static void arr_stream(lmc_sampler *self, int stream) { (void)self, (void)stream; }
 
 typedef struct jac_case {
   const scene *sc;
@@ -81,11 +69,11 @@ typedef struct jac_case {
 static int walk(const jac_case *jc, const double *u, bdpt_vertex *path) {
   render_counters cnt = {0};
   if (jc->is_cam) {
-    arr_smp a = {{arr_next, arr_stream, NULL}, u + 2, DIM - 2, 0};
+    arr_smp a = arr_at(u + 2, DIM - 2);
     return bdpt_camera_subpath_p(jc->sc, &jc->rs, &a.base, u[0] * jc->sc->cam.width,
                                  u[1] * jc->sc->cam.height, jc->nv, jc->par, path, &cnt);
   }
-  arr_smp a = {{arr_next, arr_stream, NULL}, u, DIM, 0};
+  arr_smp a = arr_at(u, DIM);
   return bdpt_light_subpath_p(jc->sc, &jc->rs, &a.base, jc->nv, jc->par, path, &cnt);
 }
 

@@ -47,19 +47,12 @@
 
 static char out_text[1 << 16], err_text[1 << 14];
 
-static void slurp(const char *path, char *buf, size_t size) {
-  FILE *f = fopen(path, "rb");
-  size_t n = f ? fread(buf, 1, size - 1, f) : 0;
-  buf[n] = '\0';
-  if (f) fclose(f);
-}
-
 static int run_lmc(const char *args) {
   char cmd[4096];
   snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
   int rc = system(cmd);
-  slurp(TMP "/out.txt", out_text, sizeof out_text);
-  slurp(TMP "/err.txt", err_text, sizeof err_text);
+  slurp_text(TMP "/out.txt", out_text, sizeof out_text);
+  slurp_text(TMP "/err.txt", err_text, sizeof err_text);
   if (rc == -1 || !WIFEXITED(rc)) return -1;
   return WEXITSTATUS(rc);
 }
@@ -337,7 +330,7 @@ static void test_readme(void **state) {
   mkdir(TMP, 0755);
   assert_int_equal(run_lmc("render --help-markdown"), 0);
   static char readme[1 << 17];
-  slurp(LMC_SOURCE_DIR "/README.md", readme, sizeof readme);
+  slurp_text(LMC_SOURCE_DIR "/README.md", readme, sizeof readme);
   const char *begin = strstr(readme, "<!-- flags: lmc render --help-markdown -->\n");
   const char *end = strstr(readme, "<!-- /flags -->");
   assert_non_null(begin);

@@ -61,15 +61,6 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static void slurp(const char *path, char *buf, size_t size) {
-  buf[0] = '\0';
-  FILE *f = fopen(path, "rb");
-  if (!f) return;
-  size_t n = fread(buf, 1, size - 1, f);
-  buf[n] = '\0';
-  fclose(f);
-}
-
 /* Runs `lmc render SCENE ARGS -q -o TMP/OUT` (under timeout; the scene
  * CBOX for the MCMC integrators, else SCENE); its exit status, its wall
  * time in *OUT_seconds, its stderr in err_text. */
@@ -82,7 +73,7 @@ static int render(const char *args, const char *out, double *OUT_seconds) {
   double t0 = now_seconds();
   int rc = system(cmd);
   *OUT_seconds = now_seconds() - t0;
-  slurp(TMP "/err.txt", err_text, sizeof err_text);
+  slurp_text(TMP "/err.txt", err_text, sizeof err_text);
   if (rc == -1 || !WIFEXITED(rc)) return -1;
   return WEXITSTATUS(rc);
 }

@@ -7,6 +7,18 @@
 #define LMC_TESTS_TEST_UTIL_H
 
 #include <math.h>
+#include <stdio.h>
+
+/* The file at path into buf (NUL-terminated, at most size - 1 bytes; empty
+ * when it cannot be read). */
+static inline void slurp_text(const char *path, char *buf, size_t size) {
+  buf[0] = '\0';
+  FILE *f = fopen(path, "rb");
+  if (!f) return;
+  size_t n = fread(buf, 1, size - 1, f);
+  buf[n] = '\0';
+  fclose(f);
+}
 
 /* |a - b| <= tol, printing both values when it fails. */
 #define assert_near(a, b, tol)                                                    \

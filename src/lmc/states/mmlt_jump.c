@@ -142,6 +142,21 @@ static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y,
   return j->walked_ok;
 }
 
+/* A strategy t' != skip (0: none skipped) of weight w[t'] > 0, drawn with
+ * probability w[t'] / sum (sum: the weights but skip's); the last one with
+ * weight where rounding leaves the draw past them all. */
+static int mmj__draw(rng *r, const double *w, int k, int skip, double sum) {
+  double pick = rng_uniform(r) * sum, acc = 0.0;
+  int last = -1;
+  for (int tp = 1; tp <= k + 1; tp++) {
+    if (tp == skip || !(w[tp] > 0.0)) continue;
+    acc += w[tp];
+    last = tp;
+    if (pick < acc) return tp;
+  }
+  return last;
+}
+
 static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
   const mc_mmlt_states *st = j->target->ctx;
@@ -158,16 +173,7 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
     j->st.lone++;
     return -INFINITY;
   }
-  double pick = rng_uniform(r) * rest, acc = 0.0;
-  int t2 = -1;
-  for (int tp = 1; tp <= k + 1 && t2 < 0; tp++) {
-    if (tp == t || !(w[tp] > 0.0)) continue;
-    acc += w[tp];
-    if (pick < acc) t2 = tp;
-  }
-  if (t2 < 0)
-    for (int tp = k + 1; tp >= 1 && t2 < 0; tp--)
-      if (tp != t && w[tp] > 0.0) t2 = tp;
+  int t2 = mmj__draw(r, w, k, t, rest);
   if (!mmj__numbers(j, r, X, k + 1 - t2, t2, OUT_y)) {
     j->st.refused++;
     return -INFINITY;
@@ -273,16 +279,8 @@ static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double
     j->st.lone++;
     return -INFINITY;
   }
-  double pick = rng_uniform(r) * sum, acc = 0.0;
-  int t2 = -1;
-  for (int tp = 1; tp <= k + 1 && t2 < 0; tp++) {
-    acc += w[tp];
-    if (w[tp] > 0.0 && pick < acc) t2 = tp;
-  }
-  if (t2 < 0)
-    for (int tp = k + 1; tp >= 1 && t2 < 0; tp--)
-      if (w[tp] > 0.0) t2 = tp;
-  if (k == 1) t2 = 2;
+  int t2 = mmj__draw(r, w, k, 0, sum);
+  if (k == 1) t2 = 2; /* (length 1 has one strategy in these states) */
   if (!mmj__numbers(j, r, Xy, k + 1 - t2, t2, OUT_y)) {
     j->st.refused++;
     return -INFINITY;
