@@ -71,6 +71,7 @@
 #define LMC_AD_DUAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #define AD_CAPACITY 128  /* largest tangent length n */
@@ -97,16 +98,27 @@ typedef struct ad_arena {
   int overflow;  /* set when an allocation did not fit */
   /* Second order: the tape and the reverse sweep's storage, in buf past
    * the tangents (doubles throughout; node numbers are exact in them). */
-  double *node_at; /* node -> offset in buf of its tangent block */
+  double *node_at; /* node -> offset in buf of its tangent block (ad__ld) */
   double *terms;   /* AD__TERM doubles per term (ad__term) */
   double *adj;     /* the sweep: adjoint per node */
-  double *bw;      /* ... padded width of its B vector (0: untouched) */
+  double *bw;      /* ... padded width of its B vector (0: untouched; ad__ld) */
   double *bv;      /* ... B vectors, glanes doubles per node */
   size_t n_nodes, node_cap, n_terms, term_cap;
 } ad_arena;
 
 /* n rounded up to a multiple of AD_LANES. */
 static inline size_t ad__pad(size_t n) { return (n + AD_LANES - 1) & ~(size_t)(AD_LANES - 1); }
+
+/* Second order keeps integers (a block's width and node, the node table,
+ * the tape's node numbers and widths, the sweep's widths) in its double
+ * storage as 64-bit patterns: they are only ever copied, never used in
+ * arithmetic, so reading one back is a move rather than a conversion. */
+static inline uint64_t ad__ld(const double *p) {
+  uint64_t u;
+  memcpy(&u, p, sizeof u);
+  return u;
+}
+static inline void ad__st(double *p, uint64_t u) { memcpy(p, &u, sizeof u); }
 
 /* Doubles of one tangent block of an arena of tangent length n and order:
  * the gradient, and at second order a header lane group (width, node). */
@@ -115,7 +127,7 @@ static inline size_t ad__block(int n, int order) {
   return ad__pad(m) + (order == 2 ? AD_LANES : 0);
 }
 
-#define AD__TERM 4      /* doubles per term of the tape (ad__term) */
+#define AD__TERM 3      /* doubles per term of the tape (ad__term) */
 #define AD__TERMS_PER 4 /* terms per dual the tape has room for (2.3 on paths) */
 
 /* Second order: doubles per dual of the arena's storage (its tangent
@@ -148,6 +160,7 @@ static inline int ad__arena_init(ad_arena *A, double *buf, size_t cap, int n, in
     /* buf: the tangents of node_cap duals, then the node table, the
      * terms, the adjoints, the widths and the B vectors. */
     size_t nodes = cap / ad__per2(n);
+    if (nodes > 0xffffffffu) nodes = 0xffffffffu; /* node numbers fit the tape's 32 bits */
     if (nodes < 2) return -1;
     A->cap = cap = nodes * A->lanes;
     A->node_cap = nodes;
@@ -238,8 +251,8 @@ static inline double *ad__alloc(ad_arena *A) {
   if (A->order == 2 && A->lanes) {
     /* A new node of the tape (at most one per block: never past node_cap). */
     size_t k = ++A->n_nodes;
-    A->node_at[k] = (double)(size_t)(r - A->buf);
-    r[A->woff + 1] = (double)k;
+    ad__st(A->node_at + k, (uint64_t)(r - A->buf));
+    ad__st(r + A->woff + 1, k);
   }
   return r;
 }
@@ -305,25 +318,27 @@ static inline void ad__k6(size_t nb, double *restrict r, const double c[6],
 #define AD__H2(A) ((A)->order == 2 && (A)->lanes != 0)
 
 /* Width of a tangent of a second-order arena (AD__H2). */
-static inline size_t ad__w(const ad_arena *A, const double *d) { return (size_t)d[A->woff]; }
+static inline size_t ad__w(const ad_arena *A, const double *d) { return (size_t)ad__ld(d + A->woff); }
 
 /* Its node on the tape (0: a constant, the shared zero tangent). */
 static inline size_t ad__node(const ad_arena *A, const double *d) {
-  return (size_t)d[A->woff + 1];
+  return (size_t)ad__ld(d + A->woff + 1);
 }
 
 /* Second order: zeroes r's gradient entries from width `from` up to
  * width `to` (padded lengths) and gives r width `to`. */
 static inline void ad__zero_w(const ad_arena *A, double *r, size_t from, size_t to) {
   for (size_t k = ad__pad(from); k < ad__pad(to); k++) r[k] = 0.0;
-  r[A->woff] = (double)to;
+  ad__st(r + A->woff, to);
 }
 
 /* Appends a term to the tape: node k's result depends on node x (and y),
- * of widths wx (and wy), as kind says, with coefficient c. Stored as
- * c, k, 128 x + wx, 8 (128 y + wy) + kind (widths <= AD_H_CAPACITY < 128),
- * so that the sweep finds the widths without visiting the operands'
- * blocks. A full tape counts as an overflow. */
+ * of widths wx (and wy), as kind says, with coefficient c. Stored in three
+ * doubles: c, then the bit patterns k + 2^32 x and
+ * y + 2^32 wx + 2^40 wy + 2^48 kind (node numbers < 2^32, as the arena's
+ * node_cap; widths <= AD_H_CAPACITY < 2^8), so that the sweep finds the
+ * widths without visiting the operands' blocks. A full tape counts as an
+ * overflow. */
 enum { AD__LIN, AD__SQ, AD__SYM, AD__VAR, AD__SEED };
 static inline void ad__term(ad_arena *A, int kind, double c, size_t k, size_t x, size_t wx,
                             size_t y, size_t wy) {
@@ -333,8 +348,9 @@ static inline void ad__term(ad_arena *A, int kind, double c, size_t k, size_t x,
     return;
   }
   double *t = A->terms + AD__TERM * A->n_terms++;
-  t[0] = c, t[1] = (double)k, t[2] = (double)(128 * x + wx);
-  t[3] = (double)(8 * (128 * y + wy) + (size_t)kind);
+  t[0] = c;
+  ad__st(t + 1, (uint64_t)k | (uint64_t)x << 32);
+  ad__st(t + 2, (uint64_t)y | (uint64_t)wx << 32 | (uint64_t)wy << 40 | (uint64_t)kind << 48);
 }
 
 /* Second order: r = sum_i c_i d_i over m <= 6 tangents, each over its
@@ -367,7 +383,7 @@ static inline void ad__lin_w(ad_arena *A, double *restrict r, int m, const doubl
       for (size_t k = a; k < e; k += AD_LANES) AD__BLOCK(k, r[k_] += ci * di[k_]);
     }
   }
-  r[A->woff] = (double)hi;
+  ad__st(r + A->woff, hi);
   size_t kr = ad__node(A, r);
   for (int i = 0; i < m; i++) {
     size_t x = ad__node(A, d[i]);
@@ -525,17 +541,17 @@ static inline ad ad_copy(ad_arena *A, ad x) { return ad_from_block(A, x.v, x.d);
 
 /* The tangent block of node x (second order). */
 static inline const double *ad__block_of(const ad_arena *A, size_t x) {
-  return A->buf + (size_t)A->node_at[x];
+  return A->buf + ad__ld(A->node_at + x);
 }
 
 /* B_x (the sweep's vector of node x) widened to w padded entries, the
  * entries past its width zeroed first. */
 static inline double *ad__bgrow(ad_arena *A, size_t x, size_t w) {
   double *b = A->bv + x * A->glanes;
-  size_t have = (size_t)A->bw[x];
+  size_t have = (size_t)ad__ld(A->bw + x);
   if (have < w) {
     for (size_t k = have; k < w; k += AD_LANES) AD__BLOCK(k, b[k_] = 0.0);
-    A->bw[x] = (double)w;
+    ad__st(A->bw + x, w);
   }
   return b;
 }
@@ -580,16 +596,18 @@ static inline int ad_hessian(ad_arena *A, ad x, double *H) {
   A->adj[k0] = 1.0;
   for (size_t t = A->n_terms; t-- > 0;) {
     const double *T = A->terms + AD__TERM * t;
-    size_t k = (size_t)T[1];
+    uint64_t t1 = ad__ld(T + 1);
+    size_t k = (size_t)(t1 & 0xffffffffu);
     if (k > k0) continue; /* made after x: x does not depend on it */
     double a = A->adj[k];
-    size_t wb = (size_t)A->bw[k];
+    size_t wb = (size_t)ad__ld(A->bw + k);
     if (a == 0.0 && wb == 0) continue;
     double c = T[0];
-    size_t tx = (size_t)T[2], ty = (size_t)T[3] >> 3;
-    size_t xk = tx >> 7, wx = tx & 127u, yk = ty >> 7, wy = ty & 127u;
+    uint64_t t2 = ad__ld(T + 2);
+    size_t xk = (size_t)(t1 >> 32), yk = (size_t)(t2 & 0xffffffffu);
+    size_t wx = (size_t)(t2 >> 32) & 0xffu, wy = (size_t)(t2 >> 40) & 0xffu;
     const double *bk = A->bv + k * g;
-    switch ((int)((size_t)T[3] & 7u)) {
+    switch ((int)(t2 >> 48)) {
     case AD__LIN:
       A->adj[xk] += c * a;
       if (wb) ad__badd(A, xk, wx, wb, c, bk);
