@@ -447,7 +447,9 @@ static void chain__rec_stream(lmc_sampler *self, int stream) {
 static double chain__sum_current(mc_chain *c) {
   const mc_target *T = c->target;
   mc_pss *p = c->pss;
-  mc_pss_materialise(p, c->x.u);
+  /* The lazy vector brings each coordinate up to date as eval_all reads
+   * it (the coordinates it does not read stay owed, as after any step). */
+  p->large = 0;
   mc_pss_rewind(p);
   c->sum_evals++;
   int n = T->eval_all(T, c->scratch_alt ? c->scratch_alt : c->scratch, &p->base, c->x.label, c->cx);
