@@ -12,7 +12,9 @@
  *    image cover it exactly once; the last image equals the EXR written,
  *    bit for bit. Once with pt under --time (several images), once with
  *    pssmlt under --spp, whose EXR must also be the one the same seed
- *    gives without the flag;
+ *    gives without the flag; with --reference the images are named
+ *    "OUT relmse X", each new name after a CloseImage of the old, the
+ *    last with the final line's relmse;
  *  - a receiver that accepts and never reads (a small receive buffer), one
  *    that closes at once, and none at all (a closed port): the render
  *    exits 0 with the image the same seed gives without the flag, in the
@@ -248,10 +250,23 @@ static void rd_channels(rd *r) {
 
 /* What the parse of one run found. */
 typedef struct tally {
-  int creates, updates, full_images;
+  int creates, updates, full_images, closes;
   int last_full;   /* the last image's tiles covered it */
   float *canvas;   /* the image as the viewer would show it */
+  char last_name[256]; /* the name of the last image */
 } tally;
+
+/* An image's name: the output's file name, or it and a label "relmse X"
+ * (--reference). */
+static void check_name(const char *got, const char *name) {
+  size_t n = strlen(name);
+  if (strncmp(got, name, n) != 0) fail_msg("image name '%s', expected '%s...'", got, name);
+  if (got[n] == 0) return;
+  double x;
+  char rest[8];
+  if (sscanf(got + n, " relmse %lf%7s", &x, rest) != 1 || !(x >= 0.0))
+    fail_msg("image name '%s': not '%s relmse X'", got, name);
+}
 
 /* Checks one connection's packets (bytes [0, n)), painting the tiles. */
 static void parse_connection(const unsigned char *b, size_t n, const char *name, int W, int H,
@@ -259,6 +274,7 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
   size_t off = 0;
   long area = 0;
   int first = 1;
+  char shown[256] = "";
   while (off < n) {
     if (n - off < 5) fail_msg("%zu bytes left: no packet header", n - off);
     rd r = {b + off, 0, n - off};
@@ -266,9 +282,26 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
     if (len < 6 || len > n - off) fail_msg("length %u with %zu bytes left", len, n - off);
     r.n = len; /* (reads past the length fail) */
     int type = (int)rd_le(&r, 1);
+    if (type == TEV_CLOSE_IMAGE && !first) {
+      /* CloseImage of the image shown (its name changes): its name alone,
+       * and CreateImage next. */
+      assert_string_equal(rd_str(&r), shown);
+      assert_int_equal(r.at, len);
+      t->closes++;
+      first = 1;
+      off += len;
+      continue;
+    }
     int focus = (int)rd_le(&r, 1);
     assert_true(focus == 0 || focus == 1);
-    assert_string_equal(rd_str(&r), name);
+    const char *got = rd_str(&r);
+    if (first) {
+      check_name(got, name);
+      snprintf(shown, sizeof shown, "%s", got);
+      snprintf(t->last_name, sizeof t->last_name, "%s", got);
+    } else {
+      assert_string_equal(got, shown);
+    }
     if (first) {
       /* CreateImage: the size and channels, nothing more. */
       assert_int_equal(type, TEV_CREATE_IMAGE);
@@ -366,7 +399,7 @@ static void parsed_render(const char *args, const char *out, int W, int H, tally
   free(rv.bytes);
   fprintf(stderr, "  %s: %d connection(s), %d CreateImage, %d tiles, %d whole images, %.2f s\n",
           out, rv.connections, t->creates, t->updates, t->full_images, secs);
-  assert_int_equal(t->creates, rv.connections);
+  assert_int_equal(t->creates, rv.connections + t->closes);
   assert_true(t->last_full);
 }
 
@@ -409,6 +442,34 @@ static void test_protocol_pssmlt(void **state) {
   snprintf(plain, sizeof plain, "%s --resolution 160x120", args);
   assert_int_equal(render(plain, "tev_pssmlt_plain.exr", &secs), 0);
   assert_int_equal(exr_differences("tev_pssmlt.exr", "tev_pssmlt_plain.exr"), 0);
+}
+
+/* --reference: the viewer's image is named "OUT relmse X" after the error
+ * of the image it shows; a new name closes the old image and creates it
+ * again; the last name carries the final line's relmse. */
+static void test_reference_name(void **state) {
+  (void)state;
+  double secs;
+  assert_int_equal(render("--integrator pssmlt --spp 24 --bootstrap 16384 --seed 9 --threads 2 "
+                          "--resolution 160x120",
+                          "tev_ref.exr", &secs),
+                   0);
+  tally t;
+  parsed_render("--integrator pssmlt --spp 6 --bootstrap 16384 --seed 5 --threads 2 "
+                "--display-interval 0.05 --reference " TMP "/tev_ref.exr",
+                "tev_named.exr", 160, 120, &t);
+  const char *fin = strstr(err_text, "final image: relmse ");
+  assert_non_null(fin);
+  char want[128];
+  double x;
+  assert_int_equal(sscanf(fin, "final image: relmse %lf", &x), 1);
+  snprintf(want, sizeof want, "tev_named.exr relmse %.6g", x);
+  fprintf(stderr, "  last name '%s', %d CloseImage, %d CreateImage\n", t.last_name, t.closes,
+          t.creates);
+  assert_string_equal(t.last_name, want);
+  assert_true(t.closes >= 1); /* the error changed as the chains ran */
+  assert_int_equal(canvas_equals_exr(&t, "tev_named.exr"), 3L * 160 * 120);
+  free(t.canvas);
 }
 
 /* The viewers that fail, each against the same render without one. */
@@ -498,6 +559,7 @@ int main(void) {
       cmocka_unit_test_setup(test_bad_addresses, setup),
       cmocka_unit_test_setup(test_protocol_pt, setup),
       cmocka_unit_test_setup(test_protocol_pssmlt, setup),
+      cmocka_unit_test_setup(test_reference_name, setup),
       cmocka_unit_test_setup(test_robust, setup),
       cmocka_unit_test_setup(test_time_limit_noread, setup),
   };

@@ -116,9 +116,11 @@ static void lmc_default_output(const char *scene_path, char *out, size_t size) {
 }
 
 /* --reference: the error of img against it, one line on stderr (when is
- * the time, or NULL for the final image). */
+ * the time, or NULL for the final image), and the label the viewer shows
+ * after the image's name, "relmse X" (label: LMC_LABEL_MAX chars). */
+#define LMC_LABEL_MAX 64
 static void lmc_report_error(const lmc_image *img, const lmc_image *ref, const char *ref_path,
-                             const double *when) {
+                             const double *when, char *label) {
   lmc_image_error e;
   lmc_error err;
   lmc_error_clear(&err);
@@ -127,6 +129,7 @@ static void lmc_report_error(const lmc_image *img, const lmc_image *ref, const c
   if (when) snprintf(at, sizeof at, "%.1f s", *when);
   fprintf(stderr, "lmc: %s: relmse %.6g (trimmed %.6g, mean ratio %.5f) against %s\n", at,
           e.relmse, e.relmse_trimmed, e.mean_ratio, ref_path);
+  snprintf(label, LMC_LABEL_MAX, "relmse %.6g", e.relmse);
 }
 
 /* Writes the EXR and its PNG preview, and posts the image to the viewer
@@ -146,9 +149,11 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
     image_free(&img);
     return 0;
   }
-  /* The final image to the viewer first: it goes out while the files are written. */
-  tev_post(display, &img);
-  if (ref) lmc_report_error(&img, ref, ref_path, NULL);
+  /* The final image to the viewer first (with its error against the
+   * reference in its name): it goes out while the files are written. */
+  char label[LMC_LABEL_MAX] = "";
+  if (ref) lmc_report_error(&img, ref, ref_path, NULL, label);
+  tev_post(display, &img, label);
   if (image_write_exr(exr_path, &img, &err)) {
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: %s\n", msg);
@@ -186,6 +191,7 @@ typedef struct lmc_snapshot_ctx {
   const lmc_image *ref;         /* --reference (NULL: none) */
   const char *ref_path;
   double ref_every, next_ref;
+  char label[LMC_LABEL_MAX];    /* the last error against it, for the viewer */
 } lmc_snapshot_ctx;
 
 static void lmc_write_snapshot(const lmc_snapshot_ctx *sc, const lmc_image *img,
@@ -219,8 +225,8 @@ static void lmc_on_snapshot(void *ctx, const struct film *f, double seconds) {
   } else {
     film_develop_to(f, sc->img.data);
     if (file) lmc_write_snapshot(sc, &sc->img, seconds);
-    if (display) tev_post(sc->display, &sc->img);
-    if (refd) lmc_report_error(&sc->img, sc->ref, sc->ref_path, &seconds);
+    if (refd) lmc_report_error(&sc->img, sc->ref, sc->ref_path, &seconds, sc->label);
+    if (display) tev_post(sc->display, &sc->img, sc->label);
   }
   while (file && sc->next_file <= seconds) sc->next_file += sc->file_every;
   while (display && sc->next_display <= seconds) sc->next_display += sc->display_every;
@@ -341,7 +347,7 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   /* The snapshot hook: the files of --snapshot and the viewer of
    * --display-server, the drivers calling at the shorter interval. */
   lmc_snapshot_ctx snap = {out_exr, rs->snapshot, rs->snapshot, NULL, rs->display_interval,
-                           rs->display_interval, {0, 0, 0, NULL}, NULL, NULL, 0.0, 0.0};
+                           rs->display_interval, {0, 0, 0, NULL}, NULL, NULL, 0.0, 0.0, ""};
   snap.display = lmc_display_start(rs, s, out_exr);
   /* --reference: at each snapshot, else with the viewer, else every 5 s. */
   if (ref && dist_rank() == 0) {

@@ -54,13 +54,14 @@
 struct lmc_tev {
   char host[LMC_ADDRESS_MAX], port[8];
   char where[LMC_ADDRESS_MAX + 8]; /* "host:port", for the warning */
-  char name[TEV_NAME_MAX];
+  char base[TEV_NAME_MAX]; /* the name given to tev_create */
   int width, height;
   /* The mailbox and the end, under mu. */
   pthread_mutex_t mu;
   pthread_cond_t wake;  /* to the sender: an image, or the end */
   pthread_cond_t ended; /* to tev_destroy: the sender returned */
   float *slot;          /* width * height * 3: the image posted last */
+  char slot_label[TEV_NAME_MAX / 2]; /* ... and its label */
   int fresh;            /* slot holds an image not taken yet */
   int closing;          /* tev_destroy was called */
   double deadline;      /* closing: the monotonic time the sender stops by */
@@ -69,6 +70,8 @@ struct lmc_tev {
   /* The sender's own. */
   pthread_t thread;
   float *frame;           /* the image being sent */
+  char name[TEV_NAME_MAX];  /* ... under this name: the base and its label */
+  char shown[TEV_NAME_MAX]; /* the name of the image created on this connection */
   unsigned char *packet;  /* one packet's bytes */
   int fd;                 /* the connection, -1 when none */
   int created;            /* CreateImage sent on this connection */
@@ -236,8 +239,8 @@ static unsigned char *tev__str(unsigned char *p, const char *s) {
   return p + n;
 }
 
-/* The start of every packet lmc sends: room for its length, its type,
- * grabFocus and the image's name. */
+/* The start of every packet lmc sends but CloseImage: room for its
+ * length, its type, grabFocus and the image's name. */
 static unsigned char *tev__head(lmc_tev *t, int type, int grab_focus) {
   unsigned char *p = t->packet + 4;
   *p++ = (unsigned char)type;
@@ -257,6 +260,13 @@ static unsigned char *tev__channels(unsigned char *p) {
   p = tev__str(p, "R");
   p = tev__str(p, "G");
   return tev__str(p, "B");
+}
+
+/* CloseImage of the image shown so far: its name alone. */
+static size_t tev__close_packet(lmc_tev *t) {
+  unsigned char *p = t->packet + 4;
+  *p++ = (unsigned char)TEV_CLOSE_IMAGE;
+  return tev__seal(t, tev__str(p, t->shown));
 }
 
 /* CreateImage: the image, its size and channels (and the viewer's focus). */
@@ -304,10 +314,18 @@ static void tev__send_frame(lmc_tev *t, int last) {
     if (!tev__connect(t, now + TEV_CONNECT_SECONDS)) return;
   }
   double until = tev__now() + TEV_FRAME_SECONDS;
+  if (t->created && strcmp(t->shown, t->name) != 0) {
+    /* A new name (its label changed): tev cannot rename an image, so the
+     * old one is closed and the image created again under the new name. */
+    size_t n = tev__close_packet(t);
+    if (!tev__send_all(t, t->packet, n, until)) return;
+    t->created = 0;
+  }
   if (!t->created) {
     size_t n = tev__create_packet(t);
     if (!tev__send_all(t, t->packet, n, until)) return;
     t->created = 1;
+    snprintf(t->shown, sizeof t->shown, "%s", t->name);
   }
   for (int y = 0; y < t->height; y += TEV_TILE)
     for (int x = 0; x < t->width; x += TEV_TILE) {
@@ -339,6 +357,10 @@ static void *tev__main(void *arg) {
     if (!t->fresh) break;
     float *swap = t->frame;
     t->frame = t->slot, t->slot = swap;
+    if (t->slot_label[0])
+      snprintf(t->name, sizeof t->name, "%.126s %.126s", t->base, t->slot_label);
+    else
+      snprintf(t->name, sizeof t->name, "%s", t->base);
     t->fresh = 0;
     int last = t->closing;
     pthread_mutex_unlock(&t->mu);
@@ -372,6 +394,7 @@ lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int 
   snprintf(t->host, sizeof t->host, "%s", host);
   snprintf(t->port, sizeof t->port, "%d", port ? port : TEV_DEFAULT_PORT);
   snprintf(t->where, sizeof t->where, "%s:%s", t->host, t->port);
+  snprintf(t->base, sizeof t->base, "%s", name);
   snprintf(t->name, sizeof t->name, "%s", name);
   t->width = width, t->height = height;
   t->fd = -1;
@@ -402,12 +425,13 @@ lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int 
   return LMC_OK;
 }
 
-void tev_post(lmc_tev *t, const lmc_image *img) {
+void tev_post(lmc_tev *t, const lmc_image *img, const char *label) {
   if (!t || !img || !img->data || img->width != t->width || img->height != t->height ||
       img->channels != 3)
     return;
   pthread_mutex_lock(&t->mu);
   memcpy(t->slot, img->data, 3 * (size_t)t->width * (size_t)t->height * sizeof(float));
+  snprintf(t->slot_label, sizeof t->slot_label, "%s", label ? label : "");
   t->fresh = 1;
   pthread_cond_signal(&t->wake);
   pthread_mutex_unlock(&t->mu);

@@ -17,6 +17,7 @@
  * little-endian, strings NUL-terminated, booleans one byte:
  *   CreateImage (4): grabFocus, name, int32 width, height, nChannels,
  *     nChannels channel names;
+ *   CloseImage (2): name (when the image's name changes);
  *   UpdateImageV3 (6): grabFocus, name, int32 nChannels, channel names,
  *     int32 x, y, width, height, int64 offsets[nChannels],
  *     int64 strides[nChannels], then float32 values: channel c of tile
@@ -50,8 +51,11 @@ lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int 
 
 /* Copies img (3 channels, the client's size; borrowed) into the mailbox,
  * replacing an image not yet sent, and wakes the sender. Never waits for
- * the network. An image of another size or channel count is ignored. */
-void tev_post(lmc_tev *t, const lmc_image *img);
+ * the network. An image of another size or channel count is ignored.
+ * `label` (NULL or "": none; copied) follows the name in the viewer, as
+ * "NAME LABEL": when it changes, the image shown under the old name is
+ * closed (CloseImage) and created again under the new one. */
+void tev_post(lmc_tev *t, const lmc_image *img, const char *label);
 
 /* Sends the image posted last if it was not sent yet (reconnecting once
  * if need be, whatever the back-off), waiting at most wait_seconds for it,
