@@ -62,6 +62,12 @@ int lmc_cmd_render(int argc, char **argv);
  * take seconds, so that a Ctrl-C then still ends with the image. */
 void lmc_render_catch_signals(void);
 int lmc_cmd_compare(int argc, char **argv);
+/* A false-colour PNG of per-pixel squared relative errors e (width *
+ * height), log scale from 1e-4 (dark blue) to 1 (red): lmc compare's
+ * heat map of the true error, lmc convert --channel error's of the
+ * estimated one. */
+lmc_status lmc_write_heat_png(const char *path, int width, int height, const double *e,
+                              lmc_error *err);
 int lmc_cmd_merge(int argc, char **argv);
 int lmc_cmd_convert(int argc, char **argv);
 

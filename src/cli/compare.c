@@ -27,6 +27,52 @@ static rgb lmc_heat_color(double t) {
                   stops[i][2] + f * (stops[i + 1][2] - stops[i][2]));
 }
 
+/* IMAGE's own error (channels error.R, G, B, from `lmc render --error on`)
+ * against the true error I - R: how many values lie within one and two
+ * estimated standard errors, over the values with a finite, positive one
+ * (a pixel of zero spread, such as the bare environment, says nothing). */
+static void lmc_print_coverage(const char *path, const lmc_image *img, const lmc_image *ref) {
+  lmc_image se = {0};
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (image_read_exr_layer(path, "error", &se, &err) || se.channels != 3 ||
+      se.width != img->width || se.height != img->height) {
+    image_free(&se);
+    return;
+  }
+  size_t n = 3 * (size_t)img->width * (size_t)img->height;
+  long long used = 0, in1 = 0, in2 = 0;
+  for (size_t i = 0; i < n; i++) {
+    double e = se.data[i], d = fabs((double)img->data[i] - (double)ref->data[i]);
+    if (!(e > 0.0) || !isfinite(e)) continue;
+    used++;
+    in1 += d <= e;
+    in2 += d <= 2.0 * e;
+  }
+  image_free(&se);
+  printf("error_values: %lld\n", used);
+  if (used > 0)
+    printf("coverage_1se: %.6g\ncoverage_2se: %.6g\n", (double)in1 / (double)used,
+           (double)in2 / (double)used);
+}
+
+lmc_status lmc_write_heat_png(const char *path, int width, int height, const double *e,
+                              lmc_error *err) {
+  lmc_image hm = {0};
+  lmc_status st = image_init(&hm, width, height, 3, err);
+  if (st) return st;
+  for (size_t p = 0; p < (size_t)width * (size_t)height; p++) {
+    double t = (log10(fmax(e[p], 1e-4)) + 4.0) / 4.0;
+    rgb col = lmc_heat_color(t);
+    hm.data[3 * p] = (float)srgb_to_linear(col.r);
+    hm.data[3 * p + 1] = (float)srgb_to_linear(col.g);
+    hm.data[3 * p + 2] = (float)srgb_to_linear(col.b);
+  }
+  st = image_write_png(path, &hm, 1.0, err);
+  image_free(&hm);
+  return st;
+}
+
 int lmc_cmd_compare(int argc, char **argv) {
   const char *paths[2] = {NULL, NULL}, *heatmap = NULL;
   int n_paths = 0;
@@ -39,7 +85,10 @@ int lmc_cmd_compare(int argc, char **argv) {
              "prints mse, relmse (mean of (I-R)^2 / (R^2 + 0.01)), relmse_trimmed\n"
              "(the same without the 0.1%% of pixels with the largest error) and\n"
              "mean_ratio (mean luminance of IMAGE over REFERENCE); exit 2 if the\n"
-             "sizes differ\n");
+             "sizes differ. When IMAGE has channels error.R, G, B (lmc render\n"
+             "--error on), also how often |I - R| lies within one and two of\n"
+             "them (coverage_1se, coverage_2se; 0.68 and 0.95 for normal errors)\n"
+             "over error_values values of positive error\n");
       return EXIT_OK;
     } else if (argv[a.i][0] == '-') {
       fprintf(stderr, "lmc: unknown flag '%s' (see lmc compare --help)\n", argv[a.i]);
@@ -87,34 +136,33 @@ int lmc_cmd_compare(int argc, char **argv) {
   }
   printf("mse: %.9g\nrelmse: %.9g\nrelmse_trimmed: %.9g\nmean_ratio: %.9g\n", ie.mse, ie.relmse,
          ie.relmse_trimmed, ie.mean_ratio);
+  lmc_print_coverage(paths[0], &img[0], &img[1]);
 
   /* The heatmap: per-pixel relative error, log scale from 1e-4 to 1. */
   int status = EXIT_OK;
   if (heatmap) {
-    lmc_image hm = {0};
-    if (image_init(&hm, img[0].width, img[0].height, 3, &err) == LMC_OK) {
+    double *e = malloc(n * sizeof *e);
+    if (e) {
       for (size_t p = 0; p < n; p++) {
         const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
-        double e = 0.0;
+        e[p] = 0.0;
         for (int c = 0; c < 3; c++) {
           double d = (double)I[c] - (double)R[c];
-          e += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+          e[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
         }
-        double t = (log10(fmax(e, 1e-4)) + 4.0) / 4.0;
-        rgb col = lmc_heat_color(t);
-        hm.data[3 * p] = (float)srgb_to_linear(col.r);
-        hm.data[3 * p + 1] = (float)srgb_to_linear(col.g);
-        hm.data[3 * p + 2] = (float)srgb_to_linear(col.b);
       }
-      if (image_write_png(heatmap, &hm, 1.0, &err)) status = EXIT_FAIL;
-    } else {
+    }
+    if (!e) {
+      lmc_error_set(&err, LMC_ENOMEM, NULL, 0, "out of memory");
+      status = EXIT_FAIL;
+    } else if (lmc_write_heat_png(heatmap, img[0].width, img[0].height, e, &err)) {
       status = EXIT_FAIL;
     }
+    free(e);
     if (status != EXIT_OK) {
       lmc_error_format(&err, msg, sizeof msg);
       fprintf(stderr, "lmc: %s\n", msg);
     }
-    image_free(&hm);
   }
   image_free(&img[0]);
   image_free(&img[1]);

@@ -151,6 +151,50 @@ void film_free(film *f) {
   free(f->count);
   free(f->splat);
   f->sum = f->count = f->splat = NULL;
+  free(f->esum);
+  free(f->esum2);
+  free(f->pass_val);
+  free(f->splat_prev);
+  f->esum = f->esum2 = f->pass_val = f->splat_prev = NULL;
+}
+
+lmc_status film_error_init(film *f, lmc_error *err) {
+  size_t n = 3 * (size_t)f->width * (size_t)f->height;
+  f->esum = calloc(n, sizeof(double));
+  f->esum2 = calloc(n, sizeof(double));
+  f->pass_val = calloc(n, sizeof(double));
+  f->splat_prev = calloc(n, sizeof(double));
+  f->epasses = 0.0;
+  if (!f->esum || !f->esum2 || !f->pass_val || !f->splat_prev)
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the error of a %dx%d film",
+                         f->width, f->height);
+  return LMC_OK;
+}
+
+void film_error_pass(film *f, double splat_norm) {
+  if (!f->esum) return;
+  size_t n = 3 * (size_t)f->width * (size_t)f->height;
+  for (size_t i = 0; i < n; i++) {
+    double x = f->pass_val[i] + (f->splat[i] - f->splat_prev[i]) * splat_norm;
+    f->splat_prev[i] = f->splat[i];
+    f->esum[i] += x;
+    f->esum2[i] += x * x;
+  }
+  f->epasses += 1.0;
+}
+
+void film_error_develop_to(const film *f, float *pixels) {
+  size_t n = 3 * (size_t)f->width * (size_t)f->height;
+  double m = f->epasses;
+  for (size_t i = 0; i < n; i++) {
+    if (!f->esum || m < 2.0) {
+      pixels[i] = INFINITY;
+      continue;
+    }
+    double mean = f->esum[i] / m;
+    double var = (f->esum2[i] - m * mean * mean) / (m - 1.0);
+    pixels[i] = (float)sqrt(var > 0.0 ? var / m : 0.0);
+  }
 }
 
 void film_clear(film *f) {
@@ -232,6 +276,11 @@ void film_sum_to_root(film *f) {
   dist_sum_to_root(f->sum, 3 * n);
   dist_sum_to_root(f->count, n);
   dist_sum_to_root(f->splat, 3 * n);
+  if (f->esum) {
+    dist_sum_to_root(f->esum, 3 * n);
+    dist_sum_to_root(f->esum2, 3 * n);
+    dist_sum_to_root(&f->epasses, 1);
+  }
 }
 
 void film_develop_to(const film *f, float *pixels) {

@@ -63,6 +63,14 @@ typedef struct film {
   double *splat;    /* 3 per pixel */
   double splat_scale;
   film_splat_log *log; /* borrowed; when set, film_splat appends to it instead */
+  /* The per-pixel standard error (film_error_init; NULL without): every
+   * complete pass of pt or bdpt is an independent estimate of the image
+   * (its camera sample of each pixel plus its light subpaths' splats), so
+   * the sums of the passes' pixel values and of their squares give each
+   * pixel's variance. pass_val holds the current pass's camera samples,
+   * splat_prev the splats before it (3 per pixel each). */
+  double *esum, *esum2, *pass_val, *splat_prev;
+  double epasses; /* complete passes summed (a double: summed over ranks) */
 } film;
 
 lmc_status film_init(film *f, int width, int height, lmc_error *err);
@@ -88,6 +96,17 @@ void film_merge(film *dst, const film *src);
  * rank order into rank 0's f (the others' f unchanged); splat_scale is
  * left to the caller. */
 void film_sum_to_root(film *f);
+/* Adds the error's buffers to f (film.esum ...). */
+lmc_status film_error_init(film *f, lmc_error *err);
+/* The end of a complete pass whose camera samples are in f->pass_val:
+ * each pixel's value in the pass, pass_val + (the pass's splats) *
+ * splat_norm, added to the sums. */
+void film_error_pass(film *f, double splat_norm);
+/* The standard error of each pixel's value, sqrt(s^2 / n) with s^2 the
+ * passes' sample variance, into `pixels` (width * height * 3 floats);
+ * infinity with fewer than two passes. */
+void film_error_develop_to(const film *f, float *pixels);
+
 /* The image: sum / count + splat * splat_scale (out is initialised here). */
 lmc_status film_develop(const film *f, lmc_image *out, lmc_error *err);
 /* The same pixels into `pixels` (room for width * height * 3 floats, caller's):

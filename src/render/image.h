@@ -74,9 +74,18 @@ lmc_status image_read(const char *path, int srgb_to_linear, lmc_image *out, lmc_
 lmc_status image_read_png(const char *path, int srgb_to_linear, lmc_image *out, lmc_error *err);
 lmc_status image_read_jpeg(const char *path, int srgb_to_linear, lmc_image *out, lmc_error *err);
 lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err);
+/* The channels layer.R, layer.G, layer.B (or layer.Y) of an EXR
+ * (layer NULL: image_read_exr); LMC_EUNSUPPORTED naming the layer when
+ * the file has none. */
+lmc_status image_read_exr_layer(const char *path, const char *layer, lmc_image *out,
+                                lmc_error *err);
 
 /* Writes a 3-channel image as a linear float (FP32) RGB EXR. */
 lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *err);
+/* The same with a second 3-channel image of the same size (limg) as the
+ * channels layer.R, layer.G, layer.B (layer NULL: none). */
+lmc_status image_write_exr_layer(const char *path, const lmc_image *img, const char *layer,
+                                 const lmc_image *limg, lmc_error *err);
 /* Writes an 8-bit sRGB PNG of a 3-channel linear image, multiplying by
  * `scale` first (an exposure). */
 lmc_status image_write_png(const char *path, const lmc_image *img, double scale, lmc_error *err);

@@ -228,7 +228,11 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
                          rs->integrator);
   const int W = s->cam.width, H = s->cam.height;
   lmc_status status = film_init(out, W, H, err);
-  if (status) return status;
+  if (!status && rs->error) status = film_error_init(out, err);
+  if (status) {
+    film_free(out);
+    return status;
+  }
 
   int nthreads = rs->threads > 0 ? rs->threads : omp_get_max_threads();
   /* bdpt: one splat list per row of a block; pt needs none and renders a
@@ -297,8 +301,12 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
           row_splats.height = H;
           row_splats.log = logs ? &logs[y - yb] : NULL;
           for (int x = 0; x < W; x++) {
-            film_add(out, x, y,
-                     render__sample(s, rs, x, y, pass, diff_scale, use_bdpt, &row_splats, cnt));
+            rgb L = render__sample(s, rs, x, y, pass, diff_scale, use_bdpt, &row_splats, cnt);
+            film_add(out, x, y, L);
+            if (out->pass_val) {
+              double *pv = out->pass_val + 3 * ((size_t)y * (size_t)W + (size_t)x);
+              pv[0] = L.r, pv[1] = L.g, pv[2] = L.b;
+            }
             cnt->samples++;
           }
           if (tid == 0) {
@@ -315,6 +323,9 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
       if (logs)
         for (int y = yb; y < ye; y++) film_splat_log_replay(out, &s->filter, &logs[y - yb]);
     }
+    /* --error: a complete pass is one more estimate of every pixel (its
+     * light subpaths, one per pixel, splat as W H estimates of the image). */
+    if (!stop) film_error_pass(out, 1.0 / ((double)W * (double)H));
   agree:
     /* A signal or the clock on any rank stops them all. */
     if (ranks > 1) {

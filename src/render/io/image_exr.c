@@ -52,23 +52,28 @@ static lmc_status exr__fail(lmc_error *err, const char *path, exr_result_t rv, c
 
 /* Indices of the channels we read in the order we store them, or -1. */
 typedef struct exr__layout {
-  const char *names[4];
+  char names[4][72];
   int count;
 } exr__layout;
 
-static int exr__choose(const exr_attr_chlist_t *ch, exr__layout *lay) {
+/* The channels to read: R, G, B (and A), else Y; with a layer (NULL: the
+ * image itself) the layer's, "layer.R" and so on. */
+static int exr__choose(const exr_attr_chlist_t *ch, const char *layer, exr__layout *lay) {
   int has[5] = {0, 0, 0, 0, 0};
-  static const char *const want[5] = {"R", "G", "B", "A", "Y"};
+  static const char *const base[5] = {"R", "G", "B", "A", "Y"};
+  char want[5][72];
+  for (int k = 0; k < 5; k++)
+    snprintf(want[k], sizeof want[k], "%.63s%s%s", layer ? layer : "", layer ? "." : "", base[k]);
   for (int i = 0; i < ch->num_channels; i++)
     for (int k = 0; k < 5; k++)
       if (strcmp(ch->entries[i].name.str, want[k]) == 0) has[k] = 1;
   lay->count = 0;
   if (has[0] && has[1] && has[2]) {
-    for (int k = 0; k < (has[3] ? 4 : 3); k++) lay->names[lay->count++] = want[k];
+    for (int k = 0; k < (has[3] ? 4 : 3); k++) memcpy(lay->names[lay->count++], want[k], 72);
     return 1;
   }
   if (has[4]) {
-    lay->names[lay->count++] = "Y";
+    memcpy(lay->names[lay->count++], want[4], 72);
     return 1;
   }
   return 0;
@@ -133,6 +138,11 @@ static exr_result_t exr__decode_chunk(exr_context_t ctxt, const exr_chunk_info_t
 }
 
 lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
+  return image_read_exr_layer(path, NULL, out, err);
+}
+
+lmc_status image_read_exr_layer(const char *path, const char *layer, lmc_image *out,
+                                lmc_error *err) {
   memset(out, 0, sizeof *out);
   exr__msg m = {""};
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -159,8 +169,11 @@ lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
     st = exr__fail(err, path, rv, &m, LMC_EPARSE, "bad EXR header");
   } else if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) {
     st = lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "deep EXR files are not supported");
-  } else if (!exr__choose(ch, &lay)) {
-    st = lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "EXR has neither R,G,B nor Y channels");
+  } else if (!exr__choose(ch, layer, &lay)) {
+    if (layer)
+      st = lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "EXR has no %s.R,G,B channels", layer);
+    else
+      st = lmc_error_set(err, LMC_EUNSUPPORTED, path, 0, "EXR has neither R,G,B nor Y channels");
   } else {
     for (int i = 0; i < ch->num_channels; i++)
       if (ch->entries[i].x_sampling != 1 || ch->entries[i].y_sampling != 1)
@@ -226,8 +239,17 @@ lmc_status image_read_exr(const char *path, lmc_image *out, lmc_error *err) {
 }
 
 lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *err) {
+  return image_write_exr_layer(path, img, NULL, NULL, err);
+}
+
+lmc_status image_write_exr_layer(const char *path, const lmc_image *img, const char *layer,
+                                 const lmc_image *limg, lmc_error *err) {
   if (!img || !img->data || img->channels != 3 || img->width <= 0 || img->height <= 0)
     return lmc_error_set(err, LMC_EINVAL, path, 0, "image_write_exr needs a 3-channel image");
+  if (layer && (!limg || !limg->data || limg->channels != 3 || limg->width != img->width ||
+                limg->height != img->height || strlen(layer) > 60))
+    return lmc_error_set(err, LMC_EINVAL, path, 0,
+                         "image_write_exr: the layer needs a 3-channel image of the same size");
   char tmp[4096];
   image_temp_name(path, tmp, sizeof tmp);
   exr__msg m = {""};
@@ -253,6 +275,11 @@ lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *er
   static const char *const names[3] = {"R", "G", "B"};
   for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; c++)
     rv = exr_add_channel(ctxt, part, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+  for (int c = 0; layer && c < 3 && rv == EXR_ERR_SUCCESS; c++) {
+    char name[72];
+    snprintf(name, sizeof name, "%s.%s", layer, names[c]);
+    rv = exr_add_channel(ctxt, part, name, EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+  }
   if (rv == EXR_ERR_SUCCESS) rv = exr_write_header(ctxt);
   if (rv != EXR_ERR_SUCCESS) st = exr__fail(err, path, rv, &m, LMC_EIO, "cannot write EXR header");
 
@@ -268,9 +295,13 @@ lmc_status image_write_exr(const char *path, const lmc_image *img, lmc_error *er
     if (rv == EXR_ERR_SUCCESS) {
       for (int c = 0; c < enc.channel_count; c++) {
         exr_coding_channel_info_t *ci = &enc.channels[c];
-        int k = ci->channel_name[0] == 'R' ? 0 : ci->channel_name[0] == 'G' ? 1 : 2;
+        /* R, G, B of the image, or of the layer ("layer.R", ...). */
+        const char *dot = strrchr(ci->channel_name, '.');
+        const char *cn = dot ? dot + 1 : ci->channel_name;
+        const lmc_image *src = dot ? limg : img;
+        int k = cn[0] == 'R' ? 0 : cn[0] == 'G' ? 1 : 2;
         ci->encode_from_ptr =
-            (const uint8_t *)(img->data + (size_t)cinfo.start_y * (size_t)img->width * 3 + (size_t)k);
+            (const uint8_t *)(src->data + (size_t)cinfo.start_y * (size_t)img->width * 3 + (size_t)k);
         ci->user_pixel_stride = 3 * (int32_t)sizeof(float);
         ci->user_line_stride = 3 * (int32_t)sizeof(float) * img->width;
         ci->user_bytes_per_element = 4;
