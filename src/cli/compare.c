@@ -142,16 +142,7 @@ int lmc_cmd_compare(int argc, char **argv) {
   int status = EXIT_OK;
   if (heatmap) {
     double *e = malloc(n * sizeof *e);
-    if (e) {
-      for (size_t p = 0; p < n; p++) {
-        const float *I = img[0].data + 3 * p, *R = img[1].data + 3 * p;
-        e[p] = 0.0;
-        for (int c = 0; c < 3; c++) {
-          double d = (double)I[c] - (double)R[c];
-          e[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
-        }
-      }
-    }
+    if (e) image_rel_error(&img[0], &img[1], e);
     if (!e) {
       lmc_error_set(&err, LMC_ENOMEM, NULL, 0, "out of memory");
       status = EXIT_FAIL;

@@ -186,11 +186,11 @@ void film_error_pass(film *f, double splat_norm) {
 void film_error_develop_to(const film *f, float *pixels) {
   size_t n = 3 * (size_t)f->width * (size_t)f->height;
   double m = f->epasses;
+  if (!f->esum || m < 2.0) {
+    for (size_t i = 0; i < n; i++) pixels[i] = INFINITY;
+    return;
+  }
   for (size_t i = 0; i < n; i++) {
-    if (!f->esum || m < 2.0) {
-      pixels[i] = INFINITY;
-      continue;
-    }
     double mean = f->esum[i] / m;
     double var = (f->esum2[i] - m * mean * mean) / (m - 1.0);
     pixels[i] = (float)sqrt(var > 0.0 ? var / m : 0.0);

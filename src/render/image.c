@@ -52,6 +52,18 @@ static int image__cmp_double(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+void image_rel_error(const lmc_image *img, const lmc_image *ref, double *OUT_rel) {
+  size_t n = (size_t)img->width * (size_t)img->height;
+  for (size_t p = 0; p < n; p++) {
+    const float *I = img->data + 3 * p, *R = ref->data + 3 * p;
+    OUT_rel[p] = 0.0;
+    for (int c = 0; c < 3; c++) {
+      double d = (double)I[c] - (double)R[c];
+      OUT_rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
+    }
+  }
+}
+
 lmc_status image_error(const lmc_image *img, const lmc_image *ref, lmc_image_error *OUT,
                        lmc_error *err) {
   memset(OUT, 0, sizeof *OUT);
@@ -63,13 +75,12 @@ lmc_status image_error(const lmc_image *img, const lmc_image *ref, lmc_image_err
   double *rel = malloc((n > 0 ? n : 1) * sizeof *rel);
   if (!rel) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory comparing images");
   double lum_i = 0.0, lum_r = 0.0;
+  image_rel_error(img, ref, rel);
   for (size_t p = 0; p < n; p++) {
     const float *I = img->data + 3 * p, *R = ref->data + 3 * p;
-    rel[p] = 0.0;
     for (int c = 0; c < 3; c++) {
       double d = (double)I[c] - (double)R[c];
       OUT->mse += d * d;
-      rel[p] += d * d / ((double)R[c] * R[c] + 0.01) / 3.0;
     }
     OUT->relmse += rel[p];
     lum_i += rgb_luminance(rgb_make(I[0], I[1], I[2]));

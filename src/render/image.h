@@ -35,6 +35,10 @@ void image_free(lmc_image *img);
 typedef struct lmc_image_error {
   double mse, relmse, relmse_trimmed, mean_ratio;
 } lmc_image_error;
+/* Each pixel's relative squared error (I - R)^2 / (R^2 + 0.01), the mean
+ * over its channels, into OUT_rel (width * height); img and ref 3-channel
+ * images of one size. */
+void image_rel_error(const lmc_image *img, const lmc_image *ref, double *OUT_rel);
 /* Fails on a size or channel mismatch (LMC_EINVAL) or no memory. */
 lmc_status image_error(const lmc_image *img, const lmc_image *ref, lmc_image_error *OUT,
                        lmc_error *err);

@@ -19,7 +19,7 @@
 static const char *const opt__samplers[] = {"independent", "sobol", NULL};
 static const int opt__sampler_values[] = {LMC_SAMPLER_INDEPENDENT, LMC_SAMPLER_SOBOL};
 
-static const char *const opt__off_on[] = {"off", "on", NULL};
+const char *const lmc_opt_off_on[] = {"off", "on", NULL};
 
 static const lmc_opt opt__render[] = {
     {"spp", LMC_OPT_INT64, offsetof(render_settings, spp), 0, 1, (double)(INT64_MAX / 2), NULL,
@@ -48,7 +48,7 @@ static const lmc_opt opt__render[] = {
      "omitted); the render never waits for it", NULL},
     {"display-interval", LMC_OPT_DOUBLE, offsetof(render_settings, display_interval), 0, 0.05,
      1e9, NULL, NULL, 0, "S", NULL, "seconds between the images --display-server sends", NULL},
-    {"error", LMC_OPT_CHOICE, offsetof(render_settings, error), 0, 0, 0, opt__off_on, NULL, 0,
+    {"error", LMC_OPT_CHOICE, offsetof(render_settings, error), 0, 0, 0, lmc_opt_off_on, NULL, 0,
      NULL, "off",
      "pt and bdpt: each pixel's standard error, from the spread of its passes, as the EXR's "
      "channels error.R, error.G, error.B", NULL},

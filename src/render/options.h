@@ -65,8 +65,10 @@ typedef struct lmc_opt_table {
 
 /* The renderer's own flags (options.c): --spp, --time, --threads, --seed,
  * --maxdepth, --rrdepth, --sampler, --snapshot, --display-server,
- * --display-interval. */
+ * --display-interval, --error. */
 extern const lmc_opt_table lmc_render_options;
+/* The names of an off/on choice (LMC_OPT_CHOICE: 0 off, 1 on), for every table. */
+extern const char *const lmc_opt_off_on[];
 
 /* Splits "HOST[:PORT]" (a network address: a host name or a dotted IPv4
  * address, then optionally a colon and a decimal port in [port_lo,

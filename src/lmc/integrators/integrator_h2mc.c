@@ -153,14 +153,12 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
           (long long)(c.grad_evals - c.hess_evals));
 }
 
-static const char *const h2mc__off_on[] = {"off", "on", NULL};
-
 static const lmc_opt h2mc__opts[] = {
     {"h2mc-sigma", LMC_OPT_DOUBLE, offsetof(h2mc_settings, sigma), 0, 1e-6, 0.5, NULL, NULL, 0,
      "S", "0.01", "the prior's standard deviation on the proposal's offset", NULL},
     {"iso-prob", LMC_OPT_DOUBLE, offsetof(h2mc_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
-    {"delayed", LMC_OPT_CHOICE, offsetof(h2mc_settings, delayed), 0, 0, 0, h2mc__off_on, NULL, 0,
+    {"delayed", LMC_OPT_CHOICE, offsetof(h2mc_settings, delayed), 0, 0, 0, lmc_opt_off_on, NULL, 0,
      NULL, NULL,
      "H2MC proposals first tested on f alone, the Hessian at the proposal only when they pass "
      "(delayed acceptance, exact)", NULL},

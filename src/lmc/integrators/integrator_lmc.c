@@ -472,7 +472,6 @@ static void lmc_run_report(const lmc_run *run, mc_chain *const *chains, int n, d
 static const char *const lmc__adapts[] = {"none", "adam", "diminish", "cache", NULL};
 static const int lmc__adapt_values[] = {LMC_ADAPT_NONE, LMC_ADAPT_ADAM, LMC_ADAPT_DIMINISH,
                                         LMC_ADAPT_CACHE};
-static const char *const lmc__off_on[] = {"off", "on", NULL};
 static const char *const lmc__on_off[] = {"on", "off", NULL}; /* (stores 1 for off) */
 
 static const lmc_opt lmc__opts[] = {
@@ -495,7 +494,7 @@ static const lmc_opt lmc__opts[] = {
     {"iso-prob", LMC_OPT_DOUBLE, offsetof(lmc_settings, iso_prob), 0, 0, 1, NULL, NULL, 0, "P",
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
     {"cache-gradient", LMC_OPT_CHOICE, offsetof(lmc_settings, cache_gradient), 0, 0, 0,
-     lmc__off_on, NULL, 0, NULL, NULL,
+     lmc_opt_off_on, NULL, 0, NULL, NULL,
      "--adapt cache, bdpt states: stage 2 evaluates gradients (MALA with the cached M) instead of "
      "the cached walk", NULL},
     {"cache-step", LMC_OPT_DOUBLE, offsetof(lmc_settings, cache_step), 0, 1e-9, 0.5, NULL, NULL,
@@ -512,7 +511,7 @@ static const lmc_opt lmc__opts[] = {
      0, "P", NULL,
      "--adapt cache: probability of the cache's independence proposal (a Gaussian around a cached "
      "state; on ring-caustics it accepted none of 51291)", NULL},
-    {"delayed", LMC_OPT_CHOICE, offsetof(lmc_settings, delayed), 0, 0, 0, lmc__off_on, NULL, 0,
+    {"delayed", LMC_OPT_CHOICE, offsetof(lmc_settings, delayed), 0, 0, 0, lmc_opt_off_on, NULL, 0,
      NULL, NULL, "Langevin proposals first tested without their gradient (delayed acceptance, exact)", NULL},
 };
 

@@ -24,30 +24,29 @@ typedef struct mlt_settings {
 } mlt_settings;
 
 static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1}};
-static const char *const mlt__off_on[] = {"off", "on", NULL};
 static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir", "lens", "multichain",
                                                            "caustic", "lenssub"};
 
 static const lmc_opt mlt__opts[] = {
     {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
-     mlt__off_on, NULL, 0, NULL, "on",
+     lmc_opt_off_on, NULL, 0, NULL, "on",
      "Veach's bidirectional mutation: a subpath (up to the whole path) deleted and regenerated",
      "bidirectionalMutation"},
     {"lens-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_LENS]), 0, 0, 0,
-     mlt__off_on, NULL, 0, NULL, "on",
+     lmc_opt_off_on, NULL, 0, NULL, "on",
      "the image point moved, the camera's specular chain retraced (paths E S* D (D|L))",
      "lensPerturbation"},
     {"multichain-perturbation", LMC_OPT_CHOICE,
-     offsetof(mlt_settings, move[MC_PATH_MOVE_MULTICHAIN]), 0, 0, 0, mlt__off_on, NULL, 0, NULL,
+     offsetof(mlt_settings, move[MC_PATH_MOVE_MULTICHAIN]), 0, 0, 0, lmc_opt_off_on, NULL, 0, NULL,
      "on", "the lens perturbation, then each further specular chain's start turned a little",
      "multiChainPerturbation"},
     {"caustic-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_CAUSTIC]), 0,
-     0, 0, mlt__off_on, NULL, 0, NULL, "on",
+     0, 0, lmc_opt_off_on, NULL, 0, NULL, "on",
      "the direction leaving the light side turned, the specular chain retraced to the camera "
      "(paths E D S* (D|L))",
      "causticPerturbation"},
     {"lens-subpath-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_LENSSUB]),
-     0, 0, 0, mlt__off_on, NULL, 0, NULL, "on",
+     0, 0, 0, lmc_opt_off_on, NULL, 0, NULL, "on",
      "the camera's subpath E S* D replaced by a fresh one through a uniform image point (Veach; "
      "not in Mitsuba)",
      NULL},
