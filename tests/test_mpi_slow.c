@@ -268,6 +268,51 @@ static void test_mcmc_ranks_make_the_moves_of_one_process(void **state) {
   assert_int_equal(owns, 2 * 2); /* lmc and h2mc */
 }
 
+/* --error on over ranks (the chains' groups summed to rank 0, pt's passes
+ * of --direct separate too): pssmlt and mmlt (one family, several) on 2
+ * ranks write the error channels of one process, to a relative 1e-5 (the
+ * order of the sums aside: the groups' spread is a difference of such
+ * sums, so it keeps less of their precision than the image). */
+static void test_error_over_ranks(void **state) {
+  (void)state;
+  if (skip_without_mpi()) skip();
+  static const char *const which[] = {"pssmlt", "mmlt"};
+  int compared = 0;
+  for (int k = 0; k < 2; k++) {
+    char flags[256], plain[64], two[64], path[512];
+    snprintf(flags, sizeof flags,
+             "--integrator %s --spp 4 --resolution 40x30 --maxdepth 5 --seed 8 --threads 1 "
+             "--error on",
+             which[k]);
+    snprintf(plain, sizeof plain, "%s_err_plain", which[k]);
+    snprintf(two, sizeof two, "%s_err_2", which[k]);
+    assert_int_equal(render(0, CORNELL, flags, plain), 0);
+    assert_int_equal(render(2, CORNELL, flags, two), 0);
+    lmc_image ep = {0}, e2 = {0};
+    lmc_error err;
+    snprintf(path, sizeof path, "%s/%s.exr", tmp_dir, plain);
+    assert_int_equal(image_read_exr_layer(path, "error", &ep, &err), LMC_OK);
+    snprintf(path, sizeof path, "%s/%s.exr", tmp_dir, two);
+    assert_int_equal(image_read_exr_layer(path, "error", &e2, &err), LMC_OK);
+    int64_t n = (int64_t)ep.width * ep.height * ep.channels, off = 0, positive = 0;
+    assert_int_equal(e2.width * e2.height * e2.channels, n);
+    for (int64_t i = 0; i < n; i++) {
+      double a = ep.data[i], c = e2.data[i];
+      assert_true(isfinite(a));
+      positive += a > 0.0;
+      off += !(fabs(a - c) <= 1e-5 * fabs(a) + 1e-12);
+    }
+    print_message("%s --error on 2 ranks: %lld of %lld values positive, %lld differ\n", which[k],
+                  (long long)positive, (long long)n, (long long)off);
+    assert_true(positive > n / 2);
+    assert_int_equal(off, 0);
+    image_free(&ep);
+    image_free(&e2);
+    compared++;
+  }
+  assert_int_equal(compared, 2);
+}
+
 /* The mean over the pixels and channels of tmp_dir/NAME.exr, and the
  * standard error of that mean over its pixels in OUT_se. */
 static double image_mean(const char *name, double *OUT_se) {
@@ -431,6 +476,7 @@ int main(void) {
       cmocka_unit_test(test_one_rank_is_the_plain_run),
       cmocka_unit_test(test_two_ranks_independent_of_threads),
       cmocka_unit_test(test_mcmc_ranks_make_the_moves_of_one_process),
+      cmocka_unit_test(test_error_over_ranks),
       cmocka_unit_test(test_furnace_over_ranks),
       cmocka_unit_test(test_killed_rank_ends_the_job),
       cmocka_unit_test(test_interrupted_job_writes_its_image),

@@ -156,7 +156,7 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
   tev_post(display, &img, label);
   /* --error: each pixel's standard error beside it, as channels error.R, G, B. */
   lmc_image eimg = {0};
-  if (f->esum && image_init(&eimg, f->width, f->height, 3, &err) == LMC_OK)
+  if (film_has_error(f) && image_init(&eimg, f->width, f->height, 3, &err) == LMC_OK)
     film_error_develop_to(f, eimg.data);
   lmc_status wst = eimg.data ? image_write_exr_layer(exr_path, &img, "error", &eimg, &err)
                              : image_write_exr(exr_path, &img, &err);
@@ -344,13 +344,6 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
                        const lmc_exposure *exposure, double t_load, const lmc_image *ref,
                        const char *ref_path) {
   char out_exr[1024], out_png[1100];
-  if (rs->error && mcmc_is_integrator(rs->integrator)) {
-    fprintf(stderr,
-            "lmc: flag --error: pt and bdpt give each pixel's standard error; the MCMC "
-            "integrators (%s) do not yet\n",
-            rs->integrator);
-    return EXIT_BADINPUT;
-  }
   if (output)
     snprintf(out_exr, sizeof out_exr, "%s", output);
   else

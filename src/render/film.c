@@ -156,6 +156,8 @@ void film_free(film *f) {
   free(f->pass_val);
   free(f->splat_prev);
   f->esum = f->esum2 = f->pass_val = f->splat_prev = NULL;
+  free(f->evar);
+  f->evar = NULL;
 }
 
 lmc_status film_error_init(film *f, lmc_error *err) {
@@ -186,14 +188,19 @@ void film_error_pass(film *f, double splat_norm) {
 void film_error_develop_to(const film *f, float *pixels) {
   size_t n = 3 * (size_t)f->width * (size_t)f->height;
   double m = f->epasses;
-  if (!f->esum || m < 2.0) {
+  if (!film_has_error(f) || (f->esum && m < 2.0)) {
     for (size_t i = 0; i < n; i++) pixels[i] = INFINITY;
     return;
   }
   for (size_t i = 0; i < n; i++) {
-    double mean = f->esum[i] / m;
-    double var = (f->esum2[i] - m * mean * mean) / (m - 1.0);
-    pixels[i] = (float)sqrt(var > 0.0 ? var / m : 0.0);
+    double var = 0.0;
+    if (f->esum) {
+      double mean = f->esum[i] / m;
+      double s2 = (f->esum2[i] - m * mean * mean) / (m - 1.0);
+      var = s2 > 0.0 ? s2 / m : 0.0;
+    }
+    if (f->evar) var += f->evar[i];
+    pixels[i] = (float)sqrt(var);
   }
 }
 

@@ -71,6 +71,10 @@ typedef struct film {
    * splat_prev the splats before it (3 per pixel each). */
   double *esum, *esum2, *pass_val, *splat_prev;
   double epasses; /* complete passes summed (a double: summed over ranks) */
+  /* A variance to add to each value's (3 per pixel; NULL: none; owned):
+   * the MCMC chains' part of the image, set by their driver (mcmc_error.c),
+   * beside the direct pass's passes in esum. */
+  double *evar;
 } film;
 
 lmc_status film_init(film *f, int width, int height, lmc_error *err);
@@ -96,15 +100,18 @@ void film_merge(film *dst, const film *src);
  * rank order into rank 0's f (the others' f unchanged); splat_scale is
  * left to the caller. */
 void film_sum_to_root(film *f);
+/* Whether the film carries an error (film_error_init, or evar). */
+static inline int film_has_error(const film *f) { return f->esum || f->evar; }
 /* Adds the error's buffers to f (film.esum ...). */
 lmc_status film_error_init(film *f, lmc_error *err);
 /* The end of a complete pass whose camera samples are in f->pass_val:
  * each pixel's value in the pass, pass_val + (the pass's splats) *
  * splat_norm, added to the sums. */
 void film_error_pass(film *f, double splat_norm);
-/* The standard error of each pixel's value, sqrt(s^2 / n) with s^2 the
- * passes' sample variance, into `pixels` (width * height * 3 floats);
- * infinity with fewer than two passes. */
+/* The standard error of each pixel's value into `pixels` (width * height
+ * * 3 floats): the variance of the passes' mean, s^2 / n with s^2 their
+ * sample variance (infinity with fewer than two passes), plus evar when
+ * set; infinity when the film has neither. */
 void film_error_develop_to(const film *f, float *pixels);
 
 /* The image: sum / count + splat * splat_scale (out is initialised here). */

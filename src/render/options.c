@@ -50,8 +50,9 @@ static const lmc_opt opt__render[] = {
      1e9, NULL, NULL, 0, "S", NULL, "seconds between the images --display-server sends", NULL},
     {"error", LMC_OPT_CHOICE, offsetof(render_settings, error), 0, 0, 0, lmc_opt_off_on, NULL, 0,
      NULL, "off",
-     "pt and bdpt: each pixel's standard error, from the spread of its passes, as the EXR's "
-     "channels error.R, error.G, error.B", NULL},
+     "each pixel's standard error as the EXR's channels error.R, error.G, error.B: from the "
+     "spread of the passes (pt, bdpt) or of 16 groups of independent chains with b's own "
+     "error (MCMC)", NULL},
 };
 
 const lmc_opt_table lmc_render_options = {

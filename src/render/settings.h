@@ -44,7 +44,7 @@ typedef struct render_settings {
   double snapshot;       /* seconds between intermediate images (0: none) */
   char display_server[LMC_ADDRESS_MAX]; /* --display-server HOST[:PORT] of a tev viewer ("": none) */
   double display_interval;              /* seconds between the images sent to it */
-  int error;             /* --error on: each pixel's standard error in the EXR (pt, bdpt) */
+  int error;             /* --error on: each pixel's standard error in the EXR */
   /* Called by the render drivers every `snapshot` seconds with the film
    * normalised as if the render stopped then (borrowed for the call) and
    * the seconds since the render began. cli/render.c hooks the files of

@@ -204,9 +204,10 @@ static void mcmc__record(void *ctx, const mc_value *v, double weight) {
 }
 
 /* Adds record r to rows [y_lo, y_hi) of splat, a film's splat array or a
- * buffer of its size (film_splat's rule). */
-static void mcmc__splat_rows(const film *f, double *splat, const film_filter *filter,
-                             const mcmc_splat *r, int y_lo, int y_hi) {
+ * buffer of its size (film_splat's rule), and k2 times r to buffer splat2
+ * (NULL: none). */
+static void mcmc__splat_rows(const film *f, double *splat, double *splat2, double k2,
+                             const film_filter *filter, const mcmc_splat *r, int y_lo, int y_hi) {
   if (!rgb_isfinite(r->v)) return;
   int x0 = (int)floor(r->rx - 0.5 - filter->radius), x1 = (int)ceil(r->rx - 0.5 + filter->radius);
   int y0 = (int)floor(r->ry - 0.5 - filter->radius), y1 = (int)ceil(r->ry - 0.5 + filter->radius);
@@ -222,6 +223,11 @@ static void mcmc__splat_rows(const film *f, double *splat, const film_filter *fi
       s[0] += w * r->v.r;
       s[1] += w * r->v.g;
       s[2] += w * r->v.b;
+      if (!splat2) continue;
+      double *s2 = splat2 + 3 * ((int64_t)y * f->width + x), w2 = k2 * w;
+      s2[0] += w2 * r->v.r;
+      s2[1] += w2 * r->v.g;
+      s2[2] += w2 * r->v.b;
     }
   }
 }
@@ -467,11 +473,14 @@ static int mcmc__round(mcmc_render *R, int64_t m) {
   {
     int tid = omp_get_thread_num(), nt = omp_get_num_threads();
     int y_lo = (int)((int64_t)H * tid / nt), y_hi = (int)((int64_t)H * (tid + 1) / nt);
+    const size_t n = 3 * (size_t)R->out->width * (size_t)H;
     for (int i = 0; i < R->n_slots; i++) {
-      const mcmc_family *F = &R->fam[R->slots[i].family];
+      const mcmc_chain_slot *sl = &R->slots[i];
+      const mcmc_family *F = &R->fam[sl->family];
       double *dst = F->splat ? F->splat : R->out->splat;
-      for (int q = 0; q < R->slots[i].n_rec; q++)
-        mcmc__splat_rows(R->out, dst, &R->s->filter, &R->slots[i].rec[q], y_lo, y_hi);
+      double *grp = R->egroup ? R->egroup + (size_t)sl->group * n : NULL;
+      for (int q = 0; q < sl->n_rec; q++)
+        mcmc__splat_rows(R->out, dst, grp, sl->gscale, &R->s->filter, &sl->rec[q], y_lo, y_hi);
     }
   }
   return 0;
@@ -565,6 +574,7 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
     R->st->mcmc_b = mcmc__refine_b(R, &v);
     R->st->mcmc_b_se = sqrt(v);
   }
+  mcmc__error_develop(R);
   if (dist_any(render_stop_signal())) R->st->interrupted = 1;
   else if (R->timed && R->done_per_chain < R->per_chain) R->st->timed_out = 1;
   R->st->samples = mcmc__mutations(R);
@@ -708,6 +718,7 @@ static void mcmc__free(mcmc_render *R) {
   free(R->fam);
   mc_space_free(&R->sp);
   free(R->cnt);
+  free(R->egroup);
 }
 
 lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
@@ -740,6 +751,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
   if (!status) status = mcmc__bootstrap(&R, err);
   if (!status) mcmc__allocate(&R);
   if (!status && R.n_slots == 0) {
+    status = mcmc__error_init(&R, err);
     /* No bootstrap path carried light (b = 0): the chains' part of the
      * image is black (all of it, or all but pt's direct light). Said
      * whatever --quiet (unless the loader said the scene has no emitter);
@@ -757,6 +769,7 @@ lmc_status mcmc_render_run(const scene *s, const render_settings *rs, film *out,
                              rs->integrator);
   } else if (!status) {
     status = mcmc__start_chains(&R, err);
+    if (!status) status = mcmc__error_init(&R, err);
     if (!status) status = mcmc__rounds(&R, err);
     if (!status) {
       mc_counts counts;

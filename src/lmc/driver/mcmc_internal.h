@@ -25,6 +25,8 @@
 #define MCMC_BOOT_BATCH 8192
 #define MCMC_BOOT_CAP (1 << 22) /* bootstrap samples in all, over the families */
 #define MCMC_EXPECT_SEQ 0x5eed0fb0075a3e11ull /* eval_expect's bootstrap streams: (seed, seq ^ this) */
+#define MCMC_ERROR_GROUPS 16 /* --error: chain groups (at most MCMC_MIN_CHAINS: one chain of
+                                every family in each) */
 #define MCMC_FAMILY_FILM_BYTES ((int64_t)512 << 20) /* per-family splat buffers, at most */
 
 /* --- a chain's splat records --------------------------------------------------- */
@@ -42,6 +44,8 @@ typedef struct mcmc_chain_slot {
   mcmc_splat *rec;  /* this round's splats */
   int n_rec, cap_rec;
   int rec_failed;   /* a splat was dropped: no memory to grow rec */
+  int group;        /* --error: the chain group whose image it adds to (mcmc_error.c) */
+  double gscale;    /* and the factor its splats take there */
 } mcmc_chain_slot;
 
 /* --- one render ------------------------------------------------------------------ */
@@ -92,6 +96,7 @@ typedef struct mcmc_render {
   double chain_seconds;
   int n_snapshots;
   double snapshot_seconds; /* preparing them: b, the counters and splats of every rank */
+  double *egroup;  /* --error: MCMC_ERROR_GROUPS images of the chain groups (owned; NULL: none) */
 } mcmc_render;
 
 /* The streams of family g's bootstrap sample j and of its chain i. */
@@ -108,6 +113,12 @@ double mcmc__refine_b(mcmc_render *R, double *OUT_var);
 /* The chains' image after `done` mutations per chain into the film
  * (compose: per-family buffers summed in) (mcmc_b.c). */
 void mcmc__publish(mcmc_render *R, int64_t done, int compose);
+
+/* --error (mcmc_error.c): the chain groups' images, after the chains are
+ * allocated and started; then, at the end of the chains (collective), each
+ * pixel's variance into the film's evar. */
+lmc_status mcmc__error_init(mcmc_render *R, lmc_error *err);
+void mcmc__error_develop(mcmc_render *R);
 
 /* Over several MPI ranks (mcmc_dist.c): every chain's counters from the
  * rank that steps it, onto every rank (collective; a no-op under one). */
