@@ -3,6 +3,7 @@
 #
 # usage: bench/tev_overhead.sh [-s SCENE.xml] [-i "INTEGRATOR ..."] [-t SECONDS]
 #                              [-n RUNS] [-d INTERVAL] [-j THREADS] [-b BUILD_DIR]
+#                              [-f "FLAGS"] [-w "FLAGS"]
 #
 # Renders the scene (default scenes/cornell-box/scene.xml) at 320x240 with
 # each integrator (default "pt pssmlt") for SECONDS (default 10) each,
@@ -13,7 +14,10 @@
 # which the other loads of a shared machine disturb less than the wall
 # clock. The viewer is a sink that reads and drops every byte (python3), as
 # fast as tev would take them; --display-interval is INTERVAL (default 1,
-# lmc's default).
+# lmc's default). -f adds FLAGS to every render (-f "--error on": the
+# viewer gets the error channels too); -w compares renders with FLAGS
+# against renders without them, no viewer (-w "--error on": what the
+# error itself costs).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 scene=$here/scenes/cornell-box/scene.xml
@@ -23,7 +27,9 @@ runs=3
 interval=1
 threads=2
 build=$here/../build-tev
-while getopts "s:i:t:n:d:j:b:" opt; do
+flags=""
+with_flags=""
+while getopts "s:i:t:n:d:j:b:f:w:" opt; do
   case $opt in
     s) scene=$OPTARG ;;
     i) integrators=$OPTARG ;;
@@ -32,7 +38,9 @@ while getopts "s:i:t:n:d:j:b:" opt; do
     d) interval=$OPTARG ;;
     j) threads=$OPTARG ;;
     b) build=$OPTARG ;;
-    *) sed -n '2,16p' "$0"; exit 2 ;;
+    f) flags=$OPTARG ;;
+    w) with_flags=$OPTARG ;;
+    *) sed -n '2,21p' "$0"; exit 2 ;;
   esac
 done
 lmc=$build/lmc
@@ -77,12 +85,25 @@ printf "%-10s %12s %12s %8s %14s %14s %8s\n" integrator "per s" "with" cost "per
 for integ in $integrators; do
   sums="0 0 0 0"
   for r in $(seq "$runs"); do
-    a=$(rate "$integ" --seed "$r")
-    b=$(rate "$integ" --seed "$r" --display-server "127.0.0.1:$port" --display-interval "$interval")
+    # (FLAGS split into words on purpose)
+    # shellcheck disable=SC2086
+    a=$(rate "$integ" --seed "$r" $flags)
+    if [ -n "$with_flags" ]; then
+      # shellcheck disable=SC2086
+      b=$(rate "$integ" --seed "$r" $flags $with_flags)
+    else
+      # shellcheck disable=SC2086
+      b=$(rate "$integ" --seed "$r" $flags --display-server "127.0.0.1:$port" \
+        --display-interval "$interval")
+    fi
     sums=$(echo "$sums $a $b" | awk '{ print $1 + $5, $2 + $6, $3 + $7, $4 + $8 }')
   done
   echo "$sums" | awk -v i="$integ" -v n="$runs" '{
     printf "%-10s %12.4g %12.4g %7.2f%% %14.4g %14.4g %7.2f%%\n",
            i, $1 / n, $3 / n, 100 * (1 - $3 / $1), $2 / n, $4 / n, 100 * (1 - $4 / $2) }'
 done
-echo "(320x240, $seconds s a render, the mean of $runs run(s) each, --display-interval $interval)"
+if [ -n "$with_flags" ]; then
+  echo "(320x240, $seconds s a render, the mean of $runs run(s) each; with: $with_flags${flags:+; all: $flags})"
+else
+  echo "(320x240, $seconds s a render, the mean of $runs run(s) each, --display-interval $interval${flags:+; all: $flags})"
+fi

@@ -14,7 +14,10 @@
  *    pssmlt under --spp, whose EXR must also be the one the same seed
  *    gives without the flag; with --reference the images are named
  *    "OUT relmse X", each new name after a CloseImage of the old, the
- *    last with the final line's relmse;
+ *    last with the final line's relmse; with --error on (pssmlt, pt) the
+ *    channels are R, G, B, error.R, error.G, error.B (offsets 0 .. 5,
+ *    strides 6), the last image equals the EXR's image and error layers,
+ *    and --snapshot's files carry the error layer;
  *  - a receiver that accepts and never reads (a small receive buffer), one
  *    that closes at once, and none at all (a closed port): the render
  *    exits 0 with the image the same seed gives without the flag, in the
@@ -33,6 +36,7 @@
 
 #include <arpa/inet.h>
 #include <dirent.h>
+#include <math.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <pthread.h>
@@ -243,9 +247,13 @@ static const char *rd_str(rd *r) {
   return s;
 }
 
+/* The channels a run's packets must carry: 3, or 6 with --error on. */
+static int g_nch = 3;
+
 static void rd_channels(rd *r) {
-  static const char *names[3] = {"R", "G", "B"};
-  for (int c = 0; c < 3; c++) assert_string_equal(rd_str(r), names[c]);
+  static const char *names[6] = {"R", "G", "B", "error.R", "error.G", "error.B"};
+  assert_int_equal(rd_i32(r), g_nch);
+  for (int c = 0; c < g_nch; c++) assert_string_equal(rd_str(r), names[c]);
 }
 
 /* What the parse of one run found. */
@@ -307,7 +315,6 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
       assert_int_equal(type, TEV_CREATE_IMAGE);
       assert_int_equal(rd_i32(&r), W);
       assert_int_equal(rd_i32(&r), H);
-      assert_int_equal(rd_i32(&r), 3);
       rd_channels(&r);
       assert_int_equal(r.at, len);
       t->creates++;
@@ -315,19 +322,19 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
       off += len;
       continue;
     }
-    /* UpdateImageV3: a tile inside the image, RGB interleaved. */
+    /* UpdateImageV3: a tile inside the image, its channels interleaved. */
     assert_int_equal(type, TEV_UPDATE_IMAGE_V3);
-    assert_int_equal(rd_i32(&r), 3);
     rd_channels(&r);
     int x = rd_i32(&r), y = rd_i32(&r), w = rd_i32(&r), h = rd_i32(&r);
     if (x < 0 || y < 0 || w <= 0 || h <= 0 || w > TEV_TILE || h > TEV_TILE || x + w > W ||
         y + h > H)
       fail_msg("tile %d,%d %dx%d in an image of %dx%d", x, y, w, h, W, H);
-    for (int c = 0; c < 3; c++) assert_int_equal((int64_t)rd_le(&r, 8), c);
-    for (int c = 0; c < 3; c++) assert_int_equal((int64_t)rd_le(&r, 8), 3);
-    if (len - r.at != 12 * (size_t)w * (size_t)h)
+    const size_t nch = (size_t)g_nch;
+    for (size_t c = 0; c < nch; c++) assert_int_equal((int64_t)rd_le(&r, 8), (int64_t)c);
+    for (size_t c = 0; c < nch; c++) assert_int_equal((int64_t)rd_le(&r, 8), (int64_t)nch);
+    if (len - r.at != 4 * nch * (size_t)w * (size_t)h)
       fail_msg("tile %dx%d: %zu bytes of values, expected %zu", w, h, len - r.at,
-               12 * (size_t)w * (size_t)h);
+               4 * nch * (size_t)w * (size_t)h);
     /* A tile at the origin begins an image; each pixel once per image. */
     if (x == 0 && y == 0) ++*image_id, area = 0;
     for (int j = 0; j < h; j++)
@@ -335,9 +342,9 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
         size_t px = (size_t)(y + j) * (size_t)W + (size_t)(x + i);
         if (stamp[px] == *image_id) fail_msg("pixel %d,%d sent twice in one image", x + i, y + j);
         stamp[px] = *image_id;
-        for (int c = 0; c < 3; c++) {
+        for (size_t c = 0; c < nch; c++) {
           uint32_t bits = (uint32_t)rd_le(&r, 4);
-          memcpy(&t->canvas[3 * px + (size_t)c], &bits, sizeof bits);
+          memcpy(&t->canvas[nch * px + c], &bits, sizeof bits);
         }
       }
     area += (long)w * h;
@@ -351,7 +358,7 @@ static void parse_connection(const unsigned char *b, size_t n, const char *name,
 /* Checks everything the parsing receiver got. */
 static void parse_all(const receiver *rv, const char *name, int W, int H, tally *t) {
   memset(t, 0, sizeof *t);
-  t->canvas = calloc(3 * (size_t)W * (size_t)H, sizeof(float));
+  t->canvas = calloc((size_t)g_nch * (size_t)W * (size_t)H, sizeof(float));
   int *stamp = calloc((size_t)W * (size_t)H, sizeof(int));
   assert_non_null(t->canvas);
   assert_non_null(stamp);
@@ -365,13 +372,27 @@ static void parse_all(const receiver *rv, const char *name, int W, int H, tally 
   free(stamp);
 }
 
-/* The viewer's last image against the EXR: the pixels compared. */
+/* The viewer's last image against the EXR: the pixel values compared
+ * (and with g_nch 6 the error channels against the EXR's). */
 static long canvas_equals_exr(const tally *t, const char *exr) {
-  lmc_image img = read_exr(exr);
+  lmc_image img = read_exr(exr), eimg = {0};
+  if (g_nch == 6) {
+    char path[1024];
+    snprintf(path, sizeof path, TMP "/%s", exr);
+    lmc_error err;
+    if (image_read_exr_layer(path, "error", &eimg, &err)) fail_msg("%s: %s", path, err.msg);
+  }
   long n = 3L * img.width * img.height, same = 0;
-  for (long i = 0; i < n; i++) same += !memcmp(&t->canvas[i], &img.data[i], sizeof(float));
-  if (same != n) fail_msg("%s: %ld of %ld values differ from the viewer's image", exr, n - same, n);
+  for (long i = 0; i < n; i++) {
+    long px = i / 3, c = i % 3;
+    same += !memcmp(&t->canvas[g_nch * px + c], &img.data[i], sizeof(float));
+    if (g_nch == 6) same += !memcmp(&t->canvas[6 * px + 3 + c], &eimg.data[i], sizeof(float));
+  }
+  long want = n * (g_nch / 3);
+  if (same != want)
+    fail_msg("%s: %ld of %ld values differ from the viewer's image", exr, want - same, want);
   image_free(&img);
+  image_free(&eimg);
   return same;
 }
 
@@ -442,6 +463,49 @@ static void test_protocol_pssmlt(void **state) {
   snprintf(plain, sizeof plain, "%s --resolution 160x120", args);
   assert_int_equal(render(plain, "tev_pssmlt_plain.exr", &secs), 0);
   assert_int_equal(exr_differences("tev_pssmlt.exr", "tev_pssmlt_plain.exr"), 0);
+}
+
+/* --error on: the viewer's images carry the error as channels error.R,
+ * G, B, and the last equals the EXR's image and error layers; pssmlt (the
+ * chains' groups at each snapshot) and pt under --time (its passes), each
+ * of whose --snapshot files carries the error layer too, finite once two
+ * passes are done. */
+static void test_protocol_error(void **state) {
+  (void)state;
+  g_nch = 6;
+  tally t;
+  parsed_render("--integrator pssmlt --spp 6 --bootstrap 16384 --seed 5 --threads 2 "
+                "--display-interval 0.05 --error on",
+                "tev_err_pssmlt.exr", 160, 120, &t);
+  assert_true(t.full_images >= 3);
+  assert_int_equal(canvas_equals_exr(&t, "tev_err_pssmlt.exr"), 6L * 160 * 120);
+  free(t.canvas);
+  system("rm -f " TMP "/tev_err_pt-*.exr");
+  parsed_render("--integrator pt --time 1.5 --threads 2 --display-interval 0.2 --snapshot 0.5 "
+                "--error on",
+                "tev_err_pt.exr", 300, 170, &t);
+  assert_true(t.full_images >= 4);
+  assert_int_equal(canvas_equals_exr(&t, "tev_err_pt.exr"), 6L * 300 * 170);
+  free(t.canvas);
+  g_nch = 3;
+  int files = 0;
+  DIR *d = opendir(TMP);
+  assert_non_null(d);
+  for (struct dirent *e; (e = readdir(d));) {
+    if (strncmp(e->d_name, "tev_err_pt-", 11) || !strstr(e->d_name, "s.exr")) continue;
+    char path[1024];
+    snprintf(path, sizeof path, TMP "/%s", e->d_name);
+    lmc_image eimg = {0};
+    lmc_error err;
+    if (image_read_exr_layer(path, "error", &eimg, &err)) fail_msg("%s: %s", path, err.msg);
+    long finite = 0, n = 3L * eimg.width * eimg.height;
+    for (long i = 0; i < n; i++) finite += isfinite(eimg.data[i]);
+    assert_int_equal(finite, n);
+    image_free(&eimg);
+    files++;
+  }
+  closedir(d);
+  assert_true(files >= 2 && files <= 3);
 }
 
 /* --reference: the viewer's image is named "OUT relmse X" after the error
@@ -559,6 +623,7 @@ int main(void) {
       cmocka_unit_test_setup(test_bad_addresses, setup),
       cmocka_unit_test_setup(test_protocol_pt, setup),
       cmocka_unit_test_setup(test_protocol_pssmlt, setup),
+      cmocka_unit_test_setup(test_protocol_error, setup),
       cmocka_unit_test_setup(test_reference_name, setup),
       cmocka_unit_test_setup(test_robust, setup),
       cmocka_unit_test_setup(test_time_limit_noread, setup),

@@ -149,15 +149,15 @@ static int lmc_write_outputs(const film *f, const char *exr_path, char *png_path
     image_free(&img);
     return 0;
   }
-  /* The final image to the viewer first (with its error against the
-   * reference in its name): it goes out while the files are written. */
-  char label[LMC_LABEL_MAX] = "";
-  if (ref) lmc_report_error(&img, ref, ref_path, NULL, label);
-  tev_post(display, &img, label);
   /* --error: each pixel's standard error beside it, as channels error.R, G, B. */
   lmc_image eimg = {0};
   if (film_has_error(f) && image_init(&eimg, f->width, f->height, 3, &err) == LMC_OK)
     film_error_develop_to(f, eimg.data);
+  /* The final image to the viewer first (with its error against the
+   * reference in its name): it goes out while the files are written. */
+  char label[LMC_LABEL_MAX] = "";
+  if (ref) lmc_report_error(&img, ref, ref_path, NULL, label);
+  tev_post(display, &img, eimg.data ? &eimg : NULL, label);
   lmc_status wst = eimg.data ? image_write_exr_layer(exr_path, &img, "error", &eimg, &err)
                              : image_write_exr(exr_path, &img, &err);
   image_free(&eimg);
@@ -195,6 +195,7 @@ typedef struct lmc_snapshot_ctx {
   lmc_tev *display;             /* --display-server (NULL: none) */
   double display_every, next_display;
   lmc_image img;                /* owned: the developed film, kept from one call to the next */
+  lmc_image eimg;               /* owned: its standard error (--error on; else empty) */
   const lmc_image *ref;         /* --reference (NULL: none) */
   const char *ref_path;
   double ref_every, next_ref;
@@ -202,7 +203,7 @@ typedef struct lmc_snapshot_ctx {
 } lmc_snapshot_ctx;
 
 static void lmc_write_snapshot(const lmc_snapshot_ctx *sc, const lmc_image *img,
-                               double seconds) {
+                               const lmc_image *eimg, double seconds) {
   char path[1100], stem[1024];
   snprintf(stem, sizeof stem, "%s", sc->out_exr);
   size_t len = strlen(stem);
@@ -210,7 +211,8 @@ static void lmc_write_snapshot(const lmc_snapshot_ctx *sc, const lmc_image *img,
   snprintf(path, sizeof path, "%s-%.1fs.exr", stem, seconds);
   lmc_error err;
   lmc_error_clear(&err);
-  if (image_write_exr(path, img, &err)) {
+  if (eimg->data ? image_write_exr_layer(path, img, "error", eimg, &err)
+                 : image_write_exr(path, img, &err)) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: snapshot: %s\n", msg);
@@ -231,9 +233,15 @@ static void lmc_on_snapshot(void *ctx, const struct film *f, double seconds) {
     fprintf(stderr, "lmc: snapshot: %s\n", msg);
   } else {
     film_develop_to(f, sc->img.data);
-    if (file) lmc_write_snapshot(sc, &sc->img, seconds);
+    /* (the error too, when the film has one: the files' and the viewer's
+     * channels; an error without memory for it is left out) */
+    if (film_has_error(f) && !sc->eimg.data &&
+        image_init(&sc->eimg, f->width, f->height, 3, &err))
+      image_free(&sc->eimg);
+    if (film_has_error(f) && sc->eimg.data) film_error_develop_to(f, sc->eimg.data);
+    if (file) lmc_write_snapshot(sc, &sc->img, &sc->eimg, seconds);
     if (refd) lmc_report_error(&sc->img, sc->ref, sc->ref_path, &seconds, sc->label);
-    if (display) tev_post(sc->display, &sc->img, sc->label);
+    if (display) tev_post(sc->display, &sc->img, sc->eimg.data ? &sc->eimg : NULL, sc->label);
   }
   while (file && sc->next_file <= seconds) sc->next_file += sc->file_every;
   while (display && sc->next_display <= seconds) sc->next_display += sc->display_every;
@@ -250,7 +258,7 @@ static lmc_tev *lmc_display_start(const render_settings *rs, const scene *s, con
   lmc_error err;
   lmc_error_clear(&err);
   if (tev_create(&t, rs->display_server, slash ? slash + 1 : out_exr, s->cam.width,
-                 s->cam.height, &err)) {
+                 s->cam.height, rs->error, &err)) {
     char msg[2048];
     lmc_error_format(&err, msg, sizeof msg);
     fprintf(stderr, "lmc: flag --display-server: %s (rendering without it)\n", msg);
@@ -354,7 +362,8 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
   /* The snapshot hook: the files of --snapshot and the viewer of
    * --display-server, the drivers calling at the shorter interval. */
   lmc_snapshot_ctx snap = {out_exr, rs->snapshot, rs->snapshot, NULL, rs->display_interval,
-                           rs->display_interval, {0, 0, 0, NULL}, NULL, NULL, 0.0, 0.0, ""};
+                           rs->display_interval, {0, 0, 0, NULL}, {0, 0, 0, NULL}, NULL, NULL,
+                           0.0, 0.0, ""};
   snap.display = lmc_display_start(rs, s, out_exr);
   /* --reference: at each snapshot, else with the viewer, else every 5 s. */
   if (ref && dist_rank() == 0) {
@@ -384,9 +393,11 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     fprintf(stderr, "lmc: %s\n", msg);
     tev_destroy(snap.display, 0.0);
     image_free(&snap.img);
+    image_free(&snap.eimg);
     return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
   }
   image_free(&snap.img); /* (the snapshots are over) */
+  image_free(&snap.eimg);
   /* Every rank's own rays and samples, for rank 0's summary. */
   int64_t *per_rank = dist_active() ? calloc(2 * (size_t)dist_size(), sizeof *per_rank) : NULL;
   if (dist_active() && !per_rank) dist_abort(EXIT_FAIL);

@@ -209,6 +209,11 @@ void film_clear(film *f) {
   memset(f->sum, 0, 3 * n * sizeof(double));
   memset(f->count, 0, n * sizeof(double));
   memset(f->splat, 0, 3 * n * sizeof(double));
+  if (f->esum) {
+    memset(f->esum, 0, 3 * n * sizeof(double));
+    memset(f->esum2, 0, 3 * n * sizeof(double));
+    f->epasses = 0.0;
+  }
 }
 
 /* Appends a splat to a log, growing it geometrically (a log is reused, so
@@ -276,6 +281,10 @@ void film_merge(film *dst, const film *src) {
     dst->splat[i] += src->splat[i];
   }
   for (size_t i = 0; i < n; i++) dst->count[i] += src->count[i];
+  if (dst->esum && src->esum) {
+    for (size_t i = 0; i < 3 * n; i++) dst->esum[i] += src->esum[i], dst->esum2[i] += src->esum2[i];
+    dst->epasses += src->epasses;
+  }
 }
 
 void film_sum_to_root(film *f) {

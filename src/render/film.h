@@ -94,7 +94,7 @@ void film_splat(film *f, const film_filter *filter, double rx, double ry, rgb v)
 /* Splats every record of the log into f in order, then empties the log. */
 void film_splat_log_replay(film *f, const film_filter *filter, film_splat_log *log);
 void film_splat_log_free(film_splat_log *log);
-/* dst += src (same size). */
+/* dst += src (same size; the error's sums too when both have them). */
 void film_merge(film *dst, const film *src);
 /* Collective (dist.h): every rank's sum, count and splat buffers added in
  * rank order into rank 0's f (the others' f unchanged); splat_scale is

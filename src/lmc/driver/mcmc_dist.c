@@ -84,6 +84,7 @@ void mcmc__snapshot(mcmc_render *R, double seconds) {
   mcmc__sync_chains(R);
   mcmc__publish(R, R->done_per_chain, 1);
   if (!dist_active()) {
+    mcmc__error_develop(R);
     R->snapshot_seconds += omp_get_wtime() - t0;
     rs->snapshot_fn(rs->snapshot_ctx, R->out, seconds);
     return;
@@ -94,6 +95,7 @@ void mcmc__snapshot(mcmc_render *R, double seconds) {
   if (!keep) dist_abort(1);
   memcpy(keep, R->out->splat, n * sizeof *keep);
   dist_sum_to_root(R->out->splat, n);
+  mcmc__error_develop(R);
   R->snapshot_seconds += omp_get_wtime() - t0;
   if (dist_rank() == 0) rs->snapshot_fn(rs->snapshot_ctx, R->out, seconds);
   memcpy(R->out->splat, keep, n * sizeof *keep);

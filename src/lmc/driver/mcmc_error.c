@@ -89,16 +89,12 @@ static double mcmc__b_relvar(const mcmc_render *R, int g) {
   return b > 0.0 ? v / (b * b) : 0.0;
 }
 
-void mcmc__error_develop(mcmc_render *R) {
-  if (!R->egroup) return;
+/* Each pixel's variance into out->evar (rank 0) from buffers that hold
+ * every rank's sums. */
+static void mcmc__error_pixels(mcmc_render *R) {
   film *out = R->out;
   const int G = MCMC_ERROR_GROUPS;
   size_t n = 3 * (size_t)out->width * (size_t)out->height;
-  dist_sum_to_root(R->egroup, (size_t)G * n);
-  if (R->norm == MCMC_NORM_BUFFERS)
-    for (int g = 0; g < R->n_fam; g++)
-      if (R->fam[g].splat) dist_sum_to_root(R->fam[g].splat, n);
-  if (dist_rank() != 0 || !out->evar || R->done_per_chain <= 0) return;
   double c = (R->norm == MCMC_NORM_SCALE ? R->fam[0].b_ref : 1.0) / (double)R->done_per_chain;
   double relvar_max = 0.0;
   for (int g = 0; g < R->n_fam; g++)
@@ -125,4 +121,38 @@ void mcmc__error_develop(mcmc_render *R) {
     }
     out->evar[i] = var;
   }
+}
+
+/* Over several ranks the groups' images (and the families' buffers, for
+ * b's part) are summed to rank 0 in copies of its own, kept for the
+ * chains that go on after a snapshot. */
+void mcmc__error_develop(mcmc_render *R) {
+  if (!R->egroup) return;
+  if (!dist_active()) {
+    if (R->done_per_chain > 0 && R->out->evar) mcmc__error_pixels(R);
+    return;
+  }
+  size_t n = 3 * (size_t)R->out->width * (size_t)R->out->height;
+  size_t ng = (size_t)MCMC_ERROR_GROUPS * n, total = ng;
+  for (int g = 0; g < R->n_fam; g++) total += R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat ? n : 0;
+  double *keep = malloc(total * sizeof *keep);
+  if (!keep) dist_abort(1); /* (collective: the others would wait) */
+  memcpy(keep, R->egroup, ng * sizeof *keep);
+  dist_sum_to_root(R->egroup, ng);
+  size_t at = ng;
+  for (int g = 0; g < R->n_fam; g++)
+    if (R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat) {
+      memcpy(keep + at, R->fam[g].splat, n * sizeof *keep);
+      dist_sum_to_root(R->fam[g].splat, n);
+      at += n;
+    }
+  if (dist_rank() == 0 && R->done_per_chain > 0 && R->out->evar) mcmc__error_pixels(R);
+  memcpy(R->egroup, keep, ng * sizeof *keep);
+  at = ng;
+  for (int g = 0; g < R->n_fam; g++)
+    if (R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat) {
+      memcpy(R->fam[g].splat, keep + at, n * sizeof *keep);
+      at += n;
+    }
+  free(keep);
 }

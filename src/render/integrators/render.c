@@ -155,8 +155,10 @@ static void render__snapshot(const render_settings *rs, const film *out, film *t
   if (tmp->sum) {
     film_clear(tmp);
     tmp->splat_scale = 1.0;
-  } else if (film_init(tmp, out->width, out->height, &err)) {
+  } else if (film_init(tmp, out->width, out->height, &err) ||
+             (out->esum && film_error_init(tmp, &err))) {
     if (dist_active()) dist_abort(1);
+    film_free(tmp);
     return;
   }
   film_merge(tmp, out);

@@ -27,6 +27,7 @@
 #include <poll.h>
 #include <pthread.h>
 #include <stdint.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,9 +44,15 @@
 #define TEV_FRAME_SECONDS 5.0    /* for a whole image to be sent */
 #define TEV_SLICE_MS 50          /* the longest single wait in poll */
 #define TEV_NAME_MAX 256         /* the image name's room, NUL included */
+#define TEV_MAX_CHANNELS 6
 /* A packet's bytes besides the pixels: length, type, focus, name, the
  * channels' count and names, the tile, offsets and strides. */
-#define TEV_HEADER_MAX (4 + 1 + 1 + TEV_NAME_MAX + 4 + 3 * 2 + 16 + 2 * 3 * 8)
+#define TEV_HEADER_MAX (4 + 1 + 1 + TEV_NAME_MAX + 4 + TEV_MAX_CHANNELS * 8 + 16 + \
+                        2 * TEV_MAX_CHANNELS * 8)
+
+/* The channels' names: the image's, then its standard error's. */
+static const char *const tev__names[TEV_MAX_CHANNELS] = {"R", "G", "B",
+                                                         "error.R", "error.G", "error.B"};
 
 #ifndef MSG_NOSIGNAL
 #define MSG_NOSIGNAL 0 /* (systems without it have SO_NOSIGPIPE, set on the socket) */
@@ -56,11 +63,12 @@ struct lmc_tev {
   char where[LMC_ADDRESS_MAX + 8]; /* "host:port", for the warning */
   char base[TEV_NAME_MAX]; /* the name given to tev_create */
   int width, height;
+  int nch;              /* channels: 3, or 6 with the error */
   /* The mailbox and the end, under mu. */
   pthread_mutex_t mu;
   pthread_cond_t wake;  /* to the sender: an image, or the end */
   pthread_cond_t ended; /* to tev_destroy: the sender returned */
-  float *slot;          /* width * height * 3: the image posted last */
+  float *slot;          /* width * height * nch, interleaved: the image posted last */
   char slot_label[TEV_NAME_MAX / 2]; /* ... and its label */
   int fresh;            /* slot holds an image not taken yet */
   int closing;          /* tev_destroy was called */
@@ -255,11 +263,11 @@ static size_t tev__seal(lmc_tev *t, const unsigned char *end) {
   return n;
 }
 
-/* The channel names: R, G, B. */
-static unsigned char *tev__channels(unsigned char *p) {
-  p = tev__str(p, "R");
-  p = tev__str(p, "G");
-  return tev__str(p, "B");
+/* The channels' count and names. */
+static unsigned char *tev__channels(const lmc_tev *t, unsigned char *p) {
+  p = tev__u32(p, (uint32_t)t->nch);
+  for (int c = 0; c < t->nch; c++) p = tev__str(p, tev__names[c]);
+  return p;
 }
 
 /* CloseImage of the image shown so far: its name alone. */
@@ -274,24 +282,24 @@ static size_t tev__create_packet(lmc_tev *t) {
   unsigned char *p = tev__head(t, TEV_CREATE_IMAGE, 1);
   p = tev__u32(p, (uint32_t)t->width);
   p = tev__u32(p, (uint32_t)t->height);
-  p = tev__u32(p, 3);
-  return tev__seal(t, tev__channels(p));
+  return tev__seal(t, tev__channels(t, p));
 }
 
-/* UpdateImageV3 of the tile (x, y, w, h) of t->frame: RGB interleaved. */
+/* UpdateImageV3 of the tile (x, y, w, h) of t->frame: its channels
+ * interleaved. */
 static size_t tev__tile_packet(lmc_tev *t, int x, int y, int w, int h) {
+  const int nch = t->nch;
   unsigned char *p = tev__head(t, TEV_UPDATE_IMAGE_V3, 0);
-  p = tev__u32(p, 3);
-  p = tev__channels(p);
+  p = tev__channels(t, p);
   p = tev__u32(p, (uint32_t)x);
   p = tev__u32(p, (uint32_t)y);
   p = tev__u32(p, (uint32_t)w);
   p = tev__u32(p, (uint32_t)h);
-  for (int c = 0; c < 3; c++) p = tev__i64(p, c);
-  for (int c = 0; c < 3; c++) p = tev__i64(p, 3);
+  for (int c = 0; c < nch; c++) p = tev__i64(p, c);
+  for (int c = 0; c < nch; c++) p = tev__i64(p, nch);
   for (int j = 0; j < h; j++) {
-    const float *row = t->frame + 3 * ((size_t)(y + j) * (size_t)t->width + (size_t)x);
-    for (int i = 0; i < 3 * w; i++) {
+    const float *row = t->frame + (size_t)nch * ((size_t)(y + j) * (size_t)t->width + (size_t)x);
+    for (int i = 0; i < nch * w; i++) {
       uint32_t bits;
       memcpy(&bits, &row[i], sizeof bits);
       p = tev__u32(p, bits);
@@ -380,7 +388,7 @@ static void *tev__main(void *arg) {
 /* --- the API -------------------------------------------------------------------------- */
 
 lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int width,
-                      int height, lmc_error *err) {
+                      int height, int with_error, lmc_error *err) {
   *OUT = NULL;
   char host[LMC_ADDRESS_MAX];
   int port;
@@ -397,12 +405,13 @@ lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int 
   snprintf(t->base, sizeof t->base, "%s", name);
   snprintf(t->name, sizeof t->name, "%s", name);
   t->width = width, t->height = height;
+  t->nch = with_error ? 6 : 3;
   t->fd = -1;
   t->backoff = TEV_BACKOFF_MIN;
-  size_t n = 3 * (size_t)width * (size_t)height;
+  size_t n = (size_t)t->nch * (size_t)width * (size_t)height;
   t->slot = malloc(n * sizeof(float));
   t->frame = malloc(n * sizeof(float));
-  t->packet = malloc(TEV_HEADER_MAX + 3 * sizeof(float) * TEV_TILE * TEV_TILE);
+  t->packet = malloc(TEV_HEADER_MAX + (size_t)t->nch * sizeof(float) * TEV_TILE * TEV_TILE);
   if (!t->slot || !t->frame || !t->packet) {
     free(t->slot), free(t->frame), free(t->packet), free(t);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory");
@@ -425,12 +434,24 @@ lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int 
   return LMC_OK;
 }
 
-void tev_post(lmc_tev *t, const lmc_image *img, const char *label) {
+void tev_post(lmc_tev *t, const lmc_image *img, const lmc_image *error, const char *label) {
   if (!t || !img || !img->data || img->width != t->width || img->height != t->height ||
       img->channels != 3)
     return;
+  if (error && (!error->data || error->width != t->width || error->height != t->height ||
+                error->channels != 3))
+    return;
+  size_t np = (size_t)t->width * (size_t)t->height;
   pthread_mutex_lock(&t->mu);
-  memcpy(t->slot, img->data, 3 * (size_t)t->width * (size_t)t->height * sizeof(float));
+  if (t->nch == 3) {
+    memcpy(t->slot, img->data, 3 * np * sizeof(float));
+  } else {
+    for (size_t i = 0; i < np; i++)
+      for (int c = 0; c < 3; c++) {
+        t->slot[6 * i + (size_t)c] = img->data[3 * i + (size_t)c];
+        t->slot[6 * i + 3 + (size_t)c] = error ? error->data[3 * i + (size_t)c] : INFINITY;
+      }
+  }
   snprintf(t->slot_label, sizeof t->slot_label, "%s", label ? label : "");
   t->fresh = 1;
   pthread_cond_signal(&t->wake);

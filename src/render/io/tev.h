@@ -22,9 +22,10 @@
  *     int32 x, y, width, height, int64 offsets[nChannels],
  *     int64 strides[nChannels], then float32 values: channel c of tile
  *     pixel p (row-major in the tile) at offsets[c] + p * strides[c].
- * lmc sends channels R, G, B interleaved (offsets 0, 1, 2; strides 3) in
- * tiles of at most TEV_TILE x TEV_TILE pixels (pbrt-v4's size), 192 KiB of
- * values a packet, well inside tev's 1 MiB receive buffer.
+ * lmc sends channels R, G, B, and with the error error.R, error.G,
+ * error.B, interleaved (offsets 0 .. n - 1; strides n) in tiles of at most
+ * TEV_TILE x TEV_TILE pixels (pbrt-v4's size), 192 or 384 KiB of values a
+ * packet, well inside tev's 1 MiB receive buffer.
  */
 #ifndef LMC_RENDER_IO_TEV_H
 #define LMC_RENDER_IO_TEV_H
@@ -42,20 +43,23 @@ enum { TEV_CLOSE_IMAGE = 2, TEV_CREATE_IMAGE = 4, TEV_UPDATE_IMAGE_V3 = 6 };
 typedef struct lmc_tev lmc_tev;
 
 /* Starts a client that will show images of width x height under `name`
- * (copied; the output file's base name) in the viewer at `address`,
+ * (copied; the output file's base name), with_error: and their standard
+ * errors as three more channels, in the viewer at `address`,
  * "HOST[:PORT]" (options.h's lmc_address_parse; port TEV_DEFAULT_PORT when
  * none). It connects in its own thread: *OUT is ready at once. Fails only
  * on a bad address (LMC_EINVAL), no memory or no thread. */
 lmc_status tev_create(lmc_tev **OUT, const char *address, const char *name, int width,
-                      int height, lmc_error *err);
+                      int height, int with_error, lmc_error *err);
 
 /* Copies img (3 channels, the client's size; borrowed) into the mailbox,
- * replacing an image not yet sent, and wakes the sender. Never waits for
- * the network. An image of another size or channel count is ignored.
+ * with `error` (the same shape; NULL: infinite errors) when the client
+ * shows the error, replacing an image not yet sent, and wakes the sender.
+ * Never waits for the network. An image of another size or channel count
+ * is ignored.
  * `label` (NULL or "": none; copied) follows the name in the viewer, as
  * "NAME LABEL": when it changes, the image shown under the old name is
  * closed (CloseImage) and created again under the new one. */
-void tev_post(lmc_tev *t, const lmc_image *img, const char *label);
+void tev_post(lmc_tev *t, const lmc_image *img, const lmc_image *error, const char *label);
 
 /* Sends the image posted last if it was not sent yet (reconnecting once
  * if need be, whatever the back-off), waiting at most wait_seconds for it,
