@@ -99,6 +99,8 @@ static void mcmc__error_pixels(mcmc_render *R) {
   double relvar_max = 0.0;
   for (int g = 0; g < R->n_fam; g++)
     if (R->fam[g].n_chains > 0) relvar_max = fmax(relvar_max, mcmc__b_relvar(R, g));
+  /* (between rounds, when the chains' threads are idle) */
+#pragma omp parallel for num_threads(R->nthreads) schedule(static)
   for (size_t i = 0; i < n; i++) {
     double s = 0.0, s2 = 0.0;
     for (int k = 0; k < G; k++) {
