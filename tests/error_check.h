@@ -77,14 +77,16 @@ static void read_layer(const char *name, const char *layer, lmc_image *img) {
   assert_int_equal(img->height, EH);
 }
 
-static void spread_check(const char *integ, int spp, int check_coverage) {
+/* K renders of integ (spp passes or mutations per pixel; `extra`: more
+ * flags) and the checks above; check_coverage bounds the coverage. */
+static void spread_check(const char *integ, const char *extra, int spp, int check_coverage) {
   const size_t n = 3 * (size_t)EW * EH;
   lmc_image img[K], se[K];
   for (int k = 0; k < K; k++) {
-    char args[256], out[64];
+    char args[512], out[64];
     snprintf(args, sizeof args,
-             "--integrator %s --resolution %dx%d --spp %d --seed %d --threads 2 --error on", integ,
-             EW, EH, spp, k + 1);
+             "--integrator %s --resolution %dx%d --spp %d --seed %d --threads 2 --error on %s",
+             integ, EW, EH, spp, k + 1, extra);
     snprintf(out, sizeof out, "err_%s_%d.exr", integ, k);
     if (render(args, out) != 0) fail_msg("lmc render %s: %s", args, err_text);
     read_layer(out, NULL, &img[k]);

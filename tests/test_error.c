@@ -42,12 +42,12 @@
 
 static void test_pt(void **state) {
   (void)state;
-  spread_check("pt", 16, 0);
+  spread_check("pt", "", 16, 0);
 }
 
 static void test_bdpt(void **state) {
   (void)state;
-  spread_check("bdpt", 16, 1);
+  spread_check("bdpt", "", 16, 1);
 }
 
 static void test_refusals(void **state) {
