@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include "render/image.h"
@@ -75,6 +76,13 @@ static void read_layer(const char *name, const char *layer, lmc_image *img) {
   assert_int_equal(img->channels, 3);
   assert_int_equal(img->width, EW);
   assert_int_equal(img->height, EH);
+}
+
+/* A test's setup: the scratch folder TMP. */
+static int error_check_setup(void **state) {
+  (void)state;
+  mkdir(TMP, 0755);
+  return 0;
 }
 
 /* K renders of integ (spp passes or mutations per pixel; `extra`: more

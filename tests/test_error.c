@@ -85,17 +85,11 @@ static void test_refusals(void **state) {
   assert_non_null(strstr(err_text, "--channel"));
 }
 
-static int setup(void **state) {
-  (void)state;
-  mkdir(TMP, 0755);
-  return 0;
-}
-
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test_setup(test_refusals, setup),
-      cmocka_unit_test_setup(test_pt, setup),
-      cmocka_unit_test_setup(test_bdpt, setup),
+      cmocka_unit_test_setup(test_refusals, error_check_setup),
+      cmocka_unit_test_setup(test_pt, error_check_setup),
+      cmocka_unit_test_setup(test_bdpt, error_check_setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -109,6 +109,18 @@ static void cover_scene(const char *file, const char *integrator, int64_t spp, c
   scene_destroy(s);
 }
 
+/* Prints c under `what` and asserts its shares within one and two errors
+ * in the bounds above. */
+static void check_coverage(const char *what, const coverage *c) {
+  double c1 = (double)c->in1 / c->total, c2 = (double)c->in2 / c->total;
+  fprintf(stderr,
+          "  %s: %ld values (%ld more exact, of zero error): %.4f within one standard error, "
+          "%.4f within two\n",
+          what, c->total, c->exact, c1, c2);
+  assert_true(c1 >= 0.60 && c1 <= 0.75);
+  assert_true(c2 >= 0.88 && c2 <= 0.98);
+}
+
 static void check_integrator(const char *integrator, int64_t spp) {
   rgb one = rgb_gray(1.0);
   rgb sphere[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
@@ -117,17 +129,11 @@ static void check_integrator(const char *integrator, int64_t spp) {
   cover_scene("furnace.xml", integrator, spp, &one, 1, &c);
   cover_scene("diffuse_sphere.xml", integrator, spp, sphere, 2, &c);
   cover_scene("mask.xml", integrator, spp, mask, 3, &c);
-  double c1 = (double)c.in1 / c.total, c2 = (double)c.in2 / c.total;
-  fprintf(stderr,
-          "  %s: %ld values (%ld more exact), %d seeds per scene: %.4f within one standard error, "
-          "%.4f within two\n",
-          integrator, c.total, c.exact, SEEDS, c1, c2);
+  check_coverage(integrator, &c);
   assert_true(c.total > 3 * SEEDS * 1000);
   /* (every path is the chains': no pixel is exact; pt and bdpt see the
    * environment directly, exactly) */
   if (mcmc_is_integrator(integrator)) assert_int_equal(c.exact, 0);
-  assert_true(c1 >= 0.60 && c1 <= 0.75);
-  assert_true(c2 >= 0.88 && c2 <= 0.98);
 }
 
 static void test_pt(void **state) {
@@ -176,15 +182,9 @@ static void test_direct_separate(void **state) {
   rgb one = rgb_gray(1.0);
   coverage c = {0, 0, 0, 0};
   cover_scene("furnace.xml", "pssmlt", 64, &one, 1, &c);
-  double c1 = (double)c.in1 / c.total, c2 = (double)c.in2 / c.total;
-  fprintf(stderr,
-          "  pssmlt, --direct separate: %ld values (%ld more exact, of zero error): %.4f within one "
-          "standard error, %.4f within two\n",
-          c.total, c.exact, c1, c2);
+  check_coverage("pssmlt, --direct separate", &c);
   assert_int_equal(c.total + c.exact, 3L * SEEDS * 48 * 36);
   assert_true(c.total > 3 * SEEDS * 200 && c.exact > 3 * SEEDS * 200);
-  assert_true(c1 >= 0.60 && c1 <= 0.75);
-  assert_true(c2 >= 0.88 && c2 <= 0.98);
   rgb sphere[2] = {rgb_make(1.0, 2.0, 4.0), rgb_make(0.5, 1.0, 2.0)};
   coverage cs = {0, 0, 0, 0};
   cover_scene("diffuse_sphere.xml", "pssmlt", 16, sphere, 2, &cs);
@@ -223,20 +223,14 @@ static void test_spread_mmlt(void **state) {
   spread_check("mmlt", "--bootstrap 16384", 16, 0);
 }
 
-static int setup(void **state) {
-  (void)state;
-  mkdir(TMP, 0755);
-  return 0;
-}
-
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_pt),     cmocka_unit_test(test_bdpt),
       cmocka_unit_test(test_pssmlt), cmocka_unit_test(test_mmlt), cmocka_unit_test(test_lmc),
       cmocka_unit_test(test_h2mc),   cmocka_unit_test(test_mlt),
       cmocka_unit_test(test_direct_separate),
-      cmocka_unit_test_setup(test_spread_pssmlt, setup),
-      cmocka_unit_test_setup(test_spread_mmlt, setup),
+      cmocka_unit_test_setup(test_spread_pssmlt, error_check_setup),
+      cmocka_unit_test_setup(test_spread_mmlt, error_check_setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -125,36 +125,45 @@ static void mcmc__error_pixels(mcmc_render *R) {
   }
 }
 
-/* Over several ranks the groups' images (and the families' buffers, for
- * b's part) are summed to rank 0 in copies of its own, kept for the
- * chains that go on after a snapshot. */
+/* Buffer q of those the variance reads (q = 0: the groups' images; q = 1
+ * + g: family g's splats, for b's part, when the families keep their
+ * own), its length in *OUT_len; NULL for a family without one. */
+static double *mcmc__ebuf(mcmc_render *R, int q, size_t *OUT_len) {
+  size_t n = 3 * (size_t)R->out->width * (size_t)R->out->height;
+  *OUT_len = q == 0 ? (size_t)MCMC_ERROR_GROUPS * n : n;
+  if (q == 0) return R->egroup;
+  return R->norm == MCMC_NORM_BUFFERS ? R->fam[q - 1].splat : NULL;
+}
+
+/* Over several ranks those buffers are summed to rank 0 in copies of its
+ * own, kept for the chains that go on after a snapshot. */
 void mcmc__error_develop(mcmc_render *R) {
   if (!R->egroup) return;
+  int here = dist_rank() == 0 && R->done_per_chain > 0 && R->out->evar;
   if (!dist_active()) {
-    if (R->done_per_chain > 0 && R->out->evar) mcmc__error_pixels(R);
+    if (here) mcmc__error_pixels(R);
     return;
   }
-  size_t n = 3 * (size_t)R->out->width * (size_t)R->out->height;
-  size_t ng = (size_t)MCMC_ERROR_GROUPS * n, total = ng;
-  for (int g = 0; g < R->n_fam; g++) total += R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat ? n : 0;
+  size_t total = 0, len;
+  for (int q = 0; q <= R->n_fam; q++)
+    if (mcmc__ebuf(R, q, &len)) total += len;
   double *keep = malloc(total * sizeof *keep);
   if (!keep) dist_abort(1); /* (collective: the others would wait) */
-  memcpy(keep, R->egroup, ng * sizeof *keep);
-  dist_sum_to_root(R->egroup, ng);
-  size_t at = ng;
-  for (int g = 0; g < R->n_fam; g++)
-    if (R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat) {
-      memcpy(keep + at, R->fam[g].splat, n * sizeof *keep);
-      dist_sum_to_root(R->fam[g].splat, n);
-      at += n;
-    }
-  if (dist_rank() == 0 && R->done_per_chain > 0 && R->out->evar) mcmc__error_pixels(R);
-  memcpy(R->egroup, keep, ng * sizeof *keep);
-  at = ng;
-  for (int g = 0; g < R->n_fam; g++)
-    if (R->norm == MCMC_NORM_BUFFERS && R->fam[g].splat) {
-      memcpy(R->fam[g].splat, keep + at, n * sizeof *keep);
-      at += n;
-    }
+  double *at = keep;
+  for (int q = 0; q <= R->n_fam; q++) {
+    double *b = mcmc__ebuf(R, q, &len);
+    if (!b) continue;
+    memcpy(at, b, len * sizeof *keep);
+    dist_sum_to_root(b, len);
+    at += len;
+  }
+  if (here) mcmc__error_pixels(R);
+  at = keep;
+  for (int q = 0; q <= R->n_fam; q++) {
+    double *b = mcmc__ebuf(R, q, &len);
+    if (!b) continue;
+    memcpy(b, at, len * sizeof *keep);
+    at += len;
+  }
   free(keep);
 }
