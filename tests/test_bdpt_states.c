@@ -325,11 +325,88 @@ static void test_without_absolute(void **state) {
   mc_bdpt_states_free(&ctx);
 }
 
+/* One evaluation with gradient and Hessian (eval_hess) of state u, label lab. */
+typedef struct hess_eval {
+  mc_value v;
+  int grad_ok, hn, hess_ok;
+  double *grad, *hess;
+  int hidx[MC_HESS_MAX];
+} hess_eval;
+
+static void eval_hess_at(const mc_target *T, void *scratch, double *u, int lab, hess_eval *OUT) {
+  vec_smp s = vec_at(T, u);
+  OUT->grad_ok = OUT->hess_ok = OUT->hn = 0;
+  T->eval_hess(T, scratch, &s.base, lab, &OUT->v, OUT->grad, &OUT->grad_ok, &OUT->hn, OUT->hidx,
+               OUT->hess, &OUT->hess_ok);
+}
+
+/* Chains that one thread drives share its workspace (scratch_bind): two
+ * scratches bound to one workspace and evaluated in turn give, state for
+ * state, what a scratch with its own gives, bit for bit (value, gradient,
+ * Hessian); a scratch unbound again uses its own. Counts: 200 states with
+ * a Hessian. */
+static void test_shared_workspace(void **state) {
+  fixture *fx = *state;
+  mc_bdpt_states ctx;
+  mc_target T = make_target(fx, &ctx, 0.05);
+  assert_non_null(T.eval_hess);
+  assert_non_null(T.workspace_create);
+  void *own = T.scratch_create(&T), *sa = T.scratch_create(&T), *sb = T.scratch_create(&T);
+  void *ws = T.workspace_create(&T);
+  assert_non_null(ws);
+  T.scratch_bind(sa, ws);
+  T.scratch_bind(sb, ws);
+  mc_contrib *all = calloc((size_t)T.n_labels, sizeof *all);
+  double *u = malloc((size_t)T.dim * sizeof *u);
+  size_t hsz = (size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2;
+  hess_eval e[2];
+  for (int k = 0; k < 2; k++) {
+    e[k].grad = malloc((size_t)T.dim * sizeof(double));
+    e[k].hess = malloc(hsz * sizeof(double));
+  }
+  rng r;
+  rng_seed(&r, 31, 1);
+  int compared = 0;
+  for (int n = 0; n < 5000 && compared < 200; n++) {
+    for (int i = 0; i < T.dim; i++) u[i] = rng_uniform(&r);
+    vec_smp s = vec_at(&T, u);
+    int na = T.eval_all(&T, own, &s.base, -1, all);
+    if (na <= 0) continue;
+    int lab = all[(int)(rng_uniform(&r) * na)].label;
+    /* The bound scratches in turn, then the one with its own workspace. */
+    eval_hess_at(&T, (n & 1) ? sa : sb, u, lab, &e[0]);
+    eval_hess_at(&T, own, u, lab, &e[1]);
+    assert_memory_equal(&e[0].v.f, &e[1].v.f, sizeof e[0].v.f);
+    assert_int_equal(e[0].grad_ok, e[1].grad_ok);
+    assert_int_equal(e[0].hess_ok, e[1].hess_ok);
+    if (!e[0].hess_ok) continue;
+    assert_memory_equal(e[0].grad, e[1].grad, (size_t)T.dim * sizeof(double));
+    assert_int_equal(e[0].hn, e[1].hn);
+    assert_memory_equal(e[0].hidx, e[1].hidx, (size_t)e[0].hn * sizeof(int));
+    assert_memory_equal(e[0].hess, e[1].hess,
+                        (size_t)e[0].hn * (size_t)(e[0].hn + 1) / 2 * sizeof(double));
+    compared++;
+  }
+  print_message("%d states with their Hessian the same in shared and own workspaces\n", compared);
+  assert_int_equal(compared, 200);
+  /* Unbound again, sa works with a workspace of its own. */
+  T.scratch_bind(sa, NULL);
+  T.workspace_destroy(ws);
+  eval_hess_at(&T, sa, u, all[0].label, &e[0]);
+  eval_hess_at(&T, own, u, all[0].label, &e[1]);
+  assert_memory_equal(&e[0].v.f, &e[1].v.f, sizeof e[0].v.f);
+  for (int k = 0; k < 2; k++) free(e[k].grad), free(e[k].hess);
+  free(all), free(u);
+  T.scratch_destroy(own), T.scratch_destroy(sa), T.scratch_destroy(sb);
+  mc_bdpt_states_free(&ctx);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_relabel_consistency),
       cmocka_unit_test(test_gradients),
       cmocka_unit_test(test_without_absolute),
+      cmocka_unit_test(test_shared_workspace),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -333,6 +333,60 @@ static void test_pt_hessian_long_paths(void **state) {
   hess_report("pt, long paths", &st, 5);
 }
 
+/* Whether two evaluations of one path agree bit for bit: value, gradient
+ * and (both present or both absent) Hessian. */
+static int same_eval(const path_eval *a, const path_eval *b) {
+  if (memcmp(&a->value, &b->value, sizeof a->value) || a->grad_ok != b->grad_ok ||
+      a->hess_ok != b->hess_ok || a->n_coords != b->n_coords || a->n_diff != b->n_diff)
+    return 0;
+  for (int i = 0; i < a->n_coords; i++)
+    if (memcmp(&a->coords[i].dlum, &b->coords[i].dlum, sizeof a->coords[i].dlum)) return 0;
+  size_t nh = (size_t)a->n_diff * (size_t)(a->n_diff + 1) / 2;
+  return !a->hess_ok || memcmp(a->hlum, b->hlum, nh * sizeof *a->hlum) == 0;
+}
+
+/* Chains share a thread's path scratch (their arenas), so what a scratch
+ * evaluated before must not change an evaluation: paths evaluated with
+ * their Hessians in one scratch, first 10 long ones (16+ segments, which
+ * grow its second-order arena) and then 60 of any length, agree bit for
+ * bit with the same paths evaluated in a fresh scratch each. */
+static void test_hessian_independent_of_scratch(void **state) {
+  fixture *fx = *state;
+  render_settings rs = fx->sc->settings;
+  rs.maxdepth = 24;
+  lmc_error err;
+  path_scratch *grown = NULL, *fresh = NULL;
+  assert_int_equal(path_scratch_create(&grown, &err), LMC_OK);
+  path_vec_sampler vs;
+  path_vec_sampler_init(&vs, 53, NULL);
+  int checked[2] = {0, 0}, want[2] = {10, 60}, tries = 0;
+  for (int phase = 0; phase < 2; phase++) {
+    rs.rrdepth = phase == 0 ? 1000 : 2;
+    while (checked[phase] < want[phase] && tries < 400000) {
+      tries++;
+      path_vec_sampler_clear(&vs);
+      path_eval a, b;
+      path_eval_pt(fx->sc, &rs, &vs.base, PATH_WANT_HESS, grown, &a, NULL);
+      if (!a.grad_ok || (phase == 0 && a.length < 16) || a.n_diff > AD_H_CAPACITY) continue;
+      assert_true(a.hess_ok);
+      /* (a's outputs stay in `grown` until its next evaluation.) */
+      assert_int_equal(path_scratch_create(&fresh, &err), LMC_OK);
+      path_vec_sampler_rewind(&vs);
+      path_eval_pt(fx->sc, &rs, &vs.base, PATH_WANT_HESS, fresh, &b, NULL);
+      assert_true(same_eval(&a, &b));
+      path_scratch_destroy(fresh);
+      checked[phase]++;
+    }
+  }
+  print_message("%d long paths and %d others with their Hessian in %d tries; the shared arena "
+                "grew to %zu duals\n", checked[0], checked[1], tries, grown->arena2_duals);
+  assert_int_equal(checked[0], want[0]);
+  assert_int_equal(checked[1], want[1]);
+  assert_true(grown->arena2_duals > PATH__ARENA2_DUALS);
+  path_vec_sampler_free(&vs);
+  path_scratch_destroy(grown);
+}
+
 /* The same for bidirectional strategies, 25 paths per group. */
 static void test_bdpt_hessian_matches_fd(void **state) {
   fixture *fx = *state;
@@ -377,6 +431,7 @@ int main(void) {
       cmocka_unit_test(test_bdpt_gradient_matches_fd),
       cmocka_unit_test(test_pt_hessian_matches_fd),
       cmocka_unit_test(test_pt_hessian_long_paths),
+      cmocka_unit_test(test_hessian_independent_of_scratch),
       cmocka_unit_test(test_bdpt_hessian_matches_fd),
   };
   return cmocka_run_group_tests(tests, setup, teardown);

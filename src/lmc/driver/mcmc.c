@@ -323,7 +323,8 @@ static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
   R->n_fam = R->sp.n_fam;
   R->fam = calloc((size_t)(R->n_fam > 0 ? R->n_fam : 1), sizeof *R->fam);
   R->cnt = calloc((size_t)R->nthreads, sizeof *R->cnt);
-  if (!R->fam || !R->cnt) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bootstrap");
+  R->ws = calloc((size_t)R->nthreads * (size_t)(R->n_fam > 0 ? R->n_fam : 1), sizeof *R->ws);
+  if (!R->fam || !R->cnt || !R->ws) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the bootstrap");
   for (int g = 0; g < R->n_fam; g++) R->fam[g].sf = &R->sp.fam[g];
   /* Kelemen's s2: --sigma, else the space's default (or 1/64), 0.01 for
    * --small-step gauss. */
@@ -392,6 +393,19 @@ static void mcmc__allocate(mcmc_render *R) {
   }
 }
 
+/* Points slot i's chain at thread tid's workspace for its family, made on
+ * first use (out of memory: the chain keeps its own scratch). Only thread
+ * tid makes or binds its workspaces, so the chains of a parallel loop may
+ * bind concurrently. */
+static void mcmc__bind(mcmc_render *R, int i, int tid) {
+  mcmc_chain_slot *sl = &R->slots[i];
+  const mc_target *T = &R->fam[sl->family].sf->target;
+  if (!T->workspace_create) return;
+  void **ws = &R->ws[(size_t)tid * (size_t)R->n_fam + (size_t)sl->family];
+  if (!*ws) *ws = T->workspace_create(T);
+  mc_chain_bind(sl->chain, *ws);
+}
+
 /* The chains, their kernels (the integrator's) and their starting states,
  * by systematic resampling of the bootstrap in proportion to f. */
 static lmc_status mcmc__start_chains(mcmc_render *R, lmc_error *err) {
@@ -441,6 +455,7 @@ static lmc_status mcmc__start_chains(mcmc_render *R, lmc_error *err) {
       while (j < F->bt.n - 1 && acc + F->bt.f[j] <= target) acc += F->bt.f[j++];
       while (j < F->bt.n - 1 && !(F->bt.f[j] > 0.0)) j++;
       sl->start_seq = mcmc__boot_seq(g, j);
+      mcmc__bind(R, F->first_chain + i, 0);
       mc_chain_start(sl->chain, crs->seed, sl->start_seq, mcmc__chain_seq(g, i));
     }
   }
@@ -461,6 +476,7 @@ static int mcmc__round(mcmc_render *R, int64_t m) {
     mcmc_chain_slot *sl = &R->slots[i];
     sl->n_rec = 0;
     if (abandon || !mcmc_chain_here(i)) continue;
+    mcmc__bind(R, i, omp_get_thread_num());
     int64_t r0 = mc_chain_rays(sl->chain);
     int64_t mg = mcmc__family_steps(&R->fam[sl->family], m);
     for (int64_t q = 0; q < mg; q++) mc_chain_step(sl->chain, mcmc__record, sl);
@@ -495,9 +511,11 @@ static lmc_status mcmc__restart(mcmc_render *R, lmc_error *err) {
     R->M->note_restart_chain(R->mrun, R->slots[i].chain);
   lmc_status status = mcmc__rekernel(R, err);
   if (status) return status;
-  for (int i = 0; i < R->n_slots; i++)
+  for (int i = 0; i < R->n_slots; i++) {
+    mcmc__bind(R, i, 0);
     mc_chain_start(R->slots[i].chain, R->crs.seed, R->slots[i].start_seq,
                    mcmc__chain_seq(R->slots[i].family, R->n_slots + i));
+  }
   return LMC_OK;
 }
 
@@ -712,6 +730,14 @@ static void mcmc__free(mcmc_render *R) {
       free(R->slots[i].rec);
     }
   free(R->slots);
+  for (int g = 0; R->ws && g < R->n_fam; g++) {
+    const mc_target *T = &R->fam[g].sf->target;
+    for (int t = 0; t < R->nthreads; t++) {
+      void *ws = R->ws[(size_t)t * (size_t)R->n_fam + (size_t)g];
+      if (ws) T->workspace_destroy(ws);
+    }
+  }
+  free(R->ws);
   if (R->M && R->M->destroy) R->M->destroy(R->mrun);
   if (R->moves) R->sp.moves->destroy(R->moves);
   for (int g = 0; R->fam && g < R->n_fam; g++) mc_boot_free(&R->fam[g].bt), free(R->fam[g].splat);

@@ -88,6 +88,8 @@ typedef struct mcmc_render {
   mcmc_chain_slot *slots;
   int n_slots;
   render_counters *cnt; /* per thread */
+  void **ws;            /* per thread and family (tid * n_fam + g): the workspace its chains
+                           share (target.h), made on first use; NULL: none */
   mcmc_norm norm;
   int64_t shared_paths; /* samples of the space's own estimate of b */
   double b_total, b_var; /* b before the chains */

@@ -353,6 +353,13 @@ void mc_chain_set_probs(mc_chain *c, const double *prob) {
   c->cdf[c->n_kernels - 1] = 1.0;
 }
 
+void mc_chain_bind(mc_chain *c, void *ws) {
+  const mc_target *T = c->target;
+  if (!T->scratch_bind) return;
+  if (c->scratch) T->scratch_bind(c->scratch, ws);
+  if (c->scratch_alt) T->scratch_bind(c->scratch_alt, ws);
+}
+
 int64_t mc_chain_rays(const mc_chain *c) {
   const mc_target *T = c->target;
   int64_t own = T->chain_kind ? T->chain_kind->rays(c) : 0;

@@ -266,6 +266,12 @@ lmc_status mc_chain_set_kernels(mc_chain *c, const mc_kernel *k, const double *p
  * in advance (the large-step scale of mcmc.c) keeps the chain exact. */
 void mc_chain_set_probs(mc_chain *c, const double *prob);
 
+/* Makes the chain's scratches use workspace ws (target.h's scratch_bind;
+ * borrowed, from the target's workspace_create, NULL: their own) until
+ * bound again. The chains a thread drives one after the other may share one
+ * workspace. Nothing when the target has no workspace. */
+void mc_chain_bind(mc_chain *c, void *ws);
+
 /* Rays traced in the chain's scratches so far (the target's scratch_rays). */
 int64_t mc_chain_rays(const mc_chain *c);
 

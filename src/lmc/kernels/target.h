@@ -67,9 +67,18 @@ struct mc_target {
   /* Evaluates the state drawn from smp (see above). Returns 0 on success. */
   int (*eval)(const mc_target *t, void *scratch, lmc_sampler *smp, mc_value *OUT_value,
               double *OUT_grad, int *OUT_grad_ok);
-  /* Per-thread scratch (may be NULL functions: no scratch). */
+  /* Per-chain scratch (may be NULL functions: no scratch). */
   void *(*scratch_create)(const mc_target *t);
   void (*scratch_destroy)(void *scratch);
+  /* Optional (NULL: none): a workspace that every chain one thread drives
+   * may share for the temporaries of an evaluation (the derivative passes'
+   * arenas), so that they stay in that thread's cache instead of one copy
+   * per chain. scratch_bind(scratch, ws) makes `scratch` use ws (borrowed;
+   * NULL: its own, made on first use) until bound again; what an
+   * evaluation leaves in ws is not read by the next. */
+  void *(*workspace_create)(const mc_target *t);
+  void (*workspace_destroy)(void *ws);
+  void (*scratch_bind)(void *scratch, void *ws);
   /* Optional counter of rays traced in `scratch` since it was created (NULL: none). */
   int64_t (*scratch_rays)(const void *scratch);
   /* Optional (NULL: none): the other counters of `scratch` since it was

@@ -131,14 +131,31 @@ static void states__scratch_counts(const void *scratch, mc_counts *OUT) {
   OUT->nan_samples += sc->counts.nan_samples + sc->cnt.nan_samples;
 }
 
+static void *states__workspace_create(const mc_target *t) {
+  (void)t;
+  path_scratch *ps = NULL;
+  lmc_error err;
+  return path_scratch_create(&ps, &err) == LMC_OK ? ps : NULL;
+}
+
+static void states__workspace_destroy(void *ws) { path_scratch_destroy(ws); }
+
+static void states__scratch_bind(void *scratch, void *ws) {
+  ((mc_states_scratch *)scratch)->bound = ws;
+}
+
 void mc_states_use_scratch(mc_target *T) {
   T->scratch_create = states__scratch_create;
   T->scratch_destroy = states__scratch_destroy;
   T->scratch_rays = states__scratch_rays;
   T->scratch_counts = states__scratch_counts;
+  T->workspace_create = states__workspace_create;
+  T->workspace_destroy = states__workspace_destroy;
+  T->scratch_bind = states__scratch_bind;
 }
 
 path_scratch *mc_states_scratch_path(mc_states_scratch *sc) {
+  if (sc->bound) return sc->bound;
   if (!sc->ps) {
     lmc_error err;
     if (path_scratch_create(&sc->ps, &err) != LMC_OK) return NULL;

@@ -50,14 +50,17 @@ double mc_mmlt_expected(const scene *s, const render_settings *rs, int k, double
 typedef struct mc_states_scratch {
   render_counters cnt; /* plain evaluations: rays and non-finite contributions */
   bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
-  path_scratch *ps;    /* NULL until mc_states_scratch_path */
+  path_scratch *ps;    /* owned: NULL until mc_states_scratch_path needs it unbound */
+  path_scratch *bound; /* borrowed: the thread's workspace (scratch_bind), or NULL */
   int64_t rays_d;      /* rays of the evaluations with derivatives */
   mc_counts counts;    /* evaluations with derivatives (and their non-finite contributions) */
 } mc_states_scratch;
 
-/* Sets T's scratch_create, _destroy, _rays and _counts to mc_states_scratch's. */
+/* Sets T's scratch_create, _destroy, _rays and _counts to mc_states_scratch's,
+ * and its workspace hooks (a workspace is a path_scratch). */
 void mc_states_use_scratch(mc_target *T);
-/* The scratch's path scratch for derivatives, made on first use (NULL: out of memory). */
+/* The path scratch for derivatives: the bound workspace, else the scratch's
+ * own, made on first use (NULL: out of memory). */
 path_scratch *mc_states_scratch_path(mc_states_scratch *sc);
 
 /* Sets v from a state's contribution c at raster (rx, ry): a non-finite c

@@ -127,23 +127,41 @@ ad path__draw(path__ctx *c, int diff) {
   return ad_const(c->A, u);
 }
 
-/* Makes the second-order arena of ps large enough for tangent length n
- * and `duals` duals (at least the last size); 1 on success, 0 when memory
- * is short (the caller then evaluates the gradient only). */
-static int path__arena2(path_scratch *ps, int n, size_t duals) {
-  if (duals < ps->arena2_duals) duals = ps->arena2_duals;
+/* The second-order arena's sizes: PATH__ARENA2_DUALS duals times a power
+ * of 4, up to PATH__ARENA2_MAX_BYTES at tangent length n. An evaluation
+ * tries them upwards from the last size this scratch grew to (no larger
+ * than the largest admissible at n) until its tape fits, so whether a path
+ * gets its Hessian depends on the path alone, not on what the scratch
+ * evaluated before: chains share a thread's scratch. */
+static int path__fits2(int n, size_t duals) {
+  return ad_arena_size2(n, duals) <= PATH__ARENA2_MAX_BYTES / sizeof(double);
+}
+
+/* Makes ps's second-order buffer hold `duals` duals of tangent length n;
+ * returns duals, or 0 when that is above the limit or memory is short (the
+ * caller then evaluates the gradient alone). The buffer's old contents are
+ * not kept. */
+static size_t path__arena2(path_scratch *ps, int n, size_t duals) {
+  if (!path__fits2(n, duals)) return 0;
   size_t cap = ad_arena_size2(n, duals);
-  if (cap > PATH__ARENA2_MAX_BYTES / sizeof(double)) return 0;
   if (ps->arena2_cap < cap) {
-    double *b = realloc(ps->arena2_buf, cap * sizeof(double));
-    if (!b) return 0;
-    ps->arena2_buf = b;
+    free(ps->arena2_buf);
+    ps->arena2_cap = 0;
+    ps->arena2_buf = malloc(cap * sizeof(double));
+    if (!ps->arena2_buf) return 0;
     ps->arena2_cap = cap;
   }
   if (!ps->hfull) ps->hfull = malloc((size_t)AD_H_CAPACITY * AD_H_CAPACITY * sizeof(double));
   if (!ps->hfull) return 0;
-  ps->arena2_duals = duals;
-  return 1;
+  if (duals > ps->arena2_duals) ps->arena2_duals = duals;
+  return duals;
+}
+
+/* The first size an evaluation of tangent length n tries. */
+static size_t path__arena2_first(path_scratch *ps, int n) {
+  size_t duals = PATH__ARENA2_DUALS;
+  while (duals < ps->arena2_duals && path__fits2(n, 4 * duals)) duals *= 4;
+  return path__arena2(ps, n, duals);
 }
 
 /* Carries duals over an arena rewind to `mark`: their tangents are copied
@@ -417,20 +435,24 @@ void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int
   /* Pass 2: the same function on the record, with tangents (and with
    * Hessians in a second-order arena when they are asked for). */
   int n_var = c.n_var;
-  int order2 = want_grad >= PATH_WANT_HESS && n_var <= AD_H_CAPACITY &&
-               path__arena2(ps, n_var, PATH__ARENA2_DUALS);
+  size_t duals2 = want_grad >= PATH_WANT_HESS && n_var <= AD_H_CAPACITY
+                      ? path__arena2_first(ps, n_var)
+                      : 0; /* 0: a first-order arena */
+  int order2;
   for (;;) {
     path__ctx_init(&c, sc, rs, ps, NULL, 1);
     c.arg = arg;
+    order2 = duals2 > 0;
     if (order2)
-      ad_arena_init2(&ps->A, ps->arena2_buf, ps->arena2_cap, n_var);
+      ad_arena_init2(&ps->A, ps->arena2_buf, ad_arena_size2(n_var, duals2), n_var);
     else
       ad_arena_init(&ps->A, ps->arena_buf, ps->arena_cap, n_var);
     est(&c, &L, &rx, &ry);
     /* A second-order arena keeps every dual of the path: when they do not
-     * fit, again in one four times as large. */
-    if (ad_arena_ok(&ps->A) || !order2 || !path__arena2(ps, n_var, 4 * ps->arena2_duals))
-      break;
+     * fit, again in one four times as large, and past the limit in a
+     * first-order arena (the gradient alone). */
+    if (ad_arena_ok(&ps->A) || !order2) break;
+    duals2 = path__arena2(ps, n_var, 4 * duals2);
   }
   ev->n_diff = n_var;
   if (!ad_arena_ok(&ps->A)) return;

@@ -70,7 +70,7 @@ struct path_scratch {
    * tape) and the dense Hessian of the sweep. */
   double *arena2_buf; /* owned */
   size_t arena2_cap;
-  size_t arena2_duals; /* duals it was last sized for (0: none yet) */
+  size_t arena2_duals; /* the most duals it was sized for (where the next evaluation starts) */
   double *hfull;       /* owned: AD_H_CAPACITY^2 */
   ad_arena A;
   /* The record of pass 1. */
