@@ -33,7 +33,7 @@
 #include "lmc/kernels/mala.h"
 
 typedef struct gbuf {
-  double V[9], P[3], m[3], work[16];
+  double V[9], P[3], m[3], l[3], k[3], work[16];
 } gbuf;
 
 static void gauss_of(const h2mc_params *p, int n, const double *g, const double *H, gbuf *b,
@@ -43,6 +43,8 @@ static void gauss_of(const h2mc_params *p, int n, const double *g, const double 
   G->V = b->V;
   G->P = b->P;
   G->m = b->m;
+  G->l = b->l;
+  G->k = b->k;
   assert_int_equal(h2mc_gauss_build(p, n, g, A, b->work, 16, G), 0);
 }
 
@@ -175,6 +177,44 @@ static void test_closed_form(void **state) {
     checked++;
   }
   assert_int_equal(checked, 3);
+}
+
+/* Delayed acceptance's first test at the model (h2mc_gauss_log_screen)
+ * on a quadratic log f, log f(x + d) = log f(x) + g . d + d . H d / 2,
+ * whose gradient at y = x + d is g + H d and whose Hessian is H: the test
+ * equals the full ratio log f(y) / f(x) + log q(x | y) - log q(y | x) with
+ * the Gaussian built at y from (g + H d, H), for the 2-D cases (the
+ * isotropic one included) and offsets drawn from x's Gaussian; 40 pairs. */
+static void test_screen_is_exact_on_quadratics(void **state) {
+  (void)state;
+  h2mc_params p = h2mc_params_default();
+  int checked = 0;
+  for (int c = 0; c < 4; c++) {
+    const double *g = k_g2[c], *H = k_h2[c];
+    gbuf bx, by;
+    h2mc_gauss Gx, Gy;
+    gauss_of(&p, 2, g, H, &bx, &Gx);
+    rng r;
+    rng_seed(&r, 41, (uint64_t)c);
+    for (int t = 0; t < 10; t++) {
+      double z[2], d[2], nd[2], gy[2];
+      mala_std_normal_pair(&r, &z[0], &z[1]);
+      h2mc_gauss_sample(&Gx, z, p.sigma, d);
+      for (int i = 0; i < 2; i++) gy[i] = g[i] + H[2 * i] * d[0] + H[2 * i + 1] * d[1];
+      gauss_of(&p, 2, gy, H, &by, &Gy);
+      nd[0] = -d[0], nd[1] = -d[1];
+      double lf = g[0] * d[0] + g[1] * d[1] +
+                  0.5 * (d[0] * (H[0] * d[0] + H[1] * d[1]) + d[1] * (H[2] * d[0] + H[3] * d[1]));
+      double full = lf + h2mc_gauss_log_density(&Gy, nd, p.sigma) -
+                    h2mc_gauss_log_density(&Gx, d, p.sigma);
+      double screen = h2mc_gauss_log_screen(&Gx, d, p.sigma, lf);
+      if (fabs(screen - full) > 1e-9 * (1.0 + fabs(full)))
+        print_message("case %d: screen %.12g, full ratio %.12g\n", c, screen, full);
+      assert_true(fabs(screen - full) <= 1e-9 * (1.0 + fabs(full)));
+      checked++;
+    }
+  }
+  assert_int_equal(checked, 40);
 }
 
 /* A toy target for the kernel over its dim (1 or 2) coordinates: f = 1
@@ -337,6 +377,7 @@ int main(void) {
       cmocka_unit_test(test_integrates_to_one),
       cmocka_unit_test(test_samples_match_moments),
       cmocka_unit_test(test_closed_form),
+      cmocka_unit_test(test_screen_is_exact_on_quadratics),
       cmocka_unit_test(test_outside_rejected),
       cmocka_unit_test(test_kept_gaussians_are_rebuilt_ones),
   };

@@ -95,7 +95,7 @@ static void test_h2mc(void **state) {
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.003);
   check_scene("diffuse_sphere.xml", "h2mc", 16, e, 2, 0.0);
   g_states = NULL;
-  /* Delayed acceptance (a first test on f alone): the same expectations,
+  /* Delayed acceptance (a first test at the current state's model): the same expectations,
    * from chains that do move differently (the images of one seed differ). */
   g_delayed = 1;
   check_scene("furnace.xml", "h2mc", 16, &one, 1, 0.0);

@@ -138,8 +138,8 @@ static void h2mc__report(void *r, mc_chain *const *chains, int n, double chain_s
   int64_t screened = 0, passed = 0;
   for (int i = 0; i < n; i++) screened += chains[i]->screened, passed += chains[i]->screen_passed;
   if (screened)
-    fprintf(stderr, "h2mc: delayed acceptance: %lld first tests (f alone), %.1f%% passed (then "
-                    "evaluated with the Hessian)\n",
+    fprintf(stderr, "h2mc: delayed acceptance: %lld first tests (at the current state's model), "
+                    "%.1f%% passed (then evaluated with the Hessian)\n",
             (long long)screened, 100.0 * (double)passed / (double)screened);
   fprintf(stderr,
           "h2mc: %lld proposals, %.1f%% from the Hessian's model (the rest the prior alone), "
@@ -160,8 +160,8 @@ static const lmc_opt h2mc__opts[] = {
      NULL, "probability of Kelemen's isotropic small step (lmc, h2mc)", NULL},
     {"delayed", LMC_OPT_CHOICE, offsetof(h2mc_settings, delayed), 0, 0, 0, lmc_opt_off_on, NULL, 0,
      NULL, NULL,
-     "H2MC proposals first tested on f alone, the Hessian at the proposal only when they pass "
-     "(delayed acceptance, exact)", NULL},
+     "H2MC proposals first tested at the current state's quadratic model, the Hessian at the "
+     "proposal only when they pass (delayed acceptance, exact)", NULL},
 };
 
 static const lmc_opt_table h2mc__options = {"H2MC (--integrator h2mc)", h2mc__opts, 3,

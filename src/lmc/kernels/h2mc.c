@@ -53,20 +53,25 @@ int h2mc_gauss_build(const h2mc_params *p, int n, const double *g, double *H, do
     const double *v = G->V + (size_t)i * n;
     double b = 0.0;
     for (int j = 0; j < n; j++) b += v[j] * g[j];
-    double l = G->P[i], o, s;
+    double l = G->P[i], o, s, coef; /* the offset's mean o = coef b, its variance s */
     if (l < -H2MC_TINY) {
       o = cn * b / -l;
+      coef = cn / -l;
       s = sn2 / -l;
     } else if (l > H2MC_TINY) {
       o = ch * b / l;
+      coef = ch / l;
       s = sh2 / l;
     } else {
       o = 0.5 * b * L * L;
+      coef = 0.5 * L * L;
       s = L * L;
     }
     double P = 1.0 / s + prior_prec;
     G->P[i] = P;
     G->m[i] = o / (s * P);
+    G->k[i] = coef / (s * P);
+    G->l[i] = l;
     log_norm += 0.5 * log(P);
   }
   G->n = n;
@@ -91,6 +96,23 @@ double h2mc_gauss_log_density(const h2mc_gauss *G, const double *d, double sigma
   return G->log_norm - 0.5 * q;
 }
 
+double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double sigma,
+                             double log_f_ratio) {
+  if (G->isotropic) return log_f_ratio;
+  int n = G->n;
+  double qf = 0.0, qr = 0.0;
+  for (int i = 0; i < n; i++) {
+    const double *v = G->V + (size_t)i * n;
+    double e = 0.0;
+    for (int j = 0; j < n; j++) e += v[j] * d[j];
+    double ef = e - G->m[i], er = -e - (G->m[i] + G->k[i] * G->l[i] * e);
+    qf += G->P[i] * ef * ef;
+    qr += G->P[i] * er * er;
+  }
+  (void)sigma;
+  return log_f_ratio - 0.5 * (qr - qf);
+}
+
 void h2mc_gauss_sample(const h2mc_gauss *G, const double *z, double sigma, double *OUT_d) {
   int n = G->n;
   if (G->isotropic) {
@@ -112,7 +134,9 @@ static void h2mc__carve_gauss(h2mc_gauss *G, double **blk, size_t n) {
   G->V = *blk;
   G->P = G->V + n * n;
   G->m = G->P + n;
-  *blk = G->m + n;
+  G->l = G->m + n;
+  G->k = G->l + n;
+  *blk = G->k + n;
 }
 
 lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_params *p,
@@ -130,7 +154,7 @@ lmc_status h2mc_kernel_init(h2mc_kernel *k, const mc_target *target, const h2mc_
   /* One block: g, H, work, z, d, the two slots' Gaussians and values
    * (doubles), then idx and the slots' idx. */
   size_t m = (size_t)n, dim = (size_t)(target->dim > 0 ? target->dim : 1);
-  size_t doubles = m + m * m + (size_t)k->lwork + 2 * m + 2 * (m * m + 2 * m) + 2 * dim;
+  size_t doubles = m + m * m + (size_t)k->lwork + 2 * m + 2 * (m * m + 4 * m) + 2 * dim;
   double *blk = malloc(doubles * sizeof(double) + (dim + 2 * m) * sizeof(int));
   if (!blk) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the h2mc kernel");
   k->g = blk;
@@ -301,12 +325,25 @@ static double h2mc__log_density(void *self, const mc_state *from, const double *
   return h2mc_gauss_log_density(G, k->d, k->p.sigma) - log_c;
 }
 
-/* Delayed acceptance's first test (chain.h): the ratio of f alone, which
- * needs no derivative at y. Any function of the two states keeps the chain
- * exact; this one passes what a symmetric proposal would accept. */
+/* Delayed acceptance's first test (chain.h), which needs no derivative at
+ * `to`: the full ratio with the reverse density predicted by from's
+ * quadratic model (h2mc_gauss_log_screen). Any function of the two states
+ * keeps the chain exact; this one is the full ratio where log f is
+ * quadratic, so the second test, which costs the Hessian at y, rarely
+ * rejects. */
 static double h2mc__log_screen(void *self, const mc_state *from, const double *to_u, double f_to) {
-  (void)self, (void)to_u;
-  return log(f_to) - log(from->v.f);
+  h2mc_kernel *k = self;
+  double lr = log(f_to) - log(from->v.f);
+  const double *c = k->target->step_scale;
+  int n = h2mc__coords(k, from, k->idx);
+  /* (from is the current state, whose Gaussian the slot cur holds, or the
+   * proposal, evaluated with its Hessian just before its reverse test.) */
+  const h2mc_gauss *G = &k->slot[h2mc__gauss_of(k, from, k->idx, n, 1 - k->cur)].G;
+  for (int a = 0; a < n; a++) {
+    int i = k->idx[a];
+    k->d[a] = (to_u[i] - from->u[i]) / (c ? c[i] : 1.0);
+  }
+  return h2mc_gauss_log_screen(G, k->d, k->p.sigma, lr);
 }
 
 mc_kernel h2mc_kernel_make(h2mc_kernel *k) {

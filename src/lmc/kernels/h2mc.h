@@ -56,8 +56,8 @@
 typedef struct h2mc_params {
   double sigma; /* the prior's standard deviation (the paper's implementation: 0.01) */
   double L;     /* the time w t of every direction (pi / 2) */
-  int delayed;  /* delayed acceptance (chain.h): a first test on f's ratio alone, the
-                   Hessian at y only for the proposals that pass it (0: off) */
+  int delayed;  /* delayed acceptance (chain.h): a first test at the current state's
+                   model, the Hessian at y only for the proposals that pass it (0: off) */
 } h2mc_params;
 
 h2mc_params h2mc_params_default(void);
@@ -69,6 +69,8 @@ typedef struct h2mc_gauss {
   double *V;     /* eigenvectors, column i at V[i * n .. i * n + n - 1] (n x n) */
   double *P;     /* precisions along them */
   double *m;     /* mean in the eigenbasis */
+  double *l;     /* the model's eigenvalues l_i (H's, in the step-scaled coordinates) */
+  double *k;     /* m_i = k_i b_i: the mean's factor on the gradient's component b_i */
   double log_norm; /* sum log P_i / 2 - n log(2 pi) / 2 */
 } h2mc_gauss;
 
@@ -126,6 +128,15 @@ int h2mc_gauss_build(const h2mc_params *p, int n, const double *g, double *H, do
                      int lwork, h2mc_gauss *G);
 /* log N(d; m, C) of an offset d (n coordinates) under G. */
 double h2mc_gauss_log_density(const h2mc_gauss *G, const double *d, double sigma);
+/* The first test of delayed acceptance at the model: log of
+ * f(y) q~(x | y) / (f(x) q(y | x)) for the offset d = y - x (step-scaled)
+ * with log f_ratio = log f(y) - log f(x), where q~ is the Gaussian the
+ * quadratic model of x predicts at y: the same Hessian (V, l, P), the
+ * gradient moved by H d (b + l (V^T d)), so its mean m + k l (V^T d). Exact
+ * when log f is quadratic; a function of x and y alone, as delayed
+ * acceptance asks. The prior alone is symmetric: then log f_ratio. */
+double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double sigma,
+                             double log_f_ratio);
 /* An offset d ~ G, from n standard normals z. */
 void h2mc_gauss_sample(const h2mc_gauss *G, const double *z, double sigma, double *OUT_d);
 /* The workspace dsyev wants for n x n (doubles). */
