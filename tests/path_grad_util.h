@@ -306,12 +306,15 @@ static inline void pg_hess_check(const scene *sc, path_scratch *ps, const render
 }
 
 /* The tangent length path_eval_bdpt must use for a complete strategy:
- * 2 film + 2 per camera vertex, 4 emitter + 2 per light vertex, 2 for a
- * light sample; an escaped camera ray (s = 0) draws nothing at its end. */
-static int pg_bdpt_n_diff(pg_strategy st, int escaped) {
+ * 2 film + 2 per camera vertex that a next vertex follows, 4 emitter + 2
+ * per such light vertex, 2 for a light sample. The last vertex of each
+ * subpath draws its two numbers but uses none (the subpath stops there),
+ * and an escaped camera ray (s = 0) draws nothing at its end: neither gets
+ * a slot. */
+static int pg_bdpt_n_diff(pg_strategy st) {
   int n = 0;
-  if (st.t >= 2) n += 2 + 2 * (st.t - 1 - escaped);
-  if (st.s >= 2) n += 4 + 2 * (st.s - 1);
+  if (st.t >= 2) n += 2 + 2 * (st.t - 2);
+  if (st.s >= 2) n += 4 + 2 * (st.s - 2);
   if (st.s == 1) n += 2;
   return n;
 }

@@ -145,8 +145,7 @@ static void check_bdpt(const char *file, const scene *sc, path_scratch *ps,
       subnormal++;
       continue;
     }
-    int escaped = sg.s == 0 && !(ev.flags & PATH_EMIT_AREA);
-    assert_int_equal(ev.n_diff, pg_bdpt_n_diff(sg, escaped));
+    assert_int_equal(ev.n_diff, pg_bdpt_n_diff(sg));
     unsigned cls = classify(&ev);
     pg_fd_stats before = st;
     pg_fd_check(sc, ps, rs, &vs, sg, &ev, &st);

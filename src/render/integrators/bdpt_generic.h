@@ -293,10 +293,12 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
       v->pdf_fwd = bdpt__convert(BDPT_C, pdf_dir, prev, v);
     n++;
 
-    /* This vertex's numbers (always taken), then stop if long enough. */
-    REAL u_lobe = BDPT_W_DRAW(0), u1 = BDPT_W_DRAW(1), u2 = BDPT_W_DRAW(1);
+    /* This vertex's numbers (always taken, differentiated only when a
+     * next direction uses them), then stop if long enough. */
+    int live = n < max_vertices;
+    REAL u_lobe = BDPT_W_DRAW(0), u1 = BDPT_W_DRAW(live), u2 = BDPT_W_DRAW(live);
     REAL u_rr = BDPT_W_DRAW(0);
-    if (n >= max_vertices) break;
+    if (!live) break;
 
     /* Sample the BSDF for the next direction, or read it (absolute). */
     const BDPT_HIT *h = &v->hit;

@@ -91,11 +91,13 @@ static RRGB pt__walk(PT_CTX, REAL3 org, REAL3 dir, REAL *keep_rx, REAL *keep_ry)
       }
     }
 
-    /* Take this bounce's numbers (fixed layout), then stop if too long. */
-    REAL u_light = PT_DRAW(0), ul1 = PT_DRAW(1), ul2 = PT_DRAW(1);
-    REAL u_lobe = PT_DRAW(0), ub1 = PT_DRAW(1), ub2 = PT_DRAW(1);
+    /* Take this bounce's numbers (fixed layout; differentiated only when
+     * the path goes on to use them), then stop if too long. */
+    int live = !(rs->maxdepth >= 0 && depth >= rs->maxdepth);
+    REAL u_light = PT_DRAW(0), ul1 = PT_DRAW(live), ul2 = PT_DRAW(live);
+    REAL u_lobe = PT_DRAW(0), ub1 = PT_DRAW(live), ub2 = PT_DRAW(live);
     REAL u_rr = PT_DRAW(0);
-    if (rs->maxdepth >= 0 && depth >= rs->maxdepth) break;
+    if (!live) break;
 
     const bsdf *b = h.bsdf;
     REAL3 wo_l = R3_TO_LOCAL(&h.sh, wo);
