@@ -730,13 +730,11 @@ static void mcmc__free(mcmc_render *R) {
       free(R->slots[i].rec);
     }
   free(R->slots);
-  for (int g = 0; R->ws && g < R->n_fam; g++) {
-    const mc_target *T = &R->fam[g].sf->target;
+  for (int g = 0; R->ws && g < R->n_fam; g++)
     for (int t = 0; t < R->nthreads; t++) {
       void *ws = R->ws[(size_t)t * (size_t)R->n_fam + (size_t)g];
-      if (ws) T->workspace_destroy(ws);
+      if (ws) R->fam[g].sf->target.workspace_destroy(ws); /* (made by that target) */
     }
-  }
   free(R->ws);
   if (R->M && R->M->destroy) R->M->destroy(R->mrun);
   if (R->moves) R->sp.moves->destroy(R->moves);
