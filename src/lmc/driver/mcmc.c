@@ -601,34 +601,6 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
   return LMC_OK;
 }
 
-/* The scene targets' counters of this rank's chains added to *c, and
- * their mutations to *mutations (may be NULL). */
-static void mcmc__counts_here(const mcmc_render *R, mc_counts *c, int64_t *mutations) {
-  for (int i = 0; R->slots && i < R->n_slots; i++) {
-    const mc_chain *ch = R->slots[i].chain;
-    if (!ch || !mcmc_chain_here(i)) continue;
-    const mcmc_family *F = &R->fam[R->slots[i].family];
-    mc_space_counts(F->sf, ch->scratch, c);
-    mc_space_counts(F->sf, ch->scratch_alt, c);
-    if (mutations) *mutations += F->done;
-  }
-}
-
-/* The scene targets' counters of every chain summed over the ranks, and
- * the integrator's own statistics shared (method.h), on every rank. */
-static void mcmc__share_stats(mcmc_render *R, mc_counts *OUT) {
-  mc_counts c = {0};
-  mcmc__counts_here(R, &c, NULL);
-  if (dist_active()) {
-    int64_t v[3] = {c.grad_evals, c.hess_evals, c.nan_samples};
-    dist_allsum_i64(v, 3);
-    c.grad_evals = v[0], c.hess_evals = v[1], c.nan_samples = v[2];
-    if (R->M->share_stats) R->M->share_stats(R->mrun);
-    if (R->moves) R->sp.moves->share_stats(R->moves);
-  }
-  *OUT = c;
-}
-
 /* Statistics (stderr): per kernel, per family of a per-length space,
  * mutations per second, b; then the integrator's. */
 static void mcmc__report(mcmc_render *R, const mc_counts *counts) {

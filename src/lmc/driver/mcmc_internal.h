@@ -116,6 +116,13 @@ double mcmc__refine_b(mcmc_render *R, double *OUT_var);
  * (compose: per-family buffers summed in) (mcmc_b.c). */
 void mcmc__publish(mcmc_render *R, int64_t done, int compose);
 
+/* The scene targets' counters of this rank's chains added to *c, and
+ * their mutations to *mutations (may be NULL) (mcmc_dist.c). */
+void mcmc__counts_here(const mcmc_render *R, mc_counts *c, int64_t *mutations);
+/* The scene targets' counters of every chain summed over the ranks, and
+ * the integrator's own statistics shared (method.h), on every rank. */
+void mcmc__share_stats(mcmc_render *R, mc_counts *OUT);
+
 /* --error (mcmc_error.c): the chain groups' images, after the chains are
  * allocated and started; then, at the end of the chains (collective), each
  * pixel's variance into the film's evar. */

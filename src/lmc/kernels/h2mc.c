@@ -96,8 +96,7 @@ double h2mc_gauss_log_density(const h2mc_gauss *G, const double *d, double sigma
   return G->log_norm - 0.5 * q;
 }
 
-double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double sigma,
-                             double log_f_ratio) {
+double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double log_f_ratio) {
   if (G->isotropic) return log_f_ratio;
   int n = G->n;
   double qf = 0.0, qr = 0.0;
@@ -109,7 +108,6 @@ double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double sigma,
     qf += G->P[i] * ef * ef;
     qr += G->P[i] * er * er;
   }
-  (void)sigma;
   return log_f_ratio - 0.5 * (qr - qf);
 }
 
@@ -343,7 +341,7 @@ static double h2mc__log_screen(void *self, const mc_state *from, const double *t
     int i = k->idx[a];
     k->d[a] = (to_u[i] - from->u[i]) / (c ? c[i] : 1.0);
   }
-  return h2mc_gauss_log_screen(G, k->d, k->p.sigma, lr);
+  return h2mc_gauss_log_screen(G, k->d, lr);
 }
 
 mc_kernel h2mc_kernel_make(h2mc_kernel *k) {

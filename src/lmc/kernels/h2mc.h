@@ -135,8 +135,7 @@ double h2mc_gauss_log_density(const h2mc_gauss *G, const double *d, double sigma
  * gradient moved by H d (b + l (V^T d)), so its mean m + k l (V^T d). Exact
  * when log f is quadratic; a function of x and y alone, as delayed
  * acceptance asks. The prior alone is symmetric: then log f_ratio. */
-double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double sigma,
-                             double log_f_ratio);
+double h2mc_gauss_log_screen(const h2mc_gauss *G, const double *d, double log_f_ratio);
 /* An offset d ~ G, from n standard normals z. */
 void h2mc_gauss_sample(const h2mc_gauss *G, const double *z, double sigma, double *OUT_d);
 /* The workspace dsyev wants for n x n (doubles). */
