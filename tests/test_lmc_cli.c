@@ -5,7 +5,9 @@
  * cache; cache prints its stage-1 and cache lines; an invalid mode exits
  * with status 2 and a message that lists the valid ones. --delayed on turns
  * on delayed acceptance (its line in the statistics), off (the default)
- * leaves it out, anything else exits 2 naming the flag.
+ * leaves it out, anything else exits 2 naming the flag. --technique-jump
+ * and --path-mutations run on pssmlt's, lmc's and h2mc's default states
+ * and are refused on the pt states.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
@@ -152,6 +154,42 @@ static void test_stage2_without_gradients(void **state) {
   assert_non_null(strstr(err_text, "--cache-gradient"));
 }
 
+/* --technique-jump and --path-mutations on the default states of pssmlt,
+ * lmc and h2mc (the bdpt states): each run reports its moves, proposed and
+ * accepted; on the pt states both are an error naming the states. */
+static void test_state_moves_flags(void **state) {
+  (void)state;
+  static const char *base =
+      "render ../scenes/ring-caustics/scene.xml -o " TMP "/img --resolution 16x12 --spp 16 "
+      "--threads 1 --bootstrap 2048 --technique-jump 0.2 --path-mutations 0.3";
+  static const char *integ[] = {"pssmlt", "lmc", "h2mc"};
+  int checked = 0;
+  for (int i = 0; i < 3; i++) {
+    char args[1024];
+    snprintf(args, sizeof args, "%s --integrator %s", base, integ[i]);
+    int rc = run_lmc(args);
+    if (rc != 0) print_error("%s\n%s", args, err_text);
+    assert_int_equal(rc, 0);
+    static const char *const lines[2] = {"lmc: technique jumps: ", "lmc: path mutations (fused): "};
+    for (int q = 0; q < 2; q++) {
+      const char *l = strstr(err_text, lines[q]);
+      if (!l) fail_msg("%s: no '%s' line:\n%s", integ[i], lines[q], err_text);
+      long long proposed = 0;
+      double acc = 0.0;
+      assert_int_equal(sscanf(l + strlen(lines[q]), "%lld proposed, %lf%% accepted", &proposed, &acc), 2);
+      assert_true(proposed > 100);
+      assert_true(acc > 0.0);
+      checked++;
+    }
+  }
+  char args[1024];
+  snprintf(args, sizeof args, "%s --integrator pssmlt --states pt", base);
+  int rc = run_lmc(args);
+  assert_true(rc != 0 && rc != -1);
+  assert_non_null(strstr(err_text, "not the pt states"));
+  assert_int_equal(checked, 6);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_each_mode_selected),
@@ -159,6 +197,7 @@ int main(void) {
       cmocka_unit_test(test_invalid_mode),
       cmocka_unit_test(test_delayed_flag),
       cmocka_unit_test(test_stage2_without_gradients),
+      cmocka_unit_test(test_state_moves_flags),
   };
   return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -37,6 +37,7 @@
 
 #include "chi2.h"
 #include "lmc/kernels/chain.h"
+#include "lmc/states/bdpt_states.h"
 #include "lmc/states/mmlt_jump.h"
 #include "lmc/states/mmlt_states.h"
 #include "render/io/io.h"
@@ -67,14 +68,21 @@ typedef struct wrap {
   mc_kernel inner;
   int off;
   double tech_before, rx_before, ry_before;
+  int label_before;
   int accept_all;
 } wrap;
 
 static double wrap_propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   wrap *w = self;
   w->tech_before = x->u[w->off];
+  w->label_before = x->label;
   w->rx_before = x->v.rx, w->ry_before = x->v.ry;
   return w->inner.propose(w->inner.self, r, x, OUT_y);
+}
+
+static int wrap_label(void *self) {
+  wrap *w = self;
+  return w->inner.label(w->inner.self);
 }
 
 static double wrap_log_density(void *self, const mc_state *from, const double *to_u) {
@@ -115,32 +123,47 @@ static int film_cell(double rx, double ry) {
   return cy * NCX + cx;
 }
 
-/* The largest |z| over the strategies and the film cells of length k after
- * N starts and one move each (perturb: the fused path perturbation, else
- * the strategy jump); *OUT_moved: the weighted share of states that moved
- * (changed strategy; or for perturb, raster point). */
-static double worst_z(int k, int n_starts, int accept_all, int perturb, int kind, uint64_t seed,
-                      double *OUT_moved) {
+/* The largest |z| over the strategies and the film cells after N starts
+ * and one move each (perturb: the fused path perturbation, else the
+ * strategy jump), on the mmlt states of length k (kmax 0) or on the bdpt
+ * states of lengths k .. kmax (absolute directions above roughness 0.3);
+ * *OUT_moved: the weighted share of states that moved (changed strategy;
+ * or for perturb, raster point). A bdpt state started as a large step
+ * starts it (a fresh u, a label drawn in proportion to its f, relabelled)
+ * is a sample of density f(u, l) / F(u) relative to the target: weighted
+ * by F(u), the chain's sum_x. */
+static double worst_z(int k, int kmax, int n_starts, int accept_all, int perturb, int kind,
+                      uint64_t seed, double *OUT_moved) {
   render_settings rs = render_settings_default();
   rs.maxdepth = 6;
   mc_target T;
   mc_mmlt_states ctx;
+  mc_bdpt_states bctx;
   lmc_error err;
-  assert_int_equal(mc_mmlt_states_init(&T, &ctx, g_sc, &rs, k, &err), LMC_OK);
+  int bdpt = kmax > 0;
+  if (bdpt)
+    assert_int_equal(mc_bdpt_states_init(&T, &bctx, g_sc, &rs, 0.3, k, kmax, &err), LMC_OK);
+  else
+    assert_int_equal(mc_mmlt_states_init(&T, &ctx, g_sc, &rs, k, &err), LMC_OK);
   mc_mmlt_jump j;
   assert_int_equal(mc_mmlt_jump_init(&j, &T, perturb, &err), LMC_OK);
   j.test_kind = kind;
   wrap w = {mc_mmlt_jump_kernel(&j), mc_target_stream_offset(&T, LMC_STREAM_CONNECT), 0.0, 0.0,
-            0.0, accept_all};
+            0.0, -1, accept_all};
   mc_kernel kw = w.inner;
   kw.self = &w;
   kw.propose = wrap_propose;
   kw.log_density = wrap_log_density;
+  if (bdpt) {
+    assert_non_null(w.inner.label);
+    kw.label = wrap_label;
+  }
   double prob = 1.0;
   mc_chain *c;
   assert_int_equal(mc_chain_create(&c, &T, &kw, &prob, 1, &err), LMC_OK);
-  int n = ctx.n_strategies, nq = n + NCX * NCY + NFB;
-  double sum[8 + NCX * NCY + NFB] = {0}, sum2[8 + NCX * NCY + NFB] = {0}, moved = 0.0,
+  int n = bdpt ? bctx.n_labels : ctx.n_strategies, nq = n + NCX * NCY + NFB;
+  assert_true(n <= 16);
+  double sum[16 + NCX * NCY + NFB] = {0}, sum2[16 + NCX * NCY + NFB] = {0}, moved = 0.0,
          total = 0.0;
   /* The value classes: f's quintiles over a pilot of states. */
   double fs[2000], fq[NFB - 1];
@@ -155,20 +178,26 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, int kind
   for (int i = 0; i < n_starts; i++) {
     double f = mc_chain_start(c, seed, (uint64_t)i, (uint64_t)i + CHAIN_STREAMS);
     if (!(f > 0.0)) continue;
+    double wt = bdpt ? c->sum_x : f;
     w.tech_before = -1.0;
     mc_chain_step(c, NULL, NULL);
     if (w.tech_before < 0.0) continue; /* (the kernel always proposes: never here) */
-    int a = strategy(w.tech_before, n), b = strategy(c->x.u[w.off], n);
+    int a = bdpt ? w.label_before : strategy(w.tech_before, n);
+    int b = bdpt ? c->x.label : strategy(c->x.u[w.off], n);
     int ca = n + film_cell(w.rx_before, w.ry_before), cb = n + film_cell(c->x.v.rx, c->x.v.ry);
     int va = n + NCX * NCY + f_class(f, fq), vb = n + NCX * NCY + f_class(c->x.v.f, fq);
     for (int q = 0; q < nq; q++) {
-      double d = f * ((b == q || cb == q || vb == q) - (a == q || ca == q || va == q));
+      double d = wt * ((b == q || cb == q || vb == q) - (a == q || ca == q || va == q));
       sum[q] += d;
       sum2[q] += d * d;
     }
-    /* An accepted move redraws the strategy coordinate in its interval. */
-    moved += f * (c->x.u[w.off] != w.tech_before);
-    total += f;
+    /* An accepted move redraws the strategy coordinate in its interval
+     * (bdpt states: moves the label or the raster point). */
+    if (bdpt)
+      moved += wt * (a != b || c->x.v.rx != w.rx_before || c->x.v.ry != w.ry_before);
+    else
+      moved += wt * (c->x.u[w.off] != w.tech_before);
+    total += wt;
     used++;
   }
   assert_true(used > 3000);
@@ -181,16 +210,19 @@ static double worst_z(int k, int n_starts, int accept_all, int perturb, int kind
   }
   static const char *const kinds[MC_PATH_MOVE_COUNT] = {"bidirectional", "lens", "multi-chain",
                                                         "caustic", "lens subpath"};
-  print_message("%s%s%s, length %d%s: %d states with f > 0, %.1f%% (weighted) moved, worst |z| "
-                "%.2f; no move %lld, refused %lld, walked elsewhere %lld\n",
+  print_message("%s%s%s, %s states, length %d%s%s: %d states with f > 0, %.1f%% (weighted) "
+                "moved, worst |z| %.2f; no move %lld, refused %lld, walked elsewhere %lld\n",
                 perturb ? "path move" : "jump", kind >= 0 ? ": " : "",
-                kind >= 0 ? kinds[kind] : "", k, accept_all ? " (accept all)" : "", used,
-                100.0 * moved / total, worst, (long long)j.st.lone, (long long)j.st.refused,
-                (long long)j.st.mismatch);
+                kind >= 0 ? kinds[kind] : "", bdpt ? "bdpt" : "mmlt", k, bdpt ? " and longer" : "",
+                accept_all ? " (accept all)" : "", used, 100.0 * moved / total, worst,
+                (long long)j.st.lone, (long long)j.st.refused, (long long)j.st.mismatch);
   *OUT_moved = moved / total;
   mc_chain_destroy(c);
   mc_mmlt_jump_free(&j);
-  mc_mmlt_states_free(&ctx);
+  if (bdpt)
+    mc_bdpt_states_free(&bctx);
+  else
+    mc_mmlt_states_free(&ctx);
   return worst;
 }
 
@@ -213,7 +245,7 @@ static void test_invariance(void **state) {
   for (int perturb = 0; perturb < 2; perturb++)
     for (int k = 2; k <= 4; k++) {
       double moved;
-      double z = worst_z(k, 400000, 0, perturb, -1, 300 + (uint64_t)(10 * perturb + k), &moved);
+      double z = worst_z(k, 0, 400000, 0, perturb, -1, 300 + (uint64_t)(10 * perturb + k), &moved);
       assert_true(z < zc);
       assert_true(moved > 0.05);
       checked++;
@@ -224,7 +256,7 @@ static void test_invariance(void **state) {
     double most = 0.0;
     for (int k = 3; k <= 4; k++) {
       double moved;
-      double z = worst_z(k, 400000, 0, 1, kind, 400 + (uint64_t)(10 * kind + k), &moved);
+      double z = worst_z(k, 0, 400000, 0, 1, kind, 400 + (uint64_t)(10 * kind + k), &moved);
       assert_true(z < zc);
       most = moved > most ? moved : most;
       checked++;
@@ -232,9 +264,9 @@ static void test_invariance(void **state) {
     assert_true(most > 0.001); /* multi-chain: 0.2% (few paths with two chains here) */
   }
   double moved;
-  double zbad = worst_z(3, 400000, 1, 0, -1, 999, &moved);
-  double zbad2 = worst_z(2, 400000, 1, 1, -1, 998, &moved);
-  double zbad3 = worst_z(3, 600000, 1, 1, MC_PATH_MOVE_BIDIR, 997, &moved);
+  double zbad = worst_z(3, 0, 400000, 1, 0, -1, 999, &moved);
+  double zbad2 = worst_z(2, 0, 400000, 1, 1, -1, 998, &moved);
+  double zbad3 = worst_z(3, 0, 600000, 1, 1, MC_PATH_MOVE_BIDIR, 997, &moved);
   print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (path moves), %.2f "
                 "(bidirectional)\n",
                 zc, zbad, zbad2, zbad3);
@@ -244,9 +276,49 @@ static void test_invariance(void **state) {
   assert_true(zbad3 > zc); /* fails the test itself */
 }
 
+/* The same moves on the bdpt states: every length from 1 (or 2) to 4 in
+ * one target, the path moves free to change the length, the labels'
+ * rough directions absolute. */
+static void test_invariance_bdpt(void **state) {
+  (void)state;
+  /* Labels (12 or 13), film cells and value classes for both moves over
+   * lengths 1 .. 4 and 2 .. 4, and for each path move alone over 2 .. 4
+   * (multi-chain: 4). */
+  double zc = critical_z(2 * (25 + 2 * (NCX * NCY + NFB)) +
+                         MC_PATH_MOVE_COUNT * (12 + NCX * NCY + NFB));
+  int checked = 0;
+  for (int perturb = 0; perturb < 2; perturb++)
+    for (int kmin = 1; kmin <= 2; kmin++) {
+      double moved;
+      double z = worst_z(kmin, 4, 400000, 0, perturb, -1, 500 + (uint64_t)(10 * perturb + kmin),
+                         &moved);
+      assert_true(z < zc);
+      assert_true(moved > 0.05);
+      checked++;
+    }
+  for (int kind = 0; kind < MC_PATH_MOVE_COUNT; kind++) {
+    /* (The multi-chain perturbation needs two chains: length 4 alone.) */
+    double moved;
+    int kmin = kind == MC_PATH_MOVE_MULTICHAIN ? 4 : 2;
+    double z = worst_z(kmin, 4, 400000, 0, 1, kind, 600 + (uint64_t)kind, &moved);
+    assert_true(z < zc);
+    assert_true(moved > 0.001);
+    checked++;
+  }
+  double moved;
+  double zbad = worst_z(2, 4, 400000, 1, 0, -1, 699, &moved);
+  double zbad2 = worst_z(2, 4, 400000, 1, 1, -1, 698, &moved);
+  print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (path moves)\n", zc, zbad,
+                zbad2);
+  assert_int_equal(checked, 4 + MC_PATH_MOVE_COUNT);
+  assert_true(zbad > 8.0);
+  assert_true(zbad2 > 5.0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_invariance),
+      cmocka_unit_test(test_invariance_bdpt),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

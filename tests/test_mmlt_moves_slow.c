@@ -3,14 +3,14 @@
  * sampler (src/lmc/states/mmlt_jump.h) on the analytic scenes, as
  * test_mcmc_analytic.c checks every MCMC integrator (analytic_check.h: R
  * = 6 seeds, each image group's mean within 8 of its standard errors of
- * the exact value, P(|t_5| > 8) = 5e-4 per check, about 1.6% over these
- * 33): with reversible jumps (--technique-jump 0.5) the furnace, the
+ * the exact value, P(|t_5| > 8) = 5e-4 per check, about 2.4% over these
+ * 48): with reversible jumps (--technique-jump 0.5) the furnace, the
  * diffuse sphere's two groups and the mask's three (whose pass-through is
  * a delta lobe no connection may end on); with the fused path
- * perturbations too (--path-mutations 0.3) the sphere and the mask; and
- * the jumps do move the chains (one seed's images with and without
- * differ). Slow: not part of the sanitizer's run, whose unit tests of the
- * moves are test_mmlt_jump's.
+ * perturbations too (--path-mutations 0.3) the sphere and the mask, on
+ * the mmlt states and on pssmlt's bdpt states; and the jumps do move the
+ * chains (one seed's images with and without differ). Slow: not part of
+ * the sanitizer's run, whose unit tests of the moves are test_mmlt_jump's.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -40,6 +40,10 @@ static void test_mmlt_jump(void **state) {
   g_perturb = "0.3";
   check_scene("diffuse_sphere.xml", "mmlt", 16, e, 2, 0.0);
   check_scene("mask.xml", "mmlt", 16, em, 3, 0.0);
+  /* The same moves on the bdpt states (pssmlt's): the path moves change
+   * the path's length there. */
+  check_scene("diffuse_sphere.xml", "pssmlt", 16, e, 2, 0.0);
+  check_scene("mask.xml", "pssmlt", 16, em, 3, 0.0);
   g_perturb = NULL;
   film fj, fn;
   render_seed7("furnace.xml", "mmlt", &fj);
@@ -51,8 +55,8 @@ static void test_mmlt_jump(void **state) {
 static void test_count(void **state) {
   (void)state;
   /* jumps: furnace 1, sphere 2, mask 3 groups; with perturbations: sphere
-   * 2, mask 3; 3 channels each. */
-  assert_int_equal(g_checks, (1 + 2 + 3 + 2 + 3) * 3);
+   * 2, mask 3, on the mmlt and the bdpt states; 3 channels each. */
+  assert_int_equal(g_checks, (1 + 2 + 3 + 2 * (2 + 3)) * 3);
 }
 
 int main(void) {

@@ -135,15 +135,16 @@ static const lmc_opt mcmc__opts[] = {
      NULL},
     {"technique-jump", LMC_OPT_DOUBLE, offsetof(mcmc_settings, jump_prob), 0, 0, 1, NULL, NULL,
      0, "P", "0",
-     "mmlt states: share of the mutations that are not large steps made reversible jumps, the "
-     "path kept, its strategy redrawn by the MIS weights and its numbers found by inverting the "
-     "subpaths (exact)",
+     "bdpt and mmlt states: share of the mutations that are not large steps made reversible "
+     "jumps, the path kept, its strategy redrawn by the MIS weights and its numbers found by "
+     "inverting the subpaths (exact)",
      NULL},
     {"path-mutations", LMC_OPT_DOUBLE, offsetof(mcmc_settings, path_prob), 0, 0, 1, NULL, NULL, 0,
      "P", "0",
-     "mmlt states: share of the mutations that are not large steps made path-space mutations "
-     "of the state's path (bidirectional, lens, multi-chain, caustic, lens subpath), mapped "
-     "back to a strategy's numbers (exact)",
+     "bdpt and mmlt states: share of the mutations that are not large steps made path-space "
+     "mutations of the state's path (bidirectional, lens, multi-chain, caustic, lens subpath; "
+     "on the bdpt states free to change its length), mapped back to a strategy's numbers "
+     "(exact)",
      NULL},
     {"sigma", LMC_OPT_DOUBLE, offsetof(mcmc_settings, sigma), 0, 1e-9, 1, NULL, NULL, 0,
      "S", "1/64; mmlt states 0.05; gauss 0.01", "the small step's scale S", NULL},
@@ -333,8 +334,8 @@ static lmc_status mcmc__setup(mcmc_render *R, lmc_error *err) {
   R->setup = (mc_method_setup){R->s, &R->crs, &R->ms, &R->sp};
   if ((R->ms.jump_prob > 0.0 || R->ms.path_prob > 0.0) && !R->sp.moves)
     return lmc_error_set(err, LMC_EUNSUPPORTED, NULL, 0,
-                         "--technique-jump and --path-mutations move the mmlt states (--states "
-                         "mmlt, mmlt's default), not the %s states",
+                         "--technique-jump and --path-mutations move the bdpt and the mmlt "
+                         "states (--states bdpt or mmlt), not the %s states",
                          R->sp.name);
   if (R->ms.jump_prob + R->ms.path_prob > 1.0)
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,

@@ -58,7 +58,7 @@ typedef struct mc_space_b_request {
 typedef struct mc_space mc_space;
 
 /* A state space's own moves: kernels that know its states (mmlt_jump.h's
- * reversible jump and fused path mutation on the mmlt states), which the
+ * reversible jump and fused path mutation on the mmlt and bdpt states), which the
  * driver adds to every chain of whatever integrator runs on the space when
  * --technique-jump or --path-mutations asks. */
 typedef struct mc_space_moves {
@@ -126,8 +126,8 @@ extern const int mc_space_ids[];
 extern const lmc_opt_table mc_space_bdpt_options;
 extern const lmc_opt_table mc_space_path_options;
 
-/* The mmlt states' moves (mmlt_moves.c). */
-extern const mc_space_moves mc_mmlt_moves;
+/* The moves of the mmlt and the bdpt states (mmlt_moves.c). */
+extern const mc_space_moves mc_strategy_moves;
 
 /* Frees what sp holds (accepts NULL and a space never created). */
 void mc_space_free(mc_space *sp);

@@ -576,6 +576,7 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
       chain__reject_outside(c, ki, splat, ctx);
       return ki;
     }
+    if (k->label && c->target->n_labels > 0) c->y.label = k->label(k->self);
     if (n_sub >= 0) {
       for (int q = 0; q < n_sub; q++) mc_pss_set(p, c->sub[q], c->y.u[c->sub[q]]);
     } else {

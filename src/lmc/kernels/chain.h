@@ -44,8 +44,8 @@
  * so this is rare (it is counted: mc_chain.overflow).
  *
  * Labelled targets (target.h, n_labels > 0: the state is (u, l)). Every
- * kernel but the large step keeps the label and evaluates f(u, l) alone
- * (eval_label). The large step proposes a fresh uniform u' (drawn and
+ * kernel but the large step and full kernels with a `label` keeps the
+ * label and evaluates f(u, l) alone (eval_label). The large step proposes a fresh uniform u' (drawn and
  * recorded apart from the lazy vector), evaluates every label there
  * (eval_all) and picks l' with probability f(u', l') / F(u'),
  * F = sum_l f(., l): an independence proposal whose Metropolis-Hastings
@@ -160,6 +160,12 @@ typedef struct mc_kernel {
    * coordinate gets the lazy vector's small step, a symmetric factor of
    * the proposal that cancels in the ratio. */
   int (*coords)(void *self, const mc_state *x, int *OUT_idx);
+  /* label(self) (may be NULL: x's label): labelled targets, the label of
+   * the proposal propose has just made. A full kernel that changes the
+   * label (a move between strategies of one path, mmlt_jump.h) writes
+   * every coordinate of y in the new label's coordinates; its densities
+   * are those of (u, label) pairs. */
+  int (*label)(void *self);
 } mc_kernel;
 
 /* Built-in kernels. */

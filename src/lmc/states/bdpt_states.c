@@ -427,5 +427,6 @@ lmc_status mc_space_bdpt_create(mc_space *OUT, const scene *s, const render_sett
   OUT->kmin = kmin;
   OUT->kmax = kmax;
   OUT->pool_large = 1;
+  OUT->moves = &mc_strategy_moves;
   return LMC_OK;
 }

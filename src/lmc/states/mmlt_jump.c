@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/states/bdpt_states.h"
 #include "lmc/states/mmlt_jump.h"
 #include "lmc/states/mmlt_states.h"
 #include "render/warp.h"
@@ -34,26 +35,50 @@ static double mmj__next(lmc_sampler *self) {
 
 static void mmj__stream(lmc_sampler *self, int stream) { ((mmj__vec *)self)->stream = stream; }
 
-/* Walks the state u's strategy (s, t) again into X_0 .. X_k, as
- * mc_mmlt_contribution makes it (for s = 1 the light vertex its connect
- * numbers sample). Returns 0 when the walk does not make a full path. */
-static int mmj__path(const mc_target *T, const double *u, int s, int t, bdpt_vertex *X,
+/* What the moves need of the two state spaces: the scene, the walks'
+ * settings, the film's margin, and how a strategy reads its numbers. */
+typedef struct mmj__space {
+  const scene *sc;
+  const render_settings *rs;
+  double margin;
+  double rough_min; /* bdpt states: absolute directions above it (>= 1, or mmlt: none) */
+} mmj__space;
+
+static mmj__space mmj__space_of(const mc_mmlt_jump *j) {
+  if (j->bs) return (mmj__space){j->bs->s, &j->bs->rs, j->bs->margin, j->bs->rough_min};
+  const mc_mmlt_states *st = j->target->ctx;
+  return (mmj__space){st->s, &st->rs, st->margin, 1.0};
+}
+
+/* The first of the three connect numbers strategy (s = 1, t) reads. */
+static int mmj__connect_at(const mc_mmlt_jump *j, int t) {
+  int c0 = mc_target_stream_offset(j->target, LMC_STREAM_CONNECT);
+  return j->bs ? c0 + BDPT_DIMS_CONNECT * (t - 2) : c0 + 1;
+}
+
+/* Walks the state u's strategy (s, t) again into X_0 .. X_k, k = s + t -
+ * 1, as the states' f makes it (for s = 1 the light vertex its connect
+ * numbers sample; on the bdpt states the strategy's rough vertices read
+ * absolute directions). Returns 0 when the walk does not make a full path. */
+static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_vertex *X,
                      bdpt_vertex *cam, bdpt_vertex *lp) {
-  const mc_mmlt_states *st = T->ctx;
-  const scene *sc = st->s;
-  int k = st->length;
+  const mc_target *T = j->target;
+  mmj__space S = mmj__space_of(j);
+  const scene *sc = S.sc;
+  int k = s + t - 1;
   mmj__vec v = {{mmj__next, mmj__stream, NULL}, T, u, LMC_STREAM_CAMERA, {0}, 0};
   render_counters cnt = {0};
-  double rx = -st->margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * st->margin);
-  double ry = -st->margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * st->margin);
-  if (bdpt_camera_subpath(sc, &st->rs, &v.base, rx, ry, t, cam, &cnt) < t) return 0;
+  double rx = -S.margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * S.margin);
+  double ry = -S.margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * S.margin);
+  bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
+  if (bdpt_camera_subpath_p(sc, S.rs, &v.base, rx, ry, t, &pc, cam, &cnt) < t) return 0;
   for (int i = 0; i < t; i++) X[i] = cam[i];
   if (s >= 2) {
     sampler_use_stream(&v.base, LMC_STREAM_LIGHT);
-    if (bdpt_light_subpath(sc, &st->rs, &v.base, s, lp, &cnt) < s) return 0;
-    for (int j = 0; j < s; j++) X[k - j] = lp[j];
+    if (bdpt_light_subpath_p(sc, S.rs, &v.base, s, &pl, lp, &cnt) < s) return 0;
+    for (int i = 0; i < s; i++) X[k - i] = lp[i];
   } else if (s == 1) {
-    const double *uc = u + mc_target_stream_offset(T, LMC_STREAM_CONNECT) + 1;
+    const double *uc = u + mmj__connect_at(j, t);
     double pmf, ur;
     int li = scene_sample_light(sc, uc[0], &pmf, &ur);
     light_li_sample ls;
@@ -73,29 +98,34 @@ static int mmj__path(const mc_target *T, const double *u, int s, int t, bdpt_ver
   return !v.past;
 }
 
-/* The numbers of strategy (s, t) for the path X into y (every number X
- * does not fix already a fresh uniform there). Returns 0 when a subpath
- * cannot be inverted. */
+/* The numbers of strategy (s, t) for the path X of length k = s + t - 1
+ * into y (every number X does not fix already a fresh uniform there; on
+ * the mmlt states the technique coordinate uniform in t's interval, on
+ * the bdpt states the strategy's rough vertices absolute). Returns 0 when
+ * a subpath cannot be inverted. */
 static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, int t, double *y) {
   const mc_target *T = j->target;
-  const mc_mmlt_states *st = T->ctx;
-  const scene *sc = st->s;
-  int k = st->length, n = st->n_strategies;
+  mmj__space S = mmj__space_of(j);
+  const scene *sc = S.sc;
+  int k = s + t - 1;
   bdpt_vertex *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
   double *uc = y + mc_target_stream_offset(T, LMC_STREAM_CAMERA);
   double *ul = y + mc_target_stream_offset(T, LMC_STREAM_LIGHT);
-  double *ux = y + mc_target_stream_offset(T, LMC_STREAM_CONNECT);
-  /* The technique coordinate: uniform in t's interval. */
-  ux[0] = warp_uniform_in((double)(t - 1) / n, (double)t / n, rng_uniform(r));
+  if (!j->bs) {
+    int n = ((const mc_mmlt_states *)T->ctx)->n_strategies;
+    y[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] =
+        warp_uniform_in((double)(t - 1) / n, (double)t / n, rng_uniform(r));
+  }
   bdpt_resplit(sc, X, k, s, t, cam, lp);
+  bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
   double buf[2 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * MMJ_N];
   if (t >= 2) {
     double rx, ry;
     j->st.inversions++;
-    if (!bdpt_invert_camera_subpath(sc, &st->rs, NULL, cam, t, r, &rx, &ry, buf)) return 0;
+    if (!bdpt_invert_camera_subpath(sc, S.rs, &pc, cam, t, r, &rx, &ry, buf)) return 0;
     /* The film grown by the filter's radius, as the states sample it. */
-    uc[0] = (rx + st->margin) / (sc->cam.width + 2.0 * st->margin);
-    uc[1] = (ry + st->margin) / (sc->cam.height + 2.0 * st->margin);
+    uc[0] = (rx + S.margin) / (sc->cam.width + 2.0 * S.margin);
+    uc[1] = (ry + S.margin) / (sc->cam.height + 2.0 * S.margin);
     if (!(uc[0] >= 0.0 && uc[0] < 1.0 && uc[1] >= 0.0 && uc[1] < 1.0)) return 0;
     int m = BDPT_DIMS_PER_VERTEX * (t - 1);
     if (2 + m > T->stream_dim[LMC_STREAM_CAMERA]) return 0;
@@ -103,43 +133,70 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
   }
   if (s >= 2) {
     j->st.inversions++;
-    if (!bdpt_invert_light_subpath(sc, &st->rs, NULL, lp, s, r, buf)) return 0;
+    if (!bdpt_invert_light_subpath(sc, S.rs, &pl, lp, s, r, buf)) return 0;
     int m = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (s - 1);
     if (m > T->stream_dim[LMC_STREAM_LIGHT]) return 0;
     memcpy(ul, buf, (size_t)m * sizeof *buf);
   } else if (s == 1) {
     j->st.inversions++;
-    if (!bdpt_invert_connect(sc, &cam[t - 1], &X[k], r, ux + 1)) return 0;
+    if (!bdpt_invert_connect(sc, &cam[t - 1], &X[k], r, y + mmj__connect_at(j, t))) return 0;
   }
   return 1;
 }
 
+/* The label of strategy (s, t) on the bdpt states (-1: not one). */
+static int mmj__label(const mc_bdpt_states *bs, int s, int t) {
+  return s >= 0 && t >= 1 && s + t - 1 <= bs->kmax ? bs->label_of[s * (bs->kmax + 2) + t] : -1;
+}
+
 /* What both moves do first: count the proposal, fill y with fresh
  * uniforms (the numbers the new path will not fix), and walk the state x's
- * path again into j->v (its strategy into *OUT_t). The walk is a function
- * of x's numbers: when they are those of the last walk (x stayed since
- * this kernel's last proposal from it), its path is still in j->v. Returns
- * 0 when x has no path to move (f = 0, or its walk reads past its
- * blocks). */
-static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_t) {
+ * path again into j->v (its strategy into *OUT_s, *OUT_t: on the mmlt
+ * states from the technique coordinate, on the bdpt states the label).
+ * The walk is a function of x's numbers and label: when they are those of
+ * the last walk (x stayed since this kernel's last proposal from it), its
+ * path is still in j->v. Returns 0 when x has no path to move (f = 0, or
+ * its walk reads past its blocks). */
+static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_s,
+                      int *OUT_t) {
   const mc_target *T = j->target;
-  const mc_mmlt_states *st = T->ctx;
-  int k = st->length, n = st->n_strategies;
   j->st.proposed++;
   for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
   if (!(x->v.f > 0.0)) return 0;
-  int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
-  if (idx >= n) idx = n - 1;
-  *OUT_t = k == 1 ? 2 : idx + 1;
+  if (j->bs) {
+    if (x->label < 0 || x->label >= j->bs->n_labels) return 0;
+    *OUT_s = j->bs->strat[x->label].s, *OUT_t = j->bs->strat[x->label].t;
+  } else {
+    const mc_mmlt_states *st = T->ctx;
+    int k = st->length, n = st->n_strategies;
+    int idx = (int)(x->u[mc_target_stream_offset(T, LMC_STREAM_CONNECT)] * n);
+    if (idx >= n) idx = n - 1;
+    *OUT_t = k == 1 ? 2 : idx + 1;
+    *OUT_s = k + 1 - *OUT_t;
+  }
   size_t bytes = (size_t)x->dim * sizeof *x->u;
-  if (j->walked_ok && !memcmp(j->walked_u, x->u, bytes)) {
+  if (j->walked_ok && j->walked_label == x->label && !memcmp(j->walked_u, x->u, bytes)) {
     j->st.reused++;
     return 1;
   }
-  j->walked_ok =
-      mmj__path(T, x->u, k + 1 - *OUT_t, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
-  if (j->walked_ok) memcpy(j->walked_u, x->u, bytes);
+  j->walked_ok = mmj__path(j, x->u, *OUT_s, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+  if (j->walked_ok) memcpy(j->walked_u, x->u, bytes), j->walked_label = x->label;
   return j->walked_ok;
+}
+
+/* The MIS weights w[t] (t = 1 .. k + 1) of the strategies of the path X of
+ * length k that the states have: length 1 has (0, 2) alone, and on the
+ * bdpt states a strategy without a label has weight 0. */
+static void mmj__weights(const mc_mmlt_jump *j, const bdpt_vertex *X, int k, double *w) {
+  mmj__space S = mmj__space_of(j);
+  if (k == 1) {
+    w[1] = 0.0, w[2] = 1.0;
+    return;
+  }
+  bdpt_mis_weights(S.sc, X, k, j->v + 2 * MMJ_N, w);
+  if (j->bs)
+    for (int t = 1; t <= k + 1; t++)
+      if (mmj__label(j->bs, k + 1 - t, t) < 0) w[t] = 0.0;
 }
 
 /* A strategy t' != skip (0: none skipped) of weight w[t'] > 0, drawn with
@@ -159,14 +216,15 @@ static int mmj__draw(rng *r, const double *w, int k, int skip, double sum) {
 
 static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
-  const mc_mmlt_states *st = j->target->ctx;
-  int k = st->length, t;
-  bdpt_vertex *X = j->v, *cam = j->v + 2 * MMJ_N;
-  if (st->n_strategies < 2 || !mmj__begin(j, r, x, OUT_y, &t)) return -INFINITY;
+  int s0, t;
+  bdpt_vertex *X = j->v;
+  j->label_to = x->label;
+  if (!mmj__begin(j, r, x, OUT_y, &s0, &t)) return -INFINITY;
+  int k = s0 + t - 1;
 
   /* Every strategy's weight; t' != t drawn with w_t' / (W - w_t). */
   double w[MMJ_N + 1], sum = 0.0;
-  bdpt_mis_weights(st->s, X, k, cam, w);
+  mmj__weights(j, X, k, w);
   for (int tp = 1; tp <= k + 1; tp++) sum += w[tp];
   double rest = sum - w[t];
   if (!(w[t] > 0.0) || !(rest > 0.0)) {
@@ -178,6 +236,7 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
     j->st.refused++;
     return -INFINITY;
   }
+  if (j->bs) j->label_to = mmj__label(j->bs, k + 1 - t2, t2);
   j->log_rest_to = log(sum - w[t2]);
   j->rx = x->v.rx, j->ry = x->v.ry;
   return -log(x->v.f) - log(rest);
@@ -259,32 +318,36 @@ static int mmj__path_move(mc_mmlt_jump *j, rng *r, const ps_path *P, ps_path *Y,
  * (mmlt_jump.h). */
 static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
-  const mc_mmlt_states *st = j->target->ctx;
-  int k = st->length, t;
-  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N, *cam = j->v + 2 * MMJ_N;
-  if (!mmj__begin(j, r, x, OUT_y, &t)) return -INFINITY;
+  int s0, t;
+  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N;
+  j->label_to = x->label;
+  if (!mmj__begin(j, r, x, OUT_y, &s0, &t)) return -INFINITY;
+  int k = s0 + t - 1;
   ps_path *P = j->px, *Y = j->py;
   double ratio = 0.0;
+  /* (On the mmlt states the path space has the family's length alone.) */
   if (!ps_from_bdpt(&j->ctx, X, k + 1, NULL, 0, P) || !(P->lum > 0.0) ||
-      !mmj__path_move(j, r, P, Y, &ratio) || !(ratio > 0.0) || Y->k != k) {
+      !mmj__path_move(j, r, P, Y, &ratio) || !(ratio > 0.0) || Y->k < j->ctx.kmin ||
+      Y->k > j->ctx.kmax) {
     j->st.lone++;
     return -INFINITY;
   }
   /* The new path's strategy, by its MIS weights. */
+  int ky = Y->k;
   double w[MMJ_N + 1], sum = 0.0;
-  for (int i = 0; i <= k; i++) Xy[i] = Y->x[i].v;
-  bdpt_mis_weights(st->s, Xy, k, cam, w);
-  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp];
+  for (int i = 0; i <= ky; i++) Xy[i] = Y->x[i].v;
+  mmj__weights(j, Xy, ky, w);
+  for (int tp = 1; tp <= ky + 1; tp++) sum += w[tp];
   if (!(sum > 0.0)) {
     j->st.lone++;
     return -INFINITY;
   }
-  int t2 = mmj__draw(r, w, k, 0, sum);
-  if (k == 1) t2 = 2; /* (length 1 has one strategy in these states) */
-  if (!mmj__numbers(j, r, Xy, k + 1 - t2, t2, OUT_y)) {
+  int t2 = mmj__draw(r, w, ky, 0, sum);
+  if (!mmj__numbers(j, r, Xy, ky + 1 - t2, t2, OUT_y)) {
     j->st.refused++;
     return -INFINITY;
   }
+  if (j->bs) j->label_to = mmj__label(j->bs, ky + 1 - t2, t2);
   j->log_rest_to = 0.0;
   j->rx = Y->rx, j->ry = Y->ry;
   return -log(x->v.f) - log(ratio);
@@ -298,11 +361,17 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
   j->test_kind = -1;
   j->v = malloc(4 * MMJ_N * sizeof *j->v);
   j->walked_u = malloc((size_t)(mmlt_target->dim > 0 ? mmlt_target->dim : 1) * sizeof *j->walked_u);
+  /* The bdpt states are the labelled target these moves know. */
+  if (mmlt_target->n_labels > 0) j->bs = mmlt_target->ctx;
   if (perturb) {
-    const mc_mmlt_states *st = mmlt_target->ctx;
-    ps_context_init(&j->ctx, st->s, &st->rs);
-    /* The family's paths all have its length: so have the moves'. */
-    j->ctx.kmin = j->ctx.kmax = st->length;
+    mmj__space S = mmj__space_of(j);
+    ps_context_init(&j->ctx, S.sc, S.rs);
+    if (j->bs) {
+      j->ctx.kmin = j->bs->kmin, j->ctx.kmax = j->bs->kmax;
+    } else {
+      /* The family's paths all have its length: so have the moves'. */
+      j->ctx.kmin = j->ctx.kmax = ((const mc_mmlt_states *)mmlt_target->ctx)->length;
+    }
     mut_perturb_init(&j->mp, &j->ctx);
     mut_bidir_init(&j->mb, &j->ctx);
     mut_lenssub_init(&j->ml, &j->ctx);
@@ -327,6 +396,8 @@ void mc_mmlt_jump_free(mc_mmlt_jump *j) {
   j->px = j->py = NULL;
 }
 
+static int mmj__label_to(void *self) { return ((const mc_mmlt_jump *)self)->label_to; }
+
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   mc_kernel k;
   memset(&k, 0, sizeof k);
@@ -335,5 +406,6 @@ mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   k.self = j;
   k.propose = j->perturb ? mmj__propose_perturb : mmj__propose;
   k.log_density = mmj__log_density;
+  if (j->bs) k.label = mmj__label_to;
   return k;
 }

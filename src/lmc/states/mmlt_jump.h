@@ -1,8 +1,9 @@
 /*
  * mmlt_jump.h: the reversible jump between the strategies of the mmlt
- * states (Bitterli, Jakob, Novak and Jarosz 2017, "Reversible Jump
- * Metropolis Light Transport using Inverse Mappings"): a move that keeps
- * the state's path and changes the strategy (s, t) that makes it.
+ * and the bdpt states (Bitterli, Jakob, Novak and Jarosz 2017, "Reversible
+ * Jump Metropolis Light Transport using Inverse Mappings"): a move that
+ * keeps the state's path and changes the strategy (s, t) that makes it;
+ * and the fused path mutation.
  *
  * The move. From a state of strategy t (its path x = x_0 .. x_k, walked
  * again from its numbers), the MIS weights w_t'(x) of every strategy of
@@ -49,6 +50,19 @@
  * A state whose path has no contribution in path space (its camera ray in
  * the film's margin, which the states sample) stays.
  *
+ * On the bdpt states (bdpt_states.h; a labelled target) the same moves
+ * change the state's label: the strategy is the label's (s, t), a new
+ * strategy's numbers are written in its label's coordinates (its rough
+ * vertices' absolute directions, the s = 1 connect triple of its t), and
+ * the kernel reports the new label (chain.h's mc_kernel.label). The
+ * target of (u, l) is the strategy's MIS-weighted contribution in l's
+ * coordinates, w_l(x) C(x) / p_l(x) up to the film's constant, with p_l
+ * the density of x in those coordinates, which the inverse's Jacobian is:
+ * the same two ratios follow. One family holds every length in [kmin,
+ * kmax], so the path moves keep that range alone: Veach's bidirectional
+ * mutation changes the path's length, as in mlt, and the chain's marginal
+ * over paths is C(x) over all of them.
+ *
  * Cost. Each move walks the state's path again from its numbers; a
  * kernel keeps the last path it walked with those numbers and skips the
  * walk when the state has not moved since (a rejected proposal of any
@@ -88,7 +102,11 @@ typedef struct mc_mmlt_jump_stats {
 /* One chain's jump or fused move: its target (an mmlt family's), scratch
  * and counts. */
 typedef struct mc_mmlt_jump {
-  const mc_target *target; /* borrowed; target->ctx is the family's mc_mmlt_states */
+  const mc_target *target; /* borrowed; target->ctx is the family's mc_mmlt_states, or for
+                              a labelled target the mc_bdpt_states (bs) */
+  const struct mc_bdpt_states *bs; /* the bdpt states, or NULL: the mmlt states */
+  int label_to;            /* bdpt states: the label of the last proposal */
+  int walked_label;        /* bdpt states: the label of walked_u */
   int perturb;             /* 0: the strategy jump; 1: the fused path perturbation */
   ps_context ctx;          /* perturb: the path space of the family's paths */
   mut_perturb mp;          /* perturb: the perturbations' sizes */

@@ -1,9 +1,9 @@
 /*
- * mmlt_moves.c: the mmlt states' own moves (space.h's mc_space_moves):
- * the reversible jump and the fused path mutation of mmlt_jump.h, one of
- * each per chain, added by the driver to the kernels of any integrator on
- * these states (pssmlt, mmlt, lmc, h2mc) when --technique-jump or
- * --path-mutations asks, with their statistics lines.
+ * mmlt_moves.c: the moves of the mmlt and the bdpt states (space.h's
+ * mc_space_moves): the reversible jump and the fused path mutation of
+ * mmlt_jump.h, one of each per chain, added by the driver to the kernels
+ * of any integrator on these states (pssmlt, mmlt, lmc, h2mc) when
+ * --technique-jump or --path-mutations asks, with their statistics lines.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -66,7 +66,8 @@ static lmc_status mmm__create(void **OUT_run, const mc_space *sp, int n, const i
  * family has a strategy to change. */
 static int mmm__add_kernels(void *r, int i, mc_kernel *k, double *p, int n) {
   mmm__run *run = r;
-  int jump = run->jumps && run->space->fam[run->family[i]].technique >= 0;
+  const mc_space_family *F = &run->space->fam[run->family[i]];
+  int jump = run->jumps && (F->technique >= 0 || F->target.n_labels > 0);
   double share = (jump ? run->jump : 0.0) + (run->paths ? run->path : 0.0);
   if (!(share > 0.0) || n < 1 || n + 2 > MC_MAX_KERNELS) return n;
   double rest = k[0].kind == MC_KERNEL_LARGE ? 1.0 - p[0] : 1.0;
@@ -131,7 +132,7 @@ static void mmm__report(void *r, mc_chain *const *chains, int n, double chain_se
                       chain_seconds);
 }
 
-const mc_space_moves mc_mmlt_moves = {
+const mc_space_moves mc_strategy_moves = {
     .create = mmm__create,
     .destroy = mmm__destroy,
     .add_kernels = mmm__add_kernels,

@@ -460,6 +460,6 @@ lmc_status mc_space_mmlt_create(mc_space *OUT, const scene *s, const render_sett
   OUT->pool_large = 0;
   OUT->b_note = "whole BDPT samples, every length";
   OUT->estimate_b = mms__estimate_b;
-  OUT->moves = &mc_mmlt_moves;
+  OUT->moves = &mc_strategy_moves;
   return LMC_OK;
 }
