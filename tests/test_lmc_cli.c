@@ -176,7 +176,8 @@ static void test_state_moves_flags(void **state) {
       if (!l) fail_msg("%s: no '%s' line:\n%s", integ[i], lines[q], err_text);
       long long proposed = 0;
       double acc = 0.0;
-      assert_int_equal(sscanf(l + strlen(lines[q]), "%lld proposed, %lf%% accepted", &proposed, &acc), 2);
+      int got = sscanf(l + strlen(lines[q]), "%lld proposed, %lf%% accepted", &proposed, &acc);
+      assert_int_equal(got, 2);
       assert_true(proposed > 100);
       assert_true(acc > 0.0);
       checked++;

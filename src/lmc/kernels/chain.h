@@ -45,10 +45,10 @@
  *
  * Labelled targets (target.h, n_labels > 0: the state is (u, l)). Every
  * kernel but the large step and full kernels with a `label` keeps the
- * label and evaluates f(u, l) alone (eval_label). The large step proposes a fresh uniform u' (drawn and
- * recorded apart from the lazy vector), evaluates every label there
- * (eval_all) and picks l' with probability f(u', l') / F(u'),
- * F = sum_l f(., l): an independence proposal whose Metropolis-Hastings
+ * label and evaluates f(u, l) alone (eval_label). The large step proposes
+ * a fresh uniform u' (drawn and recorded apart from the lazy vector),
+ * evaluates every label there (eval_all) and picks l' with probability
+ * f(u', l') / F(u'), F = sum_l f(., l): an independence proposal whose Metropolis-Hastings
  * ratio is F(u') / F(u). F(u) of the current state is known when that
  * state came from a large step; after a small step it is not, and is
  * computed only when needed, by a Russian roulette that keeps the step
