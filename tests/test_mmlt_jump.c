@@ -20,10 +20,13 @@
  * least 0.1%), and negative controls, the same moves with every proposal
  * accepted, must fail the same test (|z| > 8 for the jump, > 5 for the
  * path moves, whose ratio is mostly near 1, and the bidirectional
- * mutation alone beyond the critical |z|). This test found that an area light hit by the camera
- * walk, re-split as a light endpoint, must take the light walk's record
- * (bdpt_resplit) for its MIS weight. LMC_TEST_SCENE=FILE runs it on
- * another scene (for diagnosis).
+ * mutation alone beyond the critical |z|). The same on the bdpt states
+ * (test_invariance_bdpt), whose moves also hand the chain their
+ * proposal's value: each state a move reached is evaluated again through
+ * the target, and must agree bit for bit. This test found that an area
+ * light hit by the camera walk, re-split as a light endpoint, must take
+ * the light walk's record (bdpt_resplit) for its MIS weight.
+ * LMC_TEST_SCENE=FILE runs it on another scene (for diagnosis).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -123,6 +126,23 @@ static int film_cell(double rx, double ry) {
   return cy * NCX + cx;
 }
 
+/* A sampler over a state's coordinates, stream by stream (0.5 past a
+ * block), for evaluating a state through the target. */
+typedef struct vec_smp {
+  lmc_sampler base;
+  const mc_target *t;
+  const double *u;
+  int stream, pos[LMC_STREAM_COUNT];
+} vec_smp;
+
+static double vec_next(lmc_sampler *self) {
+  vec_smp *v = (vec_smp *)self;
+  int k = v->stream, p = v->pos[k]++;
+  return p < v->t->stream_dim[k] ? v->u[mc_target_stream_offset(v->t, k) + p] : 0.5;
+}
+
+static void vec_stream(lmc_sampler *self, int stream) { ((vec_smp *)self)->stream = stream; }
+
 /* The largest |z| over the strategies and the film cells after N starts
  * and one move each (perturb: the fused path perturbation, else the
  * strategy jump), on the mmlt states of length k (kmax 0) or on the bdpt
@@ -174,7 +194,8 @@ static double worst_z(int k, int kmax, int n_starts, int accept_all, int perturb
   }
   qsort(fs, (size_t)np, sizeof fs[0], cmp_double);
   for (int q = 0; q < NFB - 1; q++) fq[q] = fs[(q + 1) * np / NFB];
-  int used = 0;
+  int used = 0, compared = 0, same = 0;
+  void *scr = bdpt ? T.scratch_create(&T) : NULL;
   for (int i = 0; i < n_starts; i++) {
     double f = mc_chain_start(c, seed, (uint64_t)i, (uint64_t)i + CHAIN_STREAMS);
     if (!(f > 0.0)) continue;
@@ -199,8 +220,20 @@ static double worst_z(int k, int kmax, int n_starts, int accept_all, int perturb
       moved += wt * (c->x.u[w.off] != w.tech_before);
     total += wt;
     used++;
+    /* The bdpt states' moves hand the chain the value of their proposal
+     * (mc_kernel.value): the target's own, bit for bit. */
+    if (bdpt && c->x.v.f > 0.0 && (a != b || c->x.v.rx != w.rx_before)) {
+      vec_smp vs = {{vec_next, vec_stream, NULL}, &T, c->x.u, LMC_STREAM_CAMERA, {0}};
+      mc_value v;
+      assert_int_equal(T.eval_label(&T, scr, &vs.base, c->x.label, &v, NULL, NULL), 0);
+      same += v.f == c->x.v.f && v.rx == c->x.v.rx && v.ry == c->x.v.ry;
+      compared++;
+    }
   }
+  if (scr) T.scratch_destroy(scr);
   assert_true(used > 3000);
+  assert_int_equal(same, compared);
+  if (bdpt && !accept_all && kind != MC_PATH_MOVE_MULTICHAIN) assert_true(compared > 1000);
   double worst = 0.0;
   for (int q = 0; q < nq; q++) {
     double mean = sum[q] / n_starts;
@@ -211,11 +244,12 @@ static double worst_z(int k, int kmax, int n_starts, int accept_all, int perturb
   static const char *const kinds[MC_PATH_MOVE_COUNT] = {"bidirectional", "lens", "multi-chain",
                                                         "caustic", "lens subpath"};
   print_message("%s%s%s, %s states, length %d%s%s: %d states with f > 0, %.1f%% (weighted) "
-                "moved, worst |z| %.2f; no move %lld, refused %lld, walked elsewhere %lld\n",
+                "moved, worst |z| %.2f; no move %lld, refused %lld, walked elsewhere %lld; %d values "
+                "checked\n",
                 perturb ? "path move" : "jump", kind >= 0 ? ": " : "",
                 kind >= 0 ? kinds[kind] : "", bdpt ? "bdpt" : "mmlt", k, bdpt ? " and longer" : "",
                 accept_all ? " (accept all)" : "", used, 100.0 * moved / total, worst,
-                (long long)j.st.lone, (long long)j.st.refused, (long long)j.st.mismatch);
+                (long long)j.st.lone, (long long)j.st.refused, (long long)j.st.mismatch, compared);
   *OUT_moved = moved / total;
   mc_chain_destroy(c);
   mc_mmlt_jump_free(&j);

@@ -585,8 +585,13 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
     int delayed = k->log_screen && c->x.v.f > 0.0;
     /* The proposal with what the kernel needs at a state (gradient, or
      * Hessian: the reverse density is built from it); none before a first
-     * test of delayed acceptance. */
-    chain__eval(c, &c->y, delayed ? 0 : k->needs_grad);
+     * test of delayed acceptance. A kernel that evaluated y gives its value. */
+    if (k->value && !k->needs_grad && !k->log_screen && k->value(k->self, &c->y.v)) {
+      c->y.grad_ok = c->y.hess_ok = c->y.grad_eval = 0;
+      if (!(c->y.v.f >= 0.0) || !isfinite(c->y.v.f)) c->y.v.f = c->y.v.f_large = 0.0;
+    } else {
+      chain__eval(c, &c->y, delayed ? 0 : k->needs_grad);
+    }
     if (delayed && c->y.v.f > 0.0) {
       c->screened++;
       double s1 = k->log_screen(k->self, &c->x, c->y.u, c->y.v.f);

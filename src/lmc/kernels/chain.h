@@ -166,6 +166,12 @@ typedef struct mc_kernel {
    * every coordinate of y in the new label's coordinates; its densities
    * are those of (u, label) pairs. */
   int (*label)(void *self);
+  /* value(self, OUT) (may be NULL): a full kernel without gradients or a
+   * screen whose propose has evaluated its proposal y itself, with the
+   * target's own function of y's coordinates (and label): returns 1 and
+   * y's value, which the chain then takes instead of evaluating y; 0 when
+   * it has none (the chain evaluates y). */
+  int (*value)(void *self, mc_value *OUT);
 } mc_kernel;
 
 /* Built-in kernels. */

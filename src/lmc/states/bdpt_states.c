@@ -155,19 +155,25 @@ static int bs__eval_label(const mc_target *t, void *scratch, lmc_sampler *smp, i
     int nl = bdpt_light_subpath_p(s, &st->rs, smp, ss, &pl, sc->lp, &sc->cnt);
     if (nl < ss) return 0;
   }
+  mc_bdpt_states_value(st, sc->cam, tt, sc->lp, ss, uc, rx, ry, OUT_value, &sc->cnt);
+  return 0;
+}
+
+void mc_bdpt_states_value(const mc_bdpt_states *st, const bdpt_vertex *cam, int tt,
+                          const bdpt_vertex *lp, int ss, const double *uc, double rx, double ry,
+                          mc_value *OUT_value, render_counters *cnt) {
   double prx = rx, pry = ry;
-  rgb c = bdpt_connect(s, sc->cam, tt, sc->lp, ss, uc, &prx, &pry, NULL, &sc->cnt);
+  rgb c = bdpt_connect(st->s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
   if (tt != 1) c = rgb_scale(c, st->area);
-  bs__value(OUT_value, c, prx, pry, &sc->cnt);
+  bs__value(OUT_value, c, prx, pry, cnt);
   /* The density in the label's coordinates. */
-  double jac = st->rough_min < 1.0 ? bs__jacobian(sc->cam, tt, sc->lp, ss) : 1.0;
+  double jac = st->rough_min < 1.0 ? bs__jacobian(cam, tt, lp, ss) : 1.0;
   OUT_value->f *= jac;
   OUT_value->value = rgb_scale(OUT_value->value, jac);
   if (!(OUT_value->f > 0.0) || !isfinite(OUT_value->f)) {
     OUT_value->f = OUT_value->f_large = 0.0;
     OUT_value->value = rgb_zero();
   }
-  return 0;
 }
 
 static int bs__eval_all(const mc_target *t, void *scratch, lmc_sampler *smp, int from_label,

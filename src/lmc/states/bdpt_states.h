@@ -83,5 +83,14 @@ void mc_bdpt_states_free(mc_bdpt_states *ctx);
 /* Path length (segments) of a label. */
 int mc_bdpt_states_length(const mc_bdpt_states *ctx, int label);
 
+/* The value of label (s, t) (eval_label's f, value, raster point and
+ * f_large) from its walked subpaths cam[0 .. t-1] and lp[0 .. s-1], made
+ * from its numbers with the label's parametrization (bdpt_param {t - 1,
+ * rough_min} and {s - 1, rough_min}; the camera walk through (rx, ry), or
+ * (0, 0) for t = 1), and for s = 1 the connect triple uc (else zeros). */
+void mc_bdpt_states_value(const mc_bdpt_states *ctx, const bdpt_vertex *cam, int t,
+                          const bdpt_vertex *lp, int s, const double *uc, double rx, double ry,
+                          mc_value *OUT_value, render_counters *cnt);
+
 
 #endif

@@ -59,7 +59,8 @@ static int mmj__connect_at(const mc_mmlt_jump *j, int t) {
 /* Walks the state u's strategy (s, t) again into X_0 .. X_k, k = s + t -
  * 1, as the states' f makes it (for s = 1 the light vertex its connect
  * numbers sample; on the bdpt states the strategy's rough vertices read
- * absolute directions). Returns 0 when the walk does not make a full path. */
+ * absolute directions), its subpaths into cam and lp. Returns 0 when the
+ * walk does not make a full path. */
 static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_vertex *X,
                      bdpt_vertex *cam, bdpt_vertex *lp) {
   const mc_target *T = j->target;
@@ -68,8 +69,11 @@ static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_
   int k = s + t - 1;
   mmj__vec v = {{mmj__next, mmj__stream, NULL}, T, u, LMC_STREAM_CAMERA, {0}, 0};
   render_counters cnt = {0};
-  double rx = -S.margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * S.margin);
-  double ry = -S.margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * S.margin);
+  double rx = 0.0, ry = 0.0; /* (the bdpt states' t = 1 reads no film numbers) */
+  if (!j->bs || t >= 2) {
+    rx = -S.margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * S.margin);
+    ry = -S.margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * S.margin);
+  }
   bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
   if (bdpt_camera_subpath_p(sc, S.rs, &v.base, rx, ry, t, &pc, cam, &cnt) < t) return 0;
   for (int i = 0; i < t; i++) X[i] = cam[i];
@@ -151,16 +155,19 @@ static int mmj__label(const mc_bdpt_states *bs, int s, int t) {
 
 /* What both moves do first: count the proposal, fill y with fresh
  * uniforms (the numbers the new path will not fix), and walk the state x's
- * path again into j->v (its strategy into *OUT_s, *OUT_t: on the mmlt
- * states from the technique coordinate, on the bdpt states the label).
- * The walk is a function of x's numbers and label: when they are those of
- * the last walk (x stayed since this kernel's last proposal from it), its
- * path is still in j->v. Returns 0 when x has no path to move (f = 0, or
- * its walk reads past its blocks). */
+ * path again into j->walked_x (its strategy into *OUT_s, *OUT_t: on the
+ * mmlt states from the technique coordinate, on the bdpt states the
+ * label). The walk is a function of x's numbers and label: when they are
+ * those of the last walk (x stayed since this kernel's last proposal from
+ * it) or of this kernel's last proposal (walked by propose on the bdpt
+ * states, and accepted), that path is used. Returns 0 when x has no path
+ * to move (f = 0, or its walk reads past its blocks), 2 when its path was
+ * kept, 1 when walked. */
 static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_s,
                       int *OUT_t) {
   const mc_target *T = j->target;
   j->st.proposed++;
+  j->y_ok = 0;
   for (int i = 0; i < x->dim; i++) OUT_y[i] = rng_uniform(r);
   if (!(x->v.f > 0.0)) return 0;
   if (j->bs) {
@@ -177,11 +184,48 @@ static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y,
   size_t bytes = (size_t)x->dim * sizeof *x->u;
   if (j->walked_ok && j->walked_label == x->label && !memcmp(j->walked_u, x->u, bytes)) {
     j->st.reused++;
-    return 1;
+    return 2;
   }
-  j->walked_ok = mmj__path(j, x->u, *OUT_s, *OUT_t, j->v, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+  if (j->pend_ok && j->pend_label == x->label && !memcmp(j->pend_u, x->u, bytes)) {
+    /* The last proposal, accepted: its walk becomes the state's. */
+    bdpt_vertex *tx = j->walked_x;
+    double *tu = j->walked_u;
+    j->walked_x = j->pend_x, j->walked_u = j->pend_u, j->walked_label = j->pend_label;
+    j->pend_x = tx, j->pend_u = tu;
+    j->walked_ok = 1, j->pend_ok = 0, j->px_ok = 0;
+    j->st.reused++;
+    return 2;
+  }
+  j->px_ok = 0;
+  j->walked_ok =
+      mmj__path(j, x->u, *OUT_s, *OUT_t, j->walked_x, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
   if (j->walked_ok) memcpy(j->walked_u, x->u, bytes), j->walked_label = x->label;
   return j->walked_ok;
+}
+
+/* The bdpt states: walks the proposal y (strategy (s, t), label) into
+ * j->pend_x and evaluates it there as the target does
+ * (mc_bdpt_states_value), for the chain (mc_kernel.value) and for this
+ * kernel's next proposal should y be accepted. */
+static void mmj__eval_proposal(mc_mmlt_jump *j, const double *y, int s, int t, int label) {
+  const mc_target *T = j->target;
+  bdpt_vertex *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
+  j->y_ok = j->pend_ok = 0;
+  if (label < 0 || !mmj__path(j, y, s, t, j->pend_x, cam, lp)) return;
+  memcpy(j->pend_u, y, (size_t)T->dim * sizeof *y);
+  j->pend_label = label, j->pend_ok = 1;
+  const double zero[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
+  double rx = 0.0, ry = 0.0;
+  if (t >= 2) {
+    const double *u = y + mc_target_stream_offset(T, LMC_STREAM_CAMERA);
+    const mc_bdpt_states *bs = j->bs;
+    rx = -bs->margin + u[0] * (bs->s->cam.width + 2.0 * bs->margin);
+    ry = -bs->margin + u[1] * (bs->s->cam.height + 2.0 * bs->margin);
+  }
+  render_counters cnt = {0};
+  mc_bdpt_states_value(j->bs, cam, t, lp, s, s == 1 ? y + mmj__connect_at(j, t) : zero, rx, ry,
+                       &j->yv, &cnt);
+  j->y_ok = 1;
 }
 
 /* The MIS weights w[t] (t = 1 .. k + 1) of the strategies of the path X of
@@ -217,9 +261,9 @@ static int mmj__draw(rng *r, const double *w, int k, int skip, double sum) {
 static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
   int s0, t;
-  bdpt_vertex *X = j->v;
   j->label_to = x->label;
   if (!mmj__begin(j, r, x, OUT_y, &s0, &t)) return -INFINITY;
+  const bdpt_vertex *X = j->walked_x;
   int k = s0 + t - 1;
 
   /* Every strategy's weight; t' != t drawn with w_t' / (W - w_t). */
@@ -236,7 +280,10 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
     j->st.refused++;
     return -INFINITY;
   }
-  if (j->bs) j->label_to = mmj__label(j->bs, k + 1 - t2, t2);
+  if (j->bs) {
+    j->label_to = mmj__label(j->bs, k + 1 - t2, t2);
+    mmj__eval_proposal(j, OUT_y, k + 1 - t2, t2, j->label_to);
+  }
   j->log_rest_to = log(sum - w[t2]);
   j->rx = x->v.rx, j->ry = x->v.ry;
   return -log(x->v.f) - log(rest);
@@ -319,14 +366,17 @@ static int mmj__path_move(mc_mmlt_jump *j, rng *r, const ps_path *P, ps_path *Y,
 static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
   int s0, t;
-  bdpt_vertex *X = j->v, *Xy = j->v + MMJ_N;
+  bdpt_vertex *Xy = j->v + MMJ_N;
   j->label_to = x->label;
-  if (!mmj__begin(j, r, x, OUT_y, &s0, &t)) return -INFINITY;
+  int begun = mmj__begin(j, r, x, OUT_y, &s0, &t);
+  if (!begun) return -INFINITY;
   int k = s0 + t - 1;
   ps_path *P = j->px, *Y = j->py;
   double ratio = 0.0;
-  /* (On the mmlt states the path space has the family's length alone.) */
-  if (!ps_from_bdpt(&j->ctx, X, k + 1, NULL, 0, P) || !(P->lum > 0.0) ||
+  /* The state's path in path space, kept with its walk. (On the mmlt
+   * states the path space has the family's length alone.) */
+  if (begun != 2 || !j->px_ok) j->px_ok = ps_from_bdpt(&j->ctx, j->walked_x, k + 1, NULL, 0, P);
+  if (!j->px_ok || !(P->lum > 0.0) ||
       !mmj__path_move(j, r, P, Y, &ratio) || !(ratio > 0.0) || Y->k < j->ctx.kmin ||
       Y->k > j->ctx.kmax) {
     j->st.lone++;
@@ -347,7 +397,10 @@ static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double
     j->st.refused++;
     return -INFINITY;
   }
-  if (j->bs) j->label_to = mmj__label(j->bs, ky + 1 - t2, t2);
+  if (j->bs) {
+    j->label_to = mmj__label(j->bs, ky + 1 - t2, t2);
+    mmj__eval_proposal(j, OUT_y, ky + 1 - t2, t2, j->label_to);
+  }
   j->log_rest_to = 0.0;
   j->rx = Y->rx, j->ry = Y->ry;
   return -log(x->v.f) - log(ratio);
@@ -359,8 +412,11 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
   j->target = mmlt_target;
   j->perturb = perturb;
   j->test_kind = -1;
-  j->v = malloc(4 * MMJ_N * sizeof *j->v);
-  j->walked_u = malloc((size_t)(mmlt_target->dim > 0 ? mmlt_target->dim : 1) * sizeof *j->walked_u);
+  size_t nu = (size_t)(mmlt_target->dim > 0 ? mmlt_target->dim : 1);
+  j->v = malloc(5 * MMJ_N * sizeof *j->v);
+  j->walked_u = malloc(2 * nu * sizeof *j->walked_u);
+  j->walked_x = j->v, j->pend_x = j->v ? j->v + 4 * MMJ_N : NULL;
+  j->u_block = j->walked_u, j->pend_u = j->walked_u ? j->walked_u + nu : NULL;
   /* The bdpt states are the labelled target these moves know. */
   if (mmlt_target->n_labels > 0) j->bs = mmlt_target->ctx;
   if (perturb) {
@@ -388,15 +444,22 @@ lmc_status mc_mmlt_jump_init(mc_mmlt_jump *j, const mc_target *mmlt_target, int 
 void mc_mmlt_jump_free(mc_mmlt_jump *j) {
   if (!j) return;
   free(j->v);
-  free(j->walked_u);
+  free(j->u_block);
   free(j->px);
   free(j->py);
   j->v = NULL;
-  j->walked_u = NULL;
+  j->walked_u = j->pend_u = j->u_block = NULL;
+  j->walked_x = j->pend_x = NULL;
   j->px = j->py = NULL;
 }
 
 static int mmj__label_to(void *self) { return ((const mc_mmlt_jump *)self)->label_to; }
+
+static int mmj__value(void *self, mc_value *OUT) {
+  const mc_mmlt_jump *j = self;
+  if (j->y_ok) *OUT = j->yv;
+  return j->y_ok;
+}
 
 mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   mc_kernel k;
@@ -406,6 +469,6 @@ mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   k.self = j;
   k.propose = j->perturb ? mmj__propose_perturb : mmj__propose;
   k.log_density = mmj__log_density;
-  if (j->bs) k.label = mmj__label_to;
+  if (j->bs) k.label = mmj__label_to, k.value = mmj__value;
   return k;
 }
