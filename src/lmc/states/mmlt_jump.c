@@ -9,6 +9,7 @@
 #include "lmc/states/bdpt_states.h"
 #include "lmc/states/mmlt_jump.h"
 #include "lmc/states/mmlt_states.h"
+#include "lmc/states/states.h"
 #include "render/warp.h"
 
 enum { MMJ_N = BDPT_MAX_VERTICES + 1 };
@@ -41,7 +42,8 @@ typedef struct mmj__space {
   const scene *sc;
   const render_settings *rs;
   double margin;
-  double rough_min; /* bdpt states: absolute directions above it (>= 1, or mmlt: none) */
+  double rough_min; /* bdpt states: absolute directions above it (the mmlt states walk with
+                       no bdpt_param: BSDF sampling everywhere) */
 } mmj__space;
 
 static mmj__space mmj__space_of(const mc_mmlt_jump *j) {
@@ -75,11 +77,12 @@ static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_
     ry = -S.margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * S.margin);
   }
   bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
-  if (bdpt_camera_subpath_p(sc, S.rs, &v.base, rx, ry, t, &pc, cam, &cnt) < t) return 0;
+  const bdpt_param *ppc = j->bs ? &pc : NULL, *ppl = j->bs ? &pl : NULL;
+  if (bdpt_camera_subpath_p(sc, S.rs, &v.base, rx, ry, t, ppc, cam, &cnt) < t) return 0;
   for (int i = 0; i < t; i++) X[i] = cam[i];
   if (s >= 2) {
     sampler_use_stream(&v.base, LMC_STREAM_LIGHT);
-    if (bdpt_light_subpath_p(sc, S.rs, &v.base, s, &pl, lp, &cnt) < s) return 0;
+    if (bdpt_light_subpath_p(sc, S.rs, &v.base, s, ppl, lp, &cnt) < s) return 0;
     for (int i = 0; i < s; i++) X[k - i] = lp[i];
   } else if (s == 1) {
     const double *uc = u + mmj__connect_at(j, t);
@@ -122,11 +125,12 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
   }
   bdpt_resplit(sc, X, k, s, t, cam, lp);
   bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
+  const bdpt_param *ppc = j->bs ? &pc : NULL, *ppl = j->bs ? &pl : NULL;
   double buf[2 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * MMJ_N];
   if (t >= 2) {
     double rx, ry;
     j->st.inversions++;
-    if (!bdpt_invert_camera_subpath(sc, S.rs, &pc, cam, t, r, &rx, &ry, buf)) return 0;
+    if (!bdpt_invert_camera_subpath(sc, S.rs, ppc, cam, t, r, &rx, &ry, buf)) return 0;
     /* The film grown by the filter's radius, as the states sample it. */
     uc[0] = (rx + S.margin) / (sc->cam.width + 2.0 * S.margin);
     uc[1] = (ry + S.margin) / (sc->cam.height + 2.0 * S.margin);
@@ -137,7 +141,7 @@ static int mmj__numbers(mc_mmlt_jump *j, rng *r, const bdpt_vertex *X, int s, in
   }
   if (s >= 2) {
     j->st.inversions++;
-    if (!bdpt_invert_light_subpath(sc, S.rs, &pl, lp, s, r, buf)) return 0;
+    if (!bdpt_invert_light_subpath(sc, S.rs, ppl, lp, s, r, buf)) return 0;
     int m = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (s - 1);
     if (m > T->stream_dim[LMC_STREAM_LIGHT]) return 0;
     memcpy(ul, buf, (size_t)m * sizeof *buf);
@@ -159,8 +163,8 @@ static int mmj__label(const mc_bdpt_states *bs, int s, int t) {
  * mmlt states from the technique coordinate, on the bdpt states the
  * label). The walk is a function of x's numbers and label: when they are
  * those of the last walk (x stayed since this kernel's last proposal from
- * it) or of this kernel's last proposal (walked by propose on the bdpt
- * states, and accepted), that path is used. Returns 0 when x has no path
+ * it) or of this kernel's last proposal (walked by propose, and
+ * accepted), that path is used. Returns 0 when x has no path
  * to move (f = 0, or its walk reads past its blocks), 2 when its path was
  * kept, 1 when walked. */
 static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y, int *OUT_s,
@@ -203,28 +207,35 @@ static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y,
   return j->walked_ok;
 }
 
-/* The bdpt states: walks the proposal y (strategy (s, t), label) into
- * j->pend_x and evaluates it there as the target does
- * (mc_bdpt_states_value), for the chain (mc_kernel.value) and for this
- * kernel's next proposal should y be accepted. */
+/* Walks the proposal y (strategy (s, t), label) into j->pend_x and
+ * evaluates it there as the target does (mc_bdpt_states_value, or the
+ * mmlt states' mc_mmlt_connect), for the chain (mc_kernel.value) and for
+ * this kernel's next proposal should y be accepted. */
 static void mmj__eval_proposal(mc_mmlt_jump *j, const double *y, int s, int t, int label) {
   const mc_target *T = j->target;
+  mmj__space S = mmj__space_of(j);
   bdpt_vertex *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
   j->y_ok = j->pend_ok = 0;
-  if (label < 0 || !mmj__path(j, y, s, t, j->pend_x, cam, lp)) return;
+  if ((j->bs && label < 0) || !mmj__path(j, y, s, t, j->pend_x, cam, lp)) return;
   memcpy(j->pend_u, y, (size_t)T->dim * sizeof *y);
   j->pend_label = label, j->pend_ok = 1;
   const double zero[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
-  double rx = 0.0, ry = 0.0;
-  if (t >= 2) {
+  const double *uc = s == 1 ? y + mmj__connect_at(j, t) : zero;
+  double rx = 0.0, ry = 0.0; /* (as mmj__path walked) */
+  if (!j->bs || t >= 2) {
     const double *u = y + mc_target_stream_offset(T, LMC_STREAM_CAMERA);
-    const mc_bdpt_states *bs = j->bs;
-    rx = -bs->margin + u[0] * (bs->s->cam.width + 2.0 * bs->margin);
-    ry = -bs->margin + u[1] * (bs->s->cam.height + 2.0 * bs->margin);
+    rx = -S.margin + u[0] * (S.sc->cam.width + 2.0 * S.margin);
+    ry = -S.margin + u[1] * (S.sc->cam.height + 2.0 * S.margin);
   }
   render_counters cnt = {0};
-  mc_bdpt_states_value(j->bs, cam, t, lp, s, s == 1 ? y + mmj__connect_at(j, t) : zero, rx, ry,
-                       &j->yv, &cnt);
+  if (j->bs) {
+    mc_bdpt_states_value(j->bs, cam, t, lp, s, uc, rx, ry, &j->yv, &cnt);
+  } else {
+    const mc_mmlt_states *st = T->ctx;
+    rgb c = mc_mmlt_connect(S.sc, cam, t, lp, s, uc, st->n_strategies, st->area, &cnt, &rx, &ry);
+    int64_t nan = 0;
+    mc_states_value(&j->yv, c, rx, ry, &nan);
+  }
   j->y_ok = 1;
 }
 
@@ -280,10 +291,8 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
     j->st.refused++;
     return -INFINITY;
   }
-  if (j->bs) {
-    j->label_to = mmj__label(j->bs, k + 1 - t2, t2);
-    mmj__eval_proposal(j, OUT_y, k + 1 - t2, t2, j->label_to);
-  }
+  if (j->bs) j->label_to = mmj__label(j->bs, k + 1 - t2, t2);
+  mmj__eval_proposal(j, OUT_y, k + 1 - t2, t2, j->label_to);
   j->log_rest_to = log(sum - w[t2]);
   j->rx = x->v.rx, j->ry = x->v.ry;
   return -log(x->v.f) - log(rest);
@@ -397,10 +406,8 @@ static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double
     j->st.refused++;
     return -INFINITY;
   }
-  if (j->bs) {
-    j->label_to = mmj__label(j->bs, ky + 1 - t2, t2);
-    mmj__eval_proposal(j, OUT_y, ky + 1 - t2, t2, j->label_to);
-  }
+  if (j->bs) j->label_to = mmj__label(j->bs, ky + 1 - t2, t2);
+  mmj__eval_proposal(j, OUT_y, ky + 1 - t2, t2, j->label_to);
   j->log_rest_to = 0.0;
   j->rx = Y->rx, j->ry = Y->ry;
   return -log(x->v.f) - log(ratio);
@@ -469,6 +476,7 @@ mc_kernel mc_mmlt_jump_kernel(mc_mmlt_jump *j) {
   k.self = j;
   k.propose = j->perturb ? mmj__propose_perturb : mmj__propose;
   k.log_density = mmj__log_density;
-  if (j->bs) k.label = mmj__label_to, k.value = mmj__value;
+  if (j->bs) k.label = mmj__label_to;
+  k.value = mmj__value;
   return k;
 }

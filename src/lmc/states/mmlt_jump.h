@@ -68,10 +68,11 @@
  * fused move, that path in path space) and skips the walk when the state
  * has not moved since (a rejected proposal of any kernel leaves it), a
  * function of the numbers alone, so the chain is the same, image for
- * image. On the bdpt states propose also walks its proposal from the new
- * numbers and evaluates it with the target's own function
- * (mc_bdpt_states_value), which the chain takes in place of evaluating y
- * (mc_kernel.value); once y is accepted, that walk is the state's.
+ * image. propose also walks its proposal from the new numbers and
+ * evaluates it with the target's own function (mc_bdpt_states_value, the
+ * mmlt states' mc_mmlt_connect), which the chain takes in place of
+ * evaluating y (mc_kernel.value); once y is accepted, that walk is the
+ * state's.
  *
  * Refusals. A re-split whose numbers a walk cannot reach (a direction
  * deep in a sampler's clamped tail, bsdf_invert) is refused: the state
@@ -123,11 +124,11 @@ typedef struct mc_mmlt_jump {
   double *walked_u;        /* (in u_block) that state's numbers (target->dim) */
   int walked_ok;           /* walked_x holds walk(walked_u) */
   int px_ok;               /* perturb: px holds walked_x in path space */
-  bdpt_vertex *pend_x;     /* (in v) bdpt states: the last proposal's walk, */
+  bdpt_vertex *pend_x;     /* (in v) the last proposal's walk, */
   double *pend_u;          /* (in u_block) its numbers */
   int pend_ok, pend_label; /* pend_x holds walk(pend_u) for pend_label */
   double *u_block;         /* owned: walked_u and pend_u */
-  mc_value yv;             /* bdpt states: the last proposal's value ... */
+  mc_value yv;             /* the last proposal's value ... */
   int y_ok;                /* ... when propose evaluated it (mc_kernel.value) */
   double log_rest_to;      /* log(W - w_t') of the last proposal, for log_density */
   double rx, ry;           /* the raster point of its path */

@@ -63,11 +63,17 @@ rgb mc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n
     if (nl < ss) return rgb_zero();
   }
 
+  return mc_mmlt_connect(s, cam, tt, lp, ss, uc, n, area, cnt, OUT_rx, OUT_ry);
+}
+
+rgb mc_mmlt_connect(const scene *s, const bdpt_vertex *cam, int tt, const bdpt_vertex *lp,
+                    int ss, const double *uc, int n, double area, render_counters *cnt,
+                    double *IO_rx, double *IO_ry) {
   /* The strategy's MIS-weighted contribution, times n_k. */
-  double prx = rx, pry = ry;
+  double prx = *IO_rx, pry = *IO_ry;
   rgb c = bdpt_connect(s, cam, tt, lp, ss, uc, &prx, &pry, NULL, cnt);
   if (tt != 1) return rgb_scale(c, area * n);
-  *OUT_rx = prx, *OUT_ry = pry;
+  *IO_rx = prx, *IO_ry = pry;
   return rgb_scale(c, (double)n);
 }
 

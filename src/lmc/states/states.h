@@ -35,6 +35,14 @@ rgb mc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n
                          double area, lmc_sampler *smp, bdpt_vertex *cam, bdpt_vertex *lp,
                          render_counters *cnt, double *OUT_rx, double *OUT_ry);
 
+/* Its last part: the value of strategy (s, t) from the walked subpaths
+ * cam[0 .. t-1] and lp[0 .. s-1] and, for s = 1, the light sample's
+ * numbers uc; *IO_rx, *IO_ry hold the film numbers' raster point and get
+ * the splat's for t = 1. */
+rgb mc_mmlt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
+                    const double *uc, int n, double area, render_counters *cnt, double *IO_rx,
+                    double *IO_ry);
+
 /* E[mc_mmlt_contribution | all but the technique coordinate]: the sum of
  * the MIS-weighted contributions of every strategy of length k for the
  * subpaths of smp (read in the same layout; the technique number is drawn
