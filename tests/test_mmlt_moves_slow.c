@@ -3,12 +3,13 @@
  * sampler (src/lmc/states/mmlt_jump.h) on the analytic scenes, as
  * test_mcmc_analytic.c checks every MCMC integrator (analytic_check.h: R
  * = 6 seeds, each image group's mean within 8 of its standard errors of
- * the exact value, P(|t_5| > 8) = 5e-4 per check, about 2.4% over these
- * 48): with reversible jumps (--technique-jump 0.5) the furnace, the
+ * the exact value, P(|t_5| > 8) = 5e-4 per check, about 3% over these
+ * 63): with reversible jumps (--technique-jump 0.5) the furnace, the
  * diffuse sphere's two groups and the mask's three (whose pass-through is
  * a delta lobe no connection may end on); with the fused path
  * perturbations too (--path-mutations 0.3) the sphere and the mask, on
- * the mmlt states and on pssmlt's bdpt states; and the jumps do move the
+ * the mmlt states and on the bdpt states with pssmlt and with lmc (its
+ * Langevin steps in the same chain); and the jumps do move the
  * chains (one seed's images with and without differ). Slow: not part of
  * the sanitizer's run, whose unit tests of the moves are test_mmlt_jump's.
  */
@@ -44,6 +45,9 @@ static void test_mmlt_jump(void **state) {
    * the path's length there. */
   check_scene("diffuse_sphere.xml", "pssmlt", 16, e, 2, 0.0);
   check_scene("mask.xml", "pssmlt", 16, em, 3, 0.0);
+  /* ... and lmc's Langevin steps among them (its default states too). */
+  check_scene("diffuse_sphere.xml", "lmc", 16, e, 2, 0.0);
+  check_scene("mask.xml", "lmc", 16, em, 3, 0.0);
   g_perturb = NULL;
   film fj, fn;
   render_seed7("furnace.xml", "mmlt", &fj);
@@ -55,8 +59,9 @@ static void test_mmlt_jump(void **state) {
 static void test_count(void **state) {
   (void)state;
   /* jumps: furnace 1, sphere 2, mask 3 groups; with perturbations: sphere
-   * 2, mask 3, on the mmlt and the bdpt states; 3 channels each. */
-  assert_int_equal(g_checks, (1 + 2 + 3 + 2 * (2 + 3)) * 3);
+   * 2, mask 3, on the mmlt states and with pssmlt and lmc on the bdpt
+   * states; 3 channels each. */
+  assert_int_equal(g_checks, (1 + 2 + 3 + 3 * (2 + 3)) * 3);
 }
 
 int main(void) {
