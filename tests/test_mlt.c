@@ -6,12 +6,16 @@
  * What is checked:
  * - tests/data/analytic/emitting_box.xml, whose every pixel has
  *   expectation 1 - 2^-8 exactly: the image mean of R = 6 seeds (each with
- *   its own bootstrap) lies within 8 of their standard errors of it
+ *   its own bootstrap), and each quadrant's, lies within 8 of their
+ *   standard errors of it
  *   (P(|t_5| > 8) = 5e-4 per check), with the chains rendering every path
  *   (--direct mcmc) and with pt rendering the paths of one and two
  *   segments (--direct separate, the chains from three); every render
  *   makes its budget of spp mutations per pixel (up to whole rounds), and
- *   its statistics count the moves proposed and accepted.
+ *   its statistics count the moves proposed and accepted; and with the
+ *   primary-sample step (--pss-mutation on) among the moves, which must
+ *   change the image (the box's contribution is nearly flat, so that
+ *   step's exactness is test_perturb's to check).
  * - Determinism under --spp: the same seed gives a bit-identical film with
  *   1 and 2 threads; another seed a different one.
  * - A plane under a directional light alone, every pixel rho / pi E cos:
@@ -75,16 +79,36 @@ static double image_mean(const film *f) {
   return s;
 }
 
+/* The mean of quadrant q (0 .. 3: left/right, top/bottom) of the image. */
+static double quadrant_mean(const film *f, int q) {
+  lmc_image img;
+  lmc_error err;
+  assert_int_equal(film_develop(f, &img, &err), LMC_OK);
+  int w2 = img.width / 2, h2 = img.height / 2, x0 = (q & 1) * w2, y0 = (q >> 1) * h2;
+  double s = 0.0;
+  for (int y = y0; y < y0 + h2; y++)
+    for (int x = x0; x < x0 + w2; x++)
+      for (int c = 0; c < 3; c++) s += img.data[((size_t)y * img.width + x) * 3 + c];
+  image_free(&img);
+  return s / (3.0 * w2 * h2);
+}
+
 static void test_emitting_box(void **state) {
   (void)state;
   int checks = 0;
   scene *s = load("emitting_box.xml");
   const double exact = 1.0 - 1.0 / 256.0;
-  const char *direct[2] = {"mcmc", "separate"};
-  for (int d = 0; d < 2; d++) {
-    double sum = 0.0, sum2 = 0.0;
+  /* The third: every path with the primary-sample step among the moves. */
+  const char *direct[3] = {"mcmc", "separate", "mcmc"};
+  for (int d = 0; d < 3; d++) {
+    double sum = 0.0, sum2 = 0.0, qs[4] = {0}, qs2[4] = {0};
+    static double q0_first; /* quadrant 0's sum with d = 0: the step must change it */
     for (int r = 0; r < RUNS; r++) {
       render_settings rs = settings(s, 16, 100 + (uint64_t)r, 2, direct[d]);
+      if (d == 2) {
+        lmc_error err;
+        assert_int_equal(mcmc_set(&rs, "pss-mutation", "on", &err), LMC_OK);
+      }
       film f;
       render_stats st;
       lmc_error err;
@@ -94,17 +118,32 @@ static void test_emitting_box(void **state) {
       assert_true(st.samples >= want && st.samples < want + want / 10);
       double m = image_mean(&f);
       sum += m, sum2 += m * m;
+      for (int q = 0; q < 4; q++) {
+        double mq = quadrant_mean(&f, q);
+        qs[q] += mq, qs2[q] += mq * mq;
+      }
       film_free(&f);
     }
+    if (d == 0) q0_first = qs[0];
+    if (d == 2) assert_true(qs[0] != q0_first); /* the step did move the chains */
+    /* Where the chains put the light (the total is b's): each quadrant's
+     * mean within 8 of its standard errors of the exact value. */
+    for (int q = 0; q < 4; q++) {
+      double mq = qs[q] / RUNS;
+      double seq = sqrt(fmax(0.0, (qs2[q] - RUNS * mq * mq) / (RUNS - 1)) / RUNS);
+      assert_true(seq > 0.0);
+      assert_near(mq, exact, 8.0 * seq);
+      checks++;
+    }
     double mean = sum / RUNS, se = sqrt(fmax(0.0, (sum2 - RUNS * mean * mean) / (RUNS - 1)) / RUNS);
-    fprintf(stderr, "  emitting box, --direct %s: mean %.5f (exact %.5f), SE %.2g\n", direct[d],
-            mean, exact, se);
+    fprintf(stderr, "  emitting box, --direct %s%s: mean %.5f (exact %.5f), SE %.2g\n", direct[d],
+            d == 2 ? " --pss-mutation on" : "", mean, exact, se);
     assert_true(se > 0.0);
     assert_near(mean, exact, 8.0 * se);
     checks += 2;
   }
   scene_destroy(s);
-  assert_int_equal(checks, 4);
+  assert_int_equal(checks, 3 * (2 + 4));
 }
 
 static int films_equal(const film *a, const film *b) {

@@ -243,7 +243,7 @@ static double worst_z(int k, int kmax, int n_starts, int accept_all, int perturb
     double z = var > 0.0 ? mean / sqrt(var / n_starts) : 0.0;
     if (fabs(z) > worst) worst = fabs(z);
   }
-  static const char *const kinds[MC_PATH_MOVE_COUNT] = {"bidirectional", "lens", "multi-chain",
+  static const char *const kinds[MC_PATH_MOVE_FUSED] = {"bidirectional", "lens", "multi-chain",
                                                         "caustic", "lens subpath"};
   print_message("%s%s%s, %s states, length %d%s%s: %d states with f > 0, %.1f%% (weighted) "
                 "moved, worst |z| %.2f; no move %lld, refused %lld, walked elsewhere %lld; %d values "
@@ -276,7 +276,7 @@ static void test_invariance(void **state) {
    * means per move at lengths 2 .. 4, and (4 + 5) + 2 x (12 + 5) for each
    * path move alone at lengths 3 and 4. */
   double zc = critical_z(2 * (12 + 3 * (NCX * NCY + NFB)) +
-                         MC_PATH_MOVE_COUNT * (9 + 2 * (NCX * NCY + NFB)));
+                         MC_PATH_MOVE_FUSED * (9 + 2 * (NCX * NCY + NFB)));
   int checked = 0;
   for (int perturb = 0; perturb < 2; perturb++)
     for (int k = 2; k <= 4; k++) {
@@ -288,7 +288,7 @@ static void test_invariance(void **state) {
     }
   /* Each of the fused move's path moves alone, at lengths 3 and 4: its own
    * ratio (the multi-chain perturbation needs two chains: length 4). */
-  for (int kind = 0; kind < MC_PATH_MOVE_COUNT; kind++) {
+  for (int kind = 0; kind < MC_PATH_MOVE_FUSED; kind++) {
     double most = 0.0;
     for (int k = 3; k <= 4; k++) {
       double moved;
@@ -306,7 +306,7 @@ static void test_invariance(void **state) {
   print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (path moves), %.2f "
                 "(bidirectional)\n",
                 zc, zbad, zbad2, zbad3);
-  assert_int_equal(checked, 6 + 2 * MC_PATH_MOVE_COUNT);
+  assert_int_equal(checked, 6 + 2 * MC_PATH_MOVE_FUSED);
   assert_true(zbad > 8.0);
   assert_true(zbad2 > 5.0);
   assert_true(zbad3 > zc); /* fails the test itself */
@@ -321,7 +321,7 @@ static void test_invariance_bdpt(void **state) {
    * lengths 1 .. 4 and 2 .. 4, and for each path move alone over 2 .. 4
    * (multi-chain: 4). */
   double zc = critical_z(2 * (25 + 2 * (NCX * NCY + NFB)) +
-                         MC_PATH_MOVE_COUNT * (12 + NCX * NCY + NFB));
+                         MC_PATH_MOVE_FUSED * (12 + NCX * NCY + NFB));
   int checked = 0;
   for (int perturb = 0; perturb < 2; perturb++)
     for (int kmin = 1; kmin <= 2; kmin++) {
@@ -332,7 +332,7 @@ static void test_invariance_bdpt(void **state) {
       assert_true(moved > 0.05);
       checked++;
     }
-  for (int kind = 0; kind < MC_PATH_MOVE_COUNT; kind++) {
+  for (int kind = 0; kind < MC_PATH_MOVE_FUSED; kind++) {
     /* (The multi-chain perturbation needs two chains: length 4 alone.) */
     double moved;
     int kmin = kind == MC_PATH_MOVE_MULTICHAIN ? 4 : 2;
@@ -346,7 +346,7 @@ static void test_invariance_bdpt(void **state) {
   double zbad2 = worst_z(2, 4, 400000, 1, 1, -1, 698, &moved);
   print_message("critical |z| %.2f; the controls' %.2f (jump), %.2f (path moves)\n", zc, zbad,
                 zbad2);
-  assert_int_equal(checked, 4 + MC_PATH_MOVE_COUNT);
+  assert_int_equal(checked, 4 + MC_PATH_MOVE_FUSED);
   assert_true(zbad > 8.0);
   assert_true(zbad2 > 5.0);
 }

@@ -42,6 +42,7 @@
 #include "lmc/path/mut_bidir.h"
 #include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
+#include "lmc/path/mut_pss.h"
 #include "pathspace_test.h"
 #include "render/io/io.h"
 #include "test_util.h"
@@ -634,6 +635,74 @@ static void test_lenssub_invariance(void **state) {
   }
 }
 
+/* ---- The primary-sample step (mut_pss.h) --------------------------------------- */
+
+/* One-step invariance of the primary-sample step on a scene's paths of
+ * lengths 1 .. KMAX, its ratio raised to `power` (1: its own; 0: every
+ * proposal accepted, which must fail); *OUT_proposed counts the proposals. */
+static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int n,
+                              int *OUT_proposed) {
+  movers mv;
+  movers_init(&mv, sc);
+  mut_pss mq;
+  mut_pss_init(&mq, &mv.ctx, 1.0);
+  mq.test_power = power;
+  /* Larger steps than the default: more power against a wrong ratio (the
+   * kernel is exact at any size). */
+  mq.s1 *= 8.0, mq.s2 *= 8.0;
+  bdpt_vertex *scratch = malloc(MUT_PSS_SCRATCH * sizeof *scratch);
+  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
+  ps_inv *res = calloc(1, sizeof *res);
+  rng r;
+  rng_seed(&r, seed, 7);
+  *OUT_proposed = 0;
+  for (int i = 0; i < n; i++) {
+    int k = 1 + (int)(rng_uniform(&r) * KMAX);
+    if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / KMAX;
+    assert_true(q > 0.0);
+    double w = x->lum / q, ratio = 0.0;
+    res->samples++;
+    int prop = mut_pss_propose(&mq, &r, x, y, &ratio, scratch, NULL);
+    *OUT_proposed += prop;
+    int moved = prop && rng_uniform(&r) < ratio;
+    int b0 = inv_bin(sc, x), b1 = moved ? inv_bin(sc, y) : b0;
+    ps_inv_add(res, w, b0, b1);
+  }
+  ps_inv_finish(res);
+  free(x), free(y), free(scratch);
+  return res;
+}
+
+static void test_pss_invariance(void **state) {
+  fixture *fx = *state;
+  int checked = 0;
+  for (int c = 0; c < N_SCENES; c++) {
+    int proposed;
+    ps_inv *r = pss_invariance(fx->sc[c], 71 + (uint64_t)c, 1.0, 400000, &proposed);
+    print_message("pss step on %s: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
+                  "%.3g)\n",
+                  scene_names[c], r->samples, proposed, r->moved, r->bins, r->min_p, r->level);
+    /* (Paths of one segment to a point light have no strategy: none.) */
+    assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
+    assert_true(proposed >= r->samples / 8);
+    assert_true(r->min_p >= r->level);
+    free(r);
+    checked++;
+  }
+  /* Every proposal accepted: the walk in the numbers is then uniform in
+   * them, not the target, and the test must see it. */
+  int proposed;
+  ps_inv *r = pss_invariance(fx->sc[DIFFUSE], 79, 0.0, 400000, &proposed);
+  print_message("pss step on diffuse, every proposal accepted: %d moved, min p %.3g (level "
+                "%.3g)\n",
+                r->moved, r->min_p, r->level);
+  assert_true(r->moved >= 5000);
+  assert_true(r->min_p < r->level);
+  free(r);
+  assert_int_equal(checked, N_SCENES);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_log_sample),
@@ -643,6 +712,7 @@ int main(void) {
       cmocka_unit_test(test_invariance_detects_bias),
       cmocka_unit_test(test_lenssub_balance),
       cmocka_unit_test(test_lenssub_invariance),
+      cmocka_unit_test(test_pss_invariance),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

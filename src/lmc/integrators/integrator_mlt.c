@@ -23,9 +23,9 @@ typedef struct mlt_settings {
   int move[MC_PATH_MOVE_COUNT]; /* on (1) or off, by mc_path_move */
 } mlt_settings;
 
-static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1}};
-static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir", "lens", "multichain",
-                                                           "caustic", "lenssub"};
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0}};
+static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir",   "lens",    "multichain",
+                                                           "caustic", "lenssub", "pss"};
 
 static const lmc_opt mlt__opts[] = {
     {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
@@ -50,6 +50,11 @@ static const lmc_opt mlt__opts[] = {
      "the camera's subpath E S* D replaced by a fresh one through a uniform image point (Veach; "
      "not in Mitsuba)",
      NULL},
+    {"pss-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_PSS]), 0, 0, 0,
+     lmc_opt_off_on, NULL, 0, NULL, "off",
+     "a primary-sample small step: the path's numbers for a strategy drawn by its MIS weights, "
+     "found by inverting its subpaths, moved by Kelemen's step and walked again (exact)",
+     NULL},
 };
 
 static const lmc_opt_table mlt__options = {"Path-space MLT (--integrator mlt)", mlt__opts,
@@ -68,7 +73,7 @@ static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--integrator mlt: every mutation is off (--bidir-mutation, "
                          "--lens-perturbation, --multichain-perturbation, --caustic-perturbation, "
-                         "--lens-subpath-mutation)");
+                         "--lens-subpath-mutation, --pss-mutation)");
   if (!ms->move[MC_PATH_MOVE_BIDIR] && !setup->rs->quiet)
     lmc_warn(NULL, 0,
              "mlt without the bidirectional mutation: the perturbations alone keep each path's "

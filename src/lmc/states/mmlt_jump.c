@@ -328,7 +328,7 @@ static int mmj__applies(const mc_mmlt_jump *j, int kind, const ps_path *P) {
 /* The number of path moves that apply to P. */
 static int mmj__n_applies(const mc_mmlt_jump *j, const ps_path *P) {
   int n = 0;
-  for (int q = 0; q < MC_PATH_MOVE_COUNT; q++) n += mmj__applies(j, q, P);
+  for (int q = 0; q < MC_PATH_MOVE_FUSED; q++) n += mmj__applies(j, q, P);
   return n;
 }
 
@@ -347,7 +347,7 @@ static int mmj__path_move(mc_mmlt_jump *j, rng *r, const ps_path *P, ps_path *Y,
   *OUT_ratio = 0.0;
   if (n_x == 0) return 0;
   if (pick >= n_x) pick = n_x - 1;
-  for (int q = 0; q < MC_PATH_MOVE_COUNT && kind < 0; q++)
+  for (int q = 0; q < MC_PATH_MOVE_FUSED && kind < 0; q++)
     if (mmj__applies(j, q, P) && pick-- == 0) kind = q;
   j->st.kinds[kind]++;
   if (kind == MC_PATH_MOVE_BIDIR) {

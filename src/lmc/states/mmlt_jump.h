@@ -101,7 +101,7 @@ typedef struct mc_mmlt_jump_stats {
   int64_t mismatch;    /* the new numbers walked to another raster point: rejected */
   int64_t inversions;  /* subpaths inverted */
   int64_t reused;      /* proposals from a state whose path was still walked (no walk) */
-  int64_t kinds[MC_PATH_MOVE_COUNT]; /* the fused move: path moves drawn, by mc_path_move */
+  int64_t kinds[MC_PATH_MOVE_FUSED]; /* the fused move: path moves drawn, by mc_path_move */
 } mc_mmlt_jump_stats;
 
 /* One chain's jump or fused move: its target (an mmlt family's), scratch

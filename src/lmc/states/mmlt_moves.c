@@ -96,7 +96,7 @@ static void mmm__report_moves(const mmm__run *run, const mc_mmlt_jump *mv, const
     t.proposed += mv[i].st.proposed, t.lone += mv[i].st.lone;
     t.refused += mv[i].st.refused, t.mismatch += mv[i].st.mismatch;
     t.inversions += mv[i].st.inversions, t.reused += mv[i].st.reused;
-    for (int q = 0; q < MC_PATH_MOVE_COUNT; q++) t.kinds[q] += mv[i].st.kinds[q];
+    for (int q = 0; q < MC_PATH_MOVE_FUSED; q++) t.kinds[q] += mv[i].st.kinds[q];
   }
   int64_t acc = 0;
   for (int c = 0; c < n; c++)

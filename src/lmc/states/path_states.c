@@ -45,6 +45,8 @@
 #include "lmc/path/mut_bidir.h"
 #include "lmc/path/mut_lenssub.h"
 #include "lmc/path/mut_perturb.h"
+#include "lmc/path/mut_pss.h"
+#include "lmc/states/states.h"
 #include "render/error.h"
 #include "render/options.h"
 
@@ -54,6 +56,7 @@ typedef struct path__space {
   mut_bidir mb;
   mut_perturb mp;
   mut_lenssub ml;
+  mut_pss mq;
   mc_chain_kind kind;
 } path__space;
 
@@ -68,6 +71,7 @@ typedef struct path__chain {
   ps_path buf[2];
   int cur;      /* buf[cur] is the current path */
   int64_t rays; /* traced by the chain's moves */
+  bdpt_vertex *pss_v; /* the primary-sample step's scratch (MUT_PSS_SCRATCH), made on first use */
 } path__chain;
 
 static void *path__scratch_create(const mc_target *t) {
@@ -150,6 +154,8 @@ static lmc_status path__chain_create(mc_chain *c, lmc_error *err) {
 }
 
 static void path__chain_destroy(mc_chain *c) {
+  path__chain *pc = c->own;
+  if (pc) free(pc->pss_v);
   free(c->own);
   c->own = NULL;
 }
@@ -221,6 +227,10 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, double p_x, 
     ok = mut_bidir_propose(&P->mb, &c->r, x, y, &rec, &ratio) == MUT_BIDIR_OK;
   } else if (move == MC_PATH_MOVE_LENSSUB) {
     ok = mut_lenssub_propose(&P->ml, &c->r, x, y, &ratio, &y->rays);
+  } else if (move == MC_PATH_MOVE_PSS) {
+    path__chain *pc = c->own;
+    if (!pc->pss_v) pc->pss_v = malloc(MUT_PSS_SCRATCH * sizeof *pc->pss_v);
+    ok = pc->pss_v && mut_pss_propose(&P->mq, &c->r, x, y, &ratio, pc->pss_v, &y->rays);
   } else {
     mut_perturb_kind kind = move == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
                             : move == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN
@@ -312,6 +322,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   if (st) return st;
   P->ctx.glossy_rough = ps.glossy_rough;
   mut_lenssub_init(&P->ml, &P->ctx);
+  mut_pss_init(&P->mq, &P->ctx, mc_light_u1_scale(s));
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",
             rs->integrator, P->ctx.kmax);

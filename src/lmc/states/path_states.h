@@ -13,7 +13,12 @@ typedef enum mc_path_move {
   MC_PATH_MOVE_MULTICHAIN,    /* the multi-chain perturbation */
   MC_PATH_MOVE_CAUSTIC,       /* the caustic perturbation */
   MC_PATH_MOVE_LENSSUB,       /* the lens subpath mutation (lmc/path/mut_lenssub.h) */
+  MC_PATH_MOVE_PSS,           /* a primary-sample small step (lmc/path/mut_pss.h); the moves
+                                 before it are path space's own, which the fused move of the
+                                 primary-sample states draws among (MC_PATH_MOVE_FUSED) */
   MC_PATH_MOVE_COUNT
 } mc_path_move;
+
+#define MC_PATH_MOVE_FUSED MC_PATH_MOVE_PSS /* path space's own moves: 0 .. this - 1 */
 
 #endif
