@@ -72,21 +72,7 @@ static int pss__walk(const mut_pss *m, const pss__numbers *u, int s, int t, bdpt
     sampler_use_stream(&smp.base, LMC_STREAM_LIGHT);
     ok = bdpt_light_subpath(sc, rs, &smp.base, s, lp, &cnt) == s;
   } else if (ok && s == 1) {
-    double pmf, ur;
-    int li = scene_sample_light(sc, u->conn[0], &pmf, &ur);
-    light_li_sample ls;
-    ok = li >= 0 && light_sample_li(&sc->lights[li], sc, cam[t - 1].p, u->conn[1], u->conn[2], &ls);
-    if (ok) {
-      bdpt_vertex *y = &lp[0];
-      memset(y, 0, sizeof *y);
-      y->type = BDPT_VERTEX_LIGHT;
-      y->light = li;
-      y->p = ls.p;
-      y->n = sc->lights[li].type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
-      y->dir = v3_neg(ls.wi);
-      y->hit.mesh = sc->lights[li].type == LIGHT_AREA ? sc->lights[li].mesh : -1;
-      y->hit.prim = ls.tri;
-    }
+    ok = bdpt_connect_vertex(sc, cam[t - 1].p, u->conn, &lp[0]);
   }
   *OUT_c = rgb_zero();
   *OUT_rx = rx, *OUT_ry = ry;
@@ -98,14 +84,13 @@ static int pss__walk(const mut_pss *m, const pss__numbers *u, int s, int t, bdpt
 
 /* Whether the walked subpaths lie on the path X of length k (to rounding). */
 static int pss__same(const bdpt_vertex *X, int k, const bdpt_vertex *cam, int t,
-                     const bdpt_vertex *lp, int s) {
+                     const bdpt_vertex *lp) {
   for (int i = 0; i <= k; i++) {
     vec3 p = i < t ? cam[i].p : lp[k - i].p, q = X[i].p;
     double d = fabs(p.x - q.x) + fabs(p.y - q.y) + fabs(p.z - q.z);
     double sz = fabs(q.x) + fabs(q.y) + fabs(q.z);
     if (!(d <= 1e-6 * (1.0 + sz))) return 0;
   }
-  (void)s;
   return 1;
 }
 
@@ -127,14 +112,10 @@ int mut_pss_propose(const mut_pss *m, rng *r, const ps_path *x, ps_path *OUT_y,
   } else {
     bdpt_mis_weights(sc, X, k, cam, w);
   }
-  for (int t = 1; t <= k + 1; t++) sum += w[t] > 0.0 ? w[t] : 0.0;
+  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp] > 0.0 ? w[tp] : 0.0;
   if (!(sum > 0.0)) return 0;
-  double pick = rng_uniform(r) * sum, acc = 0.0;
-  int t = 0;
-  for (int tp = 1; tp <= k + 1 && !t; tp++)
-    if (w[tp] > 0.0 && pick < (acc += w[tp])) t = tp;
-  for (int tp = k + 1; tp >= 1 && !t; tp--)
-    if (w[tp] > 0.0) t = tp; /* (rounding left the draw past them all) */
+  int t = bdpt_draw_strategy(w, k, 0, sum, rng_uniform(r));
+  if (t < 1) return 0;
   int s = k + 1 - t;
 
   /* Its numbers, by the inverses (the Gibbs step on z). */
@@ -158,7 +139,7 @@ int mut_pss_propose(const mut_pss *m, rng *r, const ps_path *x, ps_path *OUT_y,
   /* x's value in these numbers: its strategy walked again from them. */
   rgb c;
   double rx, ry;
-  if (!pss__walk(m, &u, s, t, cam, lp, &c, &rx, &ry, rays) || !pss__same(X, k, cam, t, lp, s))
+  if (!pss__walk(m, &u, s, t, cam, lp, &c, &rx, &ry, rays) || !pss__same(X, k, cam, t, lp))
     return 0;
   double fx = rgb_luminance(c);
   if (!(fx > 0.0) || !isfinite(fx)) return 0;

@@ -61,10 +61,11 @@ static int mmj__connect_at(const mc_mmlt_jump *j, int t) {
 /* Walks the state u's strategy (s, t) again into X_0 .. X_k, k = s + t -
  * 1, as the states' f makes it (for s = 1 the light vertex its connect
  * numbers sample; on the bdpt states the strategy's rough vertices read
- * absolute directions), its subpaths into cam and lp. Returns 0 when the
- * walk does not make a full path. */
+ * absolute directions), its subpaths into cam and lp, the camera's raster
+ * point into *OUT_rx, *OUT_ry. Returns 0 when the walk does not make a
+ * full path. */
 static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_vertex *X,
-                     bdpt_vertex *cam, bdpt_vertex *lp) {
+                     bdpt_vertex *cam, bdpt_vertex *lp, double *OUT_rx, double *OUT_ry) {
   const mc_target *T = j->target;
   mmj__space S = mmj__space_of(j);
   const scene *sc = S.sc;
@@ -76,6 +77,7 @@ static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_
     rx = -S.margin + sampler_next(&v.base) * (sc->cam.width + 2.0 * S.margin);
     ry = -S.margin + sampler_next(&v.base) * (sc->cam.height + 2.0 * S.margin);
   }
+  *OUT_rx = rx, *OUT_ry = ry;
   bdpt_param pc = {t - 1, S.rough_min}, pl = {s - 1, S.rough_min};
   const bdpt_param *ppc = j->bs ? &pc : NULL, *ppl = j->bs ? &pl : NULL;
   if (bdpt_camera_subpath_p(sc, S.rs, &v.base, rx, ry, t, ppc, cam, &cnt) < t) return 0;
@@ -85,20 +87,7 @@ static int mmj__path(const mc_mmlt_jump *j, const double *u, int s, int t, bdpt_
     if (bdpt_light_subpath_p(sc, S.rs, &v.base, s, ppl, lp, &cnt) < s) return 0;
     for (int i = 0; i < s; i++) X[k - i] = lp[i];
   } else if (s == 1) {
-    const double *uc = u + mmj__connect_at(j, t);
-    double pmf, ur;
-    int li = scene_sample_light(sc, uc[0], &pmf, &ur);
-    light_li_sample ls;
-    if (li < 0 || !light_sample_li(&sc->lights[li], sc, cam[t - 1].p, uc[1], uc[2], &ls)) return 0;
-    bdpt_vertex *y = &X[k];
-    memset(y, 0, sizeof *y);
-    y->type = BDPT_VERTEX_LIGHT;
-    y->light = li;
-    y->p = ls.p;
-    y->n = sc->lights[li].type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
-    y->dir = v3_neg(ls.wi);
-    y->hit.mesh = sc->lights[li].type == LIGHT_AREA ? sc->lights[li].mesh : -1;
-    y->hit.prim = ls.tri;
+    if (!bdpt_connect_vertex(sc, cam[t - 1].p, u + mmj__connect_at(j, t), &X[k])) return 0;
   }
   /* The connection's ends scatter through smooth lobes (ps_from_bdpt's rule). */
   if (s > 0 && t >= 1) X[t - 1].delta = X[t].delta = 0;
@@ -201,8 +190,9 @@ static int mmj__begin(mc_mmlt_jump *j, rng *r, const mc_state *x, double *OUT_y,
     return 2;
   }
   j->px_ok = 0;
-  j->walked_ok =
-      mmj__path(j, x->u, *OUT_s, *OUT_t, j->walked_x, j->v + 2 * MMJ_N, j->v + 3 * MMJ_N);
+  double rx, ry;
+  j->walked_ok = mmj__path(j, x->u, *OUT_s, *OUT_t, j->walked_x, j->v + 2 * MMJ_N,
+                           j->v + 3 * MMJ_N, &rx, &ry);
   if (j->walked_ok) memcpy(j->walked_u, x->u, bytes), j->walked_label = x->label;
   return j->walked_ok;
 }
@@ -215,18 +205,13 @@ static void mmj__eval_proposal(mc_mmlt_jump *j, const double *y, int s, int t, i
   const mc_target *T = j->target;
   mmj__space S = mmj__space_of(j);
   bdpt_vertex *cam = j->v + 2 * MMJ_N, *lp = j->v + 3 * MMJ_N;
+  double rx, ry;
   j->y_ok = j->pend_ok = 0;
-  if ((j->bs && label < 0) || !mmj__path(j, y, s, t, j->pend_x, cam, lp)) return;
+  if ((j->bs && label < 0) || !mmj__path(j, y, s, t, j->pend_x, cam, lp, &rx, &ry)) return;
   memcpy(j->pend_u, y, (size_t)T->dim * sizeof *y);
   j->pend_label = label, j->pend_ok = 1;
   const double zero[BDPT_DIMS_CONNECT] = {0.0, 0.0, 0.0};
   const double *uc = s == 1 ? y + mmj__connect_at(j, t) : zero;
-  double rx = 0.0, ry = 0.0; /* (as mmj__path walked) */
-  if (!j->bs || t >= 2) {
-    const double *u = y + mc_target_stream_offset(T, LMC_STREAM_CAMERA);
-    rx = -S.margin + u[0] * (S.sc->cam.width + 2.0 * S.margin);
-    ry = -S.margin + u[1] * (S.sc->cam.height + 2.0 * S.margin);
-  }
   render_counters cnt = {0};
   if (j->bs) {
     mc_bdpt_states_value(j->bs, cam, t, lp, s, uc, rx, ry, &j->yv, &cnt);
@@ -254,21 +239,6 @@ static void mmj__weights(const mc_mmlt_jump *j, const bdpt_vertex *X, int k, dou
       if (mmj__label(j->bs, k + 1 - t, t) < 0) w[t] = 0.0;
 }
 
-/* A strategy t' != skip (0: none skipped) of weight w[t'] > 0, drawn with
- * probability w[t'] / sum (sum: the weights but skip's); the last one with
- * weight where rounding leaves the draw past them all. */
-static int mmj__draw(rng *r, const double *w, int k, int skip, double sum) {
-  double pick = rng_uniform(r) * sum, acc = 0.0;
-  int last = -1;
-  for (int tp = 1; tp <= k + 1; tp++) {
-    if (tp == skip || !(w[tp] > 0.0)) continue;
-    acc += w[tp];
-    last = tp;
-    if (pick < acc) return tp;
-  }
-  return last;
-}
-
 static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y) {
   mc_mmlt_jump *j = self;
   int s0, t;
@@ -286,7 +256,7 @@ static double mmj__propose(void *self, rng *r, const mc_state *x, double *OUT_y)
     j->st.lone++;
     return -INFINITY;
   }
-  int t2 = mmj__draw(r, w, k, t, rest);
+  int t2 = bdpt_draw_strategy(w, k, t, rest, rng_uniform(r));
   if (!mmj__numbers(j, r, X, k + 1 - t2, t2, OUT_y)) {
     j->st.refused++;
     return -INFINITY;
@@ -401,7 +371,7 @@ static double mmj__propose_perturb(void *self, rng *r, const mc_state *x, double
     j->st.lone++;
     return -INFINITY;
   }
-  int t2 = mmj__draw(r, w, ky, 0, sum);
+  int t2 = bdpt_draw_strategy(w, ky, 0, sum, rng_uniform(r));
   if (!mmj__numbers(j, r, Xy, ky + 1 - t2, t2, OUT_y)) {
     j->st.refused++;
     return -INFINITY;

@@ -268,6 +268,11 @@ int bdpt_invert_light_subpath(const scene *sc, const render_settings *rs, const 
  * with which camera vertex ref samples the light vertex y. */
 int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vertex *y, rng *g,
                         double OUT_u[BDPT_DIMS_CONNECT]);
+/* Its forward map: the light vertex record (type LIGHT, as the light walks
+ * make their endpoint) that the s = 1 strategy samples from the point ref
+ * with the connect numbers u. Returns 0 when none is sampled. */
+int bdpt_connect_vertex(const scene *sc, vec3 ref, const double u[BDPT_DIMS_CONNECT],
+                        bdpt_vertex *OUT_y);
 
 /* The subpaths of strategy (s, t), s + t = k + 1, of the full path x_0 ..
  * x_k (camera first, vertex records as the walks or ps_path keep them):
@@ -286,6 +291,11 @@ void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
  * on each re-split. scratch: room for k + 2 vertices. */
 void bdpt_mis_weights(const scene *sc, const bdpt_vertex *x, int k, bdpt_vertex *scratch,
                       double *OUT_w);
+/* A strategy t != skip (0: none skipped) with w[t] > 0 among t = 1 .. k +
+ * 1, drawn with probability w[t] / sum (sum: the weights but skip's) from
+ * the uniform u; the last one with weight where rounding leaves the draw
+ * past them all; -1 when none has weight. */
+int bdpt_draw_strategy(const double *w, int k, int skip, double sum, double u);
 
 /* Evaluates the single strategy (s, t): the first t vertices of cam joined
  * with the first s of lp (for s = 1 the light is sampled afresh from

@@ -411,6 +411,35 @@ int bdpt_invert_connect(const scene *sc, const bdpt_vertex *ref, const bdpt_vert
   return OUT_u[0] >= 0.0 && light_invert_li(&sc->lights[li], sc, ref->p, wi, y->p, tri, r, OUT_u + 1);
 }
 
+int bdpt_connect_vertex(const scene *sc, vec3 ref, const double u[BDPT_DIMS_CONNECT],
+                        bdpt_vertex *OUT_y) {
+  double pmf, ur;
+  int li = scene_sample_light(sc, u[0], &pmf, &ur);
+  light_li_sample ls;
+  if (li < 0 || !light_sample_li(&sc->lights[li], sc, ref, u[1], u[2], &ls)) return 0;
+  memset(OUT_y, 0, sizeof *OUT_y);
+  OUT_y->type = BDPT_VERTEX_LIGHT;
+  OUT_y->light = li;
+  OUT_y->p = ls.p;
+  OUT_y->n = sc->lights[li].type == LIGHT_AREA ? ls.n : v3(0.0, 0.0, 0.0);
+  OUT_y->dir = v3_neg(ls.wi);
+  OUT_y->hit.mesh = sc->lights[li].type == LIGHT_AREA ? sc->lights[li].mesh : -1;
+  OUT_y->hit.prim = ls.tri;
+  return 1;
+}
+
+int bdpt_draw_strategy(const double *w, int k, int skip, double sum, double u) {
+  double pick = u * sum, acc = 0.0;
+  int last = -1;
+  for (int t = 1; t <= k + 1; t++) {
+    if (t == skip || !(w[t] > 0.0)) continue;
+    acc += w[t];
+    last = t;
+    if (pick < acc) return t;
+  }
+  return last;
+}
+
 void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
                   bdpt_vertex *OUT_cam, bdpt_vertex *OUT_lp) {
   for (int i = 0; i < t; i++) {
