@@ -16,6 +16,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -191,6 +192,51 @@ static void test_state_moves_flags(void **state) {
   assert_int_equal(checked, 6);
 }
 
+/* mlt's --pss-weight: the primary-sample step's share of the proposals.
+ * At a path where m of the other five moves apply, the step is chosen
+ * with probability W / (W + m), m in [1, 5]; each choice is a fresh draw
+ * given the path, so the share over n steps lies within
+ * [W / (W + 5), W / (W + 1)] up to 5 binomial standard errors (at most
+ * 0.5 / sqrt(n)). Weight 1 would give at most 1/2, above 1/8's bound and
+ * below 8's. And the weight without the step is refused. */
+static void test_pss_weight(void **state) {
+  (void)state;
+  static const char *base =
+      "render ../scenes/ring-caustics-glass/scene.xml -o " TMP "/img --resolution 16x12 --spp 64 "
+      "--threads 1 --bootstrap 2048 --integrator mlt --pss-mutation on";
+  static const double weights[2] = {0.125, 8.0};
+  static const char *const moves[6] = {"bidir", "lens", "multichain", "caustic", "lenssub", "pss"};
+  int checked = 0;
+  for (int i = 0; i < 2; i++) {
+    char args[1024];
+    snprintf(args, sizeof args, "%s --pss-weight %g", base, weights[i]);
+    int rc = run_lmc(args);
+    if (rc != 0) print_error("%s\n%s", args, err_text);
+    assert_int_equal(rc, 0);
+    long long n[6] = {0}, all = 0;
+    for (int j = 0; j < 6; j++) {
+      char key[64];
+      snprintf(key, sizeof key, "lmc: %-10s proposed ", moves[j]);
+      const char *l = strstr(err_text, key);
+      if (!l) fail_msg("no '%s' line:\n%s", key, err_text);
+      assert_int_equal(sscanf(l + strlen(key), "%lld", &n[j]), 1);
+      all += n[j];
+    }
+    assert_true(all > 2000);
+    double w = weights[i], share = (double)n[5] / (double)all, tol = 5.0 * 0.5 / sqrt((double)all);
+    fprintf(stderr, "  --pss-weight %g: the step %.3f of %lld proposals (bounds %.3f-%.3f)\n", w,
+            share, all, w / (w + 5.0), w / (w + 1.0));
+    assert_true(share > w / (w + 5.0) - tol);
+    assert_true(share < w / (w + 1.0) + tol);
+    checked++;
+  }
+  int rc = run_lmc("render ../scenes/ring-caustics-glass/scene.xml -o " TMP "/img --resolution "
+                   "16x12 --spp 1 --integrator mlt --pss-weight 2");
+  assert_true(rc != 0 && rc != -1);
+  assert_non_null(strstr(err_text, "--pss-weight"));
+  assert_int_equal(checked, 2);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_each_mode_selected),
@@ -199,6 +245,7 @@ int main(void) {
       cmocka_unit_test(test_delayed_flag),
       cmocka_unit_test(test_stage2_without_gradients),
       cmocka_unit_test(test_state_moves_flags),
+      cmocka_unit_test(test_pss_weight),
   };
   return cmocka_run_group_tests(tests, setup, NULL);
 }

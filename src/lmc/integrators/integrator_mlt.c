@@ -10,7 +10,8 @@
  * it to a fresh image point. Each move is on or off (Mitsuba's flags; the
  * lens subpath mutation, which Mitsuba lacks, has none), all on by default; a step
  * selects among those that apply to the current path with equal weights,
- * as Mitsuba does (path_states.c puts the selection into the ratio). As
+ * as Mitsuba does, but for the primary-sample step's own (--pss-weight;
+ * path_states.c puts the selection into the ratio). As
  * Veach's, direct light is rendered apart by default (--direct separate).
  */
 #include <stddef.h>
@@ -21,9 +22,10 @@
 
 typedef struct mlt_settings {
   int move[MC_PATH_MOVE_COUNT]; /* on (1) or off, by mc_path_move */
+  double pss_weight;            /* the primary-sample step's selection weight (the others 1) */
 } mlt_settings;
 
-static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0}};
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0}, 1.0};
 static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir",   "lens",    "multichain",
                                                            "caustic", "lenssub", "pss"};
 
@@ -55,6 +57,11 @@ static const lmc_opt mlt__opts[] = {
      "a primary-sample small step: the path's numbers for a strategy drawn by its MIS weights, "
      "found by inverting its subpaths, moved by Kelemen's step and walked again (exact)",
      NULL},
+    {"pss-weight", LMC_OPT_DOUBLE, offsetof(mlt_settings, pss_weight), 0, 1e-3, 1e3, NULL, NULL, 0,
+     "W", "1",
+     "--pss-mutation on: the step's weight in the choice of a move, each other move's being 1 "
+     "(the choice is among the moves that apply to the path, and enters the ratio)",
+     NULL},
 };
 
 static const lmc_opt_table mlt__options = {"Path-space MLT (--integrator mlt)", mlt__opts,
@@ -74,6 +81,9 @@ static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_
                          "--integrator mlt: every mutation is off (--bidir-mutation, "
                          "--lens-perturbation, --multichain-perturbation, --caustic-perturbation, "
                          "--lens-subpath-mutation, --pss-mutation)");
+  if (ms->pss_weight != 1.0 && !ms->move[MC_PATH_MOVE_PSS])
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0,
+                         "--pss-weight: the primary-sample step is off (--pss-mutation on)");
   if (!ms->move[MC_PATH_MOVE_BIDIR] && !setup->rs->quiet)
     lmc_warn(NULL, 0,
              "mlt without the bidirectional mutation: the perturbations alone keep each path's "
@@ -91,7 +101,7 @@ static int mlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
   for (int j = 0; j < MC_PATH_MOVE_COUNT; j++) {
     if (!ms->move[j]) continue;
     k[n] = (mc_kernel){.name = mlt__names[j], .kind = MC_KERNEL_OWN, .coord = j};
-    p[n++] = 1.0;
+    p[n++] = j == MC_PATH_MOVE_PSS ? ms->pss_weight : 1.0;
   }
   return n;
 }
