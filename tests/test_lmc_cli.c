@@ -198,11 +198,12 @@ static void test_state_moves_flags(void **state) {
  * given the path, so the share over n steps lies within
  * [W / (W + 5), W / (W + 1)] up to 5 binomial standard errors (at most
  * 0.5 / sqrt(n)). Weight 1 would give at most 1/2, above 1/8's bound and
- * below 8's. And the weight without the step is refused. */
+ * below 8's. The statistics line of the inverses is there. And the
+ * weight without the step is refused. */
 static void test_pss_weight(void **state) {
   (void)state;
   static const char *base =
-      "render ../scenes/ring-caustics-glass/scene.xml -o " TMP "/img --resolution 16x12 --spp 64 "
+      "render ../scenes/ring-caustics/scene.xml -o " TMP "/img --resolution 16x12 --spp 64 "
       "--threads 1 --bootstrap 2048 --integrator mlt --pss-mutation on";
   static const double weights[2] = {0.125, 8.0};
   static const char *const moves[6] = {"bidir", "lens", "multichain", "caustic", "lenssub", "pss"};
@@ -223,6 +224,20 @@ static void test_pss_weight(void **state) {
       all += n[j];
     }
     assert_true(all > 2000);
+    /* The inverse path sampler's line: subpaths inverted (one or two per
+     * step), and a failed round trip rare. */
+    const char *l = strstr(err_text, "lmc: pss        ");
+    l = l ? strstr(l + 1, "lmc: pss        ") : NULL;
+    if (!l) fail_msg("no inversion line for pss:\n%s", err_text);
+    long long inverted = 0;
+    double per_s = 0.0, refused = 0.0, elsewhere = 0.0;
+    int got = sscanf(l + strlen("lmc: pss        "),
+                     "%lld subpaths inverted (%lf/s), %lf%% refused (a path its walks cannot "
+                     "reach), %lf%% walked elsewhere",
+                     &inverted, &per_s, &refused, &elsewhere);
+    assert_int_equal(got, 4);
+    assert_true(inverted >= n[5] / 2 && inverted <= 2 * n[5] && per_s > 0.0);
+    assert_true(refused >= 0.0 && elsewhere <= 0.1);
     double w = weights[i], share = (double)n[5] / (double)all, tol = 5.0 * 0.5 / sqrt((double)all);
     fprintf(stderr, "  --pss-weight %g: the step %.3f of %lld proposals (bounds %.3f-%.3f)\n", w,
             share, all, w / (w + 5.0), w / (w + 1.0));

@@ -137,6 +137,24 @@ static const char *glossy_xml =
     "<emitter type=\"area\"><rgb name=\"radiance\" value=\"12\"/></emitter></shape>\n"
     "</scene>\n";
 
+/* For the primary-sample step alone: paths that end in a sky (a constant
+ * emitter), whose last vertex is a direction. */
+static const char *sky_xml =
+    "<scene version=\"0.6.0\">\n"
+    "  <sensor type=\"perspective\">\n"
+    "    <float name=\"fov\" value=\"60\"/>\n"
+    "    <transform name=\"toWorld\"><lookat origin=\"0, 2, 5\" target=\"0, 0.5, 0\" up=\"0, 1, 0\"/></transform>\n"
+    "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" value=\"24\"/>"
+    "<rfilter type=\"box\"/></film>\n"
+    "  </sensor>\n"
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/>"
+    "<scale x=\"2\" y=\"1\" z=\"2\"/></transform>"
+    "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6\"/></bsdf></shape>\n"
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0.6\" z=\"0\"/><float name=\"radius\" value=\"0.6\"/>"
+    "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.3\"/></bsdf></shape>\n"
+    "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"1, 1, 1\"/></emitter>\n"
+    "</scene>\n";
+
 enum { DIFFUSE = 0, DELTA, CAUSTIC, GLOSSY, N_SCENES };
 static const char *const scene_names[N_SCENES] = {"diffuse", "delta", "caustic", "glossy"};
 static const char *const kind_names[3] = {"lens", "multichain", "caustic"};
@@ -641,7 +659,7 @@ static void test_lenssub_invariance(void **state) {
  * lengths 1 .. KMAX, its ratio raised to `power` (1: its own; 0: every
  * proposal accepted, which must fail); *OUT_proposed counts the proposals. */
 static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int n,
-                              int *OUT_proposed) {
+                              int *OUT_proposed, mut_pss_tally *OUT_tally) {
   movers mv;
   movers_init(&mv, sc);
   mut_pss mq;
@@ -656,6 +674,7 @@ static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int 
   rng r;
   rng_seed(&r, seed, 7);
   *OUT_proposed = 0;
+  *OUT_tally = (mut_pss_tally){0, 0, 0};
   for (int i = 0; i < n; i++) {
     int k = 1 + (int)(rng_uniform(&r) * KMAX);
     if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
@@ -663,7 +682,7 @@ static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int 
     assert_true(q > 0.0);
     double w = x->lum / q, ratio = 0.0;
     res->samples++;
-    int prop = mut_pss_propose(&mq, &r, x, y, &ratio, scratch, NULL);
+    int prop = mut_pss_propose(&mq, &r, x, y, &ratio, scratch, NULL, OUT_tally);
     *OUT_proposed += prop;
     int moved = prop && rng_uniform(&r) < ratio;
     int b0 = inv_bin(sc, x), b1 = moved ? inv_bin(sc, y) : b0;
@@ -679,13 +698,19 @@ static void test_pss_invariance(void **state) {
   int checked = 0;
   for (int c = 0; c < N_SCENES; c++) {
     int proposed;
-    ps_inv *r = pss_invariance(fx->sc[c], 71 + (uint64_t)c, 1.0, 400000, &proposed);
+    mut_pss_tally ty;
+    ps_inv *r = pss_invariance(fx->sc[c], 71 + (uint64_t)c, 1.0, 400000, &proposed, &ty);
     print_message("pss step on %s: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
-                  "%.3g)\n",
-                  scene_names[c], r->samples, proposed, r->moved, r->bins, r->min_p, r->level);
-    /* (Paths of one segment to a point light have no strategy: none.) */
+                  "%.3g); %lld subpaths inverted, %lld refused, %lld walked elsewhere\n",
+                  scene_names[c], r->samples, proposed, r->moved, r->bins, r->min_p, r->level,
+                  (long long)ty.inverted, (long long)ty.refused, (long long)ty.elsewhere);
+    /* (Paths of one segment to a point light have no strategy: none.)
+     * Every sample is proposed from, refused or walked elsewhere; a round
+     * trip fails at most once in a thousand. */
     assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
     assert_true(proposed >= r->samples / 8);
+    assert_int_equal(proposed + ty.refused + ty.elsewhere, r->samples);
+    assert_true(ty.inverted >= proposed && 1000 * ty.elsewhere <= r->samples);
     assert_true(r->min_p >= r->level);
     free(r);
     checked++;
@@ -693,13 +718,30 @@ static void test_pss_invariance(void **state) {
   /* Every proposal accepted: the walk in the numbers is then uniform in
    * them, not the target, and the test must see it. */
   int proposed;
-  ps_inv *r = pss_invariance(fx->sc[DIFFUSE], 79, 0.0, 400000, &proposed);
+  mut_pss_tally ty;
+  ps_inv *r = pss_invariance(fx->sc[DIFFUSE], 79, 0.0, 400000, &proposed, &ty);
   print_message("pss step on diffuse, every proposal accepted: %d moved, min p %.3g (level "
                 "%.3g)\n",
                 r->moved, r->min_p, r->level);
   assert_true(r->moved >= 5000);
   assert_true(r->min_p < r->level);
   free(r);
+  /* Paths that end in the sky: their numbers walk back to them (the end's
+   * direction, not its far point, is the path's), and the step keeps the
+   * target. */
+  scene *sky = ps_test_load(sky_xml, "sky");
+  assert_non_null(sky);
+  r = pss_invariance(sky, 83, 1.0, 200000, &proposed, &ty);
+  print_message("pss step on sky: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
+                "%.3g); %lld subpaths inverted, %lld refused, %lld walked elsewhere\n",
+                r->samples, proposed, r->moved, r->bins, r->min_p, r->level,
+                (long long)ty.inverted, (long long)ty.refused, (long long)ty.elsewhere);
+  assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
+  assert_int_equal(proposed + ty.refused + ty.elsewhere, r->samples);
+  assert_true(1000 * ty.elsewhere <= r->samples);
+  assert_true(r->min_p >= r->level);
+  free(r);
+  scene_destroy(sky);
   assert_int_equal(checked, N_SCENES);
 }
 

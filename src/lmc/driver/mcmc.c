@@ -617,12 +617,23 @@ static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
       if (q >= nk) names[nk++] = c->kernels[q].name;
       tot[q].proposed += c->stats[q].proposed;
       tot[q].accepted += c->stats[q].accepted;
+      tot[q].inverted += c->stats[q].inverted;
+      tot[q].refused += c->stats[q].refused, tot[q].elsewhere += c->stats[q].elsewhere;
     }
   }
-  for (int q = 0; q < nk; q++)
+  for (int q = 0; q < nk; q++) {
+    double pr = fmax(1.0, (double)tot[q].proposed);
     fprintf(stderr, "lmc: %-10s proposed %lld, accepted %lld (%.1f%%)\n", names[q],
             (long long)tot[q].proposed, (long long)tot[q].accepted,
-            100.0 * (double)tot[q].accepted / fmax(1.0, (double)tot[q].proposed));
+            100.0 * (double)tot[q].accepted / pr);
+    if (tot[q].inverted > 0)
+      fprintf(stderr,
+              "lmc: %-10s %lld subpaths inverted (%.4g/s), %.3f%% refused (a path its walks "
+              "cannot reach), %.3f%% walked elsewhere\n",
+              names[q], (long long)tot[q].inverted,
+              (double)tot[q].inverted / fmax(1e-9, R->chain_seconds),
+              100.0 * (double)tot[q].refused / pr, 100.0 * (double)tot[q].elsewhere / pr);
+  }
   for (int g = 0; g < R->n_fam; g++) {
     const mcmc_family *F = &R->fam[g];
     if (F->sf->length <= 0) continue;

@@ -32,9 +32,9 @@ int mcmc_chain_here(int i) {
 }
 
 /* A chain's counters as doubles (exact below 2^53): per kernel proposed,
- * accepted, accept_sum, f_sum, f_sum2; then steps, overflow, regrad,
+ * accepted, accept_sum, f_sum, f_sum2, inverted, refused, elsewhere; then steps, overflow, regrad,
  * screened, screen_passed, eval_failures, sum_evals. */
-#define MCMC_SYNC_KERNEL 5
+#define MCMC_SYNC_KERNEL 8
 #define MCMC_SYNC_WIDTH (MC_MAX_KERNELS * MCMC_SYNC_KERNEL + 7)
 
 static void mcmc__pack_chain(const mc_chain *c, double *o) {
@@ -43,6 +43,7 @@ static void mcmc__pack_chain(const mc_chain *c, double *o) {
     double *d = o + q * MCMC_SYNC_KERNEL;
     d[0] = (double)k->proposed, d[1] = (double)k->accepted, d[2] = k->accept_sum;
     d[3] = k->f_sum, d[4] = k->f_sum2;
+    d[5] = (double)k->inverted, d[6] = (double)k->refused, d[7] = (double)k->elsewhere;
   }
   double *e = o + MC_MAX_KERNELS * MCMC_SYNC_KERNEL;
   e[0] = (double)c->steps, e[1] = (double)c->overflow, e[2] = (double)c->regrad;
@@ -56,6 +57,7 @@ static void mcmc__unpack_chain(mc_chain *c, const double *o) {
     const double *d = o + q * MCMC_SYNC_KERNEL;
     k->proposed = (int64_t)d[0], k->accepted = (int64_t)d[1], k->accept_sum = d[2];
     k->f_sum = d[3], k->f_sum2 = d[4];
+    k->inverted = (int64_t)d[5], k->refused = (int64_t)d[6], k->elsewhere = (int64_t)d[7];
   }
   const double *e = o + MC_MAX_KERNELS * MCMC_SYNC_KERNEL;
   c->steps = (int64_t)e[0], c->overflow = (int64_t)e[1], c->regrad = (int64_t)e[2];

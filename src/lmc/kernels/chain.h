@@ -192,6 +192,10 @@ typedef struct mc_kernel_stats {
   double accept_sum; /* sum of acceptance probabilities */
   double f_sum, f_sum2; /* sum of f(y) and f(y)^2 over the proposals y (for the large
                            step: independent uniform samples of b = E[f], mcmc.c) */
+  /* Moves through the inverse path sampler (own kernels; else 0): subpaths
+   * inverted, steps the inverses could not take back to numbers, and
+   * numbers that walked to another path (a failed round trip). */
+  int64_t inverted, refused, elsewhere;
 } mc_kernel_stats;
 
 /* Where a chain's splats go: w * value / f at (rx, ry); for toy targets the

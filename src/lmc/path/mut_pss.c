@@ -82,68 +82,89 @@ static int pss__walk(const mut_pss *m, const pss__numbers *u, int s, int t, bdpt
   return ok && !smp.past;
 }
 
-/* Whether the walked subpaths lie on the path X of length k (to rounding). */
-static int pss__same(const bdpt_vertex *X, int k, const bdpt_vertex *cam, int t,
+/* Whether the walked subpaths lie on the path X of length k (to rounding);
+ * an end at infinity (inf_end: an escaped ray, a directional light) is
+ * its direction, its point being only a far one. */
+static int pss__same(const bdpt_vertex *X, int k, int inf_end, const bdpt_vertex *cam, int t,
                      const bdpt_vertex *lp) {
   for (int i = 0; i <= k; i++) {
-    vec3 p = i < t ? cam[i].p : lp[k - i].p, q = X[i].p;
+    const bdpt_vertex *v = i < t ? &cam[i] : &lp[k - i];
+    int dir = i == k && inf_end;
+    vec3 p = dir ? v->dir : v->p, q = dir ? X[i].dir : X[i].p;
     double d = fabs(p.x - q.x) + fabs(p.y - q.y) + fabs(p.z - q.z);
-    double sz = fabs(q.x) + fabs(q.y) + fabs(q.z);
+    double sz = dir ? 0.0 : fabs(q.x) + fabs(q.y) + fabs(q.z);
     if (!(d <= 1e-6 * (1.0 + sz))) return 0;
   }
   return 1;
 }
 
-int mut_pss_propose(const mut_pss *m, rng *r, const ps_path *x, ps_path *OUT_y,
-                    double *OUT_ratio, bdpt_vertex *scratch, int64_t *rays) {
+/* x's numbers for a strategy drawn by its MIS weights (the Gibbs steps on
+ * t and z) in *u, the strategy in *OUT_s, *OUT_t, the subpaths inverted
+ * added to *inverted; 0 when there are none. */
+static int pss__numbers_of(const mut_pss *m, rng *r, const bdpt_vertex *X, int k,
+                           bdpt_vertex *cam, bdpt_vertex *lp, pss__numbers *u, int *OUT_s,
+                           int *OUT_t, int64_t *inverted) {
   const scene *sc = m->ctx->sc;
   const render_settings *rs = &m->ctx->rs;
+  double w[PSS_N + 1] = {0}, sum = 0.0;
+  bdpt_mis_weights(sc, X, k, cam, w);
+  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp] > 0.0 ? w[tp] : 0.0;
+  if (!(sum > 0.0)) return 0;
+  int t = bdpt_draw_strategy(w, k, 0, sum, rng_uniform(r));
+  if (t < 1) return 0;
+  int s = k + 1 - t;
+  *OUT_s = s, *OUT_t = t;
+  memset(u, 0, sizeof *u);
+  bdpt_resplit(sc, X, k, s, t, cam, lp);
+  if (t >= 2) {
+    double rx, ry;
+    ++*inverted;
+    if (!bdpt_invert_camera_subpath(sc, rs, NULL, cam, t, r, &rx, &ry, u->cam)) return 0;
+    u->film[0] = rx / sc->cam.width, u->film[1] = ry / sc->cam.height;
+    if (!(u->film[0] >= 0.0 && u->film[0] < 1.0 && u->film[1] >= 0.0 && u->film[1] < 1.0))
+      return 0;
+    u->n_cam = BDPT_DIMS_PER_VERTEX * (t - 1);
+  }
+  if (s >= 1) ++*inverted;
+  if (s >= 2) {
+    if (!bdpt_invert_light_subpath(sc, rs, NULL, lp, s, r, u->light)) return 0;
+    u->n_light = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (s - 1);
+  } else if (s == 1) {
+    if (!bdpt_invert_connect(sc, &cam[t - 1], &X[k], r, u->conn)) return 0;
+  }
+  return 1;
+}
+
+int mut_pss_propose(const mut_pss *m, rng *r, const ps_path *x, ps_path *OUT_y,
+                    double *OUT_ratio, bdpt_vertex *scratch, int64_t *rays,
+                    mut_pss_tally *tally) {
+  mut_pss_tally own = {0, 0, 0};
+  if (!tally) tally = &own;
   int k = x->k;
   bdpt_vertex *X = scratch, *cam = scratch + PSS_N, *lp = scratch + 2 * PSS_N;
   bdpt_vertex *cam2 = scratch + 3 * PSS_N, *lp2 = scratch + 4 * PSS_N;
   *OUT_ratio = 0.0;
   if (k < 1 || k + 1 > PSS_N || !(x->lum > 0.0)) return 0;
   for (int i = 0; i <= k; i++) X[i] = x->x[i].v;
-
-  /* The strategy, by x's MIS weights (the Gibbs step on t). */
-  double w[PSS_N + 1] = {0}, sum = 0.0;
-  if (k == 1) {
-    w[2] = 1.0;
-  } else {
-    bdpt_mis_weights(sc, X, k, cam, w);
-  }
-  for (int tp = 1; tp <= k + 1; tp++) sum += w[tp] > 0.0 ? w[tp] : 0.0;
-  if (!(sum > 0.0)) return 0;
-  int t = bdpt_draw_strategy(w, k, 0, sum, rng_uniform(r));
-  if (t < 1) return 0;
-  int s = k + 1 - t;
-
-  /* Its numbers, by the inverses (the Gibbs step on z). */
   pss__numbers u, u2;
-  memset(&u, 0, sizeof u);
-  bdpt_resplit(sc, X, k, s, t, cam, lp);
-  if (t >= 2) {
-    double rx, ry;
-    if (!bdpt_invert_camera_subpath(sc, rs, NULL, cam, t, r, &rx, &ry, u.cam)) return 0;
-    u.film[0] = rx / sc->cam.width, u.film[1] = ry / sc->cam.height;
-    if (!(u.film[0] >= 0.0 && u.film[0] < 1.0 && u.film[1] >= 0.0 && u.film[1] < 1.0)) return 0;
-    u.n_cam = BDPT_DIMS_PER_VERTEX * (t - 1);
+  int s = 0, t = 0;
+  if (!pss__numbers_of(m, r, X, k, cam, lp, &u, &s, &t, &tally->inverted)) {
+    tally->refused++;
+    return 0;
   }
-  if (s >= 2) {
-    if (!bdpt_invert_light_subpath(sc, rs, NULL, lp, s, r, u.light)) return 0;
-    u.n_light = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (s - 1);
-  } else if (s == 1) {
-    if (!bdpt_invert_connect(sc, &cam[t - 1], &X[k], r, u.conn)) return 0;
-  }
-
   /* x's value in these numbers: its strategy walked again from them. */
   rgb c;
   double rx, ry;
-  if (!pss__walk(m, &u, s, t, cam, lp, &c, &rx, &ry, rays) || !pss__same(X, k, cam, t, lp))
+  if (!pss__walk(m, &u, s, t, cam, lp, &c, &rx, &ry, rays) ||
+      !pss__same(X, k, x->x[k].inf, cam, t, lp)) {
+    tally->elsewhere++;
     return 0;
+  }
   double fx = rgb_luminance(c);
-  if (!(fx > 0.0) || !isfinite(fx)) return 0;
-
+  if (!(fx > 0.0) || !isfinite(fx)) {
+    tally->elsewhere++;
+    return 0;
+  }
   /* The small step, and y. */
   u2 = u;
   if (t >= 2)

@@ -8,7 +8,7 @@
  *
  * The move. A strategy (s, t) of length k is drawn with probability
  * w_t(x), its MIS weight for x (bdpt_mis_weights; length 1 has (0, 2)
- * alone); x is re-split at it and inverted into numbers u (the film
+ * alone, none to a light no ray hits); x is re-split at it and inverted into numbers u (the film
  * position u0 = rx / W, u1 = ry / H for t >= 2, the camera subpath's, the
  * light subpath's, or for s = 1 the light sample's), every number x does
  * not fix drawn uniformly (integrator.h's bdpt_invert_*). Every number
@@ -46,6 +46,14 @@ typedef struct mut_pss {
   double test_power;     /* tests only: the ratio raised to this power (1; 0 accepts all) */
 } mut_pss;
 
+/* What the proposals met, for the statistics line: subpaths inverted,
+ * paths the inverses could not take back to numbers (or with no strategy
+ * of weight), and numbers that walked to another path than x (a failed
+ * round trip, to rounding). */
+typedef struct mut_pss_tally {
+  int64_t inverted, refused, elsewhere;
+} mut_pss_tally;
+
 /* The vertices of scratch a proposal needs. */
 #define MUT_PSS_SCRATCH (5 * (BDPT_MAX_VERTICES + 1))
 
@@ -55,8 +63,10 @@ void mut_pss_init(mut_pss *m, const ps_context *ctx, double u1_scale);
 /* Proposes y from x with the ratio c_t(u') / c_t(u) in *OUT_ratio, 0 for
  * a y outside the path space (scratch: MUT_PSS_SCRATCH vertices). Returns
  * 0 when there is no proposal (x cannot be inverted, or its numbers walk
- * elsewhere). rays (may be NULL) adds the rays traced. */
+ * elsewhere). rays (may be NULL) adds the rays traced, tally (may be
+ * NULL) what the proposal met. */
 int mut_pss_propose(const mut_pss *m, rng *r, const ps_path *x, ps_path *OUT_y,
-                    double *OUT_ratio, bdpt_vertex *scratch, int64_t *rays);
+                    double *OUT_ratio, bdpt_vertex *scratch, int64_t *rays,
+                    mut_pss_tally *tally);
 
 #endif

@@ -225,14 +225,11 @@ static void mmj__eval_proposal(mc_mmlt_jump *j, const double *y, int s, int t, i
 }
 
 /* The MIS weights w[t] (t = 1 .. k + 1) of the strategies of the path X of
- * length k that the states have: length 1 has (0, 2) alone, and on the
- * bdpt states a strategy without a label has weight 0. */
+ * length k that the states have (length 1 has (0, 2) alone, unless its
+ * light cannot be hit); on the bdpt states a strategy without a label has
+ * weight 0. */
 static void mmj__weights(const mc_mmlt_jump *j, const bdpt_vertex *X, int k, double *w) {
   mmj__space S = mmj__space_of(j);
-  if (k == 1) {
-    w[1] = 0.0, w[2] = 1.0;
-    return;
-  }
   bdpt_mis_weights(S.sc, X, k, j->v + 2 * MMJ_N, w);
   if (j->bs)
     for (int t = 1; t <= k + 1; t++)

@@ -230,7 +230,10 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, double p_x, 
   } else if (move == MC_PATH_MOVE_PSS) {
     path__chain *pc = c->own;
     if (!pc->pss_v) pc->pss_v = malloc(MUT_PSS_SCRATCH * sizeof *pc->pss_v);
-    ok = pc->pss_v && mut_pss_propose(&P->mq, &c->r, x, y, &ratio, pc->pss_v, &y->rays);
+    mut_pss_tally ty = {0, 0, 0};
+    ok = pc->pss_v && mut_pss_propose(&P->mq, &c->r, x, y, &ratio, pc->pss_v, &y->rays, &ty);
+    c->stats[ki].inverted += ty.inverted;
+    c->stats[ki].refused += ty.refused, c->stats[ki].elsewhere += ty.elsewhere;
   } else {
     mut_perturb_kind kind = move == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
                             : move == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN

@@ -285,7 +285,8 @@ void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
 
 /* The power-heuristic MIS weights of every strategy t = 1 .. k + 1 (s =
  * k + 1 - t) of the full path x_0 .. x_k at once, into OUT_w[t] (0 where a
- * delta vertex at the joint makes the strategy impossible): the densities
+ * delta vertex at the joint makes the strategy impossible; length 1 has
+ * (0, 2) alone, impossible at a delta light): the densities
  * of every vertex from both sides once (bdpt_path_pdfs), then the ratio
  * walk's sums for all t. The same numbers, to rounding, as bdpt_mis_weight
  * on each re-split. scratch: room for k + 2 vertices. */
