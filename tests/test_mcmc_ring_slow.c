@@ -3,8 +3,12 @@
  * bdpt on the ring-caustics scenes (scenes/ring-caustics,
  * scenes/ring-caustics-glass) at 64x48, and mlt on the Cornell box
  * (scenes/cornell-box) at 32x32 with 512 samples and mutations per pixel:
- * in the image mean and in the means of a 4 x 4 grid of regions. This is the guard against start-up bias and
- * wrong normalisation.
+ * in the image mean and in the means of a 4 x 4 grid of regions. So do
+ * the moves through the inverse path sampler: pssmlt and mmlt with
+ * reversible jumps (--technique-jump 0.2) and fused path moves
+ * (--path-mutations 0.3) on the rings (pssmlt also on the box), and mlt
+ * with its primary-sample step (--pss-mutation on) on all three. This is
+ * the guard against start-up bias and wrong normalisation.
  *
  * Variance: each integrator renders R = 5 independent seeds (MCMC: each with
  * its own bootstrap). For a statistic (a region's mean luminance) the runs
@@ -27,7 +31,7 @@
  * short: b's error is part of each run's, so of the SE. The renders use
  * the default --direct separate (pt renders the paths of one and two
  * segments with the same spp, the chains the rest; test_mcmc_analytic
- * covers --direct mcmc). About 5 CPU-minutes in Release.
+ * covers --direct mcmc). About 7 CPU-minutes in Release.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -49,18 +53,26 @@
 
 static int g_checks;
 
+/* An integrator with up to two flags of its own ({NULL}: none). */
+typedef struct config {
+  const char *name, *integrator;
+  const char *flags[2][2];
+} config;
+
 /* Mean and SE over RUNS of the region means (index GRID*GRID: whole image). */
-static void run_stats(const scene *s, const char *integrator, int64_t spp, double mean[N_STATS],
+static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
-    snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
+    snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
     rs.spp = spp;
     rs.set |= SET_SPP;
     lmc_error err;
     /* The default, adaptive bootstrap; its error is part of the SE. */
     assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
+    for (int f = 0; f < 2 && c->flags[f][0]; f++)
+      assert_int_equal(mcmc_set(&rs, c->flags[f][0], c->flags[f][1], &err), LMC_OK);
     rs.time_limit = 0.0;
     rs.threads = 2;
     rs.seed = 1000 + (uint64_t)r;
@@ -70,11 +82,11 @@ static void run_stats(const scene *s, const char *integrator, int64_t spp, doubl
   region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
 }
 
-/* The MCMC integrators names[0 .. n-1] against bdpt on scene `folder` at
+/* The MCMC configurations c[0 .. n-1] against bdpt on scene `folder` at
  * w x h, spp samples per pixel (bdpt) and mutations per pixel (the MCMC
  * integrators; mlt: mlt_spp). */
 static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t mlt_spp,
-                        const char *const *names, int n) {
+                        const config *c, int n) {
   char path[1024];
   snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", LMC_SOURCE_DIR, folder);
   scene *s = NULL;
@@ -86,49 +98,66 @@ static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t m
   camera_set_resolution(&s->cam, w, h);
 
   double ref[N_STATS], ref_se[N_STATS];
-  run_stats(s, "bdpt", spp, ref, ref_se);
+  const config bdpt = {"bdpt", "bdpt", {{NULL, NULL}}};
+  run_stats(s, &bdpt, spp, ref, ref_se);
   for (int i = 0; i < n; i++) {
     double m[N_STATS], se[N_STATS];
-    run_stats(s, names[i], strcmp(names[i], "mlt") == 0 ? mlt_spp : spp, m, se);
+    run_stats(s, &c[i], strcmp(c[i].integrator, "mlt") == 0 ? mlt_spp : spp, m, se);
     double worst = 0.0;
     for (int k = 0; k < N_STATS; k++) {
       double tol = 6.5 * sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
       double z = fabs(m[k] - ref[k]) / fmax(sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]), 1e-300);
       if (z > worst) worst = z;
       if (k == GRID * GRID)
-        fprintf(stderr, "  %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder, names[i],
-                m[k], se[k], ref[k], ref_se[k]);
+        fprintf(stderr, "  %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder,
+                c[i].name, m[k], se[k], ref[k], ref_se[k]);
       assert_near(m[k], ref[k], tol);
       g_checks++;
     }
-    fprintf(stderr, "  %s %s: largest |difference| / SE over the regions %.2f\n", folder, names[i],
-            worst);
+    fprintf(stderr, "  %s %s: largest |difference| / SE over the regions %.2f\n", folder,
+            c[i].name, worst);
   }
   scene_destroy(s);
 }
 
-static const char *const g_pss[3] = {"pssmlt", "mmlt", "mlt"};
+/* The integrators, and the moves through the inverse path sampler: pssmlt
+ * on its bdpt states and mmlt with reversible jumps and fused path
+ * moves, mlt with its primary-sample step. */
+#define N_CONFIGS 6
+static const config g_configs[N_CONFIGS] = {
+    {"pssmlt", "pssmlt", {{NULL, NULL}}},
+    {"mmlt", "mmlt", {{NULL, NULL}}},
+    {"mlt", "mlt", {{NULL, NULL}}},
+    {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
+    {"mmlt jumps+path", "mmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
+    {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
+};
 
 static void test_ring_caustics(void **state) {
   (void)state;
-  check_scene("ring-caustics", 64, 48, 80, 640, g_pss, 3);
+  check_scene("ring-caustics", 64, 48, 80, 640, g_configs, N_CONFIGS);
 }
 
 static void test_ring_caustics_glass(void **state) {
   (void)state;
-  check_scene("ring-caustics-glass", 64, 48, 80, 640, g_pss, 3);
+  check_scene("ring-caustics-glass", 64, 48, 80, 640, g_configs, N_CONFIGS);
 }
 
-/* Path-space MLT on the Cornell box too (an area light, a glass sphere). */
+/* Path-space MLT on the Cornell box too (an area light, a glass sphere),
+ * with its primary-sample step and pssmlt with the moves. */
 static void test_cornell_box_mlt(void **state) {
   (void)state;
-  static const char *const mlt[1] = {"mlt"};
-  check_scene("cornell-box", 32, 32, 512, 512, mlt, 1);
+  static const config c[3] = {
+      {"mlt", "mlt", {{NULL, NULL}}},
+      {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
+      {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
+  };
+  check_scene("cornell-box", 32, 32, 512, 512, c, 3);
 }
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, (2 * 3 + 1) * N_STATS);
+  assert_int_equal(g_checks, (2 * N_CONFIGS + 3) * N_STATS);
 }
 
 int main(void) {
