@@ -49,6 +49,19 @@ static int run_lmc(const char *args) {
   return WEXITSTATUS(rc);
 }
 
+/* run_lmc of printf-style arguments that must succeed (the command and
+ * its messages printed when it does not). */
+static void run_ok(const char *fmt, ...) {
+  char args[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(args, sizeof args, fmt, ap);
+  va_end(ap);
+  int rc = run_lmc(args);
+  if (rc != 0) print_error("%s\n%s", args, err_text);
+  assert_int_equal(rc, 0);
+}
+
 static int setup(void **state) {
   (void)state;
   mkdir(TMP, 0755);
@@ -64,12 +77,9 @@ static void test_each_mode_selected(void **state) {
   int checked = 0;
   for (int m = 0; m < 4; m++)
     for (int form = 0; form < 2; form++) {
-      char args[1024];
-      snprintf(args, sizeof args, form ? "%s --adapt=%s" : "%s --adapt %s", COMMON, modes[m]);
-      int rc = run_lmc(args);
-      if (rc != 0) print_error("%s\n%s", args, err_text);
-      assert_int_equal(rc, 0);
-      if (!strstr(err_text, shown[m])) fail_msg("'%s' does not print '%s':\n%s", args, shown[m], err_text);
+      run_ok(form ? "%s --adapt=%s" : "%s --adapt %s", COMMON, modes[m]);
+      if (!strstr(err_text, shown[m]))
+        fail_msg("--adapt %s does not print '%s':\n%s", modes[m], shown[m], err_text);
       /* Only the chosen mode is named. */
       for (int o = 0; o < 4; o++)
         if (o != m) assert_null(strstr(err_text, shown[o]));
@@ -113,11 +123,7 @@ static void test_delayed_flag(void **state) {
   static const char *flag[] = {"", " --delayed off", " --delayed on", " --delayed=on"};
   int checked = 0;
   for (int i = 0; i < 4; i++) {
-    char args[1024];
-    snprintf(args, sizeof args, "%s%s", base, flag[i]);
-    int rc = run_lmc(args);
-    if (rc != 0) print_error("%s\n%s", args, err_text);
-    assert_int_equal(rc, 0);
+    run_ok("%s%s", base, flag[i]);
     assert_non_null(strstr(err_text, "lmc: mala       length 3"));
     int shown = strstr(err_text, "lmc: delayed acceptance:") != NULL;
     assert_int_equal(shown, i >= 2);
@@ -166,11 +172,7 @@ static void test_state_moves_flags(void **state) {
   static const char *integ[] = {"pssmlt", "lmc", "h2mc"};
   int checked = 0;
   for (int i = 0; i < 3; i++) {
-    char args[1024];
-    snprintf(args, sizeof args, "%s --integrator %s", base, integ[i]);
-    int rc = run_lmc(args);
-    if (rc != 0) print_error("%s\n%s", args, err_text);
-    assert_int_equal(rc, 0);
+    run_ok("%s --integrator %s", base, integ[i]);
     static const char *const lines[2] = {"lmc: technique jumps: ", "lmc: path mutations (fused): "};
     for (int q = 0; q < 2; q++) {
       const char *l = strstr(err_text, lines[q]);
@@ -209,11 +211,7 @@ static void test_pss_weight(void **state) {
   static const char *const moves[6] = {"bidir", "lens", "multichain", "caustic", "lenssub", "pss"};
   int checked = 0;
   for (int i = 0; i < 2; i++) {
-    char args[1024];
-    snprintf(args, sizeof args, "%s --pss-weight %g", base, weights[i]);
-    int rc = run_lmc(args);
-    if (rc != 0) print_error("%s\n%s", args, err_text);
-    assert_int_equal(rc, 0);
+    run_ok("%s --pss-weight %g", base, weights[i]);
     long long n[6] = {0}, all = 0;
     for (int j = 0; j < 6; j++) {
       char key[64];
