@@ -693,28 +693,38 @@ static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int 
   return res;
 }
 
+/* The step's invariance on scene sc (n paths), its tally checked: every
+ * sample is proposed from, refused or walked elsewhere, and a round trip
+ * fails at most once in a thousand. */
+static void check_pss(const scene *sc, const char *name, uint64_t seed, int n) {
+  int proposed;
+  mut_pss_tally ty;
+  ps_inv *r = pss_invariance(sc, seed, 1.0, n, &proposed, &ty);
+  print_message("pss step on %s: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
+                "%.3g); %lld subpaths inverted, %lld refused, %lld walked elsewhere\n",
+                name, r->samples, proposed, r->moved, r->bins, r->min_p, r->level,
+                (long long)ty.inverted, (long long)ty.refused, (long long)ty.elsewhere);
+  /* (Paths of one segment to a point light have no strategy: none.) */
+  assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
+  assert_true(proposed >= r->samples / 8);
+  assert_int_equal(proposed + ty.refused + ty.elsewhere, r->samples);
+  assert_true(ty.inverted >= proposed && 1000 * ty.elsewhere <= r->samples);
+  assert_true(r->min_p >= r->level);
+  free(r);
+}
+
 static void test_pss_invariance(void **state) {
   fixture *fx = *state;
   int checked = 0;
-  for (int c = 0; c < N_SCENES; c++) {
-    int proposed;
-    mut_pss_tally ty;
-    ps_inv *r = pss_invariance(fx->sc[c], 71 + (uint64_t)c, 1.0, 400000, &proposed, &ty);
-    print_message("pss step on %s: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
-                  "%.3g); %lld subpaths inverted, %lld refused, %lld walked elsewhere\n",
-                  scene_names[c], r->samples, proposed, r->moved, r->bins, r->min_p, r->level,
-                  (long long)ty.inverted, (long long)ty.refused, (long long)ty.elsewhere);
-    /* (Paths of one segment to a point light have no strategy: none.)
-     * Every sample is proposed from, refused or walked elsewhere; a round
-     * trip fails at most once in a thousand. */
-    assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
-    assert_true(proposed >= r->samples / 8);
-    assert_int_equal(proposed + ty.refused + ty.elsewhere, r->samples);
-    assert_true(ty.inverted >= proposed && 1000 * ty.elsewhere <= r->samples);
-    assert_true(r->min_p >= r->level);
-    free(r);
-    checked++;
-  }
+  for (int c = 0; c < N_SCENES; c++, checked++)
+    check_pss(fx->sc[c], scene_names[c], 71 + (uint64_t)c, 400000);
+  /* Paths that end in the sky: their numbers walk back to them (the end's
+   * direction, not its far point, is the path's). */
+  scene *sky = ps_test_load(sky_xml, "sky");
+  assert_non_null(sky);
+  check_pss(sky, "sky", 83, 200000);
+  scene_destroy(sky);
+  checked++;
   /* Every proposal accepted: the walk in the numbers is then uniform in
    * them, not the target, and the test must see it. */
   int proposed;
@@ -726,23 +736,7 @@ static void test_pss_invariance(void **state) {
   assert_true(r->moved >= 5000);
   assert_true(r->min_p < r->level);
   free(r);
-  /* Paths that end in the sky: their numbers walk back to them (the end's
-   * direction, not its far point, is the path's), and the step keeps the
-   * target. */
-  scene *sky = ps_test_load(sky_xml, "sky");
-  assert_non_null(sky);
-  r = pss_invariance(sky, 83, 1.0, 200000, &proposed, &ty);
-  print_message("pss step on sky: %d samples, %d proposed, %d moved, %d bins, min p %.3g (level "
-                "%.3g); %lld subpaths inverted, %lld refused, %lld walked elsewhere\n",
-                r->samples, proposed, r->moved, r->bins, r->min_p, r->level,
-                (long long)ty.inverted, (long long)ty.refused, (long long)ty.elsewhere);
-  assert_true(r->samples >= 20000 && r->moved >= 5000 && r->bins >= 20);
-  assert_int_equal(proposed + ty.refused + ty.elsewhere, r->samples);
-  assert_true(1000 * ty.elsewhere <= r->samples);
-  assert_true(r->min_p >= r->level);
-  free(r);
-  scene_destroy(sky);
-  assert_int_equal(checked, N_SCENES);
+  assert_int_equal(checked, N_SCENES + 1);
 }
 
 int main(void) {
