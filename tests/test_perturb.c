@@ -476,6 +476,19 @@ static int inv_bin(const scene *sc, const ps_path *x) {
   return ((x->k - 1) * INV_ROWS + cy) * INV_COLS + cx;
 }
 
+/* A start for the invariance tests: a whole path of length k_only (0: a
+ * length uniform in 1 .. KMAX) from the bidirectional sampler, with its
+ * weight C(x) / q(x) in *OUT_w (q the sampler's density, the length's
+ * probability included); 0 when none was drawn. */
+static int draw_start(const movers *mv, rng *r, int k_only, ps_path *x, double *OUT_w) {
+  int k = k_only ? k_only : 1 + (int)(rng_uniform(r) * KMAX);
+  if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) return 0;
+  double q = mut_bidir_whole_pdf(&mv->mb, x, 0) / (k_only ? 1 : KMAX);
+  assert_true(q > 0.0);
+  *OUT_w = x->lum / q;
+  return 1;
+}
+
 static ps_inv *invariance(const scene *sc, mut_perturb_kind kind, int k_only, uint64_t seed,
                              double power, int n) {
   movers mv;
@@ -491,11 +504,8 @@ static ps_inv *invariance(const scene *sc, mut_perturb_kind kind, int k_only, ui
   rng r;
   rng_seed(&r, seed, 5);
   for (int i = 0; i < n; i++) {
-    int k = k_only ? k_only : 1 + (int)(rng_uniform(&r) * KMAX);
-    if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
-    double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / (k_only ? 1 : KMAX);
-    assert_true(q > 0.0);
-    double w = x->lum / q, ratio = 0.0;
+    double w, ratio = 0.0;
+    if (!draw_start(&mv, &r, k_only, x, &w)) continue;
     res->samples++;
     int moved = mut_perturb_applies(&mv.mp, kind, x) &&
                 mut_perturb_propose(&mv.mp, kind, &r, x, y, &ratio, NULL, NULL) &&
@@ -619,13 +629,12 @@ static ps_inv *lenssub_invariance(const scene *sc, uint64_t seed, double power, 
   rng r;
   rng_seed(&r, seed, 5);
   for (int i = 0; i < n; i++) {
-    int k = 1 + (int)(rng_uniform(&r) * KMAX);
-    if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
-    double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / KMAX, ratio = 0.0;
+    double w, ratio = 0.0;
+    if (!draw_start(&mv, &r, 0, x, &w)) continue;
     res->samples++;
     int moved = mut_lenssub_m(&mv.ctx, x) > 0 && mut_lenssub_propose(&mv.ml, &r, x, y, &ratio, NULL) &&
                 rng_uniform(&r) < ratio;
-    ps_inv_add(res, x->lum / q, inv_bin(sc, x), moved ? inv_bin(sc, y) : inv_bin(sc, x));
+    ps_inv_add(res, w, inv_bin(sc, x), moved ? inv_bin(sc, y) : inv_bin(sc, x));
   }
   ps_inv_finish(res);
   free(x), free(y);
@@ -676,11 +685,8 @@ static ps_inv *pss_invariance(const scene *sc, uint64_t seed, double power, int 
   *OUT_proposed = 0;
   *OUT_tally = (mut_pss_tally){0, 0, 0};
   for (int i = 0; i < n; i++) {
-    int k = 1 + (int)(rng_uniform(&r) * KMAX);
-    if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
-    double q = mut_bidir_whole_pdf(&mv.mb, x, 0) / KMAX;
-    assert_true(q > 0.0);
-    double w = x->lum / q, ratio = 0.0;
+    double w, ratio = 0.0;
+    if (!draw_start(&mv, &r, 0, x, &w)) continue;
     res->samples++;
     int prop = mut_pss_propose(&mq, &r, x, y, &ratio, scratch, NULL, OUT_tally);
     *OUT_proposed += prop;
