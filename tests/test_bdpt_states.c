@@ -18,6 +18,10 @@
  *    those converge.
  *  - without absolute directions (rough_min 2) relabel is absent and
  *    eval_label in the large step's coordinates gives f_j itself.
+ *  - a chain's ray tallies (chain.h): the kernels' rays sum to the rays
+ *    its scratches traced, the labels' tallies to its steps and its small
+ *    steps' rays, and a small step from a state of length k traces
+ *    between 1 and k rays (its two subpaths and one connection).
  * Every check is counted and the counts asserted.
  */
 #include <setjmp.h>
@@ -31,6 +35,7 @@
 
 #include <cmocka.h>
 
+#include "lmc/kernels/chain.h"
 #include "lmc/states/bdpt_states.h"
 #include "render/io/io.h"
 #include "test_util.h"
@@ -401,8 +406,59 @@ static void test_shared_workspace(void **state) {
   mc_bdpt_states_free(&ctx);
 }
 
+/* A chain of large and small steps on the bdpt states: every ray its
+ * scratches traced after the start is in one kernel's tally; the labels'
+ * tallies sum to the steps, the small steps and their rays; a small step
+ * from label (s, t) of length k = s + t - 1 traces 1 to k rays (t - 1
+ * camera and s - 1 light segments and the connection), so each label's
+ * rays lie within [steps, k steps]. Counts: 20,000 steps, the labels
+ * visited (at least 5). */
+static void test_ray_tallies(void **state) {
+  fixture *fx = *state;
+  mc_bdpt_states ctx;
+  mc_target T = make_target(fx, &ctx, 0.3);
+  mc_kernel k[2] = {mc_kernel_large(), mc_kernel_small(1.0 / 1024.0, 1.0 / 64.0)};
+  double p[2] = {0.2, 0.8};
+  mc_chain *ch = NULL;
+  lmc_error err;
+  assert_int_equal(mc_chain_create(&ch, &T, k, p, 2, &err), LMC_OK);
+  assert_non_null(ch->lab);
+  int64_t r_start = 0;
+  for (uint64_t seq = 1; seq < 100; seq++) /* a start that sees light */
+    if (mc_chain_start(ch, 7, seq, 1000 + seq) > 0.0) break;
+  assert_true(ch->x.v.f > 0.0);
+  r_start = mc_chain_rays(ch);
+  const int n_steps = 20000;
+  for (int i = 0; i < n_steps; i++) mc_chain_step(ch, NULL, NULL);
+  int64_t traced = mc_chain_rays(ch) - r_start;
+  assert_int_equal(ch->stats[0].rays + ch->stats[1].rays, traced);
+  assert_true(ch->stats[0].rays >= ch->sum_rays);
+  int64_t steps = 0, small = 0, small_rays = 0;
+  int visited = 0;
+  for (int l = 0; l < T.n_labels; l++) {
+    const int64_t *t = ch->lab + 3 * l;
+    steps += t[0], small += t[1], small_rays += t[2];
+    if (t[1] == 0) continue;
+    int len = mc_bdpt_states_length(&ctx, l);
+    if (t[2] < t[1] || t[2] > (int64_t)len * t[1])
+      fail_msg("label %d (length %d): %lld rays in %lld small steps", l, len, (long long)t[2],
+               (long long)t[1]);
+    visited++;
+  }
+  print_message("%d steps, %d labels visited, %.3g rays a small step, %.3g a large one\n",
+                n_steps, visited, (double)small_rays / (double)small,
+                (double)ch->stats[0].rays / (double)ch->stats[0].proposed);
+  assert_int_equal(steps, n_steps);
+  assert_int_equal(small, ch->stats[1].proposed);
+  assert_int_equal(small_rays, ch->stats[1].rays);
+  assert_true(visited >= 5);
+  mc_chain_destroy(ch);
+  mc_bdpt_states_free(&ctx);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_ray_tallies),
       cmocka_unit_test(test_relabel_consistency),
       cmocka_unit_test(test_gradients),
       cmocka_unit_test(test_without_absolute),

@@ -602,6 +602,53 @@ static lmc_status mcmc__rounds(mcmc_render *R, lmc_error *err) {
   return LMC_OK;
 }
 
+/* The rays a mutation traced, per kernel (the large step's with the share
+ * of its roulette's F(u)); on a labelled space whose families say their
+ * labels' lengths, the chains' time at each path length and the rays a
+ * step of a kernel other than the large step traced from there. */
+static void mcmc__report_rays(const mcmc_render *R, const mc_kernel_stats *tot,
+                              const char *const *names, int nk) {
+  int64_t rays = 0, steps = 0, sum_rays = 0, sum_evals = 0;
+  for (int q = 0; q < nk; q++) rays += tot[q].rays, steps += tot[q].proposed;
+  if (steps == 0 || rays == 0) return;
+  char line[512];
+  int o = snprintf(line, sizeof line, "lmc: rays       %.3g per mutation:", (double)rays / (double)steps);
+  for (int q = 0; q < nk && o < (int)sizeof line; q++)
+    o += snprintf(line + o, sizeof line - (size_t)o, "%s %s %.3g", q ? "," : "", names[q],
+                  (double)tot[q].rays / fmax(1.0, (double)tot[q].proposed));
+  for (int i = 0; i < R->n_slots; i++)
+    sum_rays += R->slots[i].chain->sum_rays, sum_evals += R->slots[i].chain->sum_evals;
+  if (sum_evals > 0 && o < (int)sizeof line)
+    snprintf(line + o, sizeof line - (size_t)o, " (%lld roulette F(u) evaluations, %.3g rays each)",
+             (long long)sum_evals, (double)sum_rays / (double)sum_evals);
+  fprintf(stderr, "%s\n", line);
+
+  /* The labels' tallies by path length (MCMC_MAX_DEPTH bounds a length). */
+  enum { LEN_MAX = 64 };
+  int64_t at[LEN_MAX][3];
+  memset(at, 0, sizeof at);
+  int64_t total = 0;
+  for (int i = 0; i < R->n_slots; i++) {
+    const mc_chain *c = R->slots[i].chain;
+    const mcmc_family *F = &R->fam[R->slots[i].family];
+    if (!c->lab || !F->sf->length_of) continue;
+    for (int l = 0; l < c->target->n_labels; l++) {
+      int len = F->sf->length_of(F->sf, l, -1);
+      if (len < 0 || len >= LEN_MAX) continue;
+      for (int k = 0; k < 3; k++) at[len][k] += c->lab[3 * l + k];
+      total += c->lab[3 * l];
+    }
+  }
+  if (total == 0) return;
+  o = snprintf(line, sizeof line, "lmc: states     by length (share of steps, rays a step but the large):");
+  for (int len = 0; len < LEN_MAX && o < (int)sizeof line; len++)
+    if (at[len][0] > 0)
+      o += snprintf(line + o, sizeof line - (size_t)o, " %d %.1f%% %.3g", len,
+                    100.0 * (double)at[len][0] / (double)total,
+                    (double)at[len][2] / fmax(1.0, (double)at[len][1]));
+  fprintf(stderr, "%s\n", line);
+}
+
 /* Statistics (stderr): per kernel, per family of a per-length space,
  * mutations per second, b; then the integrator's. */
 static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
@@ -619,6 +666,7 @@ static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
       tot[q].accepted += c->stats[q].accepted;
       tot[q].inverted += c->stats[q].inverted;
       tot[q].refused += c->stats[q].refused, tot[q].elsewhere += c->stats[q].elsewhere;
+      tot[q].rays += c->stats[q].rays;
     }
   }
   for (int q = 0; q < nk; q++) {
@@ -634,6 +682,7 @@ static void mcmc__report(mcmc_render *R, const mc_counts *counts) {
               (double)tot[q].inverted / fmax(1e-9, R->chain_seconds),
               100.0 * (double)tot[q].refused / pr, 100.0 * (double)tot[q].elsewhere / pr);
   }
+  mcmc__report_rays(R, tot, names, nk);
   for (int g = 0; g < R->n_fam; g++) {
     const mcmc_family *F = &R->fam[g];
     if (F->sf->length <= 0) continue;

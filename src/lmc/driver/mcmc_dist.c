@@ -32,10 +32,11 @@ int mcmc_chain_here(int i) {
 }
 
 /* A chain's counters as doubles (exact below 2^53): per kernel proposed,
- * accepted, accept_sum, f_sum, f_sum2, inverted, refused, elsewhere; then steps, overflow, regrad,
- * screened, screen_passed, eval_failures, sum_evals. */
-#define MCMC_SYNC_KERNEL 8
-#define MCMC_SYNC_WIDTH (MC_MAX_KERNELS * MCMC_SYNC_KERNEL + 7)
+ * accepted, accept_sum, f_sum, f_sum2, inverted, refused, elsewhere, rays; then steps, overflow,
+ * regrad, screened, screen_passed, eval_failures, sum_evals, sum_rays; then its labels' tallies
+ * (c->lab, 3 per label; the width has room for the most labels of any chain). */
+#define MCMC_SYNC_KERNEL 9
+#define MCMC_SYNC_FIXED (MC_MAX_KERNELS * MCMC_SYNC_KERNEL + 8)
 
 static void mcmc__pack_chain(const mc_chain *c, double *o) {
   for (int q = 0; q < c->n_kernels; q++) {
@@ -44,11 +45,13 @@ static void mcmc__pack_chain(const mc_chain *c, double *o) {
     d[0] = (double)k->proposed, d[1] = (double)k->accepted, d[2] = k->accept_sum;
     d[3] = k->f_sum, d[4] = k->f_sum2;
     d[5] = (double)k->inverted, d[6] = (double)k->refused, d[7] = (double)k->elsewhere;
+    d[8] = (double)k->rays;
   }
   double *e = o + MC_MAX_KERNELS * MCMC_SYNC_KERNEL;
   e[0] = (double)c->steps, e[1] = (double)c->overflow, e[2] = (double)c->regrad;
   e[3] = (double)c->screened, e[4] = (double)c->screen_passed;
-  e[5] = (double)c->eval_failures, e[6] = (double)c->sum_evals;
+  e[5] = (double)c->eval_failures, e[6] = (double)c->sum_evals, e[7] = (double)c->sum_rays;
+  for (int l = 0; c->lab && l < 3 * c->target->n_labels; l++) e[8 + l] = (double)c->lab[l];
 }
 
 static void mcmc__unpack_chain(mc_chain *c, const double *o) {
@@ -58,24 +61,31 @@ static void mcmc__unpack_chain(mc_chain *c, const double *o) {
     k->proposed = (int64_t)d[0], k->accepted = (int64_t)d[1], k->accept_sum = d[2];
     k->f_sum = d[3], k->f_sum2 = d[4];
     k->inverted = (int64_t)d[5], k->refused = (int64_t)d[6], k->elsewhere = (int64_t)d[7];
+    k->rays = (int64_t)d[8];
   }
   const double *e = o + MC_MAX_KERNELS * MCMC_SYNC_KERNEL;
   c->steps = (int64_t)e[0], c->overflow = (int64_t)e[1], c->regrad = (int64_t)e[2];
   c->screened = (int64_t)e[3], c->screen_passed = (int64_t)e[4];
-  c->eval_failures = (int64_t)e[5], c->sum_evals = (int64_t)e[6];
+  c->eval_failures = (int64_t)e[5], c->sum_evals = (int64_t)e[6], c->sum_rays = (int64_t)e[7];
+  for (int l = 0; c->lab && l < 3 * c->target->n_labels; l++) c->lab[l] = (int64_t)e[8 + l];
 }
 
 void mcmc__sync_chains(mcmc_render *R) {
-  if (!dist_active() || R->n_slots == 0) return;
-  size_t n = (size_t)R->n_slots * MCMC_SYNC_WIDTH;
+  if (!dist_active() || R->n_slots <= 0) return;
+  unsigned labels = 0;
+  for (int i = 0; i < R->n_slots; i++) {
+    int nl = R->slots[i].chain->target->n_labels;
+    if (nl > 0 && (unsigned)nl > labels) labels = (unsigned)nl;
+  }
+  size_t width = MCMC_SYNC_FIXED + 3 * (size_t)labels;
+  size_t n = (size_t)R->n_slots * width;
   double *buf = calloc(n, sizeof *buf);
   if (!buf) dist_abort(1); /* (collective: the others would wait) */
   for (int i = 0; i < R->n_slots; i++)
-    if (mcmc_chain_here(i)) mcmc__pack_chain(R->slots[i].chain, buf + (size_t)i * MCMC_SYNC_WIDTH);
+    if (mcmc_chain_here(i)) mcmc__pack_chain(R->slots[i].chain, buf + (size_t)i * width);
   dist_allsum(buf, n);
   for (int i = 0; i < R->n_slots; i++)
-    if (!mcmc_chain_here(i))
-      mcmc__unpack_chain(R->slots[i].chain, buf + (size_t)i * MCMC_SYNC_WIDTH);
+    if (!mcmc_chain_here(i)) mcmc__unpack_chain(R->slots[i].chain, buf + (size_t)i * width);
   free(buf);
 }
 

@@ -113,7 +113,8 @@ lmc_status mc_chain_create(mc_chain **OUT_chain, const mc_target *target, const 
     c->cy = calloc((size_t)target->n_labels, sizeof *c->cy);
     c->cx = calloc((size_t)target->n_labels, sizeof *c->cx);
     c->drawn = calloc((size_t)D, sizeof *c->drawn);
-    if (!c->cy || !c->cx || !c->drawn) goto oom;
+    c->lab = calloc(3 * (size_t)target->n_labels, sizeof *c->lab);
+    if (!c->cy || !c->cx || !c->drawn || !c->lab) goto oom;
   }
   c->x.dim = c->y.dim = D;
   mc_pss_init(p, target, s1, s2, &c->r, &c->overflow);
@@ -169,6 +170,7 @@ void mc_chain_destroy(mc_chain *c) {
   free(c->cy);
   free(c->cx);
   free(c->drawn);
+  free(c->lab);
   if (c->scratch && c->target->scratch_destroy) c->target->scratch_destroy(c->scratch);
   if (c->scratch_alt && c->target->scratch_destroy) c->target->scratch_destroy(c->scratch_alt);
   free(c);
@@ -459,7 +461,9 @@ static double chain__sum_current(mc_chain *c) {
   p->large = 0;
   mc_pss_rewind(p);
   c->sum_evals++;
+  int64_t r0 = mc_chain_rays(c);
   int n = T->eval_all(T, c->scratch_alt ? c->scratch_alt : c->scratch, &p->base, c->x.label, c->cx);
+  c->sum_rays += mc_chain_rays(c) - r0;
   double sum = c->x.v.f_large;
   for (int j = 0; j < n; j++) {
     double f = c->cx[j].v.f;
@@ -541,7 +545,7 @@ static void chain__reject_outside(mc_chain *c, int ki, mc_splat_fn splat, void *
     if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, 0);
 }
 
-int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
+static int chain__step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   if (c->target->chain_kind) return c->target->chain_kind->step(c, splat, ctx);
   mc_pss *p = c->pss;
   int ki = mc_chain_pick(c);
@@ -658,5 +662,19 @@ int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
   c->steps++;
   for (int i = 0; i < c->n_kernels; i++)
     if (c->kernels[i].on_step) c->kernels[i].on_step(c->kernels[i].self, &c->x, accepted);
+  return ki;
+}
+
+int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx) {
+  int64_t r0 = mc_chain_rays(c);
+  int label = c->x.label;
+  int ki = chain__step(c, splat, ctx);
+  int64_t rays = mc_chain_rays(c) - r0;
+  c->stats[ki].rays += rays;
+  if (c->lab && label >= 0 && label < c->target->n_labels) {
+    int64_t *l = c->lab + 3 * (size_t)label;
+    l[0]++;
+    if (c->kernels[ki].kind != MC_KERNEL_LARGE) l[1]++, l[2] += rays;
+  }
   return ki;
 }

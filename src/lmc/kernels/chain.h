@@ -196,6 +196,10 @@ typedef struct mc_kernel_stats {
    * inverted, steps the inverses could not take back to numbers, and
    * numbers that walked to another path (a failed round trip). */
   int64_t inverted, refused, elsewhere;
+  /* Rays traced by the kernel's steps: its proposals, the current states
+   * it re-evaluated (for a gradient, or the roulette's F(u) of the
+   * labelled large step). */
+  int64_t rays;
 } mc_kernel_stats;
 
 /* Where a chain's splats go: w * value / f at (rx, ry); for toy targets the
@@ -230,6 +234,11 @@ typedef struct mc_chain {
   int *drawn;                 /* coordinates the large-step proposal drew */
   int n_drawn;
   int64_t sum_evals;          /* current states evaluated for F (the roulette) */
+  int64_t sum_rays;           /* ... the rays they traced (also in the large step's stats) */
+  /* Labelled targets: per label l, the steps made from a state of label l
+   * (the chain's time there), the steps of kernels other than the large
+   * step among them and the rays those traced: lab[3 l + 0, 1, 2]. */
+  int64_t *lab;
   int *sub;                   /* scratch: a subset kernel's coordinates */
   void *own;                  /* a target's own chain's state (mc_chain_kind) */
 } mc_chain;
@@ -295,7 +304,8 @@ int64_t mc_chain_rays(const mc_chain *c);
 int mc_chain_max_splats(const mc_chain *c);
 
 /* One Metropolis-Hastings step; splats through splat(ctx, ...) when not
- * NULL. Returns the kernel index used. */
+ * NULL. Returns the kernel index used. Counts the step's rays into its
+ * kernel's stats (and the label's tallies, c->lab). */
 int mc_chain_step(mc_chain *c, mc_splat_fn splat, void *ctx);
 
 /* Evaluates one independent uniform sample drawn from (seed, seq), without
