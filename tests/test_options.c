@@ -1,6 +1,7 @@
 /*
  * test_options.c: the flag tables (render/options.h) of the renderer, the
- * MCMC driver, the state spaces and the integrators, one table-driven test
+ * direct integrator, the MCMC driver, the state spaces and the MCMC
+ * integrators, one table-driven test
  * over every flag of every table:
  *
  *  - lmc_opt_parse takes a valid value (inside the range, different from
@@ -133,7 +134,7 @@ static void test_parse(void **state) {
   (void)state;
   const lmc_opt_table *t[MAX_TABLES];
   int nt = tables(t), flags = 0, checks = 0;
-  assert_true(nt >= 4); /* render, driver, bdpt states, lmc, h2mc */
+  assert_true(nt >= 4); /* render, direct, driver, bdpt states, lmc, h2mc */
   render_settings d = render_settings_default();
   for (int ti = 0; ti < nt; ti++) {
     assert_true(t[ti]->n >= 1);
@@ -171,8 +172,8 @@ static void test_parse(void **state) {
   }
   fprintf(stderr, "  %d flags in %d tables, %d parse checks\n", flags, nt, checks);
   assert_int_equal(checks, 3 * flags);
-  assert_int_equal(flags, 54); /* render 11, driver 13, bdpt states 1, path states 1, lmc 16,
-                                  h2mc 3, mlt 7, mmlt 2 */
+  assert_int_equal(flags, 57); /* render 11, direct 3, driver 13, bdpt states 1, path states 1,
+                                  lmc 16, h2mc 3, mlt 7, mmlt 2 */
 }
 
 static void test_binary(void **state) {
@@ -213,7 +214,7 @@ static void test_binary(void **state) {
     }
   fprintf(stderr, "  %d flags, %d checks of the binary\n", flags, checks);
   assert_int_equal(checks, 4 * flags);
-  assert_int_equal(flags, 52); /* the 53 less iso-prob, in lmc's table and h2mc's */
+  assert_int_equal(flags, 55); /* the 57 less iso-prob and delayed, in lmc's table and h2mc's */
 }
 
 /* Writes a scene with `block` (an <integrator> or <dpt> element) to path. */
@@ -318,7 +319,7 @@ static void test_scene(void **state) {
   assert_int_equal(lmc_warning_count() - w0, 1);
   lmc_warn_set_quiet(0);
   fprintf(stderr, "  %d flags, %d scene names besides them, %d checks\n", flags, aliases, checks);
-  assert_int_equal(flags, 52);
+  assert_int_equal(flags, 55);
   assert_int_equal(aliases, 10); /* pLarge largestepprob largestepscale numchains numinitsamples
                                     roughnessthreshold, mlt's bidirectionalMutation
                                     lensPerturbation multiChainPerturbation causticPerturbation */
@@ -349,7 +350,7 @@ static void test_readme(void **state) {
       if (!strstr(out_text, row)) fail_msg("no row for --%s", t[ti]->opts[i].name);
       rows++;
     }
-  assert_int_equal(rows, 54);
+  assert_int_equal(rows, 57);
 }
 
 int main(void) {

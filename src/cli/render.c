@@ -1,7 +1,7 @@
 /*
  * render.c: `lmc render SCENE.xml [flags]`: loads the scene, takes its
  * settings and the flags (the option tables of render/options.h), renders
- * with pt, bdpt or an MCMC integrator and writes OUT.exr (linear) and
+ * with pt, bdpt, direct or an MCMC integrator and writes OUT.exr (linear) and
  * OUT.png (preview), also when interrupted (Ctrl-C, SIGTERM, --time).
  */
 #define _POSIX_C_SOURCE 200809L
@@ -31,7 +31,7 @@ static const char *lmc_render_usage =
     "  -o, --output OUT.exr     output; OUT.png (sRGB preview) is written beside it\n"
     "                           (-o OUT.png: the same two files)\n"
     "                           (default: the scene's name in the current folder)\n"
-    "  --integrator NAME        pt | bdpt | pssmlt | mmlt | lmc | h2mc | mlt\n"
+    "  --integrator NAME        pt | bdpt | direct | pssmlt | mmlt | lmc | h2mc | mlt\n"
     "                           (default: the scene's <integrator>/<dpt>, else pt)\n"
     "  --resolution WxH         film size (keeps the field of view)\n"
     "  -D name=value            override a <default> of the scene (repeatable)\n"
@@ -54,8 +54,8 @@ static const char *lmc_render_usage =
     "  --help-markdown          the flags below as Markdown tables (the README's)\n"
     "\n";
 
-/* Every table of flags: the renderer's, then the MCMC driver's, its
- * state spaces' and integrators' (mcmc.h). */
+/* Every table of flags: the renderer's, then direct's, the MCMC
+ * driver's, its state spaces' and integrators' (mcmc.h). */
 #define LMC_MAX_TABLES 32
 static int lmc_option_tables(const lmc_opt_table **OUT) {
   OUT[0] = &lmc_render_options;
@@ -82,7 +82,8 @@ static void lmc_render_help(FILE *f) {
 
 /* Integrators `--integrator` accepts. */
 static int lmc_integrator_known(const char *name) {
-  return !strcmp(name, "pt") || !strcmp(name, "bdpt") || mcmc_is_integrator(name);
+  return !strcmp(name, "pt") || !strcmp(name, "bdpt") || !strcmp(name, "direct") ||
+         mcmc_is_integrator(name);
 }
 
 /* --- lmc render --------------------------------------------------------------- */
@@ -394,7 +395,11 @@ static int render__run(scene *s, render_settings *rs, const char *output, const 
     tev_destroy(snap.display, 0.0);
     image_free(&snap.img);
     image_free(&snap.eimg);
-    return rst == LMC_ESTRICT ? EXIT_BADINPUT : EXIT_FAIL;
+    /* Settings the render refused (a combination of flags no table can
+     * check alone: --pss-weight without --pss-mutation, ...) are bad
+     * input, as a bad flag is. */
+    return rst == LMC_ESTRICT || rst == LMC_EINVAL || rst == LMC_EUNSUPPORTED ? EXIT_BADINPUT
+                                                                              : EXIT_FAIL;
   }
   image_free(&snap.img); /* (the snapshots are over) */
   image_free(&snap.eimg);
@@ -549,7 +554,8 @@ int lmc_cmd_render(int argc, char **argv) {
       if (!lmc_integrator_known(v)) {
         const char *names[16];
         int n = mcmc_integrator_names(names, 16);
-        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt", v);
+        fprintf(stderr, "lmc: flag --integrator: unknown integrator '%s' (valid: pt, bdpt, direct",
+                v);
         for (int i = 0; i < n; i++) fprintf(stderr, ", %s", names[i]);
         fprintf(stderr, ")\n");
         goto bad;

@@ -14,9 +14,10 @@
 /* 1 when `name` names an MCMC integrator (mc_method_find, method.h). */
 int mcmc_is_integrator(const char *name);
 
-/* The flags of the MCMC integrators, for the command line: the driver's,
- * then each state space's and each integrator's (render/options.h), up to
- * max tables into OUT; returns their count. */
+/* The flags besides the renderer's own, for the command line: direct's
+ * (render/integrators/integrator.h), then the MCMC integrators': the
+ * driver's, each state space's and each integrator's (render/options.h),
+ * up to max tables into OUT; returns their count. */
 int mcmc_option_tables(const lmc_opt_table **OUT, int max);
 
 /* Sets the flag `name` (without dashes) of any table to value in *rs, as

@@ -63,6 +63,9 @@ extern const lmc_opt_table mcmc_driver_options;
 
 int mcmc_option_tables(const lmc_opt_table **OUT, int max) {
   int n = 0;
+  /* (direct's own first: a pixel-sample integrator of render/, listed
+   * with the plugins' tables since its values travel as they do) */
+  if (n < max) OUT[n++] = &direct_options;
   if (n < max) OUT[n++] = &mcmc_driver_options;
   for (size_t i = 0; i < sizeof mc__spaces / sizeof mc__spaces[0]; i++)
     if (mc__spaces[i].opts && n < max) OUT[n++] = mc__spaces[i].opts;

@@ -18,6 +18,7 @@
 #define LMC_RENDER_INTEGRATOR_H
 
 #include "render/film.h"
+#include "render/options.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/settings.h"
@@ -69,6 +70,34 @@ typedef struct ray_diff {
 rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
           const ray_diff *rd, render_counters *cnt);
 
+/* ---- Direct illumination (integrator_direct.c) ---------------------------
+ *
+ * Mitsuba's `direct`: the emitters the camera sees and the light reaching
+ * the first hit straight from an emitter (paths of 1 and 2 segments, pt
+ * --maxdepth 2 in expectation), by emitter_samples light samples and
+ * bsdf_samples BSDF samples per pixel sample joined by MIS (the power
+ * heuristic over the counts). */
+typedef struct direct_settings {
+  int emitter_samples; /* --emitter-samples: light samples (Mitsuba's emitterSamples) */
+  int bsdf_samples;    /* --bsdf-samples: BSDF samples (bsdfSamples); not both 0 */
+  int hide_emitters;   /* --hide-emitters on: emitters seen by the camera are black */
+} direct_settings;
+
+/* Its flags (defaults 1, 1, off); the values travel in render_settings.params. */
+extern const lmc_opt_table direct_options;
+/* Its numbers for the Sobol sampler: the film pair, then (choice, pair) per sample. */
+extern const sampler_layout sampler_layout_direct;
+
+/* direct's settings from rs (lmc_opt_read of direct_options); LMC_EINVAL
+ * on a bad value or when both counts are 0. */
+lmc_status direct_read_settings(const render_settings *rs, direct_settings *OUT,
+                                lmc_error *err);
+
+/* Radiance along the camera ray (org, dir) by direct illumination; the
+ * camera hit's filtered textures read over rd's footprint (NULL: none). */
+rgb direct_li(const scene *s, const render_settings *rs, const direct_settings *ds,
+              lmc_sampler *smp, vec3 org, vec3 dir, const ray_diff *rd, render_counters *cnt);
+
 /* One BDPT sample for the camera ray through raster point (rx, ry): the
  * camera-side estimate is returned; light-tracing (t = 1) contributions are
  * splatted into `splat` (scaled later by the film's splat_scale). */
@@ -90,7 +119,7 @@ typedef struct render_stats {
                                          the counts above are every rank's, on rank 0) */
 } render_stats;
 
-/* Renders with pt or bdpt according to rs->integrator into `out` (created
+/* Renders with pt, bdpt or direct according to rs->integrator into `out` (created
  * here). Stops at rs->spp passes, at rs->time_limit, or when
  * render_request_stop() is called (e.g. from a signal handler); the film
  * then holds a correctly normalised image of all samples taken. */

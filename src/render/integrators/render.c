@@ -1,6 +1,6 @@
 /*
- * render.c: the render driver for the pixel-sample integrators (pt, bdpt),
- * and the progress bar.
+ * render.c: the render driver for the pixel-sample integrators (pt, bdpt,
+ * direct), and the progress bar.
  *
  * The image is rendered in passes of one sample per pixel; OpenMP threads
  * take the next row whenever they finish one (dynamic schedule: rows differ
@@ -124,21 +124,25 @@ typedef struct render__counters_slot {
   _Alignas(64) render_counters c;
 } render__counters_slot;
 
-/* pt's estimate along the camera ray through raster point (rx, ry); with
- * filtered textures in the scene, with its differentials: towards the film
- * points a step `diff_scale` pixels along x and along y, interpolated as
- * Mitsuba's scaleDifferential does. */
-static rgb render__pt(const scene *s, const render_settings *rs, lmc_sampler *smp, double rx,
-                      double ry, double diff_scale, render_counters *cnt) {
+/* pt's estimate (direct's when ds is not NULL) along the camera ray
+ * through raster point (rx, ry); with filtered textures in the scene, with
+ * its differentials: towards the film points a step `diff_scale` pixels
+ * along x and along y, interpolated as Mitsuba's scaleDifferential does. */
+static rgb render__pt(const scene *s, const render_settings *rs, const direct_settings *ds,
+                      lmc_sampler *smp, double rx, double ry, double diff_scale,
+                      render_counters *cnt) {
   vec3 org, dir;
   camera_generate_ray(&s->cam, rx, ry, &org, &dir);
-  if (!s->tex_filtered) return pt_li(s, rs, smp, org, dir, NULL, cnt);
-  vec3 o, dx, dy;
-  camera_generate_ray(&s->cam, rx + 1.0, ry, &o, &dx);
-  camera_generate_ray(&s->cam, rx, ry + 1.0, &o, &dy);
-  ray_diff rd = {v3_add(dir, v3_scale(v3_sub(dx, dir), diff_scale)),
-                 v3_add(dir, v3_scale(v3_sub(dy, dir), diff_scale))};
-  return pt_li(s, rs, smp, org, dir, &rd, cnt);
+  ray_diff rd, *prd = NULL;
+  if (s->tex_filtered) {
+    vec3 o, dx, dy;
+    camera_generate_ray(&s->cam, rx + 1.0, ry, &o, &dx);
+    camera_generate_ray(&s->cam, rx, ry + 1.0, &o, &dy);
+    rd = (ray_diff){v3_add(dir, v3_scale(v3_sub(dx, dir), diff_scale)),
+                    v3_add(dir, v3_scale(v3_sub(dy, dir), diff_scale))};
+    prd = &rd;
+  }
+  return ds ? direct_li(s, rs, ds, smp, org, dir, prd, cnt) : pt_li(s, rs, smp, org, dir, prd, cnt);
 }
 
 /* Hands rs->snapshot_fn the image so far: the camera estimates plus the
@@ -189,11 +193,12 @@ static void render__totals(render_stats *st, film *out, int nthreads,
 /* --- the pass loop ----------------------------------------------------------- */
 
 /* One sample of pixel (x, y) in pass `pass`, from the pixel's own stream:
- * pt's or bdpt's estimate (bdpt's splats to row_splats); a non-finite or
- * float-overflowing one counted and dropped (0). */
+ * pt's, bdpt's or (ds not NULL) direct's estimate (bdpt's splats to
+ * row_splats); a non-finite or float-overflowing one counted and dropped
+ * (0). */
 static rgb render__sample(const scene *s, const render_settings *rs, int x, int y, int64_t pass,
-                          double diff_scale, int use_bdpt, film *row_splats,
-                          render_counters *cnt) {
+                          double diff_scale, int use_bdpt, const direct_settings *ds,
+                          film *row_splats, render_counters *cnt) {
   union {
     lmc_indep_sampler indep;
     lmc_sobol_sampler sobol;
@@ -202,7 +207,9 @@ static rgb render__sample(const scene *s, const render_settings *rs, int x, int 
   uint64_t pixel = (uint64_t)y * (uint64_t)s->cam.width + (uint64_t)x;
   if (rs->sampler == LMC_SAMPLER_SOBOL) {
     sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
-                       use_bdpt ? &sampler_layout_bdpt : &sampler_layout_pt);
+                       use_bdpt ? &sampler_layout_bdpt
+                       : ds     ? &sampler_layout_direct
+                                : &sampler_layout_pt);
     smp = &smp_store.sobol.base;
   } else {
     indep_sampler_init(&smp_store.indep, rs->seed, pixel * 0x100000001b3ull + (uint64_t)pass);
@@ -213,7 +220,7 @@ static rgb render__sample(const scene *s, const render_settings *rs, int x, int 
   filter_sample(&s->filter, u1, u2, &dx, &dy);
   double rx = x + 0.5 + dx, ry = y + 0.5 + dy;
   rgb L = use_bdpt ? bdpt_li(s, rs, smp, rx, ry, row_splats, cnt)
-                   : render__pt(s, rs, smp, rx, ry, diff_scale, cnt);
+                   : render__pt(s, rs, ds, smp, rx, ry, diff_scale, cnt);
   if (!rgb_isfinite(L) || fabs(L.r) > FLT_MAX || fabs(L.g) > FLT_MAX || fabs(L.b) > FLT_MAX) {
     cnt->nan_samples++;
     L = rgb_zero();
@@ -225,9 +232,17 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
                       lmc_error *err) {
   memset(st, 0, sizeof *st);
   int use_bdpt = strcmp(rs->integrator, "bdpt") == 0;
-  if (!use_bdpt && strcmp(rs->integrator, "pt") != 0)
+  int use_direct = strcmp(rs->integrator, "direct") == 0;
+  if (!use_bdpt && !use_direct && strcmp(rs->integrator, "pt") != 0)
     return lmc_error_set(err, LMC_EINVAL, NULL, 0, "render_run: unknown integrator '%s'",
                          rs->integrator);
+  /* direct's own settings (its flags, render_settings.params). */
+  direct_settings dset;
+  if (use_direct) {
+    lmc_status dst = direct_read_settings(rs, &dset, err);
+    if (dst) return dst;
+  }
+  const direct_settings *ds = use_direct ? &dset : NULL;
   const int W = s->cam.width, H = s->cam.height;
   lmc_status status = film_init(out, W, H, err);
   if (!status && rs->error) status = film_error_init(out, err);
@@ -303,7 +318,7 @@ lmc_status render_run(const scene *s, const render_settings *rs, film *out, rend
           row_splats.height = H;
           row_splats.log = logs ? &logs[y - yb] : NULL;
           for (int x = 0; x < W; x++) {
-            rgb L = render__sample(s, rs, x, y, pass, diff_scale, use_bdpt, &row_splats, cnt);
+            rgb L = render__sample(s, rs, x, y, pass, diff_scale, use_bdpt, ds, &row_splats, cnt);
             film_add(out, x, y, L);
             if (out->pass_val) {
               double *pv = out->pass_val + 3 * ((size_t)y * (size_t)W + (size_t)x);

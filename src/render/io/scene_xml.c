@@ -25,7 +25,8 @@
  *               does (with sunRadiusScale 0 the sun is a directional
  *               light);
  *   integrator  and the <dpt> block of the LMC/H2MC reference scenes, into
- *               scene->settings;
+ *               scene->settings (Mitsuba's direct with its sample counts
+ *               and hideEmitters, passed on to direct's flags);
  * and finally calls scene_finalize, then says (a warning naming the scene)
  * when no emitter gives light: none in the file, every one ignored, or
  * all black.
@@ -504,6 +505,44 @@ static lmc_status xml__depths(builder *B, pset *o) {
   return LMC_OK;
 }
 
+/* Mitsuba's direct integrator's sample counts and hideEmitters, passed
+ * on to direct's flags (render/integrators/integrator_direct.c):
+ * emitterSamples and bsdfSamples (each by default shadingSamples, itself
+ * by default 1), neither negative and not both 0. */
+static lmc_status xml__direct(builder *B, pset *o) {
+  static const char *const names[3] = {"shadingSamples", "emitterSamples", "bsdfSamples"};
+  static const char *const flags[3] = {NULL, "emitter-samples", "bsdf-samples"};
+  long long n[3];
+  int found[3];
+  lmc_status st;
+  for (int i = 0; i < 3; i++) {
+    if ((st = xml__int(B, o, names[i], i ? n[0] : 1, &n[i], &found[i])) != LMC_OK) return st;
+    if (n[i] < 0) {
+      prop *p = xml__find(o, names[i]);
+      return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                       "integrator \"direct\": %s %lld is negative", names[i], n[i]);
+    }
+  }
+  if (n[1] == 0 && n[2] == 0)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line,
+                     "integrator \"direct\": emitterSamples and bsdfSamples are both 0 (no "
+                     "strategy left to sample the light)");
+  /* Each count given (or set through shadingSamples), at its place. */
+  for (int i = 1; i < 3; i++) {
+    if (!found[i] && !found[0]) continue;
+    char v[32];
+    snprintf(v, sizeof v, "%lld", n[i]);
+    if ((st = xml__pass(B, xml__find(o, found[i] ? names[i] : names[0]), flags[i], v)) != LMC_OK)
+      return st;
+  }
+  int hide, found_hide;
+  if ((st = xml__bool(B, o, "hideEmitters", 0, &hide, &found_hide)) != LMC_OK) return st;
+  if (found_hide &&
+      (st = xml__pass(B, xml__find(o, "hideEmitters"), "hide-emitters", hide ? "on" : "off")))
+    return st;
+  return LMC_OK;
+}
+
 static lmc_status xml__integrator(builder *B, pset *o, int nested) {
   render_settings *r = &B->s->settings;
   lmc_status st;
@@ -564,6 +603,9 @@ static lmc_status xml__integrator(builder *B, pset *o, int nested) {
       lmc_warn(xml__find(o, "manifoldPerturbation")->file,
                xml__find(o, "manifoldPerturbation")->line,
                "the manifold perturbation is not implemented: mlt renders without it");
+  } else if (strcmp(t, "direct") == 0) {
+    if (choose) xml__set_integrator(r, "direct");
+    if ((st = xml__direct(B, o)) != LMC_OK) return st;
   } else if (strcmp(t, "mmlt") == 0 || strcmp(t, "lmc") == 0 || strcmp(t, "h2mc") == 0) {
     /* lmc's own MCMC integrators; their parameters are their flags. */
     if (choose) xml__set_integrator(r, t);
