@@ -6,12 +6,27 @@
  * applied at load time. Positions are float (what Embree traces; the
  * buffer has one float of padding at the end, as rtcSetSharedGeometryBuffer
  * requires); normals and uvs are optional. `face_normals` ignores vertex
- * normals. The geometric normal of triangle (a, b, c) is normalize((b-a) x
- * (c-a)), flipped when `flip_normals` is set; area lights emit on its side.
+ * normals.
+ *
+ * Which side a surface faces, as Mitsuba 0.6 decides it (TriMesh::
+ * computeNormals, and ShapeKDTree::fillIntersectionRecord: "Ensure that
+ * the geometric & shading normals face the same direction"). The winding
+ * normal of triangle (a, b, c) is normalize((b-a) x (c-a)), reversed when
+ * `flip_normals` is set (Mitsuba reverses the winding under faceNormals,
+ * and negates the normals it generates for a mesh that has none). Where
+ * vertex normals are used (present, `face_normals` off) they decide
+ * instead: `flip_normals` reverses them (Mitsuba negates the stored
+ * normals before any hit is made), the shading normal is their
+ * interpolation, and the geometric normal is the winding normal turned to
+ * agree with it (mesh_hit_normals). So a one-sided surface faces where its
+ * vertex normals say, whatever its winding; BSDFs, area lights (which emit
+ * on the side of this geometric normal), the path evaluators and the
+ * emitters' sampled points all take their side from mesh_hit_normals.
  */
 #ifndef LMC_RENDER_MESH_H
 #define LMC_RENDER_MESH_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "render/error.h"
@@ -48,13 +63,52 @@ lmc_status mesh_validate(mesh *m, const char *file, int line, lmc_error *err);
 static inline vec3 mesh_position(const mesh *m, uint32_t i) {
   return v3(m->p[3 * i], m->p[3 * i + 1], m->p[3 * i + 2]);
 }
-/* Unit geometric normal of triangle `tri` (with flip_normals applied). */
+/* Unit winding normal of triangle `tri` (with flip_normals applied): the
+ * side the triangle faces when the mesh's vertex normals are not used; a
+ * hit's geometric normal is mesh_hit_normals'. */
 vec3 mesh_face_normal(const mesh *m, int64_t tri);
 /* The same normal from the triangle's corners p0, p1, p2 (mesh_position of
  * its three indices), for callers that have loaded them already. */
 static inline vec3 mesh_corners_normal(const mesh *m, vec3 p0, vec3 p1, vec3 p2) {
   vec3 n = v3_normalize(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
   return m->flip_normals ? v3_neg(n) : n;
+}
+/* 1 when hits on the mesh interpolate its vertex normals. */
+static inline int mesh_uses_vertex_normals(const mesh *m) {
+  return m->n != NULL && !m->face_normals;
+}
+/* Vertex normal i as shading uses it: reversed when flip_normals is set
+ * (Mitsuba's computeNormals negates the stored normals). */
+static inline vec3 mesh_vertex_normal(const mesh *m, uint32_t i) {
+  vec3 n = v3(m->n[3 * i], m->n[3 * i + 1], m->n[3 * i + 2]);
+  return m->flip_normals ? v3_neg(n) : n;
+}
+/* The normals of the point with barycentrics (b1, b2) on triangle `tri`
+ * (corners p0, p1, p2), oriented as Mitsuba orients them (see the top of
+ * this file): returns the unit geometric normal, and *OUT_ns (may be NULL)
+ * gets the unit shading normal, the interpolated vertex normal. Without
+ * used vertex normals, or where they interpolate to zero, both are the
+ * winding normal. The turn is a choice of sign on values only: the dual
+ * hit (path.c) makes the same choice and its derivatives follow it. */
+static inline vec3 mesh_hit_normals(const mesh *m, int64_t tri, vec3 p0, vec3 p1, vec3 p2,
+                                    double b1, double b2, vec3 *OUT_ns) {
+  vec3 ng = mesh_corners_normal(m, p0, p1, p2);
+  vec3 ns = ng;
+  if (mesh_uses_vertex_normals(m)) {
+    const uint32_t *idx = m->idx + 3 * tri;
+    double b0 = 1.0 - b1 - b2;
+    vec3 ni = v3_add(v3_add(v3_scale(mesh_vertex_normal(m, idx[0]), b0),
+                            v3_scale(mesh_vertex_normal(m, idx[1]), b1)),
+                     v3_scale(mesh_vertex_normal(m, idx[2]), b2));
+    double l = v3_len(ni);
+    if (l > 1e-12) {
+      /* The geometric normal turns to the shading normal's side. */
+      ns = v3_scale(ni, 1.0 / l);
+      if (v3_dot(ng, ns) < 0.0) ng = v3_neg(ng);
+    }
+  }
+  if (OUT_ns) *OUT_ns = ns;
+  return ng;
 }
 double mesh_triangle_area(const mesh *m, int64_t tri);
 /* Mitsuba's maxSmoothAngle (TriMesh::rebuildTopology): corners that share a

@@ -2,10 +2,13 @@
  * scene.c: the scene container, its finalisation and the ray queries that
  * turn an accelerator hit into a shading point.
  *
- * Normals: the geometric normal comes from the triangle's winding (flipped
- * by flipNormals); the interpolated shading normal is turned to the same
- * side when the mesh's vertex normals disagree with its winding, so that a
- * one-sided BSDF and a one-sided area light agree on which side is front.
+ * Normals, as Mitsuba 0.6 orients them (mesh.h's mesh_hit_normals): the
+ * shading normal is the interpolated vertex normal (reversed by
+ * flipNormals), and the geometric normal, the triangle's winding normal,
+ * is turned to its side when the two disagree; without vertex normals (or
+ * with faceNormals) both are the winding normal, reversed by flipNormals.
+ * A one-sided BSDF and a one-sided area light so agree on which side is
+ * front, and it is the side the vertex normals say.
  * Texture coordinates default to the barycentrics (b1, b2) when a mesh has
  * none.
  *
@@ -176,21 +179,10 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
   /* Re-evaluate the hit point on the triangle from its barycentrics. */
   double b0 = 1.0 - ah.b1 - ah.b2;
   h->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, ah.b1)), v3_scale(p2, ah.b2));
-  h->ng = mesh_corners_normal(m, p0, p1, p2);
-  /* Shading normal: interpolated, turned to the geometric side. */
-  vec3 ns = h->ng;
-  if (m->n && !m->face_normals) {
-    const float *n = m->n;
-    vec3 n0 = v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]);
-    vec3 n1 = v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]);
-    vec3 n2 = v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]);
-    vec3 ni = v3_add(v3_add(v3_scale(n0, b0), v3_scale(n1, ah.b1)), v3_scale(n2, ah.b2));
-    double l = v3_len(ni);
-    if (l > 1e-12) {
-      ns = v3_scale(ni, 1.0 / l);
-      if (v3_dot(ns, h->ng) < 0.0) ns = v3_neg(ns);
-    }
-  }
+  /* Normals as Mitsuba orients them (mesh.h): the shading normal
+   * interpolated, the geometric normal turned to its side. */
+  vec3 ns;
+  h->ng = mesh_hit_normals(m, ah.prim, p0, p1, p2, ah.b1, ah.b2, &ns);
   h->sh = frame_from_z(ns);
   if (m->uv) {
     const float *uv = m->uv;

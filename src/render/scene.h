@@ -63,8 +63,9 @@ typedef struct surface_hit {
   int64_t prim;
   double b1, b2;   /* barycentrics */
   vec3 p;          /* position */
-  vec3 ng;         /* unit geometric normal (emitting side for area lights) */
-  frame sh;        /* shading frame (sh.n: interpolated normal, same side as ng) */
+  vec3 ng;         /* unit geometric normal, on the shading normal's side (mesh.h's
+                      mesh_hit_normals; the emitting side for area lights) */
+  frame sh;        /* shading frame (sh.n: the interpolated vertex normal, or ng) */
   double tu, tv;   /* texture coordinates */
   const bsdf *bsdf;
   int light;       /* area light index, or -1 */

@@ -211,20 +211,19 @@ void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
   h->mesh = mi;
   h->prim = prim;
   h->p = path__bary(A, p0, p1, p2, b0, b1, b2);
+  /* Normals as scene_intersect orients them (mesh.h's mesh_hit_normals):
+   * the shading normal interpolated and normalised, the geometric normal
+   * (constant on the triangle) turned to its side by the values alone, the
+   * derivatives following the sign chosen. */
   h->ng = mesh_face_normal(m, prim);
-
-  /* Shading normal: interpolated, normalised, turned to the geometric side. */
   adv3 ns = path__cv(A, h->ng);
-  if (m->n && !m->face_normals) {
-    const float *n = m->n;
-    vec3 n0 = v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]);
-    vec3 n1 = v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]);
-    vec3 n2 = v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]);
-    adv3 ni = path__bary(A, n0, n1, n2, b0, b1, b2);
+  if (mesh_uses_vertex_normals(m)) {
+    adv3 ni = path__bary(A, mesh_vertex_normal(m, tri[0]), mesh_vertex_normal(m, tri[1]),
+                         mesh_vertex_normal(m, tri[2]), b0, b1, b2);
     double l = v3_len(path__val(ni));
     if (l > 1e-12) {
       ns = adv3_normalize(A, ni);
-      if (v3_dot(path__val(ns), h->ng) < 0.0) ns = adv3_neg(A, ns);
+      if (v3_dot(h->ng, path__val(ns)) < 0.0) h->ng = v3_neg(h->ng);
     }
   }
   h->sh = adv3_frame_from_z(A, ns);

@@ -100,7 +100,9 @@ void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p, vec3 
   const uint32_t *idx = m->idx + 3 * tri;
   *p = path__bary(A, mesh_position(m, idx[0]), mesh_position(m, idx[1]), mesh_position(m, idx[2]),
                   b0, b1, b2);
-  *n = mesh_face_normal(m, tri);
+  /* The emitting side: a hit's geometric normal at the point's values. */
+  *n = mesh_hit_normals(m, tri, mesh_position(m, idx[0]), mesh_position(m, idx[1]),
+                        mesh_position(m, idx[2]), b1.v, b2.v, NULL);
 }
 
 /* Envmap importance sampling (light.c): the pixel is chosen by the discrete

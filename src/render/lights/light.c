@@ -12,8 +12,11 @@
  * keep the same meaning for every light type.
  *
  * The models.
- *  area        Radiance L, one-sided on the side of mesh_face_normal (which
- *              honours flip_normals). A triangle is chosen with probability
+ *  area        Radiance L, one-sided on the side of the geometric normal
+ *              a hit on the point has (mesh_hit_normals: the side of the
+ *              mesh's vertex normals where it has them, else its winding's,
+ *              flip_normals honoured), so that a sampled point and a hit
+ *              on it agree. A triangle is chosen with probability
  *              area_i / A (tri_dist), then a uniform point on it, so the
  *              area density is 1/A. Seen from ref at distance d with
  *              cos_l = <n, -wi>, the solid-angle density is
@@ -99,8 +102,35 @@ static int64_t light__sample_area_point(const light *l, const struct scene *s, d
   vec3 a, b, c;
   light__triangle(m, tri, &a, &b, &c);
   *p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
-  *n = mesh_corners_normal(m, a, b, c);
+  *n = mesh_hit_normals(m, tri, a, b, c, b1, b2, NULL);
   return tri;
+}
+
+/* Barycentrics (b1, b2) of p on the triangle (a, b, c): least squares in
+ * the triangle's plane. Returns 0 for a degenerate triangle. */
+static int light__barycentrics(vec3 a, vec3 b, vec3 c, vec3 p, double *OUT_b1, double *OUT_b2) {
+  vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), d = v3_sub(p, a);
+  double d11 = v3_dot(e1, e1), d12 = v3_dot(e1, e2), d22 = v3_dot(e2, e2);
+  double d1 = v3_dot(d, e1), d2 = v3_dot(d, e2);
+  double den = d11 * d22 - d12 * d12;
+  if (!(den > 0.0)) return 0;
+  *OUT_b1 = (d22 * d1 - d12 * d2) / den;
+  *OUT_b2 = (d11 * d2 - d12 * d1) / den;
+  return 1;
+}
+
+/* The emitting side's normal at point p of triangle tri of an area light
+ * (the normal light__sample_area_point gave it). Returns 0 for a
+ * degenerate triangle. */
+static int light__area_normal(const light *l, const struct scene *s, int64_t tri, vec3 p,
+                              vec3 *OUT_n) {
+  const mesh *m = &s->meshes[l->mesh];
+  vec3 a, b, c;
+  double b1, b2;
+  light__triangle(m, tri, &a, &b, &c);
+  if (!light__barycentrics(a, b, c, p, &b1, &b2)) return 0;
+  *OUT_n = mesh_hit_normals(m, tri, a, b, c, b1, b2, NULL);
+  return 1;
 }
 
 /* Mitsuba's spot falloff as a function of the cosine to the axis. */
@@ -617,12 +647,8 @@ static int light__invert_area_point(const light *l, const struct scene *s, int64
   if (tri < 0 || tri >= l->tri_dist.n) return 0;
   vec3 a, b, c;
   light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
-  vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), d = v3_sub(p, a);
-  double d11 = v3_dot(e1, e1), d12 = v3_dot(e1, e2), d22 = v3_dot(e2, e2);
-  double d1 = v3_dot(d, e1), d2 = v3_dot(d, e2);
-  double den = d11 * d22 - d12 * d12;
-  if (!(den > 0.0)) return 0;
-  double b1 = (d22 * d1 - d12 * d2) / den, b2 = (d11 * d2 - d12 * d1) / den;
+  double b1, b2;
+  if (!light__barycentrics(a, b, c, p, &b1, &b2)) return 0;
   double ur;
   warp_triangle_to_square(b1, b2, &ur, OUT_u2);
   *OUT_u1 = distrib1d_invert_discrete(&l->tri_dist, (int)tri, fmin(ur, nextafter(1.0, 0.0)));
@@ -646,11 +672,10 @@ int light_invert_li(const light *l, const struct scene *s, vec3 ref, vec3 wi, ve
   OUT_u[1] = r[1];
   switch (l->type) {
   case LIGHT_AREA: {
-    vec3 a, b, c;
-    if (tri < 0 || tri >= l->tri_dist.n) return 0;
-    light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
+    vec3 n;
+    if (tri < 0 || tri >= l->tri_dist.n || !light__area_normal(l, s, tri, p, &n)) return 0;
     /* The sampler refuses points whose emitting side faces away from ref. */
-    if (!(v3_dot(mesh_corners_normal(&s->meshes[l->mesh], a, b, c), v3_sub(ref, p)) > 0.0)) return 0;
+    if (!(v3_dot(n, v3_sub(ref, p)) > 0.0)) return 0;
     return light__invert_area_point(l, s, tri, p, &OUT_u[0], &OUT_u[1]);
   }
   case LIGHT_CONSTANT:
@@ -668,10 +693,11 @@ int light_invert_le(const light *l, const struct scene *s, vec3 p, vec3 dir, int
   for (int i = 0; i < 4; i++) OUT_u[i] = r[i];
   switch (l->type) {
   case LIGHT_AREA: {
-    if (!light__invert_area_point(l, s, tri, p, &OUT_u[0], &OUT_u[1])) return 0;
-    vec3 a, b, c;
-    light__triangle(&s->meshes[l->mesh], tri, &a, &b, &c);
-    frame f = frame_from_z(mesh_corners_normal(&s->meshes[l->mesh], a, b, c));
+    vec3 n;
+    if (!light__invert_area_point(l, s, tri, p, &OUT_u[0], &OUT_u[1]) ||
+        !light__area_normal(l, s, tri, p, &n))
+      return 0;
+    frame f = frame_from_z(n);
     vec3 local = frame_to_local(&f, dir);
     if (!(local.z > 0.0)) return 0;
     warp_cosine_hemisphere_to_square(local, &OUT_u[2], &OUT_u[3]);
