@@ -214,6 +214,11 @@ static const bad_case bad_cases[] = {
                    "      <spectrum name=\"reflectance\" filename=\"lmc_nonexistent.spd\"/>\n" /* 8 */
                    "    </bsdf>\n  </shape>\n</scene>\n",
      LMC_EIO, "lmc_loader_spec_nofile.xml", 8, "lmc_nonexistent.spd"},
+    {"ldr_exposure", HEAD "  <sensor type=\"perspective\">\n" /* 3 */
+                     "    <film type=\"ldrfilm\">\n"           /* 4 */
+                     "      <float name=\"exposure\" value=\"bright\"/>\n" /* 5 */
+                     "    </film>\n  </sensor>\n</scene>\n",
+     LMC_EPARSE, "lmc_loader_ldr_exposure.xml", 5, "bright"},
 };
 
 static void test_malformed(void **state) {
@@ -572,6 +577,38 @@ static void test_direct_samples(void **state) {
     checked++;
   }
   assert_int_equal(checked, 5);
+}
+
+/* Mitsuba's ldrfilm is rendered as hdrfilm with one warning that says
+ * what lmc writes (and names tonemapping lmc does not apply); hdrfilm
+ * takes none; another film type one. */
+static void test_film_types(void **state) {
+  (void)state;
+  static const struct {
+    const char *film;
+    int warnings;
+  } cases[] = {
+      {"<film type=\"hdrfilm\"/>", 0},
+      {"<film type=\"ldrfilm\"/>", 1},
+      {"<film type=\"ldrfilm\"><float name=\"exposure\" value=\"2\"/>"
+       "<string name=\"tonemapMethod\" value=\"reinhard\"/></film>", 1},
+      {"<film type=\"mfilm\"/>", 1},
+  };
+  int checked = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char xml[1024];
+    snprintf(xml, sizeof xml,
+             HEAD "  <sensor type=\"perspective\">%s</sensor>\n  <shape type=\"cube\"/>\n" LIGHT
+                  "</scene>\n",
+             cases[i].film);
+    int warnings;
+    scene *s = load_case_ok("/tmp/lmc_loader_film.xml", xml, i, &warnings);
+    if (warnings != cases[i].warnings)
+      fail_msg("case %zu: %d warnings, want %d", i, warnings, cases[i].warnings);
+    scene_destroy(s);
+    checked++;
+  }
+  assert_int_equal(checked, 4);
 }
 
 /* ---- Mitsuba's defaults. ------------------------------------------------ */
@@ -1218,6 +1255,7 @@ int main(void) {
       cmocka_unit_test(test_roughdiffuse_ward),
       cmocka_unit_test(test_spectra),
       cmocka_unit_test(test_spectrum_file_errors),
+      cmocka_unit_test(test_film_types),
   };
   return cmocka_run_group_tests(tests, write_texture, NULL);
 }

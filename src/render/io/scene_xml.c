@@ -319,8 +319,30 @@ static lmc_status xml__film(builder *B, pset *f, int *w, int *h) {
   long long lw = 768, lh = 576;
   filter_type ft = FILTER_GAUSSIAN;
   if (f) {
-    if (strcmp(f->type, "hdrfilm") != 0)
-      lmc_warn(f->file, f->line, "film type \"%s\": treated as hdrfilm", f->type);
+    if (strcmp(f->type, "ldrfilm") == 0) {
+      /* Mitsuba's ldrfilm writes one tonemapped 8-bit image; lmc writes
+       * what it writes for hdrfilm, and says where its tonemapping differs. */
+      double exposure, gamma;
+      const char *tm;
+      prop *tp;
+      if ((st = xml__float(B, f, "exposure", 0.0, &exposure, NULL)) != LMC_OK) return st;
+      if ((st = xml__float(B, f, "gamma", -1.0, &gamma, NULL)) != LMC_OK) return st;
+      if ((st = xml__string(B, f, "tonemapMethod", "gamma", &tm, &tp)) != LMC_OK) return st;
+      char note[160] = "";
+      if (strcmp(tm, "gamma") != 0)
+        snprintf(note, sizeof note, "; its tonemapMethod \"%s\" is not applied", tm);
+      else if (exposure != 0.0 || (gamma != -1.0 && gamma != 2.2))
+        snprintf(note, sizeof note,
+                 "; its exposure %g and gamma %g are not applied (lmc render --exposure %g "
+                 "sets the PNG's exposure)", exposure, gamma, exposure);
+      lmc_warn(f->file, f->line,
+               "film type \"ldrfilm\": lmc writes OUT.exr (linear radiance) and OUT.png (sRGB, "
+               "clamped to [0, 1]) as for hdrfilm%s", note);
+    } else if (strcmp(f->type, "hdrfilm") != 0) {
+      lmc_warn(f->file, f->line,
+               "film type \"%s\": treated as hdrfilm (lmc writes OUT.exr and an sRGB OUT.png)",
+               f->type);
+    }
     if ((st = xml__int(B, f, "width", 768, &lw, NULL)) != LMC_OK) return st;
     if ((st = xml__int(B, f, "height", 576, &lh, NULL)) != LMC_OK) return st;
     static const char *const silent[] = {
