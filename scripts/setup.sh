@@ -26,6 +26,7 @@ packages=(build-essential cmake pkg-config libembree-dev libopenexr-dev libpng-d
           clang libclang-rt-dev libomp-dev   # libFuzzer (-fsanitize=fuzzer) and OpenMP for clang
           openmpi-bin libopenmpi-dev         # mpirun: one image over many processes or machines
           gnuplot-nox                        # plots of bench/equal_time.sh
+          python3-dev python3-numpy python3-pytest  # the Python module lmc (src/python) and its tests
           imagemagick fonts-dejavu-core)     # the demo's side-by-side picture, benchmark grids
 
 # Install the Debian packages that are missing.

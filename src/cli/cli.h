@@ -55,6 +55,27 @@ int lmc_parse_exposure(const char *s, lmc_exposure *out);
 /* The factor on radiance of the preview of img. */
 double lmc_exposure_scale(const lmc_exposure *e, const lmc_image *img);
 
+/* The integrators `--integrator` accepts: pt, bdpt, direct and the MCMC ones. */
+int lmc_integrator_known(const char *name);
+
+/* A flag of the tables as given (checked with lmc_opt_set). */
+typedef struct lmc_given {
+  const lmc_opt_table *table;
+  const lmc_opt *opt;
+  const char *value; /* borrowed */
+} lmc_given;
+
+/* The settings of a render of scene s (render_settings.c; lmc render's and
+ * the Python module's): the scene's own (mcmc_scene_settings), pt when it
+ * names none, then what cli sets (its integrator, and whether --spp and
+ * --time were given, by its SET_ bits; its quiet and strict) and the flags
+ * given[0 .. n_given-1] in order, into *OUT. An integrator lmc lacks is
+ * warned about (naming scene_path) and replaced by bdpt. Fails only on a
+ * bad value in the scene (file, line). */
+lmc_status lmc_render_settings(const scene *s, const char *scene_path, const render_settings *cli,
+                               const lmc_given *given, int n_given, render_settings *OUT,
+                               lmc_error *err);
+
 /* The commands (argv[1] is the command's name). */
 int lmc_cmd_render(int argc, char **argv);
 /* SIGINT and SIGTERM ask a render to stop (render_request_stop) from now

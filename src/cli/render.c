@@ -80,12 +80,6 @@ static void lmc_render_help(FILE *f) {
   for (int i = 0; i < n; i++) lmc_opt_help(f, t[i]);
 }
 
-/* Integrators `--integrator` accepts. */
-static int lmc_integrator_known(const char *name) {
-  return !strcmp(name, "pt") || !strcmp(name, "bdpt") || !strcmp(name, "direct") ||
-         mcmc_is_integrator(name);
-}
-
 /* --- lmc render --------------------------------------------------------------- */
 
 static void lmc_on_signal(int sig) { render_request_stop(sig); }
@@ -268,49 +262,6 @@ static lmc_tev *lmc_display_start(const render_settings *rs, const scene *s, con
   return t;
 }
 
-/* A flag of the tables as given on the command line (checked). */
-typedef struct lmc_given {
-  const lmc_opt_table *table;
-  const lmc_opt *opt;
-  const char *value;
-} lmc_given;
-
-/* The scene's settings (with its <integrator>/<dpt> parameters through
- * the option tables), overridden by the command line: cli's own fields
- * and the flags given, in order. */
-static lmc_status render__settings(const scene *s, const char *scene_path,
-                                   const render_settings *cli, const lmc_given *given,
-                                   int n_given, render_settings *OUT, lmc_error *err) {
-  render_settings rs;
-  lmc_status st = mcmc_scene_settings(s, &rs, err);
-  if (st) return st;
-  if (!(rs.set & SET_INTEGRATOR)) snprintf(rs.integrator, sizeof rs.integrator, "pt");
-  if (cli->set & SET_INTEGRATOR) memcpy(rs.integrator, cli->integrator, sizeof rs.integrator);
-  /* The scene's directSamples is a sample count for its own spp: --spp
-   * given here sets both passes (unless --direct-spp is given too). */
-  if (cli->set & SET_SPP) lmc_opt_unset(&rs, "direct-spp");
-  int adapt_given = 0;
-  for (int i = 0; i < n_given; i++) {
-    char msg[512];
-    lmc_opt_set(given[i].table, given[i].opt, given[i].value, &rs, msg, sizeof msg); /* (checked) */
-    adapt_given |= !strcmp(given[i].opt->name, "adapt");
-  }
-  if ((cli->set & SET_TIME) && !(cli->set & SET_SPP)) rs.set &= ~(unsigned)SET_SPP;
-  rs.quiet = cli->quiet;
-  rs.strict = cli->strict;
-  if (!lmc_integrator_known(rs.integrator)) {
-    lmc_warn(scene_path, 0,
-             "the scene asks for integrator '%s', which lmc does not have; "
-             "rendering with bdpt (choose with --integrator)",
-             rs.integrator);
-    snprintf(rs.integrator, sizeof rs.integrator, "bdpt");
-  }
-  if (adapt_given && strcmp(rs.integrator, "lmc"))
-    lmc_warn(NULL, 0, "--adapt only applies to --integrator lmc; ignored for %s", rs.integrator);
-  *OUT = rs;
-  return LMC_OK;
-}
-
 /* Rank 0's end of a render: writes the image and prints the summary
  * (per_rank: every rank's rays and samples, NULL in one process); the
  * exit status. */
@@ -468,7 +419,7 @@ static int render__load_and_run(const lmc_render_input *in, const render_setting
 
   /* Its settings and the flags, then the render. */
   render_settings rs;
-  lmc_status sst = render__settings(s, in->scene_path, cli, given, n_given, &rs, &err);
+  lmc_status sst = lmc_render_settings(s, in->scene_path, cli, given, n_given, &rs, &err);
   free(given);
   if (sst) {
     char msg[2048];
