@@ -11,6 +11,10 @@
  * barycentrics) with the formulas of scene_intersect and mesh_hit_normals
  * ("locate, then re-evaluate", as path.c does), in plain doubles for the
  * constraint values and in duals (src/ad) for the Jacobian blocks.
+ * After a direction start, x_0 is at infinity: wi at x_1 is -d, and the
+ * projection's ray comes along d from outside the bounding sphere. The
+ * last section reads chains from path-space paths (pathspace.h) and
+ * writes walked chains back into them.
  */
 #include "lmc/path/manifold.h"
 
@@ -94,7 +98,14 @@ int mf_vertex_set(const scene *sc, mf_vertex *v, int mi, int64_t prim, double b1
   return MF_OK;
 }
 
-static int mf__chain_ok(const mf_chain *c) { return c && c->k >= 1 && c->k <= MF_MAX_CHAIN; }
+static int mf__chain_ok(const mf_chain *c) {
+  if (!c || c->k < 1 || c->k > MF_MAX_CHAIN) return 0;
+  if (c->start == MF_START_POINT) return v3_isfinite(c->x0);
+  return c->start == MF_START_DIRECTION && v3_isfinite(c->d) && v3_len2(c->d) > 0.0;
+}
+
+/* wi at x_1 after a direction start: against the first segment's travel. */
+static vec3 mf__start_wi(const mf_chain *c) { return v3_neg(v3_normalize(c->d)); }
 
 /* The relative index eta_r of a vertex for wi on the side of ns given by
  * cos_wi_ns: 1 for a reflection; for a refraction the index on wo's side
@@ -110,9 +121,12 @@ int mf_half_vector(const scene *sc, const mf_chain *c, int i, double OUT[2]) {
   mf__geo gp, gi, gn;
   if (i > 1 && !mf__geom(sc, &c->v[i - 1], &gp)) return MF_EINVAL;
   if (!mf__geom(sc, &c->v[i], &gi) || !mf__geom(sc, &c->v[i + 1], &gn)) return MF_EINVAL;
-  vec3 xp = i > 1 ? gp.p : c->x0;
+  /* wi towards x_{i-1} (against d after a direction start). */
+  vec3 wi = i == 1 && c->start == MF_START_DIRECTION
+                ? mf__start_wi(c)
+                : v3_normalize(v3_sub(i > 1 ? gp.p : c->x0, gi.p));
   /* h = normalize(wi + eta_r wo), on the side of ns. */
-  vec3 wi = v3_normalize(v3_sub(xp, gi.p)), wo = v3_normalize(v3_sub(gn.p, gi.p));
+  vec3 wo = v3_normalize(v3_sub(gn.p, gi.p));
   double eta_r = mf__eta_r(&c->v[i], v3_dot(wi, gi.ns));
   vec3 h = v3_normalize(v3_add(wi, v3_scale(wo, eta_r)));
   if (v3_dot(h, gi.ns) < 0.0) h = v3_neg(h);
@@ -168,6 +182,7 @@ static void mf__vertex_ad(ad_arena *A, const mesh *m, const mf_vertex *v, int va
 static void mf__constraint_ad(ad_arena *A, const scene *sc, const mf_chain *c, int i, ad OUT[2]) {
   const mf_vertex *vi = &c->v[i];
   adv3 xp, xi, xn, ns;
+  int dir_start = i == 1 && c->start == MF_START_DIRECTION;
   if (i > 1)
     mf__vertex_ad(A, &sc->meshes[c->v[i - 1].mesh], &c->v[i - 1], 0, &xp, NULL);
   else
@@ -175,8 +190,10 @@ static void mf__constraint_ad(ad_arena *A, const scene *sc, const mf_chain *c, i
   mf__vertex_ad(A, &sc->meshes[vi->mesh], vi, 2, &xi, &ns);
   mf__vertex_ad(A, &sc->meshes[c->v[i + 1].mesh], &c->v[i + 1], 4, &xn, NULL);
 
-  /* The directions away from x_i. */
-  adv3 wi = adv3_normalize(A, adv3_sub(A, xp, xi));
+  /* The directions away from x_i; after a direction start wi = -d, a
+   * constant (A_1 = 0 either way). */
+  vec3 wd = dir_start ? mf__start_wi(c) : v3(0.0, 0.0, 0.0);
+  adv3 wi = dir_start ? adv3_const(A, wd.x, wd.y, wd.z) : adv3_normalize(A, adv3_sub(A, xp, xi));
   adv3 wo = adv3_normalize(A, adv3_sub(A, xn, xi));
 
   /* h = normalize(wi + eta_r wo), turned to ns's side (a choice on values). */
@@ -313,11 +330,32 @@ static int mf__refract(vec3 wi, vec3 n, double eta, vec3 *wt) {
   return 1;
 }
 
-int mf_trace(const scene *sc, const mf_chain *proto, vec3 dir, mf_chain *OUT) {
-  if (!mf__chain_ok(proto) || !v3_isfinite(dir)) return MF_EINVAL;
+/* The distance s back along the unit direction d from x to a point
+ * outside the bounding sphere: (x - center) . d + 2 radius. */
+static double mf__far_back(const scene *sc, vec3 d, vec3 x) {
+  return v3_dot(v3_sub(x, sc->center), d) + 2.0 * sc->radius;
+}
+
+int mf_start_ray(const scene *sc, const mf_chain *c, vec3 x1, vec3 *OUT_org, vec3 *OUT_dir) {
+  if (!mf__chain_ok(c) || !v3_isfinite(x1)) return MF_EINVAL;
+  if (c->start == MF_START_POINT) {
+    vec3 w = v3_sub(x1, c->x0);
+    if (!(v3_len2(w) > 0.0)) return MF_EINVAL;
+    *OUT_org = c->x0;
+    *OUT_dir = v3_normalize(w);
+    return MF_OK;
+  }
+  /* Along d, from far enough back that the ray enters the scene. */
+  vec3 d = v3_normalize(c->d);
+  *OUT_org = v3_fma(x1, d, -mf__far_back(sc, d, x1));
+  *OUT_dir = d;
+  return MF_OK;
+}
+
+/* The chain traced from org along the unit direction d (mf_trace's loop). */
+static int mf__trace_ray(const scene *sc, const mf_chain *proto, vec3 org, vec3 d, mf_chain *OUT) {
   int k = proto->k;
   mf_chain out = *proto;
-  vec3 org = proto->x0, d = v3_normalize(dir);
   for (int i = 1; i <= k + 1; i++) {
     /* The next hit, on the prototype's mesh. */
     surface_hit h;
@@ -362,6 +400,20 @@ int mf_trace(const scene *sc, const mf_chain *proto, vec3 dir, mf_chain *OUT) {
   }
   *OUT = out;
   return MF_OK;
+}
+
+int mf_trace(const scene *sc, const mf_chain *proto, vec3 dir, mf_chain *OUT) {
+  if (!mf__chain_ok(proto) || proto->start != MF_START_POINT || !v3_isfinite(dir) ||
+      !(v3_len2(dir) > 0.0))
+    return MF_EINVAL;
+  return mf__trace_ray(sc, proto, proto->x0, v3_normalize(dir), OUT);
+}
+
+int mf_trace_through(const scene *sc, const mf_chain *proto, vec3 x1, mf_chain *OUT) {
+  vec3 org, d;
+  int st = mf_start_ray(sc, proto, x1, &org, &d);
+  if (st != MF_OK) return st;
+  return mf__trace_ray(sc, proto, org, d, OUT);
 }
 
 /* ---- The walk ------------------------------------------------------------------- */
@@ -438,7 +490,7 @@ int mf_walk(const scene *sc, const mf_chain *c, vec3 target, const mf_options *o
       if (inf.traces >= opt.max_traces || beta < opt.min_beta) break;
       vec3 x1 = v3_fma(g1.p, dx1, beta);
       mf_chain next;
-      int st = mf_trace(sc, &cur, v3_sub(x1, cur.x0), &next);
+      int st = mf_trace_through(sc, &cur, x1, &next);
       inf.traces++;
       if (st == MF_OK) {
         double nd = v3_len(v3_sub(target, next.v[k + 1].p));
@@ -489,6 +541,11 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G) {
   mf__geom(sc, &c->v[k + 1], &ge);
   double area1 = v3_len(v3_cross(g1.e1, g1.e2)), areae = v3_len(v3_cross(ge.e1, ge.e2));
   double det = fabs(M[0][0] * M[1][1] - M[0][1] * M[1][0]) * area1 / areae;
+  /* After a direction start: |cos theta_1| per unit of perpendicular area. */
+  if (c->start == MF_START_DIRECTION) {
+    *OUT_G = fabs(v3_dot(g1.ng, v3_normalize(c->d))) * det;
+    return MF_OK;
+  }
   /* G(x_0, x_1) with the geometric normal's cosine at x_1. */
   vec3 w = v3_sub(g1.p, c->x0);
   double dist2 = v3_len2(w);
@@ -496,5 +553,185 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G) {
   double cos0 = v3_len2(c->n0) > 0.0 ? fabs(v3_dot(c->n0, w)) : 1.0;
   double cos1 = fabs(v3_dot(g1.ng, w));
   *OUT_G = cos0 * cos1 / dist2 * det;
+  return MF_OK;
+}
+
+/* ---- Chains of path-space paths ------------------------------------------------------ */
+
+/* The vertex order of the chain of p's x_a .. x_b: *OUT_s the path index of
+ * x_0, *OUT_step +1 or -1 (x_i is path vertex s + i step). 0 when both ends
+ * are at infinity. */
+static int mf__path_order(const ps_path *p, int a, int b, unsigned flags, int *OUT_s,
+                          int *OUT_step) {
+  int inf_a = p->x[a].inf, inf_b = p->x[b].inf;
+  if (inf_a && inf_b) return 0;
+  int from_b = inf_b || (!inf_a && (flags & MF_PATH_FROM_B));
+  *OUT_s = from_b ? b : a;
+  *OUT_step = from_b ? -1 : 1;
+  return 1;
+}
+
+/* Whether a, b name a chain of p that fits: indices in range, 1 <= k <=
+ * MF_MAX_CHAIN, an order. */
+static int mf__path_range(const ps_path *p, int a, int b, unsigned flags, int *OUT_s,
+                          int *OUT_step) {
+  if (!p || a < 0 || b > p->k || p->k >= PS_MAX_VERTICES) return 0;
+  if (b - a - 1 < 1 || b - a - 1 > MF_MAX_CHAIN) return 0;
+  return mf__path_order(p, a, b, flags, OUT_s, OUT_step);
+}
+
+int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags,
+                       mf_chain *OUT) {
+  const scene *sc = ctx->sc;
+  int s, step;
+  if (!mf__path_range(p, a, b, flags, &s, &step)) return MF_EINVAL;
+  int k = b - a - 1, e = s + (k + 1) * step;
+  mf_chain c;
+  memset(&c, 0, sizeof c);
+  c.k = k;
+
+  /* The start: a direction at infinity, or a point that is an endpoint or
+   * a non-specular surface. */
+  const ps_vertex *xs = &p->x[s];
+  if (xs->inf) {
+    if (!v3_isfinite(xs->v.dir) || !(v3_len2(xs->v.dir) > 0.0)) return MF_EINVAL;
+    c.start = MF_START_DIRECTION;
+    c.d = v3_normalize(xs->v.dir);
+  } else {
+    if (xs->delta) return MF_EINVAL;
+    c.start = MF_START_POINT;
+    c.x0 = xs->v.p;
+    if (xs->v.type == BDPT_VERTEX_CAMERA)
+      c.n0 = sc->cam.forward; /* the optical axis' cosine, as pathspace.h's G */
+    else
+      c.n0 = xs->v.n; /* a surface's or an area light's; zero at a point or spot light */
+  }
+
+  /* The end: a non-specular surface. */
+  const ps_vertex *xe = &p->x[e];
+  if (xe->inf || xe->delta || xe->v.type != BDPT_VERTEX_SURFACE) return MF_EINVAL;
+
+  /* Every vertex from x_1 to the end: its place on its triangle. */
+  for (int i = 1; i <= k + 1; i++) {
+    const ps_vertex *x = &p->x[s + i * step];
+    const surface_hit *h = &x->v.hit;
+    mf_vertex *v = &c.v[i];
+    if (x->v.type != BDPT_VERTEX_SURFACE) return MF_EINVAL;
+    if (mf_vertex_set(sc, v, h->mesh, h->prim, h->b1, h->b2) != MF_OK) return MF_EINVAL;
+    v->kind = MF_REFLECT;
+  }
+
+  /* The specular vertices: delta, or glossy when asked; reflection or
+   * refraction by the sides of the geometric normal their neighbours lie
+   * on; eta from the BSDF. */
+  for (int i = 1; i <= k; i++) {
+    int j = s + i * step;
+    const ps_vertex *x = &p->x[j];
+    int glossy = (flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j);
+    if (!x->delta && !glossy) return MF_EINVAL;
+    const bsdf *bs = x->v.hit.bsdf;
+    if (!bs || bsdf_needs_tangents(bs)) return MF_EBSDF;
+    double sp = v3_dot(ps_dir(p, j, j - 1), x->v.n), sn = v3_dot(ps_dir(p, j, j + 1), x->v.n);
+    mf_vertex *v = &c.v[i];
+    if (sp * sn > 0.0) continue; /* a reflection */
+    if (bs->masked || (bs->type != BSDF_DIELECTRIC && bs->type != BSDF_ROUGHDIELECTRIC) ||
+        !(bs->eta > 0.0))
+      return MF_EBSDF;
+    v->kind = MF_REFRACT;
+    v->eta = bs->eta;
+  }
+
+  /* Glossy vertices keep their current half vector as their target. */
+  for (int i = 1; i <= k; i++) {
+    if (p->x[s + i * step].delta) continue;
+    double hv[2];
+    if (mf_half_vector(sc, &c, i, hv) != MF_OK) return MF_EINVAL;
+    c.v[i].target[0] = hv[0];
+    c.v[i].target[1] = hv[1];
+  }
+  *OUT = c;
+  return MF_OK;
+}
+
+/* What scene_intersect makes of a hit on (mesh, prim, b1, b2) at distance
+ * t: the same point, normals, frame and texture coordinates. */
+static void mf__surface_hit(const scene *sc, const mf_vertex *v, double t, surface_hit *h) {
+  const mesh *m = &sc->meshes[v->mesh];
+  const uint32_t *tri = m->idx + 3 * v->prim;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+  double b0 = 1.0 - v->b1 - v->b2;
+  memset(h, 0, sizeof *h);
+  h->t = t;
+  h->mesh = v->mesh;
+  h->prim = v->prim;
+  h->b1 = v->b1;
+  h->b2 = v->b2;
+  h->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, v->b1)), v3_scale(p2, v->b2));
+  vec3 ns;
+  h->ng = mesh_hit_normals(m, v->prim, p0, p1, p2, v->b1, v->b2, &ns);
+  h->sh = frame_from_z(ns);
+  if (m->uv) {
+    const float *uv = m->uv;
+    h->tu = b0 * uv[2 * tri[0]] + v->b1 * uv[2 * tri[1]] + v->b2 * uv[2 * tri[2]];
+    h->tv = b0 * uv[2 * tri[0] + 1] + v->b1 * uv[2 * tri[1] + 1] + v->b2 * uv[2 * tri[2] + 1];
+  } else {
+    h->tu = v->b1;
+    h->tv = v->b2;
+  }
+  h->bsdf = &sc->bsdfs[m->bsdf];
+  h->light = m->light;
+  vec3 dpdu, dpdv;
+  if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, v->prim, p0, p1, p2, &dpdu, &dpdv))
+    h->sh = bsdf_shading_frame(h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
+}
+
+/* Whether record r's hit is chain vertex v's state, bit for bit. */
+static int mf__same_state(const bdpt_vertex *r, const mf_vertex *v) {
+  return r->hit.mesh == v->mesh && r->hit.prim == v->prim && r->hit.b1 == v->b1 &&
+         r->hit.b2 == v->b2;
+}
+
+int mf_chain_to_path(const scene *sc, const mf_chain *c, int a, int b, unsigned flags,
+                     ps_path *p) {
+  int s, step;
+  if (!mf__chain_ok(c) || !mf__path_range(p, a, b, flags, &s, &step) || c->k != b - a - 1)
+    return MF_EINVAL;
+  int k = c->k;
+  /* Check everything before writing anything; note which records move and
+   * each one's side (the neighbour its old wo points to: its walk's). */
+  int moved[MF_MAX_CHAIN + 2], side[MF_MAX_CHAIN + 2];
+  for (int i = 1; i <= k + 1; i++) {
+    int j = s + i * step;
+    const bdpt_vertex *r = &p->x[j].v;
+    if (r->type != BDPT_VERTEX_SURFACE || j <= 0 || !mf__mesh(sc, &c->v[i])) return MF_EINVAL;
+    moved[i] = !mf__same_state(r, &c->v[i]);
+    if (j == p->k)
+      side[i] = j - 1;
+    else
+      side[i] = v3_dot(r->wo, ps_dir(p, j, j - 1)) >= v3_dot(r->wo, ps_dir(p, j, j + 1)) ? j - 1
+                                                                                        : j + 1;
+  }
+  /* The moved records: what scene_intersect makes of their points. */
+  for (int i = 1; i <= k + 1; i++) {
+    if (!moved[i]) continue;
+    bdpt_vertex *r = &p->x[s + i * step].v;
+    mf__surface_hit(sc, &c->v[i], r->hit.t, &r->hit);
+    r->p = r->hit.p;
+    r->n = r->hit.ng;
+    r->light = r->hit.light;
+  }
+  /* Their wo and t, now that every neighbour is in place: towards the
+   * neighbour of their own walk, t the distance from it (from outside the
+   * bounding sphere when it is at infinity, as mf_start_ray). */
+  for (int i = 1; i <= k + 1; i++) {
+    if (!moved[i]) continue;
+    int j = s + i * step, n = side[i];
+    bdpt_vertex *r = &p->x[j].v;
+    r->wo = ps_dir(p, j, n);
+    if (p->x[n].inf)
+      r->hit.t = mf__far_back(sc, v3_neg(r->wo), r->p);
+    else
+      r->hit.t = v3_len(v3_sub(p->x[n].v.p, r->p));
+  }
   return MF_OK;
 }

@@ -7,9 +7,14 @@
  * manifold while its end moves, and the generalized geometry term of the
  * chain. MEMLT's manifold perturbation and HSLT build on it.
  *
- * The chain. x_0 is a fixed start point (a point light, a pinhole, or a
- * surface point whose normal n0 enters the geometry term's cosine);
- * x_1 .. x_k (1 <= k <= MF_MAX_CHAIN) are specular vertices, each a
+ * The chain. x_0 is a fixed start (mf_start): a point (a point light, a
+ * pinhole, or a surface point whose normal n0 enters the geometry term's
+ * cosine) or a direction (a light at infinity: an environment map,
+ * sunsky, a directional light). A direction start is x_0 at infinity: d
+ * is the unit direction of the first segment, the way it travels from x_0
+ * to x_1 (for a light, the way its light travels: pathspace.h's v.dir of
+ * an `inf` endpoint), so that wi at x_1 is -d; x_1 may lie anywhere on
+ * the line through it along d. x_1 .. x_k (1 <= k <= MF_MAX_CHAIN) are specular vertices, each a
  * reflection or a refraction chosen by the caller; x_{k+1} is the end, on
  * a non-specular surface. A surface vertex is (mesh, triangle,
  * barycentrics (b1, b2)); it moves with (b1, b2) on the plane of its
@@ -19,8 +24,9 @@
  * has none or sets face_normals). Bump maps and anisotropic frames
  * (bsdf_needs_tangents) are not followed: the frame is frame_from_z(ns).
  *
- * The constraints. With wi = normalize(x_{i-1} - x_i) and wo =
- * normalize(x_{i+1} - x_i) (directions away from the surface), the
+ * The constraints. With wi = normalize(x_{i-1} - x_i) (at x_1 after a
+ * direction start, wi = -d) and wo = normalize(x_{i+1} - x_i) (directions
+ * away from the surface), the
  * generalized half vector of vertex i is
  *   h_i = normalize(wi + eta_r wo), turned so that h_i . ns >= 0,
  * where eta_r = 1 for a reflection and, for a refraction, the ratio of the
@@ -36,7 +42,8 @@
  *
  * The Jacobian. c_i depends on the barycentrics of x_{i-1}, x_i and
  * x_{i+1} only, so dc / db over x_1 .. x_k is block tridiagonal with 2 x 2
- * blocks A_i = dc_i / db_{i-1} (zero for i = 1: x_0 is fixed), B_i =
+ * blocks A_i = dc_i / db_{i-1} (zero for i = 1: x_0 is fixed, and a
+ * direction start's c_1 does not depend on any position of x_0), B_i =
  * dc_i / db_i and C_i = dc_i / db_{i+1} (C_k: the end's). lmc's forward
  * mode AD (src/ad) computes them (mf_jacobian); mf_solve solves
  *   A_i d_{i-1} + B_i d_i + C_i d_{i+1} = r_i,  i = 1 .. k,
@@ -48,8 +55,9 @@
  * end's barycentrics that moves it (on the plane of its triangle) onto the
  * target, solves for d_1 (the change of x_1, that is, of the first
  * segment's direction), moves x_1 by beta d_1 on its triangle's plane and
- * PROJECTS back onto the surfaces: a ray from x_0 through the moved x_1,
- * followed through every chain vertex by specular reflection or refraction
+ * PROJECTS back onto the surfaces: a ray from x_0 through the moved x_1
+ * (after a direction start, the ray along d through the moved x_1, from
+ * outside the scene's bounding sphere: mf_start_ray), followed through every chain vertex by specular reflection or refraction
  * about the actual shading normal of each new hit (about the microfacet
  * normal whose projection is the vertex's target, for a non-zero target),
  * to a new end (mf_trace). A step whose projection fails or does not bring
@@ -61,7 +69,9 @@
  *
  * Leaving the manifold (mf_trace's statuses): a ray that misses
  * (MF_EMISS); a vertex on another mesh (MF_ESHAPE; another triangle of the
- * same mesh is fine: a smooth mesh is one surface); total internal
+ * same mesh is fine: a smooth mesh is one surface; after a direction
+ * start, x_1 is the first hit of the ray from outside the scene, so a
+ * ray that meets another mesh first fails so); total internal
  * reflection at a refraction vertex (MF_ETIR); a direction on the wrong
  * side of a vertex (a reflection through its surface or a refraction that
  * does not cross it, by the shading or the geometric normal: MF_ESIDE).
@@ -85,17 +95,52 @@
  * Mitsuba's SpecularManifold::G (the area of x_1's tangent map times
  * G(x_0, x_1)), with lmc's geometric-normal cosine at x_1 (pathspace.h).
  *
+ * After a direction start, x_0's free measure is not a solid angle at a
+ * point but the area A_perp of the plane perpendicular to d that the
+ * parallel rays cross (d fixed: a light at infinity has solid-angle
+ * measure in its direction, and the rays of one direction are told apart
+ * by where they cross that plane). The generalized geometry term is the
+ * Jacobian of that area per unit area at the end:
+ *   G(d <-> x_{k+1}) = dA_perp / dA_{k+1}
+ *     = (dA_perp / dA_1) (dA_1 / dA_{k+1})
+ *     = |cos theta_1| |det(dx_1 / dx_{k+1})|,
+ * cos theta_1 = d . ng_1 (a patch dA_1 of x_1's triangle casts |cos
+ * theta_1| dA_1 on the perpendicular plane), dx_1 / dx_{k+1} the same
+ * block as above with d held fixed (c_1 does not depend on x_0). For
+ * k = 0 it is |cos theta_1|, pathspace.h's G of an edge to infinity; the
+ * light's radiance times G dA_{k+1} dsigma(d) is the power the chain
+ * carries from the solid angle dsigma(d) onto dA_{k+1}.
+ *
  * Memory and threads: every function works on caller-owned structs and
  * the stack (the AD arena of one constraint, 16 KB); nothing allocates.
- * The scene is read only. Not supported yet: a moving x_0 (Jakob's pinned
- * direction or a free start), media vertices, bump-mapped or anisotropic
- * shading frames, thindielectric; see docs/manifold.md.
+ * The scene is read only. Not supported yet: a moving x_0 (a free start;
+ * x_0 is pinned, as a position or as a direction), media vertices,
+ * bump-mapped or anisotropic shading frames, thindielectric; see
+ * docs/manifold.md.
+ *
+ * Chains of path-space paths (mf_chain_from_path, mf_chain_to_path). A
+ * ps_path's vertices x_a .. x_b (a < b) make a chain when x_a and x_b are
+ * endpoints or non-specular surfaces and every vertex between them is a
+ * specular surface: ps_vertex.delta set, or a glossy vertex (ps_glossy)
+ * when the caller treats those as specular (MF_PATH_GLOSSY: the target is
+ * its current half vector, HSLT's case). The chain runs from x_a to x_b,
+ * or from x_b to x_a (MF_PATH_FROM_B); an endpoint at infinity (`inf`) is
+ * always its start, a direction start with d = v.dir. Each chain vertex
+ * reads (mesh, triangle, barycentrics) from its record's hit; its kind is
+ * the geometry's: a reflection when the directions to its two path
+ * neighbours (ps_dir) lie on the same side of its geometric normal, else
+ * a refraction, whose eta is its BSDF's (dielectric, roughdielectric).
+ * The start: the pinhole is a point whose n0 is the optical axis
+ * (pathspace.h's cosine there), a point or spot light a point (n0 = 0),
+ * an area light endpoint or a surface a point with its geometric normal.
+ * The end is a surface record (type BDPT_VERTEX_SURFACE).
  */
 #ifndef LMC_PATH_MANIFOLD_H
 #define LMC_PATH_MANIFOLD_H
 
 #include <stdint.h>
 
+#include "lmc/path/pathspace.h"
 #include "render/scene.h"
 
 #define MF_MAX_CHAIN 16 /* largest number k of specular vertices */
@@ -139,11 +184,20 @@ typedef struct mf_vertex {
   vec3 ng;           /* derived: unit geometric normal, on ns's side (mesh_hit_normals) */
 } mf_vertex;
 
+/* What the fixed start x_0 is. */
+typedef enum mf_start {
+  MF_START_POINT = 0,    /* a point x0 (normal n0) */
+  MF_START_DIRECTION = 1 /* a point at infinity: the first segment runs along d */
+} mf_start;
+
 /* A chain x_0 .. x_{k+1}: v[i] is x_i for i = 1 .. k + 1 (v[0] unused). */
 typedef struct mf_chain {
   int k;                        /* specular vertices, 1 .. MF_MAX_CHAIN */
-  vec3 x0;                      /* the fixed start */
+  mf_start start;               /* x_0 a point (x0, n0) or a direction (d) */
+  vec3 x0;                      /* MF_START_POINT: the fixed start */
   vec3 n0;                      /* its unit normal, or (0, 0, 0) for a point (cos theta_0 = 1) */
+  vec3 d;                       /* MF_START_DIRECTION: unit direction from x_0 towards x_1
+                                   (the light's travel; wi at x_1 is -d) */
   mf_vertex v[MF_MAX_CHAIN + 2]; /* x_1 .. x_k specular, x_{k+1} the end */
 } mf_chain;
 
@@ -199,6 +253,15 @@ int mf_jacobian(const scene *sc, const mf_chain *c, mf_jac *OUT);
  * Thomas. MF_ESINGULAR when a pivot block is singular. */
 int mf_solve(const mf_jac *J, const double *r, const double d_end[2], double *OUT_d);
 
+/* The ray of a chain's first segment that passes through the point x1:
+ * from x0 along normalize(x1 - x0) for a point start; for a direction
+ * start along d from *OUT_org = x1 - s d, s = (x1 - center) . d + 2
+ * radius (scene->center, scene->radius: the origin lies outside the
+ * bounding sphere, and x1 at distance s along the ray). *OUT_dir is unit.
+ * Returns MF_EINVAL for a bad start (a direction that is not finite or
+ * zero, x1 = x0). */
+int mf_start_ray(const scene *sc, const mf_chain *c, vec3 x1, vec3 *OUT_org, vec3 *OUT_dir);
+
 /* Traces a chain: from proto->x0 along the unit direction dir, through
  * proto->k specular vertices whose kinds and targets proto gives (and
  * their meshes, unless -1), to an end on any surface (on proto's end mesh
@@ -206,8 +269,15 @@ int mf_solve(const mf_jac *J, const double *r, const double d_end[2], double *OU
  * normal (its target's microfacet normal when the target is not zero);
  * a refraction vertex takes eta from its BSDF (dielectric or
  * roughdielectric, else MF_EBSDF). Writes the whole chain (x0, n0, kinds,
- * targets copied) to *OUT. A failing trace's status says why (above). */
+ * targets copied) to *OUT. A failing trace's status says why (above).
+ * Point starts only (MF_EINVAL for a direction start: mf_trace_through). */
 int mf_trace(const scene *sc, const mf_chain *proto, vec3 dir, mf_chain *OUT);
+
+/* mf_trace along the ray of mf_start_ray through x1: for a point start
+ * mf_trace towards x1; for a direction start the ray along d whose first
+ * hit is x_1 (on proto's x_1 mesh unless -1: another mesh first is
+ * MF_ESHAPE, nothing MF_EMISS). What mf_walk projects with. */
+int mf_trace_through(const scene *sc, const mf_chain *proto, vec3 x1, mf_chain *OUT);
 
 /* The manifold walk: moves chain c (on its manifold: as mf_trace made it)
  * so that its end reaches `target` (a point on the end's surface), x_0
@@ -218,7 +288,44 @@ int mf_walk(const scene *sc, const mf_chain *c, vec3 target, const mf_options *o
             mf_walk_info *info);
 
 /* The generalized geometry term G(x_0 <-> x_{k+1}) of chain c (definition
- * above) into *OUT_G. MF_ESINGULAR when the chain's Jacobian is singular. */
+ * above; after a direction start G(d <-> x_{k+1})) into *OUT_G.
+ * MF_ESINGULAR when the chain's Jacobian is singular. */
 int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G);
+
+/* Flags of mf_chain_from_path and mf_chain_to_path. */
+#define MF_PATH_GLOSSY 1u /* glossy inner vertices (ps_glossy) are specular, targets their half vectors */
+#define MF_PATH_FROM_B 2u /* the chain starts at x_b (an endpoint at infinity is the start anyway) */
+
+/* The chain of path p's vertices x_a .. x_b (above) into *OUT: x_0 the
+ * start (x_a, or x_b under MF_PATH_FROM_B or when x_b is at infinity), the
+ * vertices between as x_1 .. x_k in the chain's order, the other end as
+ * x_{k+1}. The path's caches (ps_update: delta and inf flags) must be
+ * current. MF_EINVAL when the vertices do not make a chain (an index out
+ * of range, k = b - a - 1 outside 1 .. MF_MAX_CHAIN, an end that is
+ * specular or (x_{k+1}) not a surface, an inner vertex that is neither
+ * delta nor, under MF_PATH_GLOSSY, glossy, both ends at infinity);
+ * MF_EBSDF for a chain vertex whose BSDF the chain cannot follow (a
+ * refraction on a surface that is not a dielectric or roughdielectric
+ * (thindielectric, a mask's pass-through), a bump-mapped or anisotropic
+ * shading frame). Plain arithmetic; nothing traced. */
+int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags,
+                       mf_chain *OUT);
+
+/* The inverse: writes chain c's vertices x_1 .. x_{k+1} back into the
+ * records of p's vertices x_a .. x_b they came from (the same a, b,
+ * flags and path, so that the same vertex order follows). A record whose
+ * (mesh, triangle, barycentrics) are the chain vertex's is left as it is,
+ * bit for bit (so a chain written back unchanged leaves p unchanged);
+ * any other gets what scene_intersect makes of a ray that hits that
+ * point: hit (t, mesh, prim, b1, b2, p, ng, sh, tu, tv, bsdf, light), p =
+ * hit.p, n = hit.ng, light = hit.light, and wo the unit direction to the
+ * path neighbour its old wo pointed to (its own walk's side), t the
+ * distance to it (from mf_start_ray's origin for a neighbour at
+ * infinity). Type, delta flag, the walk's throughput and densities are
+ * left: the caller re-evaluates the path (ps_update, ps_eval). MF_EINVAL
+ * when c does not fit p's x_a .. x_b (k, a record that is not a surface);
+ * p is then untouched. */
+int mf_chain_to_path(const scene *sc, const mf_chain *c, int a, int b, unsigned flags,
+                     ps_path *p);
 
 #endif
