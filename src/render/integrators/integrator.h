@@ -17,6 +17,8 @@
 #ifndef LMC_RENDER_INTEGRATOR_H
 #define LMC_RENDER_INTEGRATOR_H
 
+#include <math.h>
+
 #include "render/film.h"
 #include "render/options.h"
 #include "render/sampler.h"
@@ -55,6 +57,28 @@ static inline void ray_log_add(render_counters *cnt, vec3 o, vec3 d, double tmin
   r->dir[0] = (float)d.x, r->dir[1] = (float)d.y, r->dir[2] = (float)d.z;
   r->tmin = (float)tmin;
   r->tmax = shadow ? -(float)tmax : (float)tmax;
+}
+
+/* The closest hit along (org, dir) from tmin, counted (and logged). */
+static inline int render_trace(const scene *s, render_counters *cnt, vec3 org, vec3 dir,
+                               double tmin, surface_hit *OUT_h) {
+  cnt->rays++;
+  ray_log_add(cnt, org, dir, tmin, INFINITY, 0);
+  return scene_intersect(s, org, dir, tmin, INFINITY, OUT_h);
+}
+
+/* Whether the shadow ray from p along wi to the light point lp, dist away
+ * (INFINITY: a direction, nothing beyond the scene), is blocked; counted
+ * (and logged). */
+static inline int render_blocked(const scene *s, render_counters *cnt, vec3 p, vec3 wi, vec3 lp,
+                                 double dist) {
+  cnt->rays++;
+  if (cnt->log) {
+    double e = scene_ray_eps(s, p);
+    double tmax = isinf(dist) ? INFINITY : dist - scene_ray_eps(s, lp);
+    ray_log_add(cnt, p, wi, e, tmax, 1);
+  }
+  return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
 }
 
 /* A camera ray's differentials: the directions of the rays through the film

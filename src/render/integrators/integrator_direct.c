@@ -105,22 +105,6 @@ static inline double direct__next(direct__ctx *c) {
   return c->r ? rng_uniform(c->r) : sampler_next(c->smp);
 }
 
-static int direct__intersect(direct__ctx *c, vec3 org, vec3 dir, double tmin, surface_hit *h) {
-  c->cnt->rays++;
-  ray_log_add(c->cnt, org, dir, tmin, INFINITY, 0);
-  return scene_intersect(c->s, org, dir, tmin, INFINITY, h);
-}
-
-static int direct__blocked(direct__ctx *c, vec3 p, vec3 wi, vec3 lp, double dist) {
-  const scene *s = c->s;
-  c->cnt->rays++;
-  if (c->cnt->log) {
-    double e = scene_ray_eps(s, p);
-    double tmax = isinf(dist) ? INFINITY : dist - scene_ray_eps(s, lp);
-    ray_log_add(c->cnt, p, wi, e, tmax, 1);
-  }
-  return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
-}
 
 /* Whether paths of `length` segments are counted (--mindepth). */
 static int direct__counts(const render_settings *rs, int length) {
@@ -151,7 +135,7 @@ static rgb direct__light_samples(direct__ctx *c, const direct_settings *ds, cons
     if (!(v3_dot(ls.wi, h->ng) * wi_l.z > 0.0)) continue;
     double pdf_b;
     rgb f = bsdf_eval_pdf(b, h->tu, h->tv, wo_l, wi_l, TRANSPORT_RADIANCE, &pdf_b);
-    if (rgb_is_black(f) || direct__blocked(c, h->p, ls.wi, ls.p, ls.dist)) continue;
+    if (rgb_is_black(f) || render_blocked(c->s, c->cnt, h->p, ls.wi, ls.p, ls.dist)) continue;
     /* Weighted by the power heuristic over the counts. */
     double pdf_l = ls.pdf * pmf;
     double w = ls.delta ? 1.0 : mis_power((double)nl * pdf_l, (double)nb * pdf_b);
@@ -180,7 +164,7 @@ static rgb direct__bsdf_samples(direct__ctx *c, const direct_settings *ds, const
     /* Escaped: the infinite lights, each weighted against its own
      * light-sampling density. */
     surface_hit e;
-    if (!direct__intersect(c, h->p, wi, scene_ray_eps(s, h->p), &e)) {
+    if (!render_trace(c->s, c->cnt, h->p, wi, scene_ray_eps(s, h->p), &e)) {
       for (int k = 0; k < s->n_infinite; k++) {
         int li = s->infinite_lights[k];
         double pdf_inf = 0.0;
@@ -214,7 +198,7 @@ rgb direct_li(const scene *s, const render_settings *rs, const direct_settings *
 
   /* The camera ray; on a miss, the infinite lights it sees. */
   surface_hit h;
-  if (!direct__intersect(&c, org, dir, 0.0, &h)) {
+  if (!render_trace(c.s, c.cnt, org, dir, 0.0, &h)) {
     for (int k = 0; seen && k < s->n_infinite; k++)
       L = rgb_add(L, light_le_infinite(&s->lights[s->infinite_lights[k]], dir));
     return L;

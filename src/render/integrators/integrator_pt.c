@@ -32,22 +32,6 @@ typedef struct pt__ctx {
  * (the same number, without the indirect call). */
 static inline double pt__next(pt__ctx *c) { return c->r ? rng_uniform(c->r) : sampler_next(c->smp); }
 
-static int pt__intersect(pt__ctx *c, vec3 org, vec3 dir, double tmin, surface_hit *h) {
-  c->cnt->rays++;
-  ray_log_add(c->cnt, org, dir, tmin, INFINITY, 0);
-  return scene_intersect(c->s, org, dir, tmin, INFINITY, h);
-}
-
-static int pt__blocked(pt__ctx *c, vec3 p, vec3 wi, vec3 lp, double dist) {
-  const scene *s = c->s;
-  c->cnt->rays++;
-  if (c->cnt->log) {
-    double e = scene_ray_eps(s, p);
-    double tmax = isinf(dist) ? INFINITY : dist - scene_ray_eps(s, lp);
-    ray_log_add(c->cnt, p, wi, e, tmax, 1);
-  }
-  return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
-}
 
 /* The camera hit h (from org) reads its filtered textures over its
  * footprint: h's BSDF becomes a copy that carries it. */
@@ -66,8 +50,8 @@ static void pt__footprint(pt__ctx *c, surface_hit *h, vec3 org) {
 #define PT_ARENA
 #define PT_HIT surface_hit
 #define PT_LI light_li_sample
-#define PT_INTERSECT(org, dir, tmin, h) pt__intersect(c, (org), (dir), (tmin), (h))
-#define PT_BLOCKED(p, wi, lp, dist) pt__blocked(c, (p), (wi), (lp), (dist))
+#define PT_INTERSECT(org, dir, tmin, h) render_trace(c->s, c->cnt, (org), (dir), (tmin), (h))
+#define PT_BLOCKED(p, wi, lp, dist) render_blocked(c->s, c->cnt, (p), (wi), (lp), (dist))
 #define PT_DRAW(diff) pt__next(c)
 #define PT_TOPO(x) ((void)0)
 #define PT_LE_INFINITE(l, dir, pdf) light_le_pdf_infinite((l), c->s, (dir), (pdf))
