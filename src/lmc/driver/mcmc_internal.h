@@ -116,6 +116,10 @@ double mcmc__refine_b(mcmc_render *R, double *OUT_var);
  * (compose: per-family buffers summed in) (mcmc_b.c). */
 void mcmc__publish(mcmc_render *R, int64_t done, int compose);
 
+/* The statistics lines at the end of a render (mcmc_report.c); counts:
+ * the scene targets' counters of every rank. */
+void mcmc__report(mcmc_render *R, const mc_counts *counts);
+
 /* The scene targets' counters of this rank's chains added to *c, and
  * their mutations to *mutations (may be NULL) (mcmc_dist.c). */
 void mcmc__counts_here(const mcmc_render *R, mc_counts *c, int64_t *mutations);

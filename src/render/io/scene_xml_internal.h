@@ -126,6 +126,12 @@ lmc_status xml__relabel(builder *B, lmc_status st, const prop *p, const char *wh
  * counted in B->emitters_ignored). */
 lmc_status xml__emitter(builder *B, pset *o);
 
+/* scene_xml_integrator.c: an <integrator> (nested: inside another, whose
+ * choice of integrator stands) and the reference implementation's <dpt>
+ * block, into the scene's settings. */
+lmc_status xml__integrator(builder *B, pset *o, int nested);
+lmc_status xml__dpt(builder *B, pset *o);
+
 /* ---- Textures and BSDFs (scene_xml_bsdf.c). ------------------------------ */
 
 /* Counts the texels of img that are NaN or infinite; with `repair`, also

@@ -1,0 +1,78 @@
+/*
+ * lmcpy.h: what the Python module's files share (lmcmodule.c: the module,
+ * Scene, Result, render, read, compare; lmcpy_target.c: Target). Internal
+ * to the module. A file other than lmcmodule.c defines NO_IMPORT_ARRAY
+ * before including it (NumPy's C API table is lmcmodule.c's).
+ */
+#ifndef LMC_PYTHON_LMCPY_H
+#define LMC_PYTHON_LMCPY_H
+
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#define PY_ARRAY_UNIQUE_SYMBOL lmcpy_ARRAY_API
+#include <numpy/arrayobject.h>
+
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "cli/cli.h"
+#include "lmc/driver/space.h"
+#include "lmc/states/bdpt_states.h"
+
+/* The most flags one call takes (every table's, with room to spare). */
+#define LMCPY_MAX_FLAGS 160
+#define LMCPY_MAX_TABLES 32
+
+typedef struct {
+  PyObject_HEAD
+  scene *s;       /* owned */
+  PyObject *path; /* str: the file as given */
+  int warnings;   /* warnings its load gave (--strict refuses to render it) */
+  int busy;       /* renders and targets using it now (its camera must not change then) */
+  camera loaded;  /* its camera as loaded, restored when no one uses it */
+} lmcpy_scene;
+
+/* What a call's keywords give: the command line's own flags (cli's
+ * fields), the flags of the tables (given[], their values in text[]),
+ * and the module's own. */
+typedef struct lmcpy_flags {
+  render_settings cli;
+  lmc_given given[LMCPY_MAX_FLAGS];
+  char text[LMCPY_MAX_FLAGS][LMC_ADDRESS_MAX];
+  int n_given;
+  int res_w, res_h; /* resolution (0: the scene's) */
+} lmcpy_flags;
+
+/* Raises the Python exception for a failed lmc call (NULL). */
+PyObject *lmcpy_raise(const lmc_error *err);
+/* Reads kwargs (may be NULL) into *F, skipping the names in `skip`; 0 and
+ * ValueError naming the flag on an unknown flag or a bad value. */
+int lmcpy_parse_flags(PyObject *kwargs, const char *const *skip, lmcpy_flags *F);
+/* The render settings of scene sc with flags F (as lmc render merges them). */
+int lmcpy_settings(lmcpy_scene *sc, const lmcpy_flags *F, render_settings *OUT);
+/* F's resolution applied to sc's camera (0 and ValueError when bad). */
+int lmcpy_resolution(lmcpy_scene *sc, const lmcpy_flags *F);
+/* A render or target starts or stops using sc (its camera restored when
+ * none does). */
+void lmcpy_acquire(lmcpy_scene *sc);
+void lmcpy_release(lmcpy_scene *sc);
+/* d[key] = v, taking v's reference; 0 on failure. */
+int lmcpy_dict_set(PyObject *d, const char *key, PyObject *v);
+
+/* A float32 array (height, width, 3) copied from img. */
+PyObject *lmcpy_image_copy(const lmc_image *img);
+/* lmc.read(path, layer=None) and lmc.compare(image, reference). */
+PyObject *lmcpy_read(PyObject *mod, PyObject *args, PyObject *kwargs);
+PyObject *lmcpy_compare(PyObject *mod, PyObject *args);
+
+extern PyTypeObject lmcpy_scene_type;
+extern PyTypeObject lmcpy_target_type;
+/* lmc.target(scene, space='bdpt', length=None, **flags). */
+PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs);
+
+#endif
