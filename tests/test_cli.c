@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include "test_util.h"
+#include "run_lmc.h"
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -36,13 +37,7 @@
 static char out_text[65536], err_text[65536];
 
 static int run_lmc(const char *args) {
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
-  int rc = system(cmd);
-  slurp_text(TMP "/out.txt", out_text, sizeof out_text);
-  slurp_text(TMP "/err.txt", err_text, sizeof err_text);
-  if (rc == -1 || !WIFEXITED(rc)) return -1;
-  return WEXITSTATUS(rc);
+  return run_lmc_in(TMP, args, out_text, sizeof out_text, err_text, sizeof err_text);
 }
 
 static int setup(void **state) {

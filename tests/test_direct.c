@@ -44,6 +44,7 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "test_util.h"
+#include "run_lmc.h"
 
 #define TMP LMC_TEST_TMP "/lmc_test_direct"
 #define GRID 2
@@ -89,13 +90,7 @@ static const char *box_xml =
 static char out_text[1 << 14], err_text[1 << 15];
 
 static int run_lmc(const char *args) {
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
-  int rc = system(cmd);
-  slurp_text(TMP "/out.txt", out_text, sizeof out_text);
-  slurp_text(TMP "/err.txt", err_text, sizeof err_text);
-  if (rc == -1 || !WIFEXITED(rc)) return -1;
-  return WEXITSTATUS(rc);
+  return run_lmc_in(TMP, args, out_text, sizeof out_text, err_text, sizeof err_text);
 }
 
 static void write_text(const char *path, const char *text) {

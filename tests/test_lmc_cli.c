@@ -26,6 +26,7 @@
 #include <sys/wait.h>
 
 #include "test_util.h"
+#include "run_lmc.h"
 
 /* The furnace: light on paths of every length, so the chains have work
  * under the default --direct separate (the diffuse sphere's paths all have
@@ -37,18 +38,7 @@
 static char err_text[65536];
 
 static int run_lmc(const char *args) {
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "'%s' %s > " TMP "/out.txt 2> " TMP "/err.txt", LMC_BINARY, args);
-  int rc = system(cmd);
-  err_text[0] = '\0';
-  FILE *f = fopen(TMP "/err.txt", "rb");
-  if (f) {
-    size_t n = fread(err_text, 1, sizeof err_text - 1, f);
-    err_text[n] = '\0';
-    fclose(f);
-  }
-  if (rc == -1 || !WIFEXITED(rc)) return -1;
-  return WEXITSTATUS(rc);
+  return run_lmc_in(TMP, args, NULL, 0, err_text, sizeof err_text);
 }
 
 /* run_lmc of printf-style arguments that must succeed (the command and
