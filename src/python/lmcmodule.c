@@ -19,11 +19,16 @@
  *
  * Threads. render releases the GIL while it renders; a Ctrl-C in that
  * time stops the render (render_request_stop, as the command line does)
- * and raises KeyboardInterrupt. A target evaluates with the GIL held (its
- * scratch is one per target object).
+ * and raises KeyboardInterrupt. render(progress=fn) hooks fn on the
+ * drivers' snapshots (what --snapshot uses): fn(image so far, seconds)
+ * with the GIL taken for the call only; an exception from fn stops the
+ * render as a Ctrl-C does and propagates. Either exception carries the
+ * image of the samples so far as e.lmc_result. A target evaluates with
+ * the GIL held (its scratch is one per target object).
  *
  * Ownership. A Scene owns its scene; a Result owns its pixels, which
- * r.image views (the array keeps the Result alive); a Target owns its
+ * r.image views (each access a new view, which keeps the Result alive;
+ * the Result keeps none: no cycle); a Target owns its
  * state space and scratch and keeps its Scene alive.
  */
 #include "lmcpy.h"
@@ -377,14 +382,10 @@ typedef struct {
   PyObject_HEAD
   lmc_image img;   /* owned: the developed film, RGB */
   lmc_image eimg;  /* owned: each pixel's standard error (--error on), else empty */
-  PyObject *image; /* float32 (H, W, 3) over img's pixels */
-  PyObject *error; /* the same over eimg's, or None */
   PyObject *stats; /* dict */
 } lmcpy_result;
 
 static void lmcpy_result_dealloc(lmcpy_result *self) {
-  Py_XDECREF(self->image);
-  Py_XDECREF(self->error);
   Py_XDECREF(self->stats);
   image_free(&self->img);
   image_free(&self->eimg);
@@ -441,15 +442,19 @@ static PyMethodDef lmcpy_result_methods[] = {
      "(path *.png; exposure in stops or 'auto')"},
     {NULL, NULL, 0, NULL}};
 
+static PyObject *lmcpy_image_view(const lmc_image *img, PyObject *owner);
+
+/* r.image and r.error: a new view of the pixels at each access. (A view
+ * kept in the Result would make a cycle, Result -> array -> Result, that
+ * the collector cannot see: every Result would leak.) */
 static PyObject *lmcpy_result_get_image(lmcpy_result *self, void *closure) {
   (void)closure;
-  Py_INCREF(self->image);
-  return self->image;
+  return lmcpy_image_view(&self->img, (PyObject *)self);
 }
 static PyObject *lmcpy_result_get_error(lmcpy_result *self, void *closure) {
   (void)closure;
-  Py_INCREF(self->error);
-  return self->error;
+  if (!self->eimg.data) Py_RETURN_NONE;
+  return lmcpy_image_view(&self->eimg, (PyObject *)self);
 }
 static PyObject *lmcpy_result_get_stats(lmcpy_result *self, void *closure) {
   (void)closure;
@@ -565,14 +570,123 @@ static int lmcpy_release_sigint(void) {
   return hit;
 }
 
+/* --- progress: the drivers' snapshot hook to a Python callable ----------------- */
+
+/* render_request_stop's number for a stop the progress callable asked for
+ * by raising (no signal has it). */
+#define LMCPY_STOP_PROGRESS (-1)
+
+/* What the drivers' snapshot hook (settings.h's snapshot_fn) hands the
+ * progress callable. The drivers call it between their rounds, on the
+ * thread that called render (which gave up the GIL): it develops the film
+ * without the GIL, then takes the GIL only to copy the image into a new
+ * array and call. Once the callable raises, its exception is kept here,
+ * the render is asked to stop, and it is not called again. */
+typedef struct lmcpy_progress {
+  PyObject *fn;        /* borrowed: the callable */
+  lmc_image img;       /* owned: the developed film, kept from one call to the next */
+  PyObject *exc;       /* owned: what the callable raised (NULL: nothing) */
+  int calls;
+} lmcpy_progress;
+
+/* The exception being raised, taken from the interpreter (a new
+ * reference; NULL when none). */
+static PyObject *lmcpy_take_exception(void) {
+#if PY_VERSION_HEX >= 0x030C0000
+  return PyErr_GetRaisedException();
+#else
+  PyObject *type, *value, *tb;
+  PyErr_Fetch(&type, &value, &tb);
+  if (!type) return NULL;
+  PyErr_NormalizeException(&type, &value, &tb);
+  if (tb && value) PyException_SetTraceback(value, tb);
+  Py_XDECREF(type);
+  Py_XDECREF(tb);
+  return value;
+#endif
+}
+
+/* Raises exc again (its reference is taken). */
+static void lmcpy_restore_exception(PyObject *exc) {
+#if PY_VERSION_HEX >= 0x030C0000
+  PyErr_SetRaisedException(exc);
+#else
+  PyObject *type = (PyObject *)Py_TYPE(exc);
+  Py_INCREF(type);
+  PyErr_Restore(type, exc, PyException_GetTraceback(exc));
+#endif
+}
+
+/* With an exception being raised: result (a Result, may be NULL) becomes
+ * its attribute lmc_result, the image so far. */
+static void lmcpy_attach_result(PyObject *result) {
+  if (!result) return;
+  PyObject *exc = lmcpy_take_exception();
+  if (!exc) return;
+  if (PyObject_SetAttrString(exc, "lmc_result", result) < 0) PyErr_Clear();
+  lmcpy_restore_exception(exc);
+}
+
+/* Calls p's callable with a copy of img and the seconds (with the GIL);
+ * 0 when it raised (the exception kept in p->exc). */
+static int lmcpy_progress_call(lmcpy_progress *p, const lmc_image *img, double seconds) {
+  PyObject *a = lmcpy_image_copy(img);
+  PyObject *res = a ? PyObject_CallFunction(p->fn, "Od", a, seconds) : NULL;
+  Py_XDECREF(a);
+  p->calls++;
+  if (res) {
+    Py_DECREF(res);
+    return 1;
+  }
+  p->exc = lmcpy_take_exception();
+  return 0;
+}
+
+/* The drivers' snapshot hook (render_settings.snapshot_fn). */
+static void lmcpy_on_snapshot(void *ctx, const struct film *f, double seconds) {
+  lmcpy_progress *p = ctx;
+  if (p->exc) return; /* (stopping) */
+  /* Develop the film as at the end, without the GIL. */
+  lmc_error err;
+  lmc_error_clear(&err);
+  if (!p->img.data && image_init(&p->img, f->width, f->height, 3, &err)) return;
+  film_develop_to(f, p->img.data);
+  /* Call with the GIL; a raise stops the render. */
+  PyGILState_STATE g = PyGILState_Ensure();
+  int ok = lmcpy_progress_call(p, &p->img, seconds);
+  PyGILState_Release(g);
+  if (!ok) render_request_stop(LMCPY_STOP_PROGRESS);
+}
+
+/* --- render ------------------------------------------------------------------- */
+
 static PyObject *lmcpy_render(PyObject *mod, PyObject *args, PyObject *kwargs) {
   (void)mod;
+  static const char *const own[] = {"progress", "progress_interval", NULL};
   lmcpy_scene *sc = NULL;
   if (!PyArg_ParseTuple(args, "O!:render", &lmcpy_scene_type, &sc)) return NULL;
+  /* The module's own keywords: progress=callable, progress_interval=seconds. */
+  lmcpy_progress prog;
+  memset(&prog, 0, sizeof prog);
+  double interval = 1.0;
+  PyObject *o;
+  if (kwargs && (o = PyDict_GetItemString(kwargs, "progress")) && o != Py_None) {
+    if (!PyCallable_Check(o))
+      return PyErr_Format(PyExc_TypeError,
+                          "progress: %R is not callable (progress(image, seconds))", o);
+    prog.fn = o;
+  }
+  if (kwargs && (o = PyDict_GetItemString(kwargs, "progress_interval")) && o != Py_None) {
+    interval = PyFloat_AsDouble(o);
+    if (interval == -1.0 && PyErr_Occurred()) PyErr_Clear();
+    if (!(interval >= 1e-3 && interval <= 1e9))
+      return PyErr_Format(PyExc_ValueError,
+                          "progress_interval: %R is not a number of seconds in [0.001, 1e9]", o);
+  }
   lmcpy_flags *F = malloc(sizeof *F);
   if (!F) return PyErr_NoMemory();
   render_settings rs;
-  if (!lmcpy_parse_flags(kwargs, NULL, F) || !lmcpy_settings(sc, F, &rs)) {
+  if (!lmcpy_parse_flags(kwargs, own, F) || !lmcpy_settings(sc, F, &rs)) {
     free(F);
     return NULL;
   }
@@ -588,6 +702,13 @@ static PyObject *lmcpy_render(PyObject *mod, PyObject *args, PyObject *kwargs) {
     return NULL;
   }
   free(F);
+  /* The progress callable on the drivers' snapshot hook (what lmc render's
+   * --snapshot uses; the snapshots leave the image as it is). */
+  if (prog.fn) {
+    rs.snapshot = interval;
+    rs.snapshot_fn = lmcpy_on_snapshot;
+    rs.snapshot_ctx = &prog;
+  }
 
   /* The render, without the GIL. */
   film f;
@@ -603,38 +724,56 @@ static PyObject *lmcpy_render(PyObject *mod, PyObject *args, PyObject *kwargs) {
   Py_END_ALLOW_THREADS
   int interrupted = lmcpy_release_sigint();
   lmcpy_release(sc);
-  if (rst) return lmcpy_raise(&err);
-  if (interrupted && PyErr_CheckSignals() < 0) {
-    film_free(&f);
-    return NULL;
+  image_free(&prog.img);
+  if (rst) {
+    Py_XDECREF(prog.exc);
+    return lmcpy_raise(&err);
   }
 
-  /* The image as lmc render writes it. */
+  /* The image as lmc render writes it (also of a render that a Ctrl-C or
+   * the callable stopped: the samples it has). */
   lmcpy_result *r = PyObject_New(lmcpy_result, &lmcpy_result_type);
   if (!r) {
     film_free(&f);
+    Py_XDECREF(prog.exc);
     return NULL;
   }
   memset(&r->img, 0, sizeof r->img);
   memset(&r->eimg, 0, sizeof r->eimg);
-  r->image = r->error = r->stats = NULL;
+  r->stats = NULL;
   if (film_develop(&f, &r->img, &err) ||
       (film_has_error(&f) && image_init(&r->eimg, f.width, f.height, 3, &err))) {
     film_free(&f);
     Py_DECREF(r);
+    Py_XDECREF(prog.exc);
     return lmcpy_raise(&err);
   }
   if (r->eimg.data) film_error_develop_to(&f, r->eimg.data);
   r->stats = lmcpy_stats(&rs, &f, &st);
   film_free(&f);
-  r->image = lmcpy_image_view(&r->img, (PyObject *)r);
-  if (r->eimg.data) {
-    r->error = lmcpy_image_view(&r->eimg, (PyObject *)r);
-  } else {
-    r->error = Py_None;
-    Py_INCREF(Py_None);
+  if (!r->stats) {
+    Py_DECREF(r);
+    Py_XDECREF(prog.exc);
+    return NULL;
   }
-  if (!r->stats || !r->image || !r->error) {
+
+  /* What raises: the callable's exception, else a Ctrl-C's
+   * KeyboardInterrupt, each with the image so far as e.lmc_result. */
+  if (prog.exc) {
+    lmcpy_restore_exception(prog.exc);
+    lmcpy_attach_result((PyObject *)r);
+    Py_DECREF(r);
+    return NULL;
+  }
+  if (interrupted && PyErr_CheckSignals() < 0) {
+    lmcpy_attach_result((PyObject *)r);
+    Py_DECREF(r);
+    return NULL;
+  }
+  /* The callable once more, with the final image and the render's seconds. */
+  if (prog.fn && !lmcpy_progress_call(&prog, &r->img, st.seconds)) {
+    lmcpy_restore_exception(prog.exc);
+    lmcpy_attach_result((PyObject *)r);
     Py_DECREF(r);
     return NULL;
   }
@@ -648,8 +787,11 @@ static PyMethodDef lmcpy_methods[] = {
      "load(path, spectra='linear', **params): a Mitsuba XML scene; params set its <default>s "
      "as lmc render's -D name=value"},
     {"render", (PyCFunction)(void (*)(void))lmcpy_render, METH_VARARGS | METH_KEYWORDS,
-     "render(scene, **flags): renders as lmc render does (every flag by its name, dashes as "
-     "underscores; quiet=True unless given); a Result"},
+     "render(scene, progress=None, progress_interval=1.0, **flags): renders as lmc render does "
+     "(every flag by its name, dashes as underscores; quiet=True unless given); a Result. "
+     "progress(image, seconds) is called every progress_interval seconds with the image so far "
+     "and once at the end; an exception from it stops the render and propagates (the image so "
+     "far as e.lmc_result)"},
     {"read", (PyCFunction)(void (*)(void))lmcpy_read, METH_VARARGS | METH_KEYWORDS,
      "read(path, layer=None): an image file (EXR, PNG, JPEG) as float32 (height, width, 3)"},
     {"compare", (PyCFunction)lmcpy_compare, METH_VARARGS,

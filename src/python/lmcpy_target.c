@@ -25,6 +25,8 @@ typedef struct {
   void *scratch;        /* owned */
   mc_contrib *contribs; /* owned: n_labels entries */
   double *grad;         /* owned: dim entries */
+  int *hidx;            /* owned: MC_HESS_MAX entries (made by the first hessian call) */
+  double *hess;         /* owned: the packed upper triangle of MC_HESS_MAX coordinates */
 } lmcpy_target;
 
 static void lmcpy_target_dealloc(lmcpy_target *self) {
@@ -32,6 +34,8 @@ static void lmcpy_target_dealloc(lmcpy_target *self) {
   if (self->created) mc_space_free(&self->sp);
   free(self->contribs);
   free(self->grad);
+  free(self->hidx);
+  free(self->hess);
   if (self->scene) lmcpy_release(self->scene);
   Py_XDECREF(self->scene);
   Py_TYPE(self)->tp_free((PyObject *)self);
@@ -110,6 +114,8 @@ PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs) {
   self->scratch = NULL;
   self->contribs = NULL;
   self->grad = NULL;
+  self->hidx = NULL;
+  self->hess = NULL;
   if (!lmcpy_resolution(sc, F)) {
     free(F);
     Py_DECREF(self);
@@ -315,6 +321,151 @@ static PyObject *lmcpy_target_grad(lmcpy_target *self, PyObject *args, PyObject 
   return lmcpy_target_call(self, args, kwargs, 1);
 }
 
+/* t.contribution(u, label=None): what each state adds to the image, as the
+ * chains splat it: its RGB value (the chain's splat is value / f times
+ * the normalisation) and its raster position (rx, ry) in pixels (the film
+ * grown by the filter's radius: pixel (x, y) covers [x, x + 1) x [y, y + 1)
+ * under a box filter). Returns (value, raster): shapes (3,), (2,) or
+ * (N, 3), (N, 2). A labelled target needs the label (the value is f(u, l)'s). */
+static PyObject *lmcpy_target_contribution(lmcpy_target *self, PyObject *args,
+                                           PyObject *kwargs) {
+  static char *kwlist[] = {"u", "label", NULL};
+  PyObject *uo, *lo = NULL;
+  if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|O:contribution", kwlist, &uo, &lo))
+    return NULL;
+  const mc_target *T = self->T;
+  int label, batch;
+  if (!lmcpy_label(self, lo, &label)) return NULL;
+  if (T->n_labels > 0 && label < 0)
+    return PyErr_Format(PyExc_ValueError,
+                        "label: the contribution is a label's (t.contribution(u, label=l), l in "
+                        "0 .. %d)",
+                        T->n_labels - 1);
+  PyArrayObject *a = lmcpy_states(self, uo, &batch);
+  if (!a) return NULL;
+  int dim = T->dim;
+  npy_intp n = batch ? PyArray_DIM(a, 0) : 1;
+  npy_intp vdims[2] = {n, 3}, rdims[2] = {n, 2};
+  PyArrayObject *vo =
+      (PyArrayObject *)PyArray_SimpleNew(batch ? 2 : 1, batch ? vdims : vdims + 1, NPY_FLOAT64);
+  PyArrayObject *ro =
+      (PyArrayObject *)PyArray_SimpleNew(batch ? 2 : 1, batch ? rdims : rdims + 1, NPY_FLOAT64);
+  if (!vo || !ro) goto fail;
+  const double *u = PyArray_DATA(a);
+  double *val = PyArray_DATA(vo), *ras = PyArray_DATA(ro);
+  for (npy_intp i = 0; i < n; i++) {
+    lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
+    mc_value v;
+    memset(&v, 0, sizeof v);
+    int r = T->n_labels > 0 ? T->eval_label(T, self->scratch, &smp.base, label, &v, NULL, NULL)
+                            : T->eval(T, self->scratch, &smp.base, &v, NULL, NULL);
+    if (r) {
+      PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
+      goto fail;
+    }
+    val[3 * i] = v.value.r, val[3 * i + 1] = v.value.g, val[3 * i + 2] = v.value.b;
+    ras[2 * i] = v.rx, ras[2 * i + 1] = v.ry;
+  }
+  Py_DECREF(a);
+  return Py_BuildValue("(NN)", (PyObject *)vo, (PyObject *)ro);
+fail:
+  Py_DECREF(a);
+  Py_XDECREF(vo);
+  Py_XDECREF(ro);
+  return NULL;
+}
+
+/* t.hessian(u, label=None, with_grad=False): the Hessian of f by the
+ * target's eval_hess, the taped second derivatives H2MC's kernel uses
+ * (h2mc.c reads the same packed triangle). eval_hess gives d^2 f/du_i du_j
+ * over the coordinates f varies with smoothly (hidx, at most MC_HESS_MAX);
+ * every other entry is 0 (f's discrete choices: a light's triangle, a
+ * lobe, the roulette). A state without one (f = 0, no gradient, overflow)
+ * gives a NaN matrix. with_grad=True: (f, grad, hessian) of the same
+ * evaluation. */
+static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
+  static char *kwlist[] = {"u", "label", "with_grad", NULL};
+  PyObject *uo, *lo = NULL;
+  int with_grad = 0;
+  if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|Op:hessian", kwlist, &uo, &lo, &with_grad))
+    return NULL;
+  const mc_target *T = self->T;
+  if (!T->eval_hess)
+    return PyErr_Format(PyExc_ValueError,
+                        "hessian: the %s states have no Hessian (eval_hess; h2mc's spaces are "
+                        "bdpt and mmlt)",
+                        self->sp.name);
+  int label, batch;
+  if (!lmcpy_label(self, lo, &label)) return NULL;
+  if (T->n_labels > 0 && label < 0)
+    return PyErr_Format(PyExc_ValueError,
+                        "label: the Hessian is a label's (t.hessian(u, label=l), l in 0 .. %d)",
+                        T->n_labels - 1);
+  if (!self->hidx) self->hidx = malloc(MC_HESS_MAX * sizeof *self->hidx);
+  if (!self->hess)
+    self->hess = malloc((size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2 * sizeof *self->hess);
+  if (!self->hidx || !self->hess) return PyErr_NoMemory();
+  PyArrayObject *a = lmcpy_states(self, uo, &batch);
+  if (!a) return NULL;
+  int dim = T->dim;
+  npy_intp n = batch ? PyArray_DIM(a, 0) : 1;
+  npy_intp hdims[3] = {n, dim, dim}, gdims[2] = {n, dim};
+  PyArrayObject *ho = (PyArrayObject *)PyArray_ZEROS(batch ? 3 : 2, batch ? hdims : hdims + 1,
+                                                     NPY_FLOAT64, 0);
+  PyArrayObject *go = with_grad ? (PyArrayObject *)PyArray_SimpleNew(
+                                      batch ? 2 : 1, batch ? gdims : gdims + 1, NPY_FLOAT64)
+                                : NULL;
+  PyArrayObject *fo = with_grad ? (PyArrayObject *)PyArray_SimpleNew(1, &n, NPY_FLOAT64) : NULL;
+  if (!ho || (with_grad && (!go || !fo))) goto fail;
+  const double *u = PyArray_DATA(a);
+  double *H = PyArray_DATA(ho), *g = go ? PyArray_DATA(go) : NULL, *f = fo ? PyArray_DATA(fo) : NULL;
+  for (npy_intp i = 0; i < n; i++) {
+    /* Evaluate f, its gradient and its Hessian at state i. */
+    lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
+    mc_value v;
+    memset(&v, 0, sizeof v);
+    int grad_ok = 0, hess_ok = 0, hn = 0;
+    if (T->eval_hess(T, self->scratch, &smp.base, label, &v, self->grad, &grad_ok, &hn,
+                     self->hidx, self->hess, &hess_ok)) {
+      PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
+      goto fail;
+    }
+    double *Hi = H + (size_t)i * (size_t)dim * (size_t)dim;
+    if (f) f[i] = v.f;
+    if (g)
+      for (int k = 0; k < dim; k++) g[(size_t)i * dim + k] = grad_ok ? self->grad[k] : NAN;
+    if (!(grad_ok && hess_ok)) {
+      for (size_t k = 0; k < (size_t)dim * (size_t)dim; k++) Hi[k] = NAN;
+      continue;
+    }
+    /* Unpack the upper triangle over hidx: entry (p, q), p <= q, at
+     * p hn - p (p - 1) / 2 + q - p (target.h). */
+    for (int p = 0; p < hn; p++) {
+      const double *row = self->hess + (size_t)p * hn - (size_t)p * (size_t)(p - 1) / 2 - p;
+      for (int q = p; q < hn; q++) {
+        int r = self->hidx[p], c = self->hidx[q];
+        Hi[(size_t)r * dim + c] = Hi[(size_t)c * dim + r] = row[q];
+      }
+    }
+  }
+  Py_DECREF(a);
+  if (!with_grad) return (PyObject *)ho;
+  PyObject *fv = batch ? (PyObject *)fo : PyFloat_FromDouble(f[0]);
+  if (!batch) Py_DECREF(fo);
+  if (!fv) {
+    Py_DECREF(go);
+    Py_DECREF(ho);
+    return NULL;
+  }
+  return Py_BuildValue("(NNN)", fv, (PyObject *)go, (PyObject *)ho);
+fail:
+  Py_DECREF(a);
+  Py_XDECREF(ho);
+  Py_XDECREF(go);
+  Py_XDECREF(fo);
+  return NULL;
+}
+
 /* t.labels(u): the labels with f > 0 at the numbers u (large-step
  * coordinates) and their f, as a dict {label: f}. */
 static PyObject *lmcpy_target_labels(lmcpy_target *self, PyObject *uo) {
@@ -360,6 +511,14 @@ static PyMethodDef lmcpy_target_methods[] = {
     {"grad", (PyCFunction)(void (*)(void))lmcpy_target_grad, METH_VARARGS | METH_KEYWORDS,
      "grad(u, label=None): df/du by lmc's forward-mode AD, shape (dim,) or (N, dim); NaN rows "
      "where the target gives no gradient (f = 0); labelled targets need label="},
+    {"hessian", (PyCFunction)(void (*)(void))lmcpy_target_hessian, METH_VARARGS | METH_KEYWORDS,
+     "hessian(u, label=None, with_grad=False): d^2 f/du^2 by the target's eval_hess (h2mc's), "
+     "shape (dim, dim) or (N, dim, dim); 0 off the coordinates f varies with smoothly, NaN "
+     "where the target gives none; with_grad=True: (f, grad, hessian) of one evaluation"},
+    {"contribution", (PyCFunction)(void (*)(void))lmcpy_target_contribution,
+     METH_VARARGS | METH_KEYWORDS,
+     "contribution(u, label=None): (value, raster): what the state adds to the image (RGB, "
+     "shape (3,) or (N, 3)) and where (rx, ry) in pixels, shape (2,) or (N, 2)"},
     {"labels", (PyCFunction)lmcpy_target_labels, METH_O,
      "labels(u): {label: f} of every label with f > 0 at u (labelled targets; large-step "
      "coordinates)"},
@@ -404,7 +563,7 @@ PyTypeObject lmcpy_target_type = {
     .tp_basicsize = sizeof(lmcpy_target),
     .tp_dealloc = (destructor)lmcpy_target_dealloc,
     .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "What the chains sample (lmc.target): dim, f(u), grad(u).",
+    .tp_doc = "What the chains sample (lmc.target): dim, f(u), grad(u), hessian(u).",
     .tp_methods = lmcpy_target_methods,
     .tp_getset = lmcpy_target_getset,
 };

@@ -23,12 +23,28 @@ What it checks:
     against the b of a render (both estimate E[F]); batched = one by one;
     labels sum to F, and without absolute directions each is f(u, label);
     wrong shapes, NaN and numbers outside [0, 1) raise.
+  - progress: the callable's images and seconds at the snapshots and the
+    end, the image still lmc render's bit for bit (pt, lmc); an exception
+    from it stops the render and carries the image so far (e.lmc_result).
+  - Ctrl-C: SIGINT to a child python during a render: KeyboardInterrupt
+    from lmc.render after the render stopped; the image it carries, saved
+    in the finally block, reads back finite and of the right shape.
+  - hessian: against Richardson-extrapolated central differences of grad
+    (mmlt, bdpt), symmetric, with the C target's f and gradient.
+  - memory (marker memory): the resident set over 1,000 renders and 10^6
+    evaluations of f, and tracemalloc over 10^4 single calls.
+  - the MALA chain of docs/python.md, run from the docs: its image's mean
+    against the emitting box's exact value, b E[1/f] against P(f > 0).
 """
+import gc
 import os
 import re
+import signal
 import subprocess
+import sys
 import threading
 import time
+import tracemalloc
 
 import pytest
 
@@ -226,6 +242,303 @@ def test_render_releases_the_gil(scene):
     assert ticks >= 10, (ticks, seconds)
 
 
+# --- progress and Ctrl-C ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("integrator,flags,cli_flags", [
+    ("pt", dict(spp=24, seed=5, threads=2), ["--spp", "24", "--seed", "5", "--threads", "2"]),
+    ("lmc", dict(spp=6, seed=3, threads=2, bootstrap=5000, chains=32, adapt="none"),
+     ["--spp", "6", "--seed", "3", "--threads", "2", "--bootstrap", "5000", "--chains", "32",
+      "--adapt", "none"]),
+])
+def test_progress_calls_and_same_image(scene, tmp_path, integrator, flags, cli_flags):
+    """progress(image, seconds) at the drivers' snapshots and at the end; the
+    image is still lmc render's bit for bit."""
+    calls = []
+
+    def progress(image, seconds):
+        assert image.shape == (H, W, 3) and image.dtype == np.float32
+        calls.append((image, seconds))
+
+    r = lmc.render(scene, integrator=integrator, progress=progress, progress_interval=0.001,
+                   **flags)
+    out = str(tmp_path / "cli.exr")
+    run_cli("render", CORNELL, "-D", f"width={W}", "-D", f"height={H}", "--integrator",
+            integrator, *cli_flags, "-q", "-o", out)
+    assert np.array_equal(bits(lmc.read(out)), bits(r.image)), "progress changed the image"
+    # At least one snapshot between rounds (passes of pt; rounds of the
+    # chains), then the final image with the render's seconds.
+    assert len(calls) >= 2, len(calls)
+    seconds = [s for _, s in calls]
+    assert all(0.0 < a <= b for a, b in zip(seconds, seconds[1:])), seconds
+    assert seconds[-1] == r.stats["seconds"]
+    assert np.array_equal(bits(calls[-1][0]), bits(r.image))
+    assert calls[-1][0] is not r.image  # a copy: the callable may keep it
+    # The images so far are images of the scene, normalised as at the end:
+    # their means within 25% of the final one (a pass of pt or a round of
+    # the chains over 1728 pixels is far less noisy than that).
+    final = float(r.image.mean())
+    for image, _ in calls[:-1]:
+        assert np.all(np.isfinite(image))
+        assert abs(float(image.mean()) - final) < 0.25 * final, (image.mean(), final)
+
+
+class Enough(Exception):
+    pass
+
+
+def test_progress_exception_stops_the_render(scene):
+    calls = []
+
+    def progress(image, seconds):
+        calls.append(seconds)
+        raise Enough("stop here")
+
+    t0 = time.perf_counter()
+    with pytest.raises(Enough, match="stop here") as e:
+        lmc.render(scene, integrator="pt", time=20, threads=2, progress=progress,
+                   progress_interval=0.01)
+    assert time.perf_counter() - t0 < 10.0, "the render ran on after the exception"
+    assert len(calls) == 1, "called again after raising"
+    r = e.value.lmc_result  # the image of the passes so far
+    assert r.stats["interrupted"] and not r.stats["timed_out"]
+    assert r.stats["spp"] >= 1 and r.stats["seconds"] < 10.0
+    assert r.image.shape == (H, W, 3) and np.all(np.isfinite(r.image)) and r.image.max() > 0
+    # The same from the chains' driver.
+    with pytest.raises(Enough) as e:
+        lmc.render(scene, integrator="lmc", time=4, threads=2, bootstrap=5000, chains=16,
+                   progress=progress, progress_interval=0.01)
+    st = e.value.lmc_result.stats  # (its direct-light pass takes a share of the 4 s first)
+    assert st["interrupted"] and st["seconds"] < 3.0 and len(calls) == 2
+    # The stop is not left behind for the next render.
+    r = lmc.render(scene, integrator="pt", spp=2)
+    assert not r.stats["interrupted"] and r.stats["spp"] == 2
+
+
+def test_progress_bad_arguments(scene):
+    with pytest.raises(TypeError, match="progress"):
+        lmc.render(scene, spp=1, progress=42)
+    for bad in (0.0, -1.0, "often", float("nan")):
+        with pytest.raises(ValueError, match="progress_interval"):
+            lmc.render(scene, spp=1, progress=print, progress_interval=bad)
+    assert lmc.render(scene, spp=1, progress=None).stats["spp"] == 1
+
+
+CTRL_C_CHILD = r"""
+import sys, time, traceback
+import lmc
+
+scene = lmc.load(sys.argv[1], width=48, height=36)
+out = sys.argv[2]
+calls_after = []
+
+def progress(image, seconds):
+    print("rendering", flush=True)  # the parent sends SIGINT now
+
+t0 = time.perf_counter()
+r = None
+try:
+    lmc.render(scene, integrator="pt", time=4, threads=2, progress=progress,
+               progress_interval=0.05)
+except KeyboardInterrupt as e:
+    r = e.lmc_result
+    frames = [f.name for f in traceback.extract_tb(e.__traceback__)]
+    print("frames", ",".join(frames), flush=True)
+    raise
+finally:
+    if r is not None:
+        r.save(out)
+        print("stats", r.stats["interrupted"], r.stats["timed_out"], r.stats["seconds"],
+              time.perf_counter() - t0, flush=True)
+"""
+
+
+def test_ctrl_c_raises_keyboard_interrupt_after_the_render(tmp_path):
+    """SIGINT during a render in a child python: the render stops, then
+    KeyboardInterrupt is raised from lmc.render (not from inside the
+    progress callable), and the image saved in its finally block is valid."""
+    child = tmp_path / "child.py"
+    child.write_text(CTRL_C_CHILD)
+    out = str(tmp_path / "interrupted.exr")
+    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.abspath(lmc.__file__)))
+    p = subprocess.Popen([sys.executable, str(child), CORNELL, out], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = p.stdout.readline()
+        assert line.strip() == "rendering", (line, p.stderr.read())
+        t_sent = time.perf_counter()
+        p.send_signal(signal.SIGINT)
+        stdout, stderr = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    # Python's exit after an uncaught KeyboardInterrupt: killed by SIGINT.
+    assert p.returncode == -signal.SIGINT, (p.returncode, stderr)
+    assert "KeyboardInterrupt" in stderr, stderr
+    lines = dict(l.split(" ", 1) for l in stdout.splitlines() if " " in l)
+    frames = lines["frames"].split(",")
+    assert frames == ["<module>"], frames  # raised by lmc.render itself
+    interrupted, timed_out, seconds, caught = lines["stats"].split()
+    assert interrupted == "True" and timed_out == "False"
+    # The render stopped before its 4 s, and the exception came after it.
+    assert float(seconds) < 4.0 and float(caught) >= float(seconds), lines["stats"]
+    assert time.perf_counter() - t_sent < 30.0
+    img = lmc.read(out)
+    assert img.shape == (36, 48, 3)
+    assert np.all(np.isfinite(img)) and img.max() > 0.0
+
+
+# --- memory ------------------------------------------------------------------------------------
+
+
+def resident_mb():
+    """The process's resident set in MB (/proc/self/statm's second field, in pages)."""
+    gc.collect()
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2.0**20
+
+
+# The bound on growth after a warm-up. A leak of anything a render or a
+# target call makes exceeds it: a leaked Result holds its 24x24 image
+# (6.9 KB; 1,000 of them 6.6 MB), a leaked film 32 KB per render, a leaked
+# output of t.f 80 KB per batch of 10^4 (100 batches: 7.6 MB). What
+# remains is the allocator's noise, well under 1 MB here.
+GROWTH_MB = 4.0
+
+
+@pytest.mark.memory
+def test_memory_renders():
+    """1,000 renders of a tiny scene (24x24, pt, 1 spp; half of them with a
+    progress callable, called at least at the end) leave the resident set
+    where 100 renders of warm-up put it."""
+    if not os.path.exists("/proc/self/statm"):
+        pytest.skip("no /proc/self/statm")
+    tiny = lmc.load(CORNELL, width=24, height=24)
+    seen = []
+
+    def progress(image, seconds):
+        seen.append(image.shape)
+
+    def renders(n):
+        for i in range(n):
+            r = lmc.render(tiny, integrator="pt", spp=1, threads=1,
+                           progress=progress if i % 2 else None)
+            assert r.image.shape == (24, 24, 3) and r.stats["spp"] == 1
+
+    renders(100)
+    before = resident_mb()
+    renders(1000)
+    grown = resident_mb() - before
+    assert len(seen) >= 550
+    assert grown < GROWTH_MB, f"the resident set grew {grown:.2f} MB over 1,000 renders"
+
+
+@pytest.mark.memory
+def test_memory_target_calls():
+    """10^6 evaluations of f in 100 batches of 10^4, then 10^4 single calls:
+    the resident set stays where the warm-up put it, and the single calls
+    leave no Python objects behind (tracemalloc: a leaked float per call
+    would be 240 KB)."""
+    if not os.path.exists("/proc/self/statm"):
+        pytest.skip("no /proc/self/statm")
+    tiny = lmc.load(CORNELL, width=8, height=8)
+    t = lmc.target(tiny, space="pt", maxdepth=4)
+    U = np.random.default_rng(10).random((10000, t.dim))
+    for _ in range(3):
+        F = t.f(U)
+    before = resident_mb()
+    for _ in range(100):
+        assert np.array_equal(t.f(U), F)
+    grown = resident_mb() - before
+    assert grown < GROWTH_MB, f"the resident set grew {grown:.2f} MB over 10^6 evaluations"
+    for u in U[:1000]:
+        t.f(u)
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        total = 0.0
+        for u in U:
+            total += t.f(u)
+        traced = tracemalloc.get_traced_memory()[0] - base
+    finally:
+        tracemalloc.stop()
+    assert total == pytest.approx(F.sum(), rel=1e-12)
+    assert traced < 64 * 1024, f"10^4 single calls left {traced} bytes traced"
+    assert resident_mb() - before < GROWTH_MB
+
+
+# --- the docs' Markov chain --------------------------------------------------------------------
+
+
+def docs_block(marker):
+    """The python block after `marker` in docs/python.md."""
+    with open(os.path.join(SOURCE, "docs", "python.md")) as f:
+        text = f.read()
+    m = re.search(re.escape(marker) + r".*?\n```python\n(.*?)\n```", text, re.S)
+    assert m, f"no python block after {marker!r} in docs/python.md"
+    return m.group(1)
+
+
+def test_docs_mala(monkeypatch, capsys):
+    """The NumPy MALA chain of docs/python.md, run as it is, on the emitting
+    box, whose pixels are exactly sum_{k=3}^{8} 0.5^k (the chains' paths).
+
+    Standard errors: the 128 chains are independent (started from distinct
+    bootstrap samples), so the spread of each chain's figure over the
+    chains gives the standard error of their mean; b's (a mean of 50,000
+    independent f) multiplies every chain's image alike and is added in
+    relative terms. Each figure must lie within 4 of them of its exact
+    value (4 figures: a false alarm about once in 4,000 runs; fixed seeds
+    make it a fixed outcome)."""
+    monkeypatch.chdir(SOURCE)
+    ns = {}
+    exec(compile(docs_block("<!-- test_docs_mala"), "docs/python.md", "exec"), ns)
+    assert "mean" in capsys.readouterr().out
+    exact = sum(0.5**k for k in range(3, 9))  # 0.24609375
+    b, F, image, images = ns["b"], ns["F"], ns["image"], ns["images"]
+    W, H, steps = ns["W"], ns["H"], ns["steps"]
+    assert image.shape == (H, W, 3) and np.all(np.isfinite(image))
+    rel_b = F.std(ddof=1) / np.sqrt(len(F)) / b
+    # b: the mean of f over uniform u is the image's integral over the film
+    # grown by the box filter's radius 0.5 ((W + 1) (H + 1) pixels).
+    b_exact = exact * (W + 1) * (H + 1)
+    assert abs(b - b_exact) < 4 * rel_b * b, (b, b_exact)
+    # The chains move: MALA's acceptance neither ~0 nor ~1.
+    rate = ns["accepted"] / (len(images) * steps)
+    assert 0.1 < rate < 0.9, rate
+    # The mean image value, and the gray box's channels alike.
+    per_chain = images.mean(axis=(1, 2, 3))
+    se = per_chain.mean() * np.hypot(per_chain.std(ddof=1) / np.sqrt(len(per_chain)) /
+                                     per_chain.mean(), rel_b)
+    assert abs(image.mean() - exact) < 4 * se, (image.mean(), exact, se)
+    assert np.allclose(image[..., 0], image[..., 2], rtol=1e-12)
+    # The chains sample f / b: E[1/f] over their states is P(f > 0) / b.
+    # (Without the Metropolis-Hastings test the same chains give 1.08 +-
+    # 0.016; with the ratio inverted 1.19: both fail here.)
+    hb = b * ns["inv_f"] / steps
+    se_h = hb.mean() * np.hypot(hb.std(ddof=1) / np.sqrt(len(hb)) / hb.mean(), rel_b)
+    p_support = (F > 0).mean()
+    assert abs(hb.mean() - p_support) < 4 * se_h, (hb.mean(), p_support, se_h)
+
+
+def test_target_contribution(scene):
+    """contribution: its luminance is f, its raster position on the grown
+    film; batched = one by one; bdpt needs a label."""
+    t = lmc.target(scene, space="pt")
+    U = np.random.default_rng(11).random((500, t.dim))
+    value, raster = t.contribution(U)
+    assert value.shape == (500, 3) and raster.shape == (500, 2)
+    lum = value @ np.array([0.212671, 0.715160, 0.072169])  # rgb_luminance's weights
+    assert np.allclose(lum, t.f(U), rtol=1e-12, atol=1e-300)
+    assert np.all(raster > -1.0) and np.all(raster[:, 0] < W + 1) and np.all(raster[:, 1] < H + 1)
+    v0, r0 = t.contribution(U[0])
+    assert v0.shape == (3,) and np.array_equal(v0, value[0]) and np.array_equal(r0, raster[0])
+    tb = lmc.target(scene, space="bdpt")
+    with pytest.raises(ValueError, match="label"):
+        tb.contribution(np.full(tb.dim, 0.5))
+
+
 # --- read and compare ------------------------------------------------------------------------
 
 
@@ -374,6 +687,85 @@ def test_target_mmlt(scene):
     assert_checked(*check_grad(t, U)[:2], least=20)
     with pytest.raises(ValueError, match="space"):
         lmc.target(scene, space="path")
+
+
+def check_hessian(t, u, label=None):
+    """t.hessian at u against Richardson-extrapolated central differences of t.grad.
+
+    Column i of the Hessian is dg/du_i. D(h) = (g(u + h e_i) - g(u - h e_i)) / 2h
+    has the error c h^2 + O(h^4) plus rounding ~ eps_g |g| / h, where eps_g
+    ~ 1e-13 is the relative rounding of the AD gradient: with h = 1e-5 that
+    is ~1e-8 |g|. R = (4 D(h/2) - D(h)) / 3 removes the h^2 term, leaving
+    O(h^4) ~ 1e-20 times the fifth derivatives and the rounding (times 5/3).
+    So R matches the exact Hessian to ~1e-8 of |H_ij| + |g|; the tolerance is
+    1e-6 relative to |H_ij| + 1e-3 (max |g| + f), a hundredfold margin. A
+    column whose stencil crosses a discontinuity (D(h) and D(h/2) disagree)
+    is left out, as in check_grad. Also checked: the Hessian is exactly
+    symmetric, and so is R to the tolerance (the gradient is consistent);
+    f and grad from the same evaluation are the C target's: grad equal to
+    t.grad bit for bit, f to t.f's plain evaluation within 1e-9 (the dual
+    numbers' f and the plain f round differently).
+    """
+    f, g, Hm = t.hessian(u, label=label, with_grad=True)
+    assert Hm.shape == (t.dim, t.dim) and np.all(np.isfinite(Hm))
+    assert np.array_equal(Hm, Hm.T), "the Hessian is not symmetric"
+    assert np.array_equal(Hm, t.hessian(u, label=label))
+    assert np.array_equal(g, t.grad(u, label=label))
+    assert f == pytest.approx(t.f(u, label=label), rel=1e-9)
+    h = 1e-5
+    E = np.eye(t.dim)
+    d = {}
+    for step in (h, h / 2):
+        d[step] = (t.grad(u + step * E, label=label) - t.grad(u - step * E, label=label)) / (2 * step)
+    R = (4 * d[h / 2] - d[h]) / 3  # row i: dg/du_i
+    scale = 1e-3 * (np.abs(g).max() + f)
+    crossed = np.any(np.abs(d[h] - d[h / 2]) > 1e-3 * (np.abs(d[h / 2]) + scale), axis=1)
+    smooth = ~crossed
+    err = np.abs(R - Hm) / (np.abs(Hm) + scale)
+    worst = err[smooth].max() if smooth.any() else 0.0
+    i, j = np.unravel_index(np.argmax(np.where(smooth[:, None], err, 0.0)), err.shape)
+    assert worst < 1e-6, f"H[{i}, {j}] = {Hm[i, j]!r}, differences {R[i, j]!r}"
+    sym = np.abs(R - R.T)[np.ix_(smooth, smooth)] / (np.abs(Hm[np.ix_(smooth, smooth)]) + scale)
+    assert sym.size == 0 or sym.max() < 1e-6
+    return int(smooth.sum()), int(crossed.sum()), int(np.count_nonzero(Hm))
+
+
+def test_target_hessian_mmlt(scene):
+    t = lmc.target(scene, space="mmlt", length=4)
+    U = states_with_light(t, np.random.default_rng(7), 4)
+    checked = crossed = nonzero = 0
+    for u in U:
+        c, x, nz = check_hessian(t, u)
+        checked, crossed, nonzero = checked + c, crossed + x, nonzero + nz
+    assert checked >= 0.9 * (checked + crossed) and nonzero >= 40, (checked, crossed, nonzero)
+    # Batched: (N, dim, dim), each the one-by-one matrix; NaN without light.
+    Hb = t.hessian(U)
+    assert Hb.shape == (len(U), t.dim, t.dim)
+    assert all(np.array_equal(Hb[k], t.hessian(U[k])) for k in range(len(U)))
+    rng = np.random.default_rng(8)
+    dark = next(u for u in rng.random((1000, t.dim)) if t.f(u) == 0.0)
+    assert np.all(np.isnan(t.hessian(dark)))
+
+
+def test_target_hessian_bdpt(scene):
+    t = lmc.target(scene, space="bdpt")
+    rng = np.random.default_rng(9)
+    n = checked = crossed = 0
+    for u in states_with_light(t, rng, 40):
+        labels = t.labels(u)
+        label = max(labels, key=labels.get)
+        if not t.f(u, label=label) > 0:
+            continue
+        c, x, nz = check_hessian(t, u, label=label)
+        assert nz > 0
+        checked, crossed, n = checked + c, crossed + x, n + 1
+        if n >= 4:
+            break
+    assert n >= 4 and checked >= 0.9 * (checked + crossed), (n, checked, crossed)
+    with pytest.raises(ValueError, match="label"):
+        t.hessian(u)  # a label's, as the gradient
+    with pytest.raises(ValueError, match="Hessian"):
+        lmc.target(scene, space="pt").hessian(u[:0])  # pt's states have none
 
 
 def test_target_shapes_and_values(scene):
