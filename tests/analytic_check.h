@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "test_util.h"
 
@@ -25,18 +26,6 @@ static const char *g_states; /* --states for the renders (NULL: the integrator's
 static int g_delayed; /* --delayed on (lmc, h2mc: delayed acceptance; h2mc's default) */
 static const char *g_jump; /* mmlt's --technique-jump (NULL: not given) */
 static const char *g_perturb; /* mmlt's --path-mutations (NULL: not given) */
-
-static inline scene *load(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/tests/data/analytic/%s", LMC_SOURCE_DIR, name);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
-  return s;
-}
 
 static inline render_settings settings(const scene *s, const char *integrator, int64_t spp,
                                 uint64_t seed, int threads) {
@@ -80,7 +69,7 @@ static inline int pixel_group(const scene *s, int x, int y) {
 #define MAX_GROUPS 3
 static inline void check_scene(const char *file, const char *integrator, int64_t spp, const rgb *expect,
                         int n_groups, double extra_tol) {
-  scene *s = load(file);
+  scene *s = load_analytic_scene(file);
   assert_true(n_groups <= MAX_GROUPS);
   double sum[MAX_GROUPS][3] = {{0}}, sum2[MAX_GROUPS][3] = {{0}};
   for (int r = 0; r < RUNS; r++) {
@@ -144,7 +133,7 @@ static inline void check_scene(const char *file, const char *integrator, int64_t
 /* One render of `file` with seed 7, 4 mutations per pixel, one thread,
  * under the flags set now (a film to compare). */
 static inline void render_seed7(const char *file, const char *integrator, film *OUT_f) {
-  scene *s = load(file);
+  scene *s = load_analytic_scene(file);
   render_stats st;
   lmc_error err;
   render_settings rs = settings(s, integrator, 4, 7, 1);

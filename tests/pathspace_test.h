@@ -1,38 +1,20 @@
 /*
  * pathspace_test.h: what the tests of path-space MLT's states and moves
- * (test_pathspace.c, test_perturb.c) share: a scene from XML text, the
- * path space of paths up to kmax segments, relative closeness, and the
- * check of a path's caches against a fresh evaluation.
+ * (test_pathspace.c, test_perturb.c) share: the path space of paths up
+ * to kmax segments, relative closeness, and the check of a path's caches
+ * against a fresh evaluation (their scenes, XML text, load with
+ * load_scene.h's try_load_scene_text). Include after <cmocka.h>.
  */
 #ifndef LMC_TESTS_PATHSPACE_TEST_H
 #define LMC_TESTS_PATHSPACE_TEST_H
 
 #include <math.h>
 #include <stdio.h>
-#include <unistd.h>
 
 #include "chi2.h"
 #include "lmc/path/pathspace.h"
+#include "load_scene.h"
 #include "render/io/io.h"
-
-/* The scene of the XML text xml (written to a scratch file named after
- * tag), or NULL with the loader's message on stderr. */
-static inline scene *ps_test_load(const char *xml, const char *tag) {
-  char path[128];
-  snprintf(path, sizeof path, "/tmp/lmc_test_ps_%s_%d.xml", tag, (int)getpid());
-  FILE *f = fopen(path, "w");
-  if (!f) return NULL;
-  fputs(xml, f);
-  fclose(f);
-  scene *sc = NULL;
-  lmc_error err;
-  if (scene_load_xml(path, NULL, 0, &sc, &err) != LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    sc = NULL;
-  }
-  remove(path);
-  return sc;
-}
 
 /* The path space of sc's paths of 1 .. kmax segments. */
 static inline void ps_test_context(const scene *sc, int kmax, ps_context *ctx) {

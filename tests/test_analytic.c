@@ -35,6 +35,7 @@
 
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
+#include "load_scene.h"
 
 #define MAX_GROUPS 8
 
@@ -63,13 +64,9 @@ static int pixel_group(const scene *s, int x, int y) {
  * (per group, per channel). Returns the number of group-channel checks. */
 static int check_scene(const char *path, const char *integrator, int sampler, int64_t spp,
                        const rgb expect[MAX_GROUPS], int min_groups, double *OUT_var0) {
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
+  scene *s = load_scene(path);
 
+  lmc_error err;
   render_settings rs = s->settings;
   snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
   rs.spp = spp;

@@ -49,6 +49,7 @@
 #include "render/rng.h"
 #include "arr_sampler.h"
 #include "test_util.h"
+#include "load_scene.h"
 
 
 enum { MAXV = 7, DIM_CAM = 2 + BDPT_DIMS_PER_VERTEX * MAXV, DIM_LIGHT = BDPT_DIMS_LIGHT_START +
@@ -59,12 +60,8 @@ static render_settings g_rs;
 
 static int setup(void **state) {
   (void)state;
-  lmc_error err;
-  if (scene_load_xml(LMC_SOURCE_DIR "/tests/data/invert/mixed.xml", NULL, 0, &g_sc, &err) !=
-      LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    return -1;
-  }
+  g_sc = try_load_scene(LMC_SOURCE_DIR "/tests/data/invert/mixed.xml");
+  if (!g_sc) return -1;
   g_rs = render_settings_default();
   g_rs.maxdepth = MAXV;
   g_rs.rrdepth = 2;
@@ -334,8 +331,7 @@ static void test_scenes(void **state) {
       print_message("%s: absent, skipped\n", files[f]);
       continue;
     }
-    lmc_error err;
-    assert_int_equal(scene_load_xml(files[f], NULL, 0, &g_sc, &err), LMC_OK);
+    g_sc = load_scene(files[f]);
     print_message("%s\n", files[f]);
     long deltas, by_s[4];
     assert_true(subpath_round_trips(400, &deltas) > 300);

@@ -37,6 +37,7 @@
 
 #include "lmc/kernels/chain.h"
 #include "lmc/states/bdpt_states.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "test_util.h"
 
@@ -75,29 +76,14 @@ static int KMAX = 5;
 
 typedef struct fixture {
   scene *sc;
-  char path[64];
 } fixture;
 
 static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
   const char *env = getenv("LMC_TEST_SCENE"); /* any scene instead (for diagnosis) */
   if (getenv("LMC_TEST_KMAX")) KMAX = atoi(getenv("LMC_TEST_KMAX"));
-  if (env) {
-    lmc_error err;
-    if (scene_load_xml(env, NULL, 0, &fx->sc, &err) != LMC_OK) return -1;
-    *state = fx;
-    return 0;
-  }
-  snprintf(fx->path, sizeof fx->path, "/tmp/lmc_test_bdpt_states_%d.xml", (int)getpid());
-  FILE *f = fopen(fx->path, "w");
-  if (!f) return -1;
-  fputs(scene_xml, f);
-  fclose(f);
-  lmc_error err;
-  if (scene_load_xml(fx->path, NULL, 0, &fx->sc, &err) != LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    return -1;
-  }
+  fx->sc = env ? try_load_scene(env) : try_load_scene_text(scene_xml, "bdpt_states");
+  if (!fx->sc) return -1;
   *state = fx;
   return 0;
 }
@@ -105,7 +91,6 @@ static int setup(void **state) {
 static int teardown(void **state) {
   fixture *fx = *state;
   scene_destroy(fx->sc);
-  remove(fx->path);
   free(fx);
   return 0;
 }

@@ -34,6 +34,7 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "test_util.h"
+#include "tmp_dir.h"
 
 #define DG_LINE 6
 
@@ -322,16 +323,12 @@ static void test_bad_fov(void **state) {
 /* Removes the temporary folder's files and the folder. */
 static int dg_teardown(void **state) {
   (void)state;
-  char cmd[600];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dg_dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return tmp_dir_remove(dg_dir);
 }
 
 static int dg_setup(void **state) {
   (void)state;
-  const char *tmp = getenv("TMPDIR");
-  snprintf(dg_dir, sizeof dg_dir, "%s/lmc-degenerate-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
-  return mkdtemp(dg_dir) ? 0 : -1;
+  return tmp_dir_make(dg_dir, sizeof dg_dir, "lmc-degenerate");
 }
 
 int main(void) {

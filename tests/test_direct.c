@@ -45,6 +45,7 @@
 #include "render/io/io.h"
 #include "test_util.h"
 #include "run_lmc.h"
+#include "load_scene.h"
 
 #define TMP LMC_TEST_TMP "/lmc_test_direct"
 #define GRID 2
@@ -107,16 +108,6 @@ static void write_box(const char *path, const char *block) {
   write_text(path, xml);
 }
 
-static scene *load(const char *path) {
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) print_error("%s: %s\n", path, err.msg);
-  assert_int_equal(st, LMC_OK);
-  return s;
-}
-
 /* Settings for integrator `name` (maxdepth: -1 unbounded) at SPP. */
 static render_settings settings(const char *name, int maxdepth) {
   render_settings rs = render_settings_default();
@@ -176,7 +167,7 @@ static void test_box_default(void **state) {
   (void)state;
   const char *path = TMP "/box.xml";
   write_box(path, "");
-  scene *s = load(path);
+  scene *s = load_scene(path);
   double md[NSTAT], sd[NSTAT], mp[NSTAT], sp[NSTAT], mf[NSTAT], sf[NSTAT];
   estimate(s, settings("direct", -1), 1000, md, sd);
   estimate(s, settings("pt", 2), 2000, mp, sp);
@@ -201,7 +192,7 @@ static void test_box_counts(void **state) {
   const char *path = TMP "/box_counts.xml";
   write_box(path, "  <integrator type=\"direct\"><integer name=\"emitterSamples\" value=\"4\"/>"
                   "<integer name=\"bsdfSamples\" value=\"2\"/></integrator>");
-  scene *s = load(path);
+  scene *s = load_scene(path);
   render_settings rs;
   lmc_error err;
   lmc_error_clear(&err);
@@ -235,7 +226,7 @@ static void test_box_counts(void **state) {
   assert_non_null(pl);
   strcpy(pl, "</scene>\n");
   write_text(TMP "/box_area.xml", xml);
-  s = load(TMP "/box_area.xml");
+  s = load_scene(TMP "/box_area.xml");
   render_settings bo = settings("direct", -1);
   set_flag(&bo, "emitter-samples", "0");
   set_flag(&bo, "bsdf-samples", "3");
@@ -249,7 +240,7 @@ static void test_box_counts(void **state) {
 /* The emitting box: exactly 0.75 everywhere, 0.25 with the walls hidden. */
 static void test_emitting_box(void **state) {
   (void)state;
-  scene *s = load("data/analytic/emitting_box.xml");
+  scene *s = load_scene("data/analytic/emitting_box.xml");
   int checks = 0;
   for (int hide = 0; hide < 2; hide++) {
     render_settings rs = settings("direct", -1);
@@ -280,7 +271,7 @@ static void test_scene_selects(void **state) {
                   "<integer name=\"bsdfSamples\" value=\"5\"/></integrator>");
   int checks = 0;
   int w0 = lmc_warning_count();
-  scene *s = load(path);
+  scene *s = load_scene(path);
   render_settings rs;
   lmc_error err;
   lmc_error_clear(&err);

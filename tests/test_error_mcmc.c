@@ -64,7 +64,7 @@ typedef struct coverage {
 /* Renders `file` with SEEDS seeds and adds its values' coverage to *c. */
 static void cover_scene(const char *file, const char *integrator, int64_t spp, const rgb *expect,
                         int n_groups, coverage *c) {
-  scene *s = load(file);
+  scene *s = load_analytic_scene(file);
   const int W = s->cam.width, H = s->cam.height;
   long kept = 0;
   for (int r = 0; r < SEEDS; r++) {
@@ -194,7 +194,7 @@ static void test_direct_separate(void **state) {
           cs.total, cs.exact, (double)cs.in1 / cs.total);
   assert_true(cs.total > 3 * SEEDS * 200 && cs.exact > 3 * SEEDS * 200);
   g_direct = 0;
-  scene *s = load("furnace.xml");
+  scene *s = load_analytic_scene("furnace.xml");
   render_settings rs = settings(s, "pssmlt", 4, 1, 2);
   film f;
   render_stats st;

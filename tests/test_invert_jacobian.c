@@ -52,6 +52,7 @@
 #include "render/rng.h"
 #include "arr_sampler.h"
 #include "test_util.h"
+#include "load_scene.h"
 
 enum { MAXV = 4, DIM = 2 + 4 * MAXV + 8, NV = 2 * MAXV };
 
@@ -235,9 +236,7 @@ static int check_case(const jac_case *jc, int n_samples, uint64_t seed, const ch
 static const bdpt_param g_abs = {100, 0.05};
 
 static void run_scene(const char *path, int *OUT_cam, int *OUT_lt, int *OUT_abs) {
-  scene *sc;
-  lmc_error err;
-  if (scene_load_xml(path, NULL, 0, &sc, &err) != LMC_OK) fail_msg("%s", err.msg);
+  scene *sc = load_scene(path);
   jac_case jc = {sc, render_settings_default(), NULL, 1, 2, 0};
   jc.rs.maxdepth = 2 * MAXV;
   jc.rs.rrdepth = 100; /* no Russian roulette: its number is discrete */

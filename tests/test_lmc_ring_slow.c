@@ -31,6 +31,7 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "region_stats.h"
 #include "test_util.h"
@@ -65,14 +66,7 @@ static void run_stats(const scene *s, const char *integrator, const char *adapt,
 }
 
 static void check_scene(const char *folder) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", LMC_SOURCE_DIR, folder);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
+  scene *s = load_source_scene("scenes/%s/scene.xml", folder);
   camera_set_resolution(&s->cam, 24, 18);
 
   double ref[N_STATS], ref_se[N_STATS];

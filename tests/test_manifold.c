@@ -112,6 +112,7 @@
 #include "render/io/io.h"
 #include "render/rng.h"
 #include "test_util.h"
+#include "load_scene.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -187,18 +188,10 @@ static const config CONFIGS[] = {
 #define N_CONFIGS ((int)(sizeof CONFIGS / sizeof CONFIGS[0]))
 
 static scene *load(const config *cf) {
-  char path[96];
-  snprintf(path, sizeof path, "/tmp/lmc_test_manifold_%d_%s.xml", (int)getpid(), cf->name);
-  FILE *f = fopen(path, "w");
-  assert_non_null(f);
-  fputs(*cf->xml, f);
-  fclose(f);
-  scene *sc = NULL;
-  lmc_error err;
-  lmc_status st = scene_load_xml(path, NULL, 0, &sc, &err);
-  remove(path);
-  if (st != LMC_OK) print_error("%s\n", err.msg);
-  assert_int_equal(st, LMC_OK);
+  char tag[64];
+  snprintf(tag, sizeof tag, "manifold_%s", cf->name);
+  scene *sc = try_load_scene_text(*cf->xml, tag);
+  assert_non_null(sc);
   return sc;
 }
 

@@ -163,7 +163,7 @@ static void test_direct_separate(void **state) {
 
 static void test_refined_b(void **state) {
   (void)state;
-  scene *s = load("furnace.xml");
+  scene *s = load_analytic_scene("furnace.xml");
   double r = s->filter.radius;
   double area = (s->cam.width + 2.0 * r) * (s->cam.height + 2.0 * r);
   for (int i = 0; i < RUNS; i++) {
@@ -225,7 +225,7 @@ static int films_equal(const film *a, const film *b) {
 
 static void test_determinism(void **state) {
   (void)state;
-  scene *s = load("furnace.xml"), *sphere = load("diffuse_sphere.xml");
+  scene *s = load_analytic_scene("furnace.xml"), *sphere = load_analytic_scene("diffuse_sphere.xml");
   /* lmc with each unbiased adaptation: its Adam statistics, stage-1 records
    * and frozen cache must be as deterministic as the chains. */
   /* Then --direct separate (the default), pt's pass and the chains' in

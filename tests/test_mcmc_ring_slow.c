@@ -43,6 +43,7 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "region_stats.h"
 #include "test_util.h"
@@ -87,14 +88,7 @@ static void run_stats(const scene *s, const config *c, int64_t spp, double mean[
  * integrators; mlt: mlt_spp). */
 static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t mlt_spp,
                         const config *c, int n) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", LMC_SOURCE_DIR, folder);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
+  scene *s = load_source_scene("scenes/%s/scene.xml", folder);
   camera_set_resolution(&s->cam, w, h);
 
   double ref[N_STATS], ref_se[N_STATS];

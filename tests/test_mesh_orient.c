@@ -45,6 +45,7 @@
 #include "render/integrators/path.h"
 #include "test_util.h"
 #include "path_grad_util.h"
+#include "load_scene.h"
 
 /* ---------------------------------------------------------------------------
  * Scenes written at run time.
@@ -95,12 +96,7 @@ static scene *load_xml(const char *name, const char *xml) {
     }
   }
   fclose(f);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
+  scene *s = load_scene(path);
   remove(path);
   return s;
 }

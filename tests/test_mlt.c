@@ -34,23 +34,12 @@
 #include <string.h>
 
 #include "lmc/mcmc.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "render/options.h"
 #include "test_util.h"
 
 #define RUNS 6
-
-static scene *load(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/tests/data/analytic/%s", LMC_SOURCE_DIR, name);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(path, NULL, 0, &s, &err);
-  if (st) fprintf(stderr, "%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
-  return s;
-}
 
 static render_settings settings(const scene *s, int64_t spp, uint64_t seed, int threads,
                                 const char *direct) {
@@ -96,7 +85,7 @@ static double quadrant_mean(const film *f, int q) {
 static void test_emitting_box(void **state) {
   (void)state;
   int checks = 0;
-  scene *s = load("emitting_box.xml");
+  scene *s = load_analytic_scene("emitting_box.xml");
   const double exact = 1.0 - 1.0 / 256.0;
   /* The third: every path with the primary-sample step among the moves. */
   const char *direct[3] = {"mcmc", "separate", "mcmc"};
@@ -155,7 +144,7 @@ static int films_equal(const film *a, const film *b) {
 
 static void test_determinism(void **state) {
   (void)state;
-  scene *s = load("emitting_box.xml");
+  scene *s = load_analytic_scene("emitting_box.xml");
   film f[4];
   const uint64_t seed[4] = {3, 3, 3, 4};
   const int threads[4] = {2, 2, 1, 2};

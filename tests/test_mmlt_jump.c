@@ -45,18 +45,15 @@
 #include "lmc/states/mmlt_states.h"
 #include "render/io/io.h"
 #include "test_util.h"
+#include "load_scene.h"
 
 static scene *g_sc;
 
 static int setup(void **state) {
   (void)state;
-  lmc_error err;
-  if (scene_load_xml(getenv("LMC_TEST_SCENE") ? getenv("LMC_TEST_SCENE") : LMC_SOURCE_DIR "/tests/data/invert/mixed.xml", NULL, 0, &g_sc, &err) !=
-      LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    return -1;
-  }
-  return 0;
+  const char *env = getenv("LMC_TEST_SCENE"); /* any scene instead (for diagnosis) */
+  g_sc = try_load_scene(env ? env : LMC_SOURCE_DIR "/tests/data/invert/mixed.xml");
+  return g_sc ? 0 : -1;
 }
 
 static int teardown(void **state) {

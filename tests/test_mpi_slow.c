@@ -42,6 +42,7 @@
 #include "render/image.h"
 #include "render/io/io.h"
 #include "test_util.h"
+#include "tmp_dir.h"
 
 #define CORNELL LMC_SOURCE_DIR "/scenes/cornell-box/scene.xml"
 #define FURNACE LMC_SOURCE_DIR "/tests/data/analytic/furnace.xml"
@@ -459,16 +460,12 @@ static void test_interrupted_job_writes_its_image(void **state) {
 
 static int setup(void **state) {
   (void)state;
-  const char *tmp = getenv("TMPDIR");
-  snprintf(tmp_dir, sizeof tmp_dir, "%s/lmc-mpi-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
-  return mkdtemp(tmp_dir) ? 0 : -1;
+  return tmp_dir_make(tmp_dir, sizeof tmp_dir, "lmc-mpi");
 }
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[600];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return tmp_dir_remove(tmp_dir);
 }
 
 int main(void) {

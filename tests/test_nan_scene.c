@@ -31,6 +31,7 @@
 
 #include "render/image.h"
 #include "test_util.h"
+#include "tmp_dir.h"
 
 #define SCENE "data/nan/scene.xml"
 
@@ -124,9 +125,7 @@ static void test_bdpt_drops_and_counts(void **state) {
 
 static int setup(void **state) {
   (void)state;
-  const char *tmp = getenv("TMPDIR");
-  snprintf(tmp_dir, sizeof tmp_dir, "%s/lmc-nan-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
-  if (!mkdtemp(tmp_dir)) return -1;
+  if (tmp_dir_make(tmp_dir, sizeof tmp_dir, "lmc-nan")) return -1;
   char path[512];
   const float tex_bad[] = {NAN, INFINITY, -INFINITY};
   snprintf(path, sizeof path, "%s/tex.exr", tmp_dir);
@@ -139,9 +138,7 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[600];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return tmp_dir_remove(tmp_dir);
 }
 
 int main(void) {

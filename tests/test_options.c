@@ -16,13 +16,17 @@
  *    paper's scenes: largestepprob, numinitsamples, ...); a <boolean> sets
  *    an on/off flag; a bad value fails with the file, the line and the
  *    parameter named; an unknown parameter is a warning;
- *  - the README's flag tables are `lmc render --help-markdown`, verbatim,
- *    between its markers (so they are made from the same tables);
+ *  - docs/flags.md's flag tables are `lmc render --help-markdown`,
+ *    verbatim, between its markers (so they are made from the same tables),
+ *    with every table under its title and every flag's row in it, in
+ *    order; the README links that page;
  *  - the binary accepts the valid value as `--flag value` and as
  *    `--flag=value` (a tiny pt render of the furnace, exit 0), and exits 2
  *    on the bad one with a message naming the flag.
- * The counts of flags and checks are asserted (every table has one flag
- * at least; no flag appears in two tables unless it sets the same field).
+ * Each test counts what it checked and asserts the count against the
+ * tables' sizes, counted apart (count_tables): every table has one flag at
+ * least; no flag appears in two tables unless it reads the same values;
+ * the scene names of the LMC paper's scenes and Mitsuba's mlt are there.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -56,6 +60,40 @@ static int run_lmc(const char *args) {
 static int tables(const lmc_opt_table **t) {
   t[0] = &lmc_render_options;
   return 1 + mcmc_option_tables(t + 1, MAX_TABLES - 1);
+}
+
+/* What the tables hold, counted apart from the tests' loops (by the names
+ * themselves, not lmc_opt_find): rows, every flag of every table; names,
+ * the distinct ones (a flag in two tables, as --iso-prob in lmc's and
+ * h2mc's, counts once); aliases, the scene names besides the flags' own
+ * (the words of each distinct flag's `scene`). */
+typedef struct table_counts {
+  int tables, rows, names, aliases;
+} table_counts;
+
+static table_counts count_tables(void) {
+  const lmc_opt_table *t[MAX_TABLES];
+  table_counts c = {tables(t), 0, 0, 0};
+  assert_true(c.tables >= 4); /* render, direct, driver, bdpt states, lmc, h2mc, ... */
+  for (int ti = 0; ti < c.tables; ti++)
+    for (int i = 0; i < t[ti]->n; i++) {
+      const lmc_opt *o = &t[ti]->opts[i];
+      c.rows++;
+      /* Seen before, in this table or an earlier one? */
+      int seen = 0;
+      for (int tj = 0; tj <= ti && !seen; tj++)
+        for (int j = 0; j < (tj == ti ? i : t[tj]->n); j++)
+          if (!strcmp(t[tj]->opts[j].name, o->name)) seen = 1;
+      if (seen) continue;
+      c.names++;
+      for (const char *p = o->scene ? o->scene : ""; *p;) {
+        size_t n = strcspn(p, " ");
+        if (n) c.aliases++;
+        p += n + strspn(p + n, " ");
+      }
+    }
+  assert_true(c.rows > 0 && c.names > 0 && c.names <= c.rows);
+  return c;
 }
 
 /* The struct that holds o's value for settings rs: rs itself, or (a
@@ -129,7 +167,8 @@ static void test_parse(void **state) {
   (void)state;
   const lmc_opt_table *t[MAX_TABLES];
   int nt = tables(t), flags = 0, checks = 0;
-  assert_true(nt >= 4); /* render, direct, driver, bdpt states, lmc, h2mc */
+  table_counts tc = count_tables();
+  assert_int_equal(nt, tc.tables);
   render_settings d = render_settings_default();
   for (int ti = 0; ti < nt; ti++) {
     assert_true(t[ti]->n >= 1);
@@ -167,8 +206,7 @@ static void test_parse(void **state) {
   }
   fprintf(stderr, "  %d flags in %d tables, %d parse checks\n", flags, nt, checks);
   assert_int_equal(checks, 3 * flags);
-  assert_int_equal(flags, 57); /* render 11, direct 3, driver 13, bdpt states 1, path states 1,
-                                  lmc 16, h2mc 3, mlt 7, mmlt 2 */
+  assert_int_equal(flags, tc.rows);
 }
 
 static void test_binary(void **state) {
@@ -176,6 +214,7 @@ static void test_binary(void **state) {
   mkdir(TMP, 0755);
   const lmc_opt_table *t[MAX_TABLES];
   int nt = tables(t), checks = 0, flags = 0;
+  table_counts tc = count_tables();
   render_settings d = render_settings_default();
   assert_int_equal(run_lmc("render --help"), 0);
   char help[sizeof out_text];
@@ -209,7 +248,7 @@ static void test_binary(void **state) {
     }
   fprintf(stderr, "  %d flags, %d checks of the binary\n", flags, checks);
   assert_int_equal(checks, 4 * flags);
-  assert_int_equal(flags, 55); /* the 57 less iso-prob and delayed, in lmc's table and h2mc's */
+  assert_int_equal(flags, tc.names); /* (a flag in two tables once) */
 }
 
 /* Writes a scene with `block` (an <integrator> or <dpt> element) to path. */
@@ -242,6 +281,15 @@ static void test_scene(void **state) {
   mkdir(TMP, 0755);
   const lmc_opt_table *t[MAX_TABLES];
   int nt = tables(t), flags = 0, aliases = 0, checks = 0;
+  table_counts tc = count_tables();
+  /* The other names the LMC paper's scenes (dpt's) and Mitsuba's mlt use:
+   * each must be among those checked. */
+  static const char *const known[] = {
+      "pLarge", "largestepprob", "largestepscale", "numchains", "numinitsamples",
+      "roughnessthreshold", "bidirectionalMutation", "lensPerturbation",
+      "multiChainPerturbation", "causticPerturbation"};
+  enum { N_KNOWN = sizeof known / sizeof known[0] };
+  int known_seen[N_KNOWN] = {0};
   render_settings d = render_settings_default();
   const char *path = TMP "/scene.xml";
   lmc_warn_set_quiet(1);
@@ -269,6 +317,7 @@ static void test_scene(void **state) {
           snprintf(alias, sizeof alias, "%.*s", (int)strcspn(p, " "), p);
           name = alias;
           aliases++;
+          for (int k = 0; k < N_KNOWN; k++) known_seen[k] += !strcmp(alias, known[k]);
         }
         snprintf(block, sizeof block,
                  form ? "  <dpt><string name=\"integrator\" value=\"mcmc\"/><string name=\"%s\" value=\"%s\"/></dpt>"
@@ -314,45 +363,74 @@ static void test_scene(void **state) {
   assert_int_equal(lmc_warning_count() - w0, 1);
   lmc_warn_set_quiet(0);
   fprintf(stderr, "  %d flags, %d scene names besides them, %d checks\n", flags, aliases, checks);
-  assert_int_equal(flags, 55);
-  assert_int_equal(aliases, 10); /* pLarge largestepprob largestepscale numchains numinitsamples
-                                    roughnessthreshold, mlt's bidirectionalMutation
-                                    lensPerturbation multiChainPerturbation causticPerturbation */
+  assert_int_equal(flags, tc.names);
+  assert_int_equal(aliases, tc.aliases);
+  for (int k = 0; k < N_KNOWN; k++)
+    if (known_seen[k] != 1) fail_msg("scene name %s checked %d times, not once", known[k], known_seen[k]);
   assert_int_equal(checks, 2 * flags + aliases);
 }
 
-static void test_readme(void **state) {
+#define FLAGS_BEGIN "<!-- flags: lmc render --help-markdown -->\n"
+#define FLAGS_END "<!-- /flags -->"
+
+static void test_flags_doc(void **state) {
   (void)state;
   mkdir(TMP, 0755);
   assert_int_equal(run_lmc("render --help-markdown"), 0);
-  static char readme[1 << 17];
-  slurp_text(LMC_SOURCE_DIR "/README.md", readme, sizeof readme);
-  const char *begin = strstr(readme, "<!-- flags: lmc render --help-markdown -->\n");
-  const char *end = strstr(readme, "<!-- /flags -->");
+  static char doc[1 << 17];
+  slurp_text(LMC_SOURCE_DIR "/docs/flags.md", doc, sizeof doc);
+  const char *begin = strstr(doc, FLAGS_BEGIN);
+  const char *end = strstr(doc, FLAGS_END);
   assert_non_null(begin);
   assert_non_null(end);
-  begin += strlen("<!-- flags: lmc render --help-markdown -->\n");
+  begin += strlen(FLAGS_BEGIN);
+  assert_true(begin <= end);
   size_t n = (size_t)(end - begin);
   if (n != strlen(out_text) || memcmp(begin, out_text, n))
-    fail_msg("README.md's flag tables differ from `lmc render --help-markdown`:\n%s", out_text);
-  /* Every flag's row is there. */
+    fail_msg("docs/flags.md's flag tables differ from `lmc render --help-markdown`:\n%s", out_text);
+  /* Every table's title, then every flag's row under it, in order. */
   const lmc_opt_table *t[MAX_TABLES];
   int nt = tables(t), rows = 0;
-  for (int ti = 0; ti < nt; ti++)
+  table_counts tc = count_tables();
+  const char *at = out_text;
+  for (int ti = 0; ti < nt; ti++) {
+    char title[256];
+    snprintf(title, sizeof title, "%s:\n\n| flag |", t[ti]->title);
+    at = strstr(at, title);
+    if (!at) fail_msg("no table titled \"%s\" (or out of order)", t[ti]->title);
+    const char *section_end = at + strlen(at);
+    if (ti + 1 < nt) {
+      snprintf(title, sizeof title, "%s:\n\n| flag |", t[ti + 1]->title);
+      const char *next = strstr(at, title);
+      if (next) section_end = next;
+    }
     for (int i = 0; i < t[ti]->n; i++) {
+      const char *name = t[ti]->opts[i].name;
       char row[96];
-      snprintf(row, sizeof row, "| `--%s", t[ti]->opts[i].name);
-      if (!strstr(out_text, row)) fail_msg("no row for --%s", t[ti]->opts[i].name);
+      snprintf(row, sizeof row, "\n| `--%s", name);
+      const char *p = at;
+      while ((p = strstr(p, row)) != NULL && p[strlen(row)] != ' ' && p[strlen(row)] != '`') p++;
+      if (!p || p >= section_end) fail_msg("no row for --%s in \"%s\" (or out of order)", name, t[ti]->title);
+      at = p + 1;
       rows++;
     }
-  assert_int_equal(rows, 57);
+  }
+  assert_int_equal(rows, tc.rows);
+  /* No other row: the page's rows are the tables' rows. */
+  int page_rows = 0;
+  for (const char *p = out_text; (p = strstr(p, "\n| `")) != NULL; p++) page_rows++;
+  assert_int_equal(page_rows, tc.rows);
+  /* The README links the page. */
+  static char readme[1 << 17];
+  slurp_text(LMC_SOURCE_DIR "/README.md", readme, sizeof readme);
+  assert_non_null(strstr(readme, "](docs/flags.md)"));
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_parse),
       cmocka_unit_test(test_binary),
-      cmocka_unit_test(test_readme),
+      cmocka_unit_test(test_flags_doc),
       cmocka_unit_test(test_scene),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -33,6 +33,7 @@
 #include "render/integrators/path.h"
 #include "test_util.h"
 #include "path_grad_util.h"
+#include "load_scene.h"
 
 static const char *scene_xml =
     "<scene version=\"0.6.0\">\n"
@@ -67,21 +68,13 @@ static const char *scene_xml =
 typedef struct fixture {
   scene *sc;
   path_scratch *ps;
-  char path[64];
 } fixture;
 
 static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
-  snprintf(fx->path, sizeof fx->path, "/tmp/lmc_test_path_grad_%d.xml", (int)getpid());
-  FILE *f = fopen(fx->path, "w");
-  if (!f) return -1;
-  fputs(scene_xml, f);
-  fclose(f);
+  fx->sc = try_load_scene_text(scene_xml, "path_grad");
+  if (!fx->sc) return -1;
   lmc_error err;
-  if (scene_load_xml(fx->path, NULL, 0, &fx->sc, &err) != LMC_OK) {
-    fprintf(stderr, "%s\n", err.msg);
-    return -1;
-  }
   if (path_scratch_create(&fx->ps, &err) != LMC_OK) return -1;
   *state = fx;
   return 0;
@@ -91,7 +84,6 @@ static int teardown(void **state) {
   fixture *fx = *state;
   path_scratch_destroy(fx->ps);
   scene_destroy(fx->sc);
-  remove(fx->path);
   free(fx);
   return 0;
 }

@@ -40,6 +40,7 @@
 #include "render/integrators/path.h"
 #include "test_util.h"
 #include "path_grad_util.h"
+#include "load_scene.h"
 
 enum { TYPE_DIFFUSE, TYPE_GLOSSY, TYPE_DELTA, TYPE_GLASS, TYPE_ENV, TYPE_DIRECT, TYPE_COUNT };
 static const char *type_names[TYPE_COUNT] = {"diffuse", "glossy", "delta", "glass", "environment", "direct"};
@@ -243,12 +244,8 @@ static void check_hessian(const char *file, const scene *sc, path_scratch *ps,
 
 /* Runs both checks on one scene; `need` lists the classes that must occur. */
 static void check_scene(const char *file, int n_value, int n_grad, unsigned need) {
-  scene *sc;
+  scene *sc = load_scene(file);
   lmc_error err;
-  if (scene_load_xml(file, NULL, 0, &sc, &err) != LMC_OK) {
-    print_error("%s: %s\n", file, err.msg);
-    fail();
-  }
   path_scratch *ps;
   assert_int_equal(path_scratch_create(&ps, &err), LMC_OK);
   render_settings rs = sc->settings;

@@ -152,10 +152,10 @@ typedef struct fixture {
 
 static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
-  fx->sc[0] = ps_test_load(diffuse_xml, "diffuse");
-  fx->sc[1] = ps_test_load(delta_xml, "delta");
-  fx->sc[2] = ps_test_load(caustic_xml, "caustic");
-  fx->sc[3] = ps_test_load(env_xml, "env");
+  fx->sc[0] = try_load_scene_text(diffuse_xml, "ps_diffuse");
+  fx->sc[1] = try_load_scene_text(delta_xml, "ps_delta");
+  fx->sc[2] = try_load_scene_text(caustic_xml, "ps_caustic");
+  fx->sc[3] = try_load_scene_text(env_xml, "ps_env");
   if (!fx->sc[0] || !fx->sc[1] || !fx->sc[2] || !fx->sc[3]) return -1;
   *state = fx;
   return 0;

@@ -165,10 +165,10 @@ typedef struct fixture {
 
 static int setup(void **state) {
   fixture *fx = calloc(1, sizeof *fx);
-  fx->sc[DIFFUSE] = ps_test_load(diffuse_xml, "diffuse");
-  fx->sc[DELTA] = ps_test_load(delta_xml, "delta");
-  fx->sc[CAUSTIC] = ps_test_load(caustic_xml, "caustic");
-  fx->sc[GLOSSY] = ps_test_load(glossy_xml, "glossy");
+  fx->sc[DIFFUSE] = try_load_scene_text(diffuse_xml, "ps_diffuse");
+  fx->sc[DELTA] = try_load_scene_text(delta_xml, "ps_delta");
+  fx->sc[CAUSTIC] = try_load_scene_text(caustic_xml, "ps_caustic");
+  fx->sc[GLOSSY] = try_load_scene_text(glossy_xml, "ps_glossy");
   for (int q = 0; q < N_SCENES; q++)
     if (!fx->sc[q]) return -1;
   *state = fx;
@@ -726,7 +726,7 @@ static void test_pss_invariance(void **state) {
     check_pss(fx->sc[c], scene_names[c], 71 + (uint64_t)c, 400000);
   /* Paths that end in the sky: their numbers walk back to them (the end's
    * direction, not its far point, is the path's). */
-  scene *sky = ps_test_load(sky_xml, "sky");
+  scene *sky = try_load_scene_text(sky_xml, "ps_sky");
   assert_non_null(sky);
   check_pss(sky, "sky", 83, 200000);
   scene_destroy(sky);

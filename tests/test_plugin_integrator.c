@@ -31,6 +31,7 @@
 
 #include "lmc/mcmc.h"
 #include "lmc/driver/method.h"
+#include "load_scene.h"
 #include "render/io/io.h"
 #include "test_util.h"
 
@@ -95,16 +96,6 @@ static const mc_method indep_method = {
 
 /* --- the checks ------------------------------------------------------------------ */
 
-static scene *load(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/tests/data/analytic/%s", LMC_SOURCE_DIR, name);
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  assert_int_equal(scene_load_xml(path, NULL, 0, &s, &err), LMC_OK);
-  return s;
-}
-
 /* 1 when every probe of pixel (x, y) hits an object, 0 when none does,
  * -1 mixed. */
 static int pixel_group(const scene *s, int x, int y) {
@@ -122,7 +113,7 @@ static int pixel_group(const scene *s, int x, int y) {
 }
 
 static void check_scene(const char *file, const rgb *expect, int n_groups) {
-  scene *s = load(file);
+  scene *s = load_analytic_scene(file);
   const int64_t spp = 16;
   double sum[2][3] = {{0}}, sum2[2][3] = {{0}};
   for (int r = 0; r < RUNS; r++) {

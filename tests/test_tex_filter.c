@@ -44,6 +44,7 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/scene.h"
+#include "load_scene.h"
 
 #define TEXFILE LMC_TEST_TMP "/lmc_tex_filter_checker.png"
 #define PLANE "data/texfilter/plane.xml"
@@ -66,12 +67,8 @@ static scene *load_plane(const char *filter) {
   char def[64];
   snprintf(def, sizeof def, "filter=%s", filter);
   const char *defs[2] = {"texfile=" TEXFILE, def};
-  scene *s = NULL;
-  lmc_error err;
-  lmc_error_clear(&err);
-  lmc_status st = scene_load_xml(PLANE, defs, 2, &s, &err);
-  if (st) print_error("%s:%d: %s\n", err.file, err.line, err.msg);
-  assert_int_equal(st, LMC_OK);
+  scene *s = try_load_scene_defs(PLANE, defs, 2);
+  assert_non_null(s);
   return s;
 }
 

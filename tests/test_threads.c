@@ -34,6 +34,7 @@
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "test_util.h"
+#include "tmp_dir.h"
 
 #define SCENE LMC_SOURCE_DIR "/scenes/cornell-box/scene.xml"
 
@@ -188,16 +189,12 @@ static void test_film_doubles_independent_of_threads(void **state) {
 
 static int setup(void **state) {
   (void)state;
-  const char *tmp = getenv("TMPDIR");
-  snprintf(tmp_dir, sizeof tmp_dir, "%s/lmc-threads-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
-  return mkdtemp(tmp_dir) ? 0 : -1;
+  return tmp_dir_make(tmp_dir, sizeof tmp_dir, "lmc-threads");
 }
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[600];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return tmp_dir_remove(tmp_dir);
 }
 
 int main(void) {

@@ -51,7 +51,7 @@ static const char *lmc_render_usage =
     "                           warning (a plugin lmc lacks, no emitter, ...) or an MCMC\n"
     "                           bootstrap finds no light; exit 2 after a black image\n"
     "  -h, --help               this text\n"
-    "  --help-markdown          the flags below as Markdown tables (the README's)\n"
+    "  --help-markdown          the flags below as Markdown tables (docs/flags.md)\n"
     "\n";
 
 /* Every table of flags: the renderer's, then direct's, the MCMC
@@ -62,7 +62,7 @@ static int lmc_option_tables(const lmc_opt_table **OUT) {
   return 1 + mcmc_option_tables(OUT + 1, LMC_MAX_TABLES - 1);
 }
 
-/* lmc render --help-markdown: the tables below as the README shows them. */
+/* lmc render --help-markdown: the tables below as docs/flags.md shows them. */
 static void lmc_render_markdown(FILE *f) {
   const lmc_opt_table *t[LMC_MAX_TABLES];
   int n = lmc_option_tables(t);
