@@ -80,6 +80,8 @@ void mcmc__report(mcmc_render *R, const mc_counts *counts) {
       tot[q].accepted += c->stats[q].accepted;
       tot[q].inverted += c->stats[q].inverted;
       tot[q].refused += c->stats[q].refused, tot[q].elsewhere += c->stats[q].elsewhere;
+      tot[q].walks += c->stats[q].walks, tot[q].walked += c->stats[q].walked;
+      tot[q].irreversible += c->stats[q].irreversible;
       tot[q].rays += c->stats[q].rays;
     }
   }
@@ -95,6 +97,14 @@ void mcmc__report(mcmc_render *R, const mc_counts *counts) {
               names[q], (long long)tot[q].inverted,
               (double)tot[q].inverted / fmax(1e-9, R->chain_seconds),
               100.0 * (double)tot[q].refused / pr, 100.0 * (double)tot[q].elsewhere / pr);
+    if (tot[q].walks > 0)
+      fprintf(stderr,
+              "lmc: %-10s %lld manifold walks (%.4g/s), %.1f%% reached their target; %.3f%% of "
+              "proposals refused (the reverse walk did not return)\n",
+              names[q], (long long)tot[q].walks,
+              (double)tot[q].walks / fmax(1e-9, R->chain_seconds),
+              100.0 * (double)tot[q].walked / (double)tot[q].walks,
+              100.0 * (double)tot[q].irreversible / pr);
   }
   mcmc__report_rays(R, tot, names, nk);
   for (int g = 0; g < R->n_fam; g++) {

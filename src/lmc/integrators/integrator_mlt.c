@@ -7,7 +7,9 @@
  * both ends, by the lens, multi-chain and caustic perturbations
  * (lmc/path/mut_perturb.h), which move a path a little keeping its form,
  * and by the lens subpath mutation (lmc/path/mut_lenssub.h), which moves
- * it to a fresh image point. Each move is on or off (Mitsuba's flags; the
+ * it to a fresh image point, and by the manifold perturbation
+ * (lmc/path/mut_manifold.h), which walks a specular chain pinned at both
+ * ends. Each move is on or off (Mitsuba's flags; the
  * lens subpath mutation, which Mitsuba lacks, has none), all on by default; a step
  * selects among those that apply to the current path with equal weights,
  * as Mitsuba does, but for the primary-sample step's own (--pss-weight;
@@ -25,9 +27,9 @@ typedef struct mlt_settings {
   double pss_weight;            /* the primary-sample step's selection weight (the others 1) */
 } mlt_settings;
 
-static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0}, 1.0};
-static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {"bidir",   "lens",    "multichain",
-                                                           "caustic", "lenssub", "pss"};
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0, 0}, 1.0};
+static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {
+    "bidir", "lens", "multichain", "caustic", "lenssub", "pss", "manifold"};
 
 static const lmc_opt mlt__opts[] = {
     {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
@@ -52,6 +54,12 @@ static const lmc_opt mlt__opts[] = {
      "the camera's subpath E S* D replaced by a fresh one through a uniform image point (Veach; "
      "not in Mitsuba)",
      NULL},
+    {"manifold-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_MANIFOLD]),
+     0, 0, 0, lmc_opt_off_on, NULL, 0, NULL, "off",
+     "Jakob and Marschner's manifold perturbation on smooth specular chains: the image point "
+     "moved, the camera's specular chain retraced, the chain behind it walked on its manifold "
+     "(paths E S* D S+ (D|L))",
+     "manifoldPerturbation"},
     {"pss-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_PSS]), 0, 0, 0,
      lmc_opt_off_on, NULL, 0, NULL, "off",
      "a primary-sample small step: the path's numbers for a strategy drawn by its MIS weights, "
@@ -80,7 +88,7 @@ static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--integrator mlt: every mutation is off (--bidir-mutation, "
                          "--lens-perturbation, --multichain-perturbation, --caustic-perturbation, "
-                         "--lens-subpath-mutation, --pss-mutation)");
+                         "--lens-subpath-mutation, --manifold-perturbation, --pss-mutation)");
   if (ms->pss_weight != 1.0 && !ms->move[MC_PATH_MOVE_PSS])
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--pss-weight: the primary-sample step is off (--pss-mutation on)");

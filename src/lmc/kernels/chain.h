@@ -196,6 +196,9 @@ typedef struct mc_kernel_stats {
    * inverted, steps the inverses could not take back to numbers, and
    * numbers that walked to another path (a failed round trip). */
   int64_t inverted, refused, elsewhere;
+  /* Manifold walks (the manifold perturbation; else 0): begun, reached their
+   * target, and proposals refused because the reverse walk did not return. */
+  int64_t walks, walked, irreversible;
   /* Rays traced by the kernel's steps: its proposals, the current states
    * it re-evaluated (for a gradient, or the roulette's F(u) of the
    * labelled large step). */

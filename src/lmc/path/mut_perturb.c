@@ -115,16 +115,13 @@ static double mp__half(lmc_sampler *s) {
 
 static void mp__stream(lmc_sampler *s, int stream) { (void)s, (void)stream; }
 
-/* Whether x's vertex i scatters through a transmission. */
-static int mp__trans(const ps_path *x, int i) {
+int mut_perturb_transmits(const ps_path *x, int i) {
   vec3 n = x->x[i].v.n;
   return v3_dot(ps_dir(x, i, i - 1), n) * v3_dot(ps_dir(x, i, i + 1), n) < 0.0;
 }
 
-/* The direction leaving surface vertex v, reached from along wo (unit,
- * towards the vertex before it), through a delta lobe of kind trans. */
-static int mp__forced_dir(const bdpt_vertex *v, vec3 wo, int trans, transport_mode mode,
-                          vec3 *OUT_dir) {
+int mut_perturb_forced_dir(const bdpt_vertex *v, vec3 wo, int trans, transport_mode mode,
+                           vec3 *OUT_dir) {
   const surface_hit *h = &v->hit;
   vec3 wo_l = frame_to_local(&h->sh, wo);
   if (!(v3_dot(wo, h->ng) * wo_l.z > 0.0)) return 0;
@@ -248,7 +245,9 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
   for (int i = 1; i < e; i++) {
     vec3 wo = v3_normalize(v3_sub(y->x[i - 1].v.p, y->x[i].v.p)), dir;
     if (x->x[i].delta) {
-      if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_RADIANCE, &dir)) return 0;
+      if (!mut_perturb_forced_dir(&y->x[i].v, wo, mut_perturb_transmits(x, i),
+                                  TRANSPORT_RADIANCE, &dir))
+        return 0;
       y->x[i].v.delta = 1;
     } else if (mut_perturb_glossy(mp, x, i)) {
       if (!mp__glossy_dir(mp, &y->x[i].v, wo, ps_dir(x, i, i + 1), TRANSPORT_RADIANCE, r, &dir))
@@ -277,7 +276,9 @@ int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 d
   for (int i = m - 1; i >= 2; i--) {
     vec3 wo = v3_normalize(v3_sub(y->x[i + 1].v.p, y->x[i].v.p)), d;
     if (x->x[i].delta) {
-      if (!mp__forced_dir(&y->x[i].v, wo, mp__trans(x, i), TRANSPORT_IMPORTANCE, &d)) return 0;
+      if (!mut_perturb_forced_dir(&y->x[i].v, wo, mut_perturb_transmits(x, i),
+                                  TRANSPORT_IMPORTANCE, &d))
+        return 0;
       y->x[i].v.delta = 1;
     } else {
       if (!mp__glossy_dir(mp, &y->x[i].v, wo, ps_dir(x, i, i - 1), TRANSPORT_IMPORTANCE, r, &d))

@@ -124,6 +124,14 @@ int mut_perturb_lens_generate(const mut_perturb *mp, const ps_path *x, double rx
  * y_{m-1} given (as above). */
 int mut_perturb_caustic_generate(const mut_perturb *mp, const ps_path *x, vec3 dir, rng *r,
                                  ps_path *OUT_y, int64_t *rays);
+/* Whether x's vertex i scatters through a transmission (its neighbours
+ * on opposite sides of its geometric normal). */
+int mut_perturb_transmits(const ps_path *x, int i);
+/* The direction leaving surface vertex v, reached from along wo (unit,
+ * towards the vertex before it), through a delta lobe that transmits
+ * (trans) or reflects, into *OUT_dir; 0 when v has no such lobe there. */
+int mut_perturb_forced_dir(const bdpt_vertex *v, vec3 wo, int trans, transport_mode mode,
+                           vec3 *OUT_dir);
 /* A direction sampled from the BSDF of surface vertex v reached from along
  * wo (unit, towards the vertex before it) in transport mode `mode`, not
  * through a delta lobe, on the sides Mitsuba's rule allows; 0 when there is

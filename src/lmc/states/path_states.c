@@ -20,8 +20,9 @@
  * The chain. Its state x is a path, its target lum(f(x)). Its kernels are
  * the moves of mc_path_move with the integrator's weights w_j. A step
  * selects a move among those that apply to x (the bidirectional mutation
- * always; a perturbation or the lens subpath mutation to the paths of
- * its form, mut_perturb.h, mut_lenssub.h) with
+ * always; a perturbation, the lens subpath mutation or the manifold
+ * perturbation to the paths of its form, mut_perturb.h, mut_lenssub.h,
+ * mut_manifold.h) with
  * probability P_j(x) = w_j / (sum of the applicable w), the move proposes
  * y with its own ratio f(y) T_j(y -> x) / (f(x) T_j(x -> y))
  * (mut_bidir_propose, mut_perturb_propose), and the selection enters too:
@@ -44,6 +45,7 @@
 #include "lmc/kernels/chain.h"
 #include "lmc/path/mut_bidir.h"
 #include "lmc/path/mut_lenssub.h"
+#include "lmc/path/mut_manifold.h"
 #include "lmc/path/mut_perturb.h"
 #include "lmc/path/mut_pss.h"
 #include "lmc/states/states.h"
@@ -56,6 +58,7 @@ typedef struct path__space {
   mut_bidir mb;
   mut_perturb mp;
   mut_lenssub ml;
+  mut_manifold mm;
   mut_pss mq;
   mc_chain_kind kind;
 } path__space;
@@ -180,6 +183,8 @@ static int path__applies(const path__space *P, int move, const ps_path *x) {
     return mut_perturb_applies(&P->mp, MUT_PERTURB_CAUSTIC, x);
   case MC_PATH_MOVE_LENSSUB:
     return mut_lenssub_m(&P->ctx, x) > 0;
+  case MC_PATH_MOVE_MANIFOLD:
+    return mut_manifold_applies(&P->mm, x);
   default:
     return 1;
   }
@@ -234,6 +239,11 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, double p_x, 
     ok = pc->pss_v && mut_pss_propose(&P->mq, &c->r, x, y, &ratio, pc->pss_v, &y->rays, &ty);
     c->stats[ki].inverted += ty.inverted;
     c->stats[ki].refused += ty.refused, c->stats[ki].elsewhere += ty.elsewhere;
+  } else if (move == MC_PATH_MOVE_MANIFOLD) {
+    mut_manifold_tally ty = {0, 0, 0, 0};
+    ok = mut_manifold_propose(&P->mm, &c->r, x, y, &ratio, &y->rays, &ty);
+    c->stats[ki].walks += ty.walks, c->stats[ki].walked += ty.walked;
+    c->stats[ki].irreversible += ty.irreversible;
   } else {
     mut_perturb_kind kind = move == MC_PATH_MOVE_LENS         ? MUT_PERTURB_LENS
                             : move == MC_PATH_MOVE_MULTICHAIN ? MUT_PERTURB_MULTICHAIN
@@ -325,6 +335,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   if (st) return st;
   P->ctx.glossy_rough = ps.glossy_rough;
   mut_lenssub_init(&P->ml, &P->ctx);
+  mut_manifold_init(&P->mm, &P->ctx, &P->mp);
   mut_pss_init(&P->mq, &P->ctx, mc_light_u1_scale(s));
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",

@@ -16,6 +16,8 @@ typedef enum mc_path_move {
   MC_PATH_MOVE_PSS,           /* a primary-sample small step (lmc/path/mut_pss.h); the moves
                                  before it are path space's own, which the fused move of the
                                  primary-sample states draws among (MC_PATH_MOVE_FUSED) */
+  MC_PATH_MOVE_MANIFOLD,      /* the manifold perturbation (lmc/path/mut_manifold.h; not yet
+                                 among the fused move's) */
   MC_PATH_MOVE_COUNT
 } mc_path_move;
 

@@ -129,13 +129,6 @@ lmc_status xml__integrator(builder *B, pset *o, int nested) {
                                              "manifoldPerturbation", NULL};
     xml__accept(o, mlt_silent);
     if (t[0] != 'm') xml__accept(o, pss_silent);
-    int manifold, found_mf;
-    if ((st = xml__bool(B, o, "manifoldPerturbation", 0, &manifold, &found_mf)) != LMC_OK)
-      return st;
-    if (manifold)
-      lmc_warn(xml__find(o, "manifoldPerturbation")->file,
-               xml__find(o, "manifoldPerturbation")->line,
-               "the manifold perturbation is not implemented: mlt renders without it");
   } else if (strcmp(t, "direct") == 0) {
     if (choose) xml__set_integrator(r, "direct");
     if ((st = xml__direct(B, o)) != LMC_OK) return st;
