@@ -56,9 +56,9 @@ static const lmc_opt mlt__opts[] = {
      NULL},
     {"manifold-perturbation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_MANIFOLD]),
      0, 0, 0, lmc_opt_off_on, NULL, 0, NULL, "off",
-     "Jakob and Marschner's manifold perturbation on smooth specular chains: the image point "
-     "moved, the camera's specular chain retraced, the chain behind it walked on its manifold "
-     "(paths E S* D S+ (D|L))",
+     "Jakob and Marschner's manifold perturbation: the image point moved, the camera's chain "
+     "retraced, the chain behind its first diffuse vertex walked on its manifold, glossy "
+     "vertices' half vectors held (paths E (S|G)* D (S|G)+ (D|L))",
      "manifoldPerturbation"},
     {"pss-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_PSS]), 0, 0, 0,
      lmc_opt_off_on, NULL, 0, NULL, "off",

@@ -13,6 +13,8 @@
 #include <string.h>
 
 #define MM_PI 3.14159265358979323846
+/* The chain behind x_b: from x_c, glossy vertices kept at their half vectors. */
+#define MF_LIGHT_CHAIN (MF_PATH_FROM_B | MF_PATH_GLOSSY)
 
 void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_perturb *mp) {
   memset(mm, 0, sizeof *mm);
@@ -24,19 +26,26 @@ void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_pertur
   mm->walk.tol = 1e-10 * ctx->sc->radius;
   mm->back_tol = 1e-6 * ctx->sc->radius;
   mm->test_jac_power = 1.0;
+  mm->test_glossy_power = 1.0;
+}
+
+/* Whether vertex i of x is a chain vertex: S (delta) or G (ps_glossy). */
+static int mm__specular(const ps_context *ctx, const ps_path *x, int i) {
+  return x->x[i].delta || ps_glossy(ctx, x, i);
 }
 
 int mut_manifold_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int *OUT_c) {
   const ps_context *ctx = mm->ctx;
   int k = x->k, b = 1;
-  while (b < k && x->x[b].delta) b++;
-  if (b + 1 >= k || ps_glossy(ctx, x, b) || !x->x[b + 1].delta) return 0;
+  while (b < k && mm__specular(ctx, x, b)) b++;
+  if (b + 1 >= k || !mm__specular(ctx, x, b + 1)) return 0;
   int c = b + 1;
-  while (c < k && x->x[c].delta) c++;
-  if (c - b - 1 > MF_MAX_CHAIN) return 0;
-  /* x_c is fixed: a non-delta surface (glossy or not) or the emitter end. */
+  while (c < k && mm__specular(ctx, x, c)) c++;
+  if (c - b - 1 > MF_MAX_CHAIN || b - 1 > MF_MAX_CHAIN) return 0;
+  /* x_c is fixed: a D surface or the emitter end; both chains readable. */
   mf_chain ch;
-  if (mf_chain_from_path(ctx, x, b, c, MF_PATH_FROM_B, &ch) != MF_OK) return 0;
+  if (mf_chain_from_path(ctx, x, b, c, MF_PATH_FROM_B | MF_PATH_GLOSSY, &ch) != MF_OK) return 0;
+  if (b > 1 && mf_chain_from_path(ctx, x, 0, b, MF_PATH_GLOSSY, &ch) != MF_OK) return 0;
   *OUT_b = b, *OUT_c = c;
   return 1;
 }
@@ -66,24 +75,24 @@ int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, d
   ps_path *y = OUT_y;
   *y = *x;
   y->rays = 0;
-  /* The camera's chain retraced to a new y_b. */
+  /* The camera's chain retraced to a new y_b: each S vertex through its
+   * lobe, each G vertex about the microfacet normal of its half vector. */
   if (!mut_perturb_first_hit(ctx, rx, ry, &y->x[0].v, &y->x[1].v, rays)) return 0;
-  for (int i = 1; i < b; i++) {
-    vec3 wo = v3_normalize(v3_sub(y->x[i - 1].v.p, y->x[i].v.p)), dir;
-    if (!mut_perturb_forced_dir(&y->x[i].v, wo, mut_perturb_transmits(x, i), TRANSPORT_RADIANCE,
-                                &dir))
-      return 0;
-    y->x[i].v.delta = 1;
-    if (!mut_perturb_trace(ctx, &y->x[i].v, dir, TRANSPORT_RADIANCE, &y->x[i + 1].v, rays)) return 0;
+  if (b > 1) {
+    mf_chain cam, cam_y;
+    if (mf_chain_from_path(ctx, x, 0, b, MF_PATH_GLOSSY, &cam) != MF_OK) return 0;
+    vec3 dir = v3_normalize(v3_sub(y->x[1].v.p, y->x[0].v.p));
+    if (rays) *rays += b;
+    if (mf_trace(sc, &cam, dir, &cam_y) != MF_OK) return 0;
+    if (mf_chain_to_path(sc, &cam_y, 0, b, MF_PATH_GLOSSY, y) != MF_OK) return 0;
   }
-  y->x[b].v.delta = 0;
   /* The chain behind x_b walked to it, its end on y_b's surface. */
   mf_chain cx, cy;
-  if (mf_chain_from_path(ctx, x, b, c, MF_PATH_FROM_B, &cx) != MF_OK) return 0;
+  if (mf_chain_from_path(ctx, x, b, c, MF_LIGHT_CHAIN, &cx) != MF_OK) return 0;
   if (y->x[b].v.hit.mesh != cx.v[cx.k + 1].mesh) return 0;
   if (!mm__walk(mm, &cx, y->x[b].v.p, &cy, rays, tally)) return 0;
   bdpt_vertex yb = y->x[b].v;
-  if (mf_chain_to_path(sc, &cy, b, c, MF_PATH_FROM_B, y) != MF_OK) return 0;
+  if (mf_chain_to_path(sc, &cy, b, c, MF_LIGHT_CHAIN, y) != MF_OK) return 0;
   y->x[b].v = yb; /* the retraced vertex, which the walk's end reached within its tolerance */
   ps_update(ctx, y, 0, c + 1 > y->k ? y->k : c + 1);
   /* x's form: the kinds of every changed vertex. */
@@ -105,7 +114,7 @@ int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_p
   int b, c;
   if (!mut_manifold_form(mm, x, &b, &c)) return 0;
   mf_chain cy, cz;
-  if (mf_chain_from_path(mm->ctx, y, b, c, MF_PATH_FROM_B, &cy) != MF_OK) return 0;
+  if (mf_chain_from_path(mm->ctx, y, b, c, MF_LIGHT_CHAIN, &cy) != MF_OK) return 0;
   if (!mm__walk(mm, &cy, x->x[b].v.p, &cz, rays, tally)) return 0;
   /* Chain vertex i is x_{c - i}. */
   for (int i = 1; i <= cz.k; i++)
@@ -113,23 +122,65 @@ int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_p
   return 1;
 }
 
-/* The chain's part of T(x -> y): Phi(y) / J(y) (mut_manifold.h). */
+/* The area of a unit of barycentrics on chain vertex v's triangle. */
+static double mm__bary_area(const scene *sc, const mf_vertex *v) {
+  const mesh *m = &sc->meshes[v->mesh];
+  const uint32_t *tri = m->idx + 3 * v->prim;
+  vec3 p0 = mesh_position(m, tri[0]), p1 = mesh_position(m, tri[1]), p2 = mesh_position(m, tri[2]);
+  return v3_len(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+}
+
+/* The density of chain vertex i + 1 reached through G vertex i with its
+ * half vector held: |det dc_i / dA_{i+1}| (mut_manifold.h). */
+static double mm__glossy_factor(const mut_manifold *mm, const mf_chain *ch, const mf_jac *J,
+                                int i) {
+  double det = J->C[i][0][0] * J->C[i][1][1] - J->C[i][0][1] * J->C[i][1][0];
+  return pow(fabs(det) / mm__bary_area(mm->ctx->sc, &ch->v[i + 1]), mm->test_glossy_power);
+}
+
+/* The lens part of T(x -> y) but the offset's density: the raster-to-area
+ * Jacobian at y_1 and each further camera-side vertex's factor. */
+static double mm__camera_density(const mut_manifold *mm, const ps_path *y, int b) {
+  const ps_context *ctx = mm->ctx;
+  const camera *cam = &ctx->sc->cam;
+  double jac = (double)cam->width * cam->height * y->x[1].pdf_cam;
+  if (b == 1 || !(jac > 0.0)) return jac;
+  mf_chain ch;
+  mf_jac J;
+  if (mf_chain_from_path(ctx, y, 0, b, MF_PATH_GLOSSY, &ch) != MF_OK ||
+      mf_jacobian(ctx->sc, &ch, &J) != MF_OK)
+    return 0.0;
+  /* Chain vertex i is y_i. */
+  for (int i = 1; i < b; i++)
+    jac *= y->x[i].delta ? ps_area_jacobian(ctx, y, i, i + 1)
+                         : mm__glossy_factor(mm, &ch, &J, i);
+  return jac;
+}
+
+/* The chain's part of T(x -> y): Phi(y) / G(y) (mut_manifold.h). */
 static double mm__chain_density(const mut_manifold *mm, const ps_path *y, int b, int c) {
   const ps_context *ctx = mm->ctx;
+  mf_chain ch;
+  mf_jac J;
+  if (mf_chain_from_path(ctx, y, b, c, MF_LIGHT_CHAIN, &ch) != MF_OK ||
+      mf_jacobian(ctx->sc, &ch, &J) != MF_OK)
+    return 0.0;
   double phi = y->x[c].inf ? fabs(v3_dot(ps_dir(y, c - 1, c), y->x[c - 1].v.n))
                            : ps_area_jacobian(ctx, y, c, c - 1);
-  for (int j = b; j <= c - 2; j++) phi *= ps_forced_density(ctx, y, j + 1, j + 2, j, 1);
-  mf_chain ch;
-  if (!(phi > 0.0) || mf_chain_from_path(ctx, y, b, c, MF_PATH_FROM_B, &ch) != MF_OK) return 0.0;
+  /* Chain vertex i is y_{c - i}; y_{c - i - 1} is reached through it. */
+  for (int i = 1; i < c - b; i++) {
+    int j = c - i;
+    phi *= y->x[j].delta ? ps_forced_density(ctx, y, j, j + 1, j - 1, 1)
+                         : mm__glossy_factor(mm, &ch, &J, i);
+  }
   ch.n0 = v3(0.0, 0.0, 0.0); /* d omega at x_c, without its cosine */
-  double J;
-  if (mf_geometry_term(ctx->sc, &ch, &J) != MF_OK || !(J > 0.0) || !isfinite(J)) return 0.0;
-  return phi / pow(J, mm->test_jac_power);
+  double G;
+  if (!(phi > 0.0) || mf_geometry_term(ctx->sc, &ch, &G) != MF_OK || !(G > 0.0) || !isfinite(G))
+    return 0.0;
+  return phi / pow(G, mm->test_jac_power);
 }
 
 double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_path *y) {
-  const ps_context *ctx = mm->ctx;
-  const camera *cam = &ctx->sc->cam;
   int bx, cx, by, cy;
   if (y->k != x->k || !mut_manifold_form(mm, x, &bx, &cx) || !mut_manifold_form(mm, y, &by, &cy) ||
       by != bx || cy != cx)
@@ -137,9 +188,7 @@ double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_p
   double dr = hypot(y->rx - x->rx, y->ry - x->ry);
   double p = mut_perturb_log_pdf(mm->mp->r1, mm->mp->r2, dr) / (2.0 * MM_PI * dr);
   if (!(p > 0.0)) return 0.0;
-  double jac = (double)cam->width * cam->height * y->x[1].pdf_cam;
-  for (int i = 2; i <= bx; i++) jac *= ps_area_jacobian(ctx, y, i - 1, i);
-  return p * jac * mm__chain_density(mm, y, bx, cx);
+  return p * mm__camera_density(mm, y, bx) * mm__chain_density(mm, y, bx, cx);
 }
 
 int mut_manifold_propose(const mut_manifold *mm, rng *r, const ps_path *x, ps_path *OUT_y,

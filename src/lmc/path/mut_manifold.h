@@ -1,55 +1,66 @@
 /*
  * mut_manifold.h: the manifold perturbation of manifold exploration
  * (Jakob and Marschner 2012, section 5; Jakob's thesis, chapter 4) on
- * pathspace.h's states, for paths whose specular chains are smooth (delta)
- * surfaces: the image point moves as the lens perturbation moves it, the
- * camera's specular chain is retraced to a new first non-specular vertex,
- * and the specular chain behind that vertex, which no ray from it can
- * retrace (its far end is pinned), follows by the manifold walk
- * (lmc/path/manifold.h).
+ * pathspace.h's states: the image point moves as the lens perturbation
+ * moves it, the camera's specular chain is retraced to a new first
+ * diffuse vertex, and the specular chain behind that vertex, which no ray
+ * from it can retrace (its far end is pinned), follows by the manifold
+ * walk (lmc/path/manifold.h). Chain vertices are S (delta surfaces) or G
+ * (glossy, ps_glossy), which the move treats as specular with their half
+ * vectors held (Jakob's offset manifolds; Kaplanyan et al. 2014's
+ * half-vector coordinates).
  *
- * Form. x_1 .. x_{b-1} are S (delta surfaces; none when b = 1), x_b is a
- * non-delta surface, x_{b+1} .. x_{c-1} are S (at least one: with none the
- * lens perturbation applies), and x_c is fixed: a non-delta surface, or
- * the emitter end x_k (a point, spot or area light's point, or a
- * direction at infinity). This is the form no other perturbation moves
- * when x_c is the emitter end at infinity (a caustic of an environment
- * seen on a diffuse surface, E D S+ L) and the form that the lens and
- * multi-chain perturbations can only move apart when both sides of x_b
- * are specular (E S+ D S+ L). Glossy vertices (ps_glossy) are not
- * followed yet: a path with one in x_1 .. x_{c-1} makes no proposal.
+ * Form. x_1 .. x_{b-1} are S or G (none when b = 1), x_b is neither (a D
+ * surface), x_{b+1} .. x_{c-1} are S or G (at least one: with none the lens
+ * perturbation applies), and x_c is fixed: a D surface or the emitter end
+ * x_k (a point, spot or area light's point, or a direction at infinity).
+ * No other perturbation moves this form when x_c is at infinity (a caustic
+ * of an environment seen on a diffuse surface, E D S+ L, or the LMC
+ * paper's torus, E G+ D G+ L), and the lens and multi-chain perturbations
+ * move it only apart when both sides of x_b are specular.
  *
  * The move. The raster point moves by the lens perturbation's offset
  * (mut_perturb.h: length with density proportional to 1/r on [r1, r2],
- * uniform angle); the camera ray through it is retraced through x_1 ..
- * x_{b-1}, each S vertex keeping its lobe, to a new y_b on a surface of
- * x_b's kind. The chain x_c, x_{c-1}, .., x_{b+1}, x_b (x_c its fixed
- * start) then walks (mf_walk) until its end reaches y_b; its vertices are
- * y's y_{c-1} .. y_{b+1}, and y_b joins y_{b+1} (a shadow ray). The walk
- * is deterministic, so the move is reversible only if the walk from y's
- * chain back to x_b returns to x's chain: it is computed, and a y whose
- * reverse walk fails or lands elsewhere (by more than 1e-6 of the scene's
- * radius at any vertex) is refused (T(y -> x) = 0).
+ * uniform angle); the camera ray through it is traced through x_1 ..
+ * x_{b-1} (mf_trace of the chain x_0 .. x_b), each S vertex through its
+ * lobe, each G vertex about the microfacet normal that keeps its half
+ * vector (in its shading frame) x's, to a new y_b on x_b's mesh. The chain
+ * x_c, x_{c-1}, .., x_{b+1}, x_b (x_c its fixed start, G vertices' half
+ * vectors held) then walks (mf_walk) until its end reaches y_b; its
+ * vertices are y's y_{c-1} .. y_{b+1}, and y_b joins y_{b+1} (a shadow
+ * ray). The walk is deterministic, so the move is reversible only if the
+ * walk from y's chain back to x_b returns to x's chain: it is computed, and
+ * a y whose reverse walk fails or lands elsewhere (by more than 1e-6 of the
+ * scene's radius at any vertex) is refused (T(y -> x) = 0).
  *
- * Transition density, in the path measure of the changed vertices
- * y_1 .. y_{c-1} (pathspace.h's: area, delta vertices' Diracs reduced):
+ * Transition density. The move keeps every G vertex's half vector h_i and
+ * moves the rest, so it is a move in the coordinates (raster point, h_i,
+ * the S vertices' reduced Diracs), in which the path's density is f times
+ * the Jacobian from the path measure (pathspace.h's: area, delta vertices'
+ * Diracs reduced) to them; as a density in the path measure of the
+ * changed vertices y_1 .. y_{c-1}:
  *   T(x -> y) = p_r(|dr|) / (2 pi |dr|) * W H * pdf_cam(y_1)
- *               * prod_{i=2..b} |cos y_i| / |y_i - y_{i-1}|^2      (the lens part)
- *               * Phi(y) / J(y)                                    (the chain)
- * where Phi is the density the chain's vertices would have if it were
- * traced from x_c with a solid-angle density of one (after a direction
- * start: a density of one on the plane perpendicular to it), each vertex
- * reached through the S vertex before it by ps_forced_density from the
- * light side:
- *   Phi = |cos y_{c-1}| / |y_{c-1} - x_c|^2 (a direction start: |cos y_{c-1}|)
- *         * prod_{j=b..c-2} ps_forced_density(y, j + 1, j + 2, j, light side),
- * and J = d omega_c / dA_b (a direction start: dA_perp / dA_b) is the
- * generalized geometry term of the chain without x_c's cosine
- * (mf_geometry_term): y_b is drawn with the lens part's area density, and
- * the chain is a function of y_b, so its direction at x_c has the density
- * of y_b divided by J. For a chain without S vertices Phi / J = 1. The
- * acceptance is f(y) T(y -> x) / (f(x) T(x -> y)), the offsets' densities
- * cancelling as in the lens perturbation.
+ *               * prod_{i=1..b-1} K_i(y)                        (the camera's chain)
+ *               * Phi(y) / G(y)                                 (the chain behind y_b)
+ * K_i, the density of y_{i+1} through y_i: for an S vertex |cos y_{i+1}| /
+ * |y_{i+1} - y_i|^2 (its forced direction), for a G vertex |det dc_i /
+ * dA_{i+1}| (c_i its projected half vector, manifold.h; mf_jacobian's C_i
+ * over the area of a unit of barycentrics): the camera's chain is traced
+ * one vertex after the other, so its Jacobian is triangular. Phi is the
+ * density the chain behind y_b would have if it were traced from x_c with
+ * a solid-angle density of one (after a direction start: a density of one
+ * on the plane perpendicular to it): |cos y_{c-1}| / |y_{c-1} - x_c|^2 (a
+ * direction start: |cos y_{c-1}|) times, at each further vertex, the
+ * factor above through the chain vertex before it (ps_forced_density from
+ * the light side for an S vertex); G is the generalized geometry term of
+ * that chain with its G vertices' half vectors held and without x_c's
+ * cosine (mf_geometry_term: d omega_c / dA_b, or dA_perp / dA_b): y_b is
+ * drawn with the camera's density, and the chain is a function of y_b
+ * and the held half vectors, so its direction at x_c has the density of
+ * y_b over G. For a chain without S or G vertices Phi / G = 1. The
+ * half-vector measure is the same at x and y (the held h_i are equal), so
+ * it cancels in the acceptance f(y) T(y -> x) / (f(x) T(x -> y)), as do
+ * the offsets' densities.
  */
 #ifndef LMC_PATH_MUT_MANIFOLD_H
 #define LMC_PATH_MUT_MANIFOLD_H
@@ -62,7 +73,8 @@ typedef struct mut_manifold {
   const mut_perturb *mp;  /* borrowed: the raster offset's range (r1, r2) */
   mf_options walk;        /* the walks' settings (mf_options_default) */
   double back_tol;        /* the reverse walk's chain against x's: 1e-6 scene radius */
-  double test_jac_power;  /* tests only: J raised to this wrong power (1: right) */
+  double test_jac_power;  /* tests only: G raised to this wrong power (1: right) */
+  double test_glossy_power; /* tests only: the G vertices' factors likewise */
 } mut_manifold;
 
 /* What one proposal did (for the statistics line; may be summed). */

@@ -1,0 +1,175 @@
+/*
+ * mut_manifold_test.h: what the tests of the manifold perturbation
+ * (test_mut_manifold.c, test_mut_manifold_slow.c) share: their seven
+ * scenes, the moves of a path space, and the one-step invariance test of
+ * test_pathspace.c with the move as a kernel of its own. Include after
+ * <cmocka.h>.
+ */
+#ifndef LMC_TESTS_MUT_MANIFOLD_TEST_H
+#define LMC_TESTS_MUT_MANIFOLD_TEST_H
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "lmc/path/mut_bidir.h"
+#include "lmc/path/mut_manifold.h"
+#include "pathspace_test.h"
+
+#define KMAX 5
+
+/* The scenes: a floor and a sphere of glass, smooth or rough, optionally a
+ * mirror wall behind, smooth or rough, and a light. */
+static const char *scene_head =
+    "<scene version=\"0.6.0\">\n"
+    "  <sensor type=\"perspective\">\n"
+    "    <float name=\"fov\" value=\"40\"/>\n"
+    "    <transform name=\"toWorld\"><lookat origin=\"0, 3, 3\" target=\"0, 0, 0\" "
+    "up=\"0, 1, 0\"/></transform>\n"
+    "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer "
+    "name=\"height\" value=\"24\"/><rfilter type=\"box\"/></film>\n"
+    "  </sensor>\n"
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"-90\"/>"
+    "<scale x=\"2\" y=\"1\" z=\"2\"/></transform>"
+    "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7\"/></bsdf></shape>\n";
+
+static const char *sphere_smooth =
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0.8\" z=\"0\"/><float "
+    "name=\"radius\" value=\"0.5\"/>"
+    "<bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf></shape>\n";
+static const char *sphere_rough =
+    "  <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0.8\" z=\"0\"/><float "
+    "name=\"radius\" value=\"0.5\"/>"
+    "<bsdf type=\"roughdielectric\"><float name=\"intIOR\" value=\"1.5\"/>"
+    "<float name=\"alpha\" value=\"0.05\"/></bsdf></shape>\n";
+
+#define MIRROR_SHAPE                                                                             \
+  "  <shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"2\" y=\"1.5\" z=\"1\"/>" \
+  "<rotate x=\"1\" angle=\"25\"/><translate x=\"0\" y=\"1\" z=\"-1.5\"/></transform>"
+static const char *mirror_smooth = MIRROR_SHAPE "<bsdf type=\"conductor\"/></shape>\n";
+static const char *mirror_rough =
+    MIRROR_SHAPE "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.05\"/></bsdf>"
+                 "</shape>\n";
+
+static const char *light_point =
+    "  <emitter type=\"point\"><point name=\"position\" x=\"0.2\" y=\"2\" z=\"0\"/>"
+    "<rgb name=\"intensity\" value=\"8, 8, 7\"/></emitter>\n";
+static const char *light_area =
+    "  <shape type=\"rectangle\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/>"
+    "<scale value=\"0.2\"/><translate x=\"0.2\" y=\"2\"/></transform>"
+    "<emitter type=\"area\"><rgb name=\"radiance\" value=\"40\"/></emitter></shape>\n";
+static const char *light_sky =
+    "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"1, 1, 1\"/></emitter>\n";
+
+/* S chains (smooth glass and mirror) and G chains (rough: ps_glossy). */
+enum { POINT = 0, AREA, SKY, MIRROR, R_POINT, R_SKY, R_MIRROR, N_SCENES };
+static const char *const scene_names[N_SCENES] = {"point",       "area",     "sky",     "mirror",
+                                                  "rough point", "rough sky", "rough mirror"};
+
+typedef struct fixture {
+  scene *sc[N_SCENES];
+} fixture;
+
+static inline int mm_setup(void **state) {
+  static const struct {
+    int rough, mirror;
+    const char **light;
+  } parts[N_SCENES] = {{0, 0, &light_point}, {0, 0, &light_area}, {0, 0, &light_sky},
+                       {0, 1, &light_point}, {1, 0, &light_point}, {1, 0, &light_sky},
+                       {1, 1, &light_point}};
+  fixture *fx = calloc(1, sizeof *fx);
+  for (int q = 0; q < N_SCENES; q++) {
+    char xml[4096], tag[32];
+    snprintf(xml, sizeof xml, "%s%s%s%s</scene>\n", scene_head,
+             parts[q].rough ? sphere_rough : sphere_smooth,
+             parts[q].mirror ? (parts[q].rough ? mirror_rough : mirror_smooth) : "",
+             *parts[q].light);
+    snprintf(tag, sizeof tag, "mm_%d", q);
+    fx->sc[q] = try_load_scene_text(xml, tag);
+    if (!fx->sc[q]) return -1;
+  }
+  *state = fx;
+  return 0;
+}
+
+static inline int mm_teardown(void **state) {
+  fixture *fx = *state;
+  for (int q = 0; q < N_SCENES; q++) scene_destroy(fx->sc[q]);
+  free(fx);
+  return 0;
+}
+
+typedef struct movers {
+  ps_context ctx;
+  mut_bidir mb;
+  mut_perturb mp;
+  mut_manifold mm;
+} movers;
+
+static inline void movers_init(movers *mv, const scene *sc) {
+  ps_test_context(sc, KMAX, &mv->ctx);
+  mut_bidir_init(&mv->mb, &mv->ctx);
+  mut_perturb_init(&mv->mp, &mv->ctx);
+  mut_manifold_init(&mv->mm, &mv->ctx, &mv->mp);
+}
+
+/* A path with f > 0 that the move applies to, or 0 after many tries. */
+static inline int draw_state(const movers *mv, rng *r, ps_path *x) {
+  for (int tries = 0; tries < 2000000; tries++) {
+    int k = 1 + (int)(rng_uniform(r) * KMAX);
+    if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    if (mut_manifold_applies(&mv->mm, x)) return 1;
+  }
+  return 0;
+}
+
+/* A chain vertex: S (delta) or G. */
+static inline int specular(const movers *mv, const ps_path *x, int j) {
+  return x->x[j].delta || ps_glossy(&mv->ctx, x, j);
+}
+
+/* ---- One-step invariance (test_pathspace.c states the test) ------------------------ */
+
+#define INV_COLS 8
+#define INV_ROWS 12
+#define INV_BINS (KMAX * INV_COLS * INV_ROWS)
+_Static_assert(INV_BINS <= PS_INV_MAX_BINS, "the bins fit ps_inv");
+
+static inline int inv_bin(const scene *sc, const ps_path *x) {
+  int cx = (int)(x->rx * INV_COLS / sc->cam.width), cy = (int)(x->ry * INV_ROWS / sc->cam.height);
+  cx = cx < 0 ? 0 : cx >= INV_COLS ? INV_COLS - 1 : cx;
+  cy = cy < 0 ? 0 : cy >= INV_ROWS ? INV_ROWS - 1 : cy;
+  return ((x->k - 1) * INV_ROWS + cy) * INV_COLS + cx;
+}
+
+/* Weighted whole paths of length k_only (their weight C(x) / q(x), q the
+ * sampler's density), each moved once. */
+static inline ps_inv *invariance(const scene *sc, int k_only, uint64_t seed, double power,
+                          double glossy_power, int n) {
+  movers mv;
+  movers_init(&mv, sc);
+  mv.mm.test_jac_power = power;
+  mv.mm.test_glossy_power = glossy_power;
+  /* Larger moves than the defaults: more power against a wrong density. */
+  mv.mp.r1 *= 4.0, mv.mp.r2 *= 4.0;
+  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
+  ps_inv *res = calloc(1, sizeof *res);
+  rng r;
+  rng_seed(&r, seed, 5);
+  for (int i = 0; i < n; i++) {
+    if (mut_bidir_sample_whole(&mv.mb, &r, k_only, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    double q = mut_bidir_whole_pdf(&mv.mb, x, 0);
+    assert_true(q > 0.0);
+    double w = x->lum / q, ratio = 0.0;
+    res->samples++;
+    int moved = mut_manifold_applies(&mv.mm, x) &&
+                mut_manifold_propose(&mv.mm, &r, x, y, &ratio, NULL, NULL) &&
+                rng_uniform(&r) < ratio;
+    int b0 = inv_bin(sc, x), b1 = moved ? inv_bin(sc, y) : b0;
+    ps_inv_add(res, w, b0, b1);
+  }
+  ps_inv_finish(res);
+  free(x), free(y);
+  return res;
+}
+
+#endif
