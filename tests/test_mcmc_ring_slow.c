@@ -7,7 +7,8 @@
  * the moves through the inverse path sampler: pssmlt and mmlt with
  * reversible jumps (--technique-jump 0.2) and fused path moves
  * (--path-mutations 0.3) on the rings (pssmlt also on the box), and mlt
- * with its primary-sample step (--pss-mutation on) on all three. This is
+ * with its primary-sample step (--pss-mutation on) and with the manifold
+ * perturbation (--manifold-perturbation on) on all three. This is
  * the guard against start-up bias and wrong normalisation.
  *
  * Variance: each integrator renders R = 5 independent seeds (MCMC: each with
@@ -16,8 +17,8 @@
  * MCMC mean must lie within 6.5 sqrt(SE_mcmc^2 + SE_bdpt^2) of bdpt's. The
  * difference over its estimated standard error follows roughly a Student t
  * with about 8 degrees of freedom (Welch), P(|t| > 6.5) ~ 2e-4 per check;
- * over the (2 x 3 + 1) x 17 = 119 checks the chance of a false alarm is
- * about 2.4%.
+ * over the (2 x 7 + 4) x 17 = 306 checks the chance of a false alarm is
+ * about 6%.
  * Effort: --spp 80 (Cornell box: 512) for bdpt, pssmlt and mmlt (MCMC:
  * mutations per pixel); mlt makes 640 on the ring scenes. Its
  * perturbations move a path locally and only its bidirectional mutation
@@ -117,7 +118,7 @@ static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t m
 /* The integrators, and the moves through the inverse path sampler: pssmlt
  * on its bdpt states and mmlt with reversible jumps and fused path
  * moves, mlt with its primary-sample step. */
-#define N_CONFIGS 6
+#define N_CONFIGS 7
 static const config g_configs[N_CONFIGS] = {
     {"pssmlt", "pssmlt", {{NULL, NULL}}},
     {"mmlt", "mmlt", {{NULL, NULL}}},
@@ -125,6 +126,7 @@ static const config g_configs[N_CONFIGS] = {
     {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
     {"mmlt jumps+path", "mmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
     {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
+    {"mlt manifold", "mlt", {{"manifold-perturbation", "on"}, {NULL, NULL}}},
 };
 
 static void test_ring_caustics(void **state) {
@@ -141,17 +143,18 @@ static void test_ring_caustics_glass(void **state) {
  * with its primary-sample step and pssmlt with the moves. */
 static void test_cornell_box_mlt(void **state) {
   (void)state;
-  static const config c[3] = {
+  static const config c[4] = {
       {"mlt", "mlt", {{NULL, NULL}}},
       {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
       {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
+      {"mlt manifold", "mlt", {{"manifold-perturbation", "on"}, {NULL, NULL}}},
   };
-  check_scene("cornell-box", 32, 32, 512, 512, c, 3);
+  check_scene("cornell-box", 32, 32, 512, 512, c, 4);
 }
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, (2 * N_CONFIGS + 3) * N_STATS);
+  assert_int_equal(g_checks, (2 * N_CONFIGS + 4) * N_STATS);
 }
 
 int main(void) {
