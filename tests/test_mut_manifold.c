@@ -11,7 +11,9 @@
  * vector when rough). Paths of 1 .. KMAX = 5 segments from the whole-path
  * sampler.
  *
- *  - forms: the paths the move applies to have its form (x_b the first
+ *  - forms: mf_path_chain_fits says what mf_chain_from_path would on
+ *    every range of every path drawn; the paths the move applies to have
+ *    its form (x_b the first
  *    vertex neither S nor G, S or G vertices up to x_c), G vertices in
  *    every rough scene's chains and none in the smooth ones', and the move
  *    applies to enough of them.
@@ -56,11 +58,22 @@ static void test_forms(void **state) {
     ps_path *x = malloc(sizeof *x);
     rng r;
     rng_seed(&r, 11 + q, 1);
-    int drawn = 0, applies = 0, b_gt_1 = 0, inf = 0, glossy = 0;
+    int drawn = 0, applies = 0, b_gt_1 = 0, inf = 0, glossy = 0, fits_checked = 0, fits_ok = 0;
     for (int i = 0; i < 200000; i++) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
       drawn++;
+      /* mf_path_chain_fits says what mf_chain_from_path would. */
+      for (int a0 = 0; a0 < x->k; a0++)
+        for (int b0 = a0 + 2; b0 <= x->k; b0++)
+          for (unsigned fl = 0; fl < 4; fl++) {
+            mf_chain ch;
+            int full = mf_chain_from_path(&mv.ctx, x, a0, b0, fl, &ch);
+            int fits = mf_path_chain_fits(&mv.ctx, x, a0, b0, fl);
+            if (full == MF_OK) assert_int_equal(fits, MF_OK);
+            if (fits != MF_OK) assert_int_equal(full, fits);
+            fits_checked++, fits_ok += full == MF_OK;
+          }
       int b, c;
       if (!mut_manifold_form(&mv.mm, x, &b, &c)) continue;
       applies++;
@@ -82,6 +95,8 @@ static void test_forms(void **state) {
     if (q >= R_POINT) assert_true(glossy >= applies);
     else assert_int_equal(glossy, 0);
     if (q == SKY || q == R_SKY) assert_true(inf >= 100);
+    print_message("  chain forms: %d checked, %d chains\n", fits_checked, fits_ok);
+    assert_true(fits_checked >= 10000 && fits_ok >= applies);
     free(x);
   }
 }

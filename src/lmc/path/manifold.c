@@ -580,6 +580,54 @@ static int mf__path_range(const ps_path *p, int a, int b, unsigned flags, int *O
   return mf__path_order(p, a, b, flags, OUT_s, OUT_step);
 }
 
+/* Whether path vertex j may be a chain vertex: delta, or glossy under
+ * MF_PATH_GLOSSY (else MF_EINVAL), on a BSDF the chain can follow (else
+ * MF_EBSDF); its kind, a reflection or a refraction by the sides of the
+ * geometric normal its neighbours lie on, and a refraction's eta from the
+ * BSDF, into *OUT_kind and *OUT_eta (left alone for a reflection). */
+static int mf__path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flags,
+                           mf_kind *OUT_kind, double *OUT_eta) {
+  const ps_vertex *x = &p->x[j];
+  int glossy = (flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j);
+  if (!x->delta && !glossy) return MF_EINVAL;
+  const bsdf *bs = x->v.hit.bsdf;
+  if (!bs || bsdf_needs_tangents(bs)) return MF_EBSDF;
+  double sp = v3_dot(ps_dir(p, j, j - 1), x->v.n), sn = v3_dot(ps_dir(p, j, j + 1), x->v.n);
+  *OUT_kind = MF_REFLECT;
+  if (sp * sn > 0.0) return MF_OK;
+  if (bs->masked || (bs->type != BSDF_DIELECTRIC && bs->type != BSDF_ROUGHDIELECTRIC) ||
+      !(bs->eta > 0.0))
+    return MF_EBSDF;
+  *OUT_kind = MF_REFRACT;
+  *OUT_eta = bs->eta;
+  return MF_OK;
+}
+
+/* The ends of the chain of p's x_a .. x_b in the order s, step: the start
+ * a direction at infinity or a non-delta point, the end a non-delta
+ * surface record. */
+static int mf__path_ends(const ps_path *p, int s, int e) {
+  const ps_vertex *xs = &p->x[s], *xe = &p->x[e];
+  if (xs->inf ? !v3_isfinite(xs->v.dir) || !(v3_len2(xs->v.dir) > 0.0) : xs->delta) return 0;
+  return !xe->inf && !xe->delta && xe->v.type == BDPT_VERTEX_SURFACE;
+}
+
+int mf_path_chain_fits(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags) {
+  int s, step;
+  if (!mf__path_range(p, a, b, flags, &s, &step)) return MF_EINVAL;
+  int k = b - a - 1;
+  if (!mf__path_ends(p, s, s + (k + 1) * step)) return MF_EINVAL;
+  for (int i = 1; i <= k + 1; i++)
+    if (p->x[s + i * step].v.type != BDPT_VERTEX_SURFACE) return MF_EINVAL;
+  for (int i = 1; i <= k; i++) {
+    mf_kind kind;
+    double eta;
+    int st = mf__path_vertex(ctx, p, s + i * step, flags, &kind, &eta);
+    if (st != MF_OK) return st;
+  }
+  return MF_OK;
+}
+
 int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags,
                        mf_chain *OUT) {
   const scene *sc = ctx->sc;
@@ -592,13 +640,12 @@ int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, un
 
   /* The start: a direction at infinity, or a point that is an endpoint or
    * a non-specular surface. */
+  if (!mf__path_ends(p, s, e)) return MF_EINVAL;
   const ps_vertex *xs = &p->x[s];
   if (xs->inf) {
-    if (!v3_isfinite(xs->v.dir) || !(v3_len2(xs->v.dir) > 0.0)) return MF_EINVAL;
     c.start = MF_START_DIRECTION;
     c.d = v3_normalize(xs->v.dir);
   } else {
-    if (xs->delta) return MF_EINVAL;
     c.start = MF_START_POINT;
     c.x0 = xs->v.p;
     if (xs->v.type == BDPT_VERTEX_CAMERA)
@@ -606,10 +653,6 @@ int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, un
     else
       c.n0 = xs->v.n; /* a surface's or an area light's; zero at a point or spot light */
   }
-
-  /* The end: a non-specular surface. */
-  const ps_vertex *xe = &p->x[e];
-  if (xe->inf || xe->delta || xe->v.type != BDPT_VERTEX_SURFACE) return MF_EINVAL;
 
   /* Every vertex from x_1 to the end: its place on its triangle. */
   for (int i = 1; i <= k + 1; i++) {
@@ -621,24 +664,10 @@ int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, un
     v->kind = MF_REFLECT;
   }
 
-  /* The specular vertices: delta, or glossy when asked; reflection or
-   * refraction by the sides of the geometric normal their neighbours lie
-   * on; eta from the BSDF. */
+  /* The specular vertices: their kinds and indices (mf__path_vertex). */
   for (int i = 1; i <= k; i++) {
-    int j = s + i * step;
-    const ps_vertex *x = &p->x[j];
-    int glossy = (flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j);
-    if (!x->delta && !glossy) return MF_EINVAL;
-    const bsdf *bs = x->v.hit.bsdf;
-    if (!bs || bsdf_needs_tangents(bs)) return MF_EBSDF;
-    double sp = v3_dot(ps_dir(p, j, j - 1), x->v.n), sn = v3_dot(ps_dir(p, j, j + 1), x->v.n);
-    mf_vertex *v = &c.v[i];
-    if (sp * sn > 0.0) continue; /* a reflection */
-    if (bs->masked || (bs->type != BSDF_DIELECTRIC && bs->type != BSDF_ROUGHDIELECTRIC) ||
-        !(bs->eta > 0.0))
-      return MF_EBSDF;
-    v->kind = MF_REFRACT;
-    v->eta = bs->eta;
+    int st = mf__path_vertex(ctx, p, s + i * step, flags, &c.v[i].kind, &c.v[i].eta);
+    if (st != MF_OK) return st;
   }
 
   /* Glossy vertices keep their current half vector as their target. */

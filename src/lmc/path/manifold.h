@@ -311,6 +311,12 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G);
 int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags,
                        mf_chain *OUT);
 
+/* What mf_chain_from_path would return for the same arguments, without
+ * reading the chain: its records' meshes and triangles are taken as valid,
+ * and a glossy vertex whose half vector cannot be formed (which makes
+ * mf_chain_from_path fail) is left to it. For forms checked at every step. */
+int mf_path_chain_fits(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags);
+
 /* The inverse: writes chain c's vertices x_1 .. x_{k+1} back into the
  * records of p's vertices x_a .. x_b they came from (the same a, b,
  * flags and path, so that the same vertex order follows). A record whose

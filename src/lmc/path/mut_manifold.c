@@ -43,9 +43,8 @@ int mut_manifold_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int 
   while (c < k && mm__specular(ctx, x, c)) c++;
   if (c - b - 1 > MF_MAX_CHAIN || b - 1 > MF_MAX_CHAIN) return 0;
   /* x_c is fixed: a D surface or the emitter end; both chains readable. */
-  mf_chain ch;
-  if (mf_chain_from_path(ctx, x, b, c, MF_PATH_FROM_B | MF_PATH_GLOSSY, &ch) != MF_OK) return 0;
-  if (b > 1 && mf_chain_from_path(ctx, x, 0, b, MF_PATH_GLOSSY, &ch) != MF_OK) return 0;
+  if (mf_path_chain_fits(ctx, x, b, c, MF_LIGHT_CHAIN) != MF_OK) return 0;
+  if (b > 1 && mf_path_chain_fits(ctx, x, 0, b, MF_PATH_GLOSSY) != MF_OK) return 0;
   *OUT_b = b, *OUT_c = c;
   return 1;
 }
