@@ -17,6 +17,8 @@
  *    vertex neither S nor G, S or G vertices up to x_c), G vertices in
  *    every rough scene's chains and none in the smooth ones', and the move
  *    applies to enough of them.
+ *  - dir_jacobian: mf_half_vector_dir_jacobian (the sky form's density at
+ *    a G vertex) against central differences.
  *  - reverse and balance: on random pairs, every cache of y against a
  *    fresh evaluation; the move from y through x's raster point gives back
  *    x (vertices to 1e-6 of the scene's size, f to 1e-5; 1e-3 through G
@@ -26,10 +28,11 @@
  *  - invariance / invariance_detects_bias: test_pathspace.c's one-step
  *    invariance test (the statistic is stated there) with the move as a
  *    kernel of its own (a path it does not apply to stays), on all seven
- *    scenes, and on the three smooth ones with a curved chain the control
- *    that leaves the chain's generalized geometry term G out, which it
- *    must reject (the rough scenes' controls need more samples:
- *    test_mut_manifold_slow.c).
+ *    scenes and the sky scenes' sky form, and the controls it must reject:
+ *    on the three smooth scenes with a curved chain the chain's
+ *    generalized geometry term G left out, on the rough sky's sky form the
+ *    G vertices' factors (the other rough scenes' controls need more
+ *    samples: test_mut_manifold_slow.c).
  * Every check is counted and the counts asserted.
  */
 #include <setjmp.h>
@@ -59,6 +62,7 @@ static void test_forms(void **state) {
     rng r;
     rng_seed(&r, 11 + q, 1);
     int drawn = 0, applies = 0, b_gt_1 = 0, inf = 0, glossy = 0, fits_checked = 0, fits_ok = 0;
+    int sky = 0;
     for (int i = 0; i < 200000; i++) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
@@ -77,6 +81,13 @@ static void test_forms(void **state) {
       int b, c;
       if (!mut_manifold_form(&mv.mm, x, &b, &c)) continue;
       applies++;
+      if (b == x->k) {
+        /* The sky form: the camera's chain reaches the sky. */
+        sky++;
+        assert_true(c == b && x->x[b].inf && x->k >= 2);
+        for (int j = 1; j < b; j++) assert_true(specular(&mv, x, j));
+        continue;
+      }
       b_gt_1 += b > 1;
       for (int j = 1; j < b; j++) assert_true(specular(&mv, x, j));
       assert_false(specular(&mv, x, b));
@@ -87,18 +98,69 @@ static void test_forms(void **state) {
       inf += c == x->k && x->x[c].inf;
     }
     print_message("%s: %d paths, the move applies to %d (%d with x_b past a specular chain, %d "
-                  "from a direction)\n",
-                  scene_names[q], drawn, applies, b_gt_1, inf);
+                  "from a direction, %d to the sky)\n",
+                  scene_names[q], drawn, applies, b_gt_1, inf, sky);
     assert_true(applies >= min_applies[q]);
     if (q == MIRROR || q == R_MIRROR) assert_true(b_gt_1 >= 20);
     /* G vertices exactly in the rough scenes' chains. */
-    if (q >= R_POINT) assert_true(glossy >= applies);
+    if (q >= R_POINT) assert_true(glossy >= applies - sky);
     else assert_int_equal(glossy, 0);
-    if (q == SKY || q == R_SKY) assert_true(inf >= 100);
+    if (q == SKY || q == R_SKY) assert_true(inf >= 100 && sky >= 100);
+    else assert_int_equal(sky, 0);
     print_message("  chain forms: %d checked, %d chains\n", fits_checked, fits_ok);
     assert_true(fits_checked >= 10000 && fits_ok >= applies);
     free(x);
   }
+}
+
+/* mf_half_vector_dir_jacobian against central differences of
+ * mf_half_vector_dirs over wo's tangent plane, at the G vertices of the
+ * rough scenes' paths (reflections and refractions from both sides). */
+static void test_dir_jacobian(void **state) {
+  fixture *fx = *state;
+  int checked = 0, refract = 0;
+  for (int q = R_POINT; q < N_SCENES; q++) {
+    movers mv;
+    movers_init(&mv, fx->sc[q]);
+    ps_path *x = malloc(sizeof *x);
+    rng r;
+    rng_seed(&r, 91 + q, 1);
+    for (int i = 0; i < 40000 && checked < 600 * (q - R_POINT + 1); i++) {
+      int k = 1 + (int)(rng_uniform(&r) * KMAX);
+      if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+      for (int j = 1; j < x->k; j++) {
+        if (!ps_glossy(&mv.ctx, x, j)) continue;
+        mf_vertex v;
+        memset(&v, 0, sizeof v);
+        const surface_hit *h = &x->x[j].v.hit;
+        if (mf_path_vertex(&mv.ctx, x, j, MF_PATH_GLOSSY, &v.kind, &v.eta) != MF_OK ||
+            mf_vertex_set(fx->sc[q], &v, h->mesh, h->prim, h->b1, h->b2) != MF_OK)
+          continue;
+        vec3 wi = ps_dir(x, j, j - 1), wo = ps_dir(x, j, j + 1);
+        frame g = frame_from_z(wo);
+        double e = 1e-6, J[2][2];
+        for (int a = 0; a < 2; a++) {
+          vec3 t = a == 0 ? g.s : g.t, cp[2], cm[2];
+          double hp[2], hm[2];
+          cp[0] = v3_normalize(v3_add(wo, v3_scale(t, e)));
+          cm[0] = v3_normalize(v3_sub(wo, v3_scale(t, e)));
+          mf_half_vector_dirs(&v, wi, cp[0], hp);
+          mf_half_vector_dirs(&v, wi, cm[0], hm);
+          for (int b = 0; b < 2; b++) J[b][a] = (hp[b] - hm[b]) / (2.0 * e);
+        }
+        double fd = fabs(J[0][0] * J[1][1] - J[0][1] * J[1][0]);
+        double an = mf_half_vector_dir_jacobian(&v, wi, wo);
+        if (!(fabs(fd - an) <= 1e-6 * (1.0 + an)))
+          print_message("dir jacobian %.12g vs differences %.12g\n", an, fd);
+        assert_true(fabs(fd - an) <= 1e-6 * (1.0 + an));
+        checked++;
+        refract += v.kind == MF_REFRACT;
+      }
+    }
+    free(x);
+  }
+  print_message("dir jacobian: %d G vertices checked, %d refractions\n", checked, refract);
+  assert_true(checked >= 1500 && refract >= 300 && checked - refract >= 300);
 }
 
 /* ---- Reverse moves, caches, detailed balance ------------------------------------ */
@@ -130,7 +192,9 @@ static void check_pairs(const scene *sc, uint64_t seed, int n, int *OUT_reverse,
     /* The move from y through x's raster point gives back x. */
     assert_true(mut_manifold_generate(&mv.mm, y, x->rx, x->ry, z, NULL, NULL));
     for (int j = 0; j <= x->k; j++) {
-      double d = v3_len(v3_sub(z->x[j].v.p, x->x[j].v.p));
+      /* (A direction at infinity: its point stands beyond the scene.) */
+      double d = x->x[j].inf ? sc->radius * v3_len(v3_sub(z->x[j].v.dir, x->x[j].v.dir))
+                             : v3_len(v3_sub(z->x[j].v.p, x->x[j].v.p));
       if (!(d < 1e-6 * sc->radius))
         print_message("vertex %d of %d back at %.3g\n", j, x->k, d);
       assert_true(d < 1e-6 * sc->radius);
@@ -174,9 +238,9 @@ static void test_reverse_and_balance(void **state) {
  * set the kernel never leaves is invariant under it too). */
 static const struct {
   int scene, k_only, n;
-} inv_cases[] = {{POINT, 4, 6000000},   {AREA, 4, 3000000},  {SKY, 4, 3000000},
+} inv_cases[] = {{POINT, 4, 6000000},   {AREA, 4, 3000000},    {SKY, 4, 3000000},
                  {MIRROR, 5, 4000000},  {R_POINT, 4, 4000000}, {R_SKY, 4, 2000000},
-                 {R_MIRROR, 5, 3000000}};
+                 {R_MIRROR, 5, 3000000}, {SKY, 3, 3000000},    {R_SKY, 3, 2000000}};
 
 static void test_invariance(void **state) {
   fixture *fx = *state;
@@ -196,23 +260,31 @@ static void test_invariance_detects_bias(void **state) {
   fixture *fx = *state;
   int controls = 0;
   for (size_t c = 0; c < sizeof inv_cases / sizeof inv_cases[0]; c++) {
-    if (inv_cases[c].scene == MIRROR || inv_cases[c].scene >= R_POINT) continue;
+    /* G left out on the smooth scenes with a curved chain behind x_b; the
+     * G vertices' factors on the rough sky's sky form. */
+    int sky_form = inv_cases[c].scene == R_SKY && inv_cases[c].k_only == 3;
+    if (!sky_form && (inv_cases[c].scene == MIRROR || inv_cases[c].scene >= R_POINT ||
+                      inv_cases[c].k_only == 3))
+      continue;
     controls++;
-    ps_inv *r = invariance(fx->sc[inv_cases[c].scene], inv_cases[c].k_only, 71 + c, 0.0, 1.0,
-                           inv_cases[c].n);
-    print_message("%s, G left out: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n",
-                  scene_names[inv_cases[c].scene], r->samples, r->moved, r->bins, r->min_p,
-                  r->level);
+    ps_inv *r = invariance(fx->sc[inv_cases[c].scene], inv_cases[c].k_only, 71 + c,
+                           sky_form ? 1.0 : 0.0, sky_form ? 0.0 : 1.0, inv_cases[c].n);
+    print_message("%s (length %d), %s left out: %d samples, %d moved, %d bins, min p %.3g "
+                  "(level %.3g)\n",
+                  scene_names[inv_cases[c].scene], inv_cases[c].k_only,
+                  sky_form ? "the G vertices' factors" : "G", r->samples, r->moved, r->bins,
+                  r->min_p, r->level);
     assert_true(r->samples >= 20000 && r->moved >= 2000 && r->bins >= 20);
     assert_true(r->min_p < r->level);
     free(r);
   }
-  assert_int_equal(controls, 3); /* the rough scenes': test_mut_manifold_slow.c */
+  assert_int_equal(controls, 4); /* the other rough scenes': test_mut_manifold_slow.c */
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_forms),
+      cmocka_unit_test(test_dir_jacobian),
       cmocka_unit_test(test_reverse_and_balance),
       cmocka_unit_test(test_invariance),
       cmocka_unit_test(test_invariance_detects_bias),

@@ -125,16 +125,44 @@ int mf_half_vector(const scene *sc, const mf_chain *c, int i, double OUT[2]) {
   vec3 wi = i == 1 && c->start == MF_START_DIRECTION
                 ? mf__start_wi(c)
                 : v3_normalize(v3_sub(i > 1 ? gp.p : c->x0, gi.p));
-  /* h = normalize(wi + eta_r wo), on the side of ns. */
-  vec3 wo = v3_normalize(v3_sub(gn.p, gi.p));
-  double eta_r = mf__eta_r(&c->v[i], v3_dot(wi, gi.ns));
-  vec3 h = v3_normalize(v3_add(wi, v3_scale(wo, eta_r)));
-  if (v3_dot(h, gi.ns) < 0.0) h = v3_neg(h);
+  mf_vertex v = c->v[i];
+  v.ns = gi.ns;
+  mf_half_vector_dirs(&v, wi, v3_normalize(v3_sub(gn.p, gi.p)), OUT);
+  return MF_OK;
+}
+
+/* h = normalize(wi + eta_r wo) on the side of ns, and |wi + eta_r wo|. */
+static vec3 mf__half(const mf_vertex *v, vec3 wi, vec3 wo, double *OUT_len, double *OUT_eta_r) {
+  double eta_r = mf__eta_r(v, v3_dot(wi, v->ns));
+  vec3 ht = v3_add(wi, v3_scale(wo, eta_r));
+  double len = v3_len(ht);
+  vec3 h = v3_scale(ht, 1.0 / len);
+  if (OUT_len) *OUT_len = len;
+  if (OUT_eta_r) *OUT_eta_r = eta_r;
+  return v3_dot(h, v->ns) < 0.0 ? v3_neg(h) : h;
+}
+
+void mf_half_vector_dirs(const mf_vertex *v, vec3 wi, vec3 wo, double OUT[2]) {
+  vec3 h = mf__half(v, wi, wo, NULL, NULL);
   /* Its projection on the shading frame's tangent plane. */
-  frame f = frame_from_z(gi.ns);
+  frame f = frame_from_z(v->ns);
   OUT[0] = v3_dot(h, f.s);
   OUT[1] = v3_dot(h, f.t);
-  return MF_OK;
+}
+
+double mf_half_vector_dir_jacobian(const mf_vertex *v, vec3 wi, vec3 wo) {
+  double len, eta_r;
+  vec3 h = mf__half(v, wi, wo, &len, &eta_r);
+  /* dh = +-(I - h h^T) eta_r dwo / len; dwo = a t1 + b t2 on wo's tangent
+   * plane; the 2 x 2 matrix of (dh . s, dh . t) over (a, b). */
+  frame f = frame_from_z(v->ns), g = frame_from_z(wo);
+  double M[2][2];
+  vec3 rows[2] = {f.s, f.t}, cols[2] = {g.s, g.t};
+  for (int r = 0; r < 2; r++)
+    for (int q = 0; q < 2; q++)
+      M[r][q] = v3_dot(rows[r], cols[q]) - v3_dot(rows[r], h) * v3_dot(h, cols[q]);
+  double k = eta_r / len;
+  return k * k * fabs(M[0][0] * M[1][1] - M[0][1] * M[1][0]);
 }
 
 int mf_constraint(const scene *sc, const mf_chain *c, int i, double OUT[2]) {
@@ -352,6 +380,36 @@ int mf_start_ray(const scene *sc, const mf_chain *c, vec3 x1, vec3 *OUT_org, vec
   return MF_OK;
 }
 
+int mf_scatter(const mf_vertex *v, vec3 wi, vec3 *OUT_wo) {
+  /* The normal it scatters about: ns, or the microfacet normal whose
+   * projection on the shading frame is the target. */
+  vec3 m = v->ns;
+  double t0 = v->target[0], t1 = v->target[1];
+  if (t0 != 0.0 || t1 != 0.0) {
+    double z2 = 1.0 - t0 * t0 - t1 * t1;
+    if (!(z2 > 0.0)) return MF_EINVAL;
+    frame f = frame_from_z(v->ns);
+    m = v3_normalize(frame_to_world(&f, v3(t0, t1, sqrt(z2))));
+  }
+  /* Reflect or refract; the new direction must leave on the right side of
+   * both the shading and the geometric normal. */
+  vec3 wo;
+  double ci_s = v3_dot(wi, v->ns), ci_g = v3_dot(wi, v->ng), side;
+  if (v->kind == MF_REFLECT) {
+    wo = v3_normalize(v3_reflect(wi, m));
+    side = 1.0;
+  } else {
+    if (v3_dot(wi, m) * ci_s <= 0.0) return MF_ESIDE;
+    if (!mf__refract(wi, m, v->eta, &wo)) return MF_ETIR;
+    wo = v3_normalize(wo);
+    side = -1.0;
+  }
+  if (!(side * ci_s * v3_dot(wo, v->ns) > 0.0) || !(side * ci_g * v3_dot(wo, v->ng) > 0.0))
+    return MF_ESIDE;
+  *OUT_wo = wo;
+  return MF_OK;
+}
+
 /* The chain traced from org along the unit direction d (mf_trace's loop). */
 static int mf__trace_ray(const scene *sc, const mf_chain *proto, vec3 org, vec3 d, mf_chain *OUT) {
   int k = proto->k;
@@ -365,36 +423,14 @@ static int mf__trace_ray(const scene *sc, const mf_chain *proto, vec3 org, vec3 
     if (mf_vertex_set(sc, v, h.mesh, h.prim, h.b1, h.b2) != MF_OK) return MF_EINVAL;
     if (i == k + 1) break;
 
-    /* The normal it scatters about: ns, or the microfacet normal whose
-     * projection on the shading frame is the target. */
-    vec3 wi = v3_neg(d);
-    vec3 m = v->ns;
-    double t0 = v->target[0], t1 = v->target[1];
-    if (t0 != 0.0 || t1 != 0.0) {
-      double z2 = 1.0 - t0 * t0 - t1 * t1;
-      if (!(z2 > 0.0)) return MF_EINVAL;
-      frame f = frame_from_z(v->ns);
-      m = v3_normalize(frame_to_world(&f, v3(t0, t1, sqrt(z2))));
-    }
-
-    /* Reflect or refract; the new direction must leave on the right side
-     * of both the shading and the geometric normal. */
-    vec3 wo;
-    double ci_s = v3_dot(wi, v->ns), ci_g = v3_dot(wi, v->ng), side;
-    if (v->kind == MF_REFLECT) {
-      wo = v3_normalize(v3_reflect(wi, m));
-      side = 1.0;
-    } else {
+    if (v->kind == MF_REFRACT) {
       const bsdf *b = &sc->bsdfs[sc->meshes[h.mesh].bsdf];
       if (b->type != BSDF_DIELECTRIC && b->type != BSDF_ROUGHDIELECTRIC) return MF_EBSDF;
       v->eta = b->eta;
-      if (v3_dot(wi, m) * ci_s <= 0.0) return MF_ESIDE;
-      if (!mf__refract(wi, m, v->eta, &wo)) return MF_ETIR;
-      wo = v3_normalize(wo);
-      side = -1.0;
     }
-    if (!(side * ci_s * v3_dot(wo, v->ns) > 0.0) || !(side * ci_g * v3_dot(wo, v->ng) > 0.0))
-      return MF_ESIDE;
+    vec3 wo;
+    int st = mf_scatter(v, v3_neg(d), &wo);
+    if (st != MF_OK) return st;
     org = v->p;
     d = wo;
   }
@@ -580,13 +616,8 @@ static int mf__path_range(const ps_path *p, int a, int b, unsigned flags, int *O
   return mf__path_order(p, a, b, flags, OUT_s, OUT_step);
 }
 
-/* Whether path vertex j may be a chain vertex: delta, or glossy under
- * MF_PATH_GLOSSY (else MF_EINVAL), on a BSDF the chain can follow (else
- * MF_EBSDF); its kind, a reflection or a refraction by the sides of the
- * geometric normal its neighbours lie on, and a refraction's eta from the
- * BSDF, into *OUT_kind and *OUT_eta (left alone for a reflection). */
-static int mf__path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flags,
-                           mf_kind *OUT_kind, double *OUT_eta) {
+int mf_path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flags,
+                   mf_kind *OUT_kind, double *OUT_eta) {
   const ps_vertex *x = &p->x[j];
   int glossy = (flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j);
   if (!x->delta && !glossy) return MF_EINVAL;
@@ -622,7 +653,7 @@ int mf_path_chain_fits(const ps_context *ctx, const ps_path *p, int a, int b, un
   for (int i = 1; i <= k; i++) {
     mf_kind kind;
     double eta;
-    int st = mf__path_vertex(ctx, p, s + i * step, flags, &kind, &eta);
+    int st = mf_path_vertex(ctx, p, s + i * step, flags, &kind, &eta);
     if (st != MF_OK) return st;
   }
   return MF_OK;
@@ -666,7 +697,7 @@ int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, un
 
   /* The specular vertices: their kinds and indices (mf__path_vertex). */
   for (int i = 1; i <= k; i++) {
-    int st = mf__path_vertex(ctx, p, s + i * step, flags, &c.v[i].kind, &c.v[i].eta);
+    int st = mf_path_vertex(ctx, p, s + i * step, flags, &c.v[i].kind, &c.v[i].eta);
     if (st != MF_OK) return st;
   }
 

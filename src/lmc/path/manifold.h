@@ -238,6 +238,20 @@ int mf_vertex_set(const scene *sc, mf_vertex *v, int mi, int64_t prim, double b1
  * specular takes it as its target. Plain arithmetic. */
 int mf_half_vector(const scene *sc, const mf_chain *c, int i, double OUT[2]);
 
+/* The same for a vertex v (its kind, eta and shading normal ns) and unit
+ * directions wi, wo away from it: h = normalize(wi + eta_r wo) turned to
+ * ns's side, projected on frame_from_z(ns). */
+void mf_half_vector_dirs(const mf_vertex *v, vec3 wi, vec3 wo, double OUT[2]);
+/* |det d(mf_half_vector_dirs) / d wo| per unit solid angle of wo, wi and
+ * the vertex held: the density a direction leaving v about a held half
+ * vector has per unit of the projected half vector's measure. */
+double mf_half_vector_dir_jacobian(const mf_vertex *v, vec3 wi, vec3 wo);
+/* The direction leaving chain vertex v (p, ns, ng, kind, eta, target)
+ * reached along -wi (wi unit, away from v): reflected or refracted about ns,
+ * or about the microfacet normal whose projection is v's target when it is
+ * not zero; MF_ESIDE or MF_ETIR as mf_trace says. */
+int mf_scatter(const mf_vertex *v, vec3 wi, vec3 *OUT_wo);
+
 /* The constraint c_i (1 .. k): mf_half_vector minus target_i. Plain
  * arithmetic, written apart from the dual form (the tests compare them). */
 int mf_constraint(const scene *sc, const mf_chain *c, int i, double OUT[2]);
@@ -310,6 +324,14 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G);
  * shading frame). Plain arithmetic; nothing traced. */
 int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, unsigned flags,
                        mf_chain *OUT);
+
+/* Whether path vertex j may be a chain vertex: delta, or glossy under
+ * MF_PATH_GLOSSY (else MF_EINVAL), on a BSDF the chain can follow (else
+ * MF_EBSDF); its kind, a reflection or a refraction by the sides of the
+ * geometric normal its path neighbours lie on, and a refraction's eta from
+ * the BSDF, into *OUT_kind and *OUT_eta (left alone for a reflection). */
+int mf_path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flags,
+                   mf_kind *OUT_kind, double *OUT_eta);
 
 /* What mf_chain_from_path would return for the same arguments, without
  * reading the chain: its records' meshes and triangles are taken as valid,

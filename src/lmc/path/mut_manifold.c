@@ -29,15 +29,50 @@ void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_pertur
   mm->test_glossy_power = 1.0;
 }
 
+/* The walk's numbers (a trace out of the scene reads none). */
+typedef struct mm__smp {
+  lmc_sampler base;
+} mm__smp;
+
+static double mm__half(lmc_sampler *s) {
+  (void)s;
+  return 0.5;
+}
+
+static void mm__stream(lmc_sampler *s, int stream) { (void)s, (void)stream; }
+
 /* Whether vertex i of x is a chain vertex: S (delta) or G (ps_glossy). */
 static int mm__specular(const ps_context *ctx, const ps_path *x, int i) {
   return x->x[i].delta || ps_glossy(ctx, x, i);
+}
+
+/* The sky form: the camera's chain reaches the emitter end, a direction
+ * at infinity that a ray can meet (not a directional light's). */
+static int mm__sky_form(const mut_manifold *mm, const ps_path *x) {
+  const ps_context *ctx = mm->ctx;
+  int k = x->k;
+  const bdpt_vertex *e = &x->x[k].v;
+  if (k < 2 || k - 1 > MF_MAX_CHAIN || !x->x[k].inf) return 0;
+  if (e->light >= 0 && !light_is_infinite(&ctx->sc->lights[e->light])) return 0;
+  for (int j = 1; j < k; j++) {
+    mf_kind kind;
+    double eta;
+    if (x->x[j].v.type != BDPT_VERTEX_SURFACE ||
+        mf_path_vertex(ctx, x, j, MF_PATH_GLOSSY, &kind, &eta) != MF_OK)
+      return 0;
+  }
+  return 1;
 }
 
 int mut_manifold_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int *OUT_c) {
   const ps_context *ctx = mm->ctx;
   int k = x->k, b = 1;
   while (b < k && mm__specular(ctx, x, b)) b++;
+  if (b == k) {
+    if (!mm__sky_form(mm, x)) return 0;
+    *OUT_b = *OUT_c = k;
+    return 1;
+  }
   if (b + 1 >= k || !mm__specular(ctx, x, b + 1)) return 0;
   int c = b + 1;
   while (c < k && mm__specular(ctx, x, c)) c++;
@@ -64,6 +99,62 @@ static int mm__walk(const mut_manifold *mm, const mf_chain *from, vec3 target, m
   return st == MF_OK;
 }
 
+/* Chain vertex j of path p as the walk's vertex: its place, and its kind,
+ * eta and target (its half vector, for a G vertex) from path x, whose
+ * form p keeps (x may be p). */
+static int mm__vertex(const ps_context *ctx, const ps_path *p, const ps_path *x, int j,
+                      mf_vertex *OUT) {
+  const surface_hit *h = &p->x[j].v.hit, *hx = &x->x[j].v.hit;
+  memset(OUT, 0, sizeof *OUT);
+  if (mf_path_vertex(ctx, x, j, MF_PATH_GLOSSY, &OUT->kind, &OUT->eta) != MF_OK) return 0;
+  if (!x->x[j].delta) {
+    mf_vertex vx = *OUT;
+    if (mf_vertex_set(ctx->sc, &vx, hx->mesh, hx->prim, hx->b1, hx->b2) != MF_OK) return 0;
+    mf_half_vector_dirs(&vx, ps_dir(x, j, j - 1), ps_dir(x, j, j + 1), OUT->target);
+  }
+  return mf_vertex_set(ctx->sc, OUT, h->mesh, h->prim, h->b1, h->b2) == MF_OK;
+}
+
+/* The sky form's y: the camera ray through (rx, ry) traced through x_1 ..
+ * x_{k-1}, each about its held half vector (an S vertex's is zero), and
+ * out to the sky. */
+static int mm__generate_sky(const mut_manifold *mm, const ps_path *x, double rx, double ry,
+                            ps_path *y, int64_t *rays) {
+  const ps_context *ctx = mm->ctx;
+  int k = x->k;
+  if (!mut_perturb_first_hit(ctx, rx, ry, &y->x[0].v, &y->x[1].v, rays)) return 0;
+  for (int i = 1; i < k; i++) {
+    mf_vertex v;
+    vec3 wo;
+    if (!mm__vertex(ctx, y, x, i, &v) ||
+        mf_scatter(&v, v3_normalize(v3_sub(y->x[i - 1].v.p, y->x[i].v.p)), &wo) != MF_OK)
+      return 0;
+    if (i + 1 < k) {
+      if (!mut_perturb_trace(ctx, &y->x[i].v, wo, TRANSPORT_RADIANCE, &y->x[i + 1].v, rays))
+        return 0;
+      continue;
+    }
+    /* The last direction must leave the scene. */
+    bdpt_vertex tmp[2];
+    tmp[0] = y->x[i].v;
+    render_counters cnt;
+    memset(&cnt, 0, sizeof cnt);
+    mm__smp smp = {{mm__half, mm__stream, NULL}};
+    int n = bdpt_continue_subpath(ctx->sc, &ctx->rs, &smp.base, TRANSPORT_RADIANCE, y->x[i].v.p,
+                                  wo, 1.0, tmp, 1, 2, &cnt);
+    if (rays) *rays += cnt.rays;
+    if (n != 2 || tmp[1].type != BDPT_VERTEX_LIGHT) return 0;
+    y->x[k].v = tmp[1];
+  }
+  for (int i = 1; i < k; i++) y->x[i].v.delta = x->x[i].v.delta;
+  ps_update(ctx, y, 0, k);
+  for (int i = 1; i < k; i++)
+    if (y->x[i].delta != x->x[i].delta || ps_glossy(ctx, y, i) != ps_glossy(ctx, x, i)) return 0;
+  if (!y->x[k].inf) return 0;
+  ps_total(y);
+  return 1;
+}
+
 int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, double ry,
                           ps_path *OUT_y, int64_t *rays, mut_manifold_tally *tally) {
   const ps_context *ctx = mm->ctx;
@@ -74,6 +165,7 @@ int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, d
   ps_path *y = OUT_y;
   *y = *x;
   y->rays = 0;
+  if (b == x->k) return mm__generate_sky(mm, x, rx, ry, y, rays);
   /* The camera's chain retraced to a new y_b: each S vertex through its
    * lobe, each G vertex about the microfacet normal of its half vector. */
   if (!mut_perturb_first_hit(ctx, rx, ry, &y->x[0].v, &y->x[1].v, rays)) return 0;
@@ -112,6 +204,7 @@ int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_p
                             int64_t *rays, mut_manifold_tally *tally) {
   int b, c;
   if (!mut_manifold_form(mm, x, &b, &c)) return 0;
+  if (b == x->k) return 1; /* the sky form: no walk, the trace is its own inverse */
   mf_chain cy, cz;
   if (mf_chain_from_path(mm->ctx, y, b, c, MF_LIGHT_CHAIN, &cy) != MF_OK) return 0;
   if (!mm__walk(mm, &cy, x->x[b].v.p, &cz, rays, tally)) return 0;
@@ -179,6 +272,27 @@ static double mm__chain_density(const mut_manifold *mm, const ps_path *y, int b,
   return phi / pow(G, mm->test_jac_power);
 }
 
+/* The sky form's density but the offset's: the raster-to-area Jacobian at
+ * y_1 and each further vertex's, the last a direction (solid angle). */
+static double mm__sky_density(const mut_manifold *mm, const ps_path *y) {
+  const ps_context *ctx = mm->ctx;
+  const camera *cam = &ctx->sc->cam;
+  int k = y->k;
+  double jac = (double)cam->width * cam->height * y->x[1].pdf_cam;
+  for (int i = 1; i < k && jac > 0.0; i++) {
+    double area = i + 1 < k ? ps_area_jacobian(ctx, y, i, i + 1) : 1.0;
+    if (y->x[i].delta) {
+      jac *= area;
+      continue;
+    }
+    mf_vertex v;
+    if (!mm__vertex(ctx, y, y, i, &v)) return 0.0;
+    double jw = mf_half_vector_dir_jacobian(&v, ps_dir(y, i, i - 1), ps_dir(y, i, i + 1));
+    jac *= pow(jw, mm->test_glossy_power) * area;
+  }
+  return jac;
+}
+
 double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_path *y) {
   int bx, cx, by, cy;
   if (y->k != x->k || !mut_manifold_form(mm, x, &bx, &cx) || !mut_manifold_form(mm, y, &by, &cy) ||
@@ -187,6 +301,7 @@ double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_p
   double dr = hypot(y->rx - x->rx, y->ry - x->ry);
   double p = mut_perturb_log_pdf(mm->mp->r1, mm->mp->r2, dr) / (2.0 * MM_PI * dr);
   if (!(p > 0.0)) return 0.0;
+  if (bx == x->k) return p * mm__sky_density(mm, y);
   return p * mm__camera_density(mm, y, bx) * mm__chain_density(mm, y, bx, cx);
 }
 

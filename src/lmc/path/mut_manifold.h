@@ -19,6 +19,15 @@
  * paper's torus, E G+ D G+ L), and the lens and multi-chain perturbations
  * move it only apart when both sides of x_b are specular.
  *
+ * The sky form. x_1 .. x_{k-1} are S or G and x_k is a direction at
+ * infinity that a ray can meet (an environment, a constant or sunsky
+ * emitter; not a directional light): the camera's chain reaches the sky
+ * (a glass cube seen against the sky, the torus's other paths, E G+ L).
+ * mut_manifold_form gives b = c = k. The camera ray through the moved
+ * image point is traced through x_1 .. x_{k-1} about their held half
+ * vectors (mf_scatter) and must leave the scene; y_k is its direction.
+ * There is no walk: the trace is its own inverse.
+ *
  * The move. The raster point moves by the lens perturbation's offset
  * (mut_perturb.h: length with density proportional to 1/r on [r1, r2],
  * uniform angle); the camera ray through it is traced through x_1 ..
@@ -61,6 +70,12 @@
  * half-vector measure is the same at x and y (the held h_i are equal), so
  * it cancels in the acceptance f(y) T(y -> x) / (f(x) T(x -> y)), as do
  * the offsets' densities.
+ *
+ * The sky form's density: p_r(|dr|) / (2 pi |dr|) W H pdf_cam(y_1)
+ * prod_{i=1..k-1} K_i, with K_i as above for i < k - 1 and, for the
+ * direction y_k, 1 after an S vertex (its Dirac reduced) and |det d h_{k-1}
+ * / d omega| (mf_half_vector_dir_jacobian) after a G vertex; a G vertex's
+ * K_i before a surface is the same determinant times |cos y_{i+1}| / d^2.
  */
 #ifndef LMC_PATH_MUT_MANIFOLD_H
 #define LMC_PATH_MUT_MANIFOLD_H
