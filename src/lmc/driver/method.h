@@ -30,6 +30,7 @@
 #include <stdint.h>
 
 #include "lmc/kernels/chain.h"
+#include "lmc/kernels/kernel_mix.h"
 #include "lmc/driver/space.h"
 #include "render/error.h"
 #include "render/options.h"
@@ -122,17 +123,24 @@ const mc_method *mc_method_find(const char *name);
  * thread; at most 8. Fails on a name already taken. */
 lmc_status mc_method_register(const mc_method *m, lmc_error *err);
 
-/* The default mix of Kelemen et al. 2002 and Hachisuka et al. 2014
- * (kernel_mix.c): the large step with probability ms->largestep, the small
- * step (Kelemen's with offsets in (1/1024, ms->sigma], or --small-step
- * gauss) and, on a family with a technique coordinate, the technique
- * mutation (--technique-prob of the rest, 0.1). Returns the kernels' count. */
-int mc_kernels_metropolis(const mcmc_settings *ms, const mc_space_family *F, mc_kernel *OUT_k,
-                          double *OUT_p);
-
-/* --largestep-scale: the large step's probability (kernel 0, when it is
- * the large step) times scale, at most 1, and the others' together scaled
- * by what is left (kernel_mix.c). */
-void mc_kernels_scale_large(const mc_kernel *k, double *p, int n, double scale);
+/* The numbers of a chain's mix (kernels/kernel_mix.h) for family F from
+ * the driver's flags: the large step with probability ms->largestep, the
+ * small step (Kelemen's with offsets in (1/1024, ms->sigma], or
+ * --small-step gauss of scale ms->sigma) and, on a family with a technique
+ * coordinate, the technique mutation (--technique-prob of the rest, 0.1).
+ * An integrator with a proposal of its own sets small, extra and
+ * min_length (and its own s1, s2) before calling mc_kernels_metropolis. */
+static inline mc_mix_params mc_mix_params_from(const mcmc_settings *ms, const mc_space_family *F) {
+  mc_mix_params mp = {0};
+  mp.large = ms->largestep;
+  mp.technique = ms->technique_prob;
+  mp.coord = F->technique;
+  mp.gauss = ms->small_gauss;
+  mp.sigma = ms->sigma;
+  mp.s1 = 1.0 / 1024.0;
+  mp.s2 = ms->sigma;
+  mp.length = F->length;
+  return mp;
+}
 
 #endif

@@ -96,23 +96,15 @@ static int h2mc__chain_kernels(void *r, const mc_method_setup *setup, int i,
                                const mc_space_family *F, mc_kernel *OUT_k, double *OUT_p) {
   (void)setup;
   h2mc_run *run = r;
-  double large = run->ms.largestep, iso = run->hs.iso_prob;
-  double tech = F->technique >= 0 ? run->ms.technique_prob * (1.0 - large) : 0.0;
-  int n = 0;
-  OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
-  OUT_k[n] = run->ms.small_gauss ? mc_kernel_small_gauss(run->ms.sigma)
-                                 : mc_kernel_small(run->kp.s1, run->kp.s2);
-  OUT_p[n++] = iso;
-  /* Short paths: H2MC's slot gets nothing, the mix is renormalised. */
-  if (F->length >= 1 && F->length < H2MC_MIN_LENGTH) iso = 1.0 - large - tech;
-  OUT_k[n] = h2mc_kernel_make(&run->h2[i]);
-  OUT_p[n++] = fmax(0.0, 1.0 - large - iso - tech);
-  if (tech > 0.0) {
-    OUT_k[n] = mc_kernel_technique(F->technique);
-    OUT_k[n].s1 = run->kp.s1, OUT_k[n].s2 = run->kp.s2;
-    OUT_p[n++] = tech;
-  }
-  return n;
+  /* The driver's mix (kernel_mix.h), H2MC's proposal in what the large
+   * step, Kelemen's isotropic step and the technique mutation leave; short
+   * paths give H2MC's slot nothing, the mix is renormalised. */
+  mc_mix_params mp = mc_mix_params_from(&run->ms, F);
+  mp.s1 = run->kp.s1, mp.s2 = run->kp.s2;
+  mp.small = run->hs.iso_prob;
+  mp.min_length = H2MC_MIN_LENGTH;
+  mc_kernel own = h2mc_kernel_make(&run->h2[i]);
+  return mc_kernels_metropolis(&mp, &own, NULL, OUT_k, OUT_p);
 }
 
 /* Every chain's kernel counters summed over the ranks (method.h). */

@@ -196,36 +196,26 @@ static lmc_status lmc_run_set_chains(lmc_run *run, int n, const int *family, lmc
   return LMC_OK;
 }
 
-/* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]. */
+/* The kernels and probabilities of chain i into k[MC_MAX_KERNELS], p[]:
+ * the driver's mix (kernel_mix.h) with MALA in what the large step,
+ * Kelemen's isotropic step (--iso-prob), the technique mutation and the
+ * cache's independence proposal leave. */
 static int lmc_run_chain_kernels(lmc_run *run, int i, mc_kernel *OUT_k, double *OUT_p) {
   lmc__family *F = &run->fam[run->chain_fam[i]];
-  double large = run->ms.largestep, iso = run->ls.iso_prob;
-  double indep = run->ls.adapt == LMC_ADAPT_CACHE ? run->ls.cache_indep : 0.0;
-  int length = F->sf->length;
-  double tech = F->sf->technique >= 0 ? run->ms.technique_prob * (1.0 - large) : 0.0;
-  int n = 0;
-  OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
-  OUT_k[n] = run->ms.small_gauss ? mc_kernel_small_gauss(run->ms.sigma)
-                                 : mc_kernel_small(F->kp.s1, F->kp.s2);
-  OUT_p[n++] = iso;
+  mc_mix_params mp = mc_mix_params_from(&run->ms, F->sf);
+  mp.s1 = F->kp.s1, mp.s2 = F->kp.s2;
+  mp.small = run->ls.iso_prob;
+  mp.extra = run->ls.adapt == LMC_ADAPT_CACHE ? run->ls.cache_indep : 0.0;
   /* Paths of one or two segments (emitters seen directly, direct light on
    * a surface) get Kelemen's step instead of MALA: f is smooth there, and a
    * gradient costs more than the few more mutations it saves. */
-  if (length >= 1 && length < LMC_MALA_MIN_LENGTH) iso = 1.0 - large - indep - tech;
+  mp.min_length = LMC_MALA_MIN_LENGTH;
   /* Stage 2 of --adapt cache on labelled states: the cached walk in
    * MALA's slot (no gradients), unless --cache-gradient on. */
-  if (run->cwalk_on && run->cwalk[i].cache)
-    OUT_k[n] = lmc_cwalk_kernel(&run->cwalk[i]);
-  else
-    OUT_k[n] = lmc_mala_kernel(&run->mala[i]);
-  OUT_p[n++] = fmax(0.0, 1.0 - large - iso - indep - tech);
-  if (tech > 0.0) {
-    OUT_k[n] = mc_kernel_technique(F->sf->technique);
-    OUT_k[n].s1 = F->kp.s1, OUT_k[n].s2 = F->kp.s2;
-    OUT_p[n++] = tech;
-  }
-  if (indep > 0.0) OUT_k[n] = lmc_indep_kernel(&F->indep), OUT_p[n++] = indep;
-  return n;
+  mc_kernel own = run->cwalk_on && run->cwalk[i].cache ? lmc_cwalk_kernel(&run->cwalk[i])
+                                                       : lmc_mala_kernel(&run->mala[i]);
+  mc_kernel indep = lmc_indep_kernel(&F->indep);
+  return mc_kernels_metropolis(&mp, &own, &indep, OUT_k, OUT_p);
 }
 
 /* Over several MPI ranks (dist.h) each rank's chains recorded their own

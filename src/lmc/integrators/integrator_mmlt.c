@@ -4,7 +4,7 @@
  * driver (method.h) and by default the mmlt states (mmlt_states.h: one
  * family of chains per path length, each state a strategy (s, t) and its
  * numbers). Its chains mix the large step, Kelemen's small step and the
- * technique mutation, which redraws the strategy (mc_kernels_metropolis).
+ * technique mutation, which redraws the strategy (kernel_mix.h).
  * The families' shares of the mutations follow their b (the driver's
  * allocation), as a single multiplexed chain's would. The states' own
  * moves, reversible jumps between strategies (--technique-jump) and
@@ -16,7 +16,8 @@
 static int mmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
                                const mc_space_family *F, mc_kernel *k, double *p) {
   (void)run, (void)i;
-  return mc_kernels_metropolis(setup->ms, F, k, p);
+  mc_mix_params mp = mc_mix_params_from(setup->ms, F);
+  return mc_kernels_metropolis(&mp, NULL, NULL, k, p);
 }
 
 const mc_method mc_method_mmlt = {

@@ -1,26 +1,50 @@
 /*
- * kernel_mix.c: the kernel mixes that several integrators share
- * (method.h): Kelemen's and Hachisuka's default mix, and the
+ * kernel_mix.c: the mix of kernels that pssmlt, mmlt, lmc and h2mc share
+ * (kernel_mix.h): Kelemen's and Hachisuka's large, small and technique
+ * steps, with an integrator's own proposal in what they leave; and the
  * --largestep-scale rescaling of a mix's probabilities.
  */
+#include "lmc/kernels/kernel_mix.h"
+
 #include <math.h>
 
-#include "lmc/driver/method.h"
-
-int mc_kernels_metropolis(const mcmc_settings *ms, const mc_space_family *F, mc_kernel *OUT_k,
-                          double *OUT_p) {
-  double large = ms->largestep;
-  OUT_k[0] = mc_kernel_large();
-  OUT_p[0] = large;
-  OUT_k[1] = ms->small_gauss ? mc_kernel_small_gauss(ms->sigma)
-                             : mc_kernel_small(1.0 / 1024.0, ms->sigma);
-  OUT_p[1] = 1.0 - large;
-  if (F->technique < 0) return 2;
-  /* The technique mutation: the strategy redrawn, the rest small steps. */
-  OUT_k[2] = mc_kernel_technique(F->technique);
-  OUT_p[1] = (1.0 - ms->technique_prob) * (1.0 - large);
-  OUT_p[2] = ms->technique_prob * (1.0 - large);
-  return 3;
+int mc_kernels_metropolis(const mc_mix_params *mp, const mc_kernel *own, const mc_kernel *extra,
+                          mc_kernel *OUT_k, double *OUT_p) {
+  double large = mp->large;
+  int n = 0;
+  /* The large step, then the small step: Gaussian, or Kelemen's. */
+  OUT_k[n] = mc_kernel_large(), OUT_p[n++] = large;
+  OUT_k[n] = mp->gauss ? mc_kernel_small_gauss(mp->sigma) : mc_kernel_small(mp->s1, mp->s2);
+  if (!own) {
+    /* Kelemen's and Hachisuka's mix: the small step takes the rest, less
+     * the technique mutation's share of it. */
+    if (mp->coord < 0) {
+      OUT_p[n++] = 1.0 - large;
+      return n;
+    }
+    OUT_p[n++] = (1.0 - mp->technique) * (1.0 - large);
+    OUT_k[n] = mc_kernel_technique(mp->coord);
+    OUT_k[n].s1 = mp->s1, OUT_k[n].s2 = mp->s2;
+    OUT_p[n++] = mp->technique * (1.0 - large);
+    return n;
+  }
+  /* An integrator's own proposal: the small step a fixed share, the
+   * technique mutation its share of the rest, the extra kernel its own. */
+  double small = mp->small, xp = extra ? mp->extra : 0.0;
+  double tech = mp->coord >= 0 ? mp->technique * (1.0 - large) : 0.0;
+  OUT_p[n++] = small;
+  /* Short paths: the own proposal's slot gets nothing (up to rounding),
+   * the chain renormalises the mix. */
+  if (mp->length >= 1 && mp->length < mp->min_length) small = 1.0 - large - xp - tech;
+  OUT_k[n] = *own;
+  OUT_p[n++] = fmax(0.0, 1.0 - large - small - xp - tech);
+  if (tech > 0.0) {
+    OUT_k[n] = mc_kernel_technique(mp->coord);
+    OUT_k[n].s1 = mp->s1, OUT_k[n].s2 = mp->s2;
+    OUT_p[n++] = tech;
+  }
+  if (xp > 0.0) OUT_k[n] = *extra, OUT_p[n++] = xp;
+  return n;
 }
 
 void mc_kernels_scale_large(const mc_kernel *k, double *p, int n, double scale) {
