@@ -29,18 +29,6 @@ void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_pertur
   mm->test_glossy_power = 1.0;
 }
 
-/* The walk's numbers (a trace out of the scene reads none). */
-typedef struct mm__smp {
-  lmc_sampler base;
-} mm__smp;
-
-static double mm__half(lmc_sampler *s) {
-  (void)s;
-  return 0.5;
-}
-
-static void mm__stream(lmc_sampler *s, int stream) { (void)s, (void)stream; }
-
 /* Whether vertex i of x is a chain vertex: S (delta) or G (ps_glossy). */
 static int mm__specular(const ps_context *ctx, const ps_path *x, int i) {
   return x->x[i].delta || ps_glossy(ctx, x, i);
@@ -135,16 +123,7 @@ static int mm__generate_sky(const mut_manifold *mm, const ps_path *x, double rx,
       continue;
     }
     /* The last direction must leave the scene. */
-    bdpt_vertex tmp[2];
-    tmp[0] = y->x[i].v;
-    render_counters cnt;
-    memset(&cnt, 0, sizeof cnt);
-    mm__smp smp = {{mm__half, mm__stream, NULL}};
-    int n = bdpt_continue_subpath(ctx->sc, &ctx->rs, &smp.base, TRANSPORT_RADIANCE, y->x[i].v.p,
-                                  wo, 1.0, tmp, 1, 2, &cnt);
-    if (rays) *rays += cnt.rays;
-    if (n != 2 || tmp[1].type != BDPT_VERTEX_LIGHT) return 0;
-    y->x[k].v = tmp[1];
+    if (!mut_perturb_trace_sky(ctx, &y->x[i].v, wo, &y->x[k].v, rays)) return 0;
   }
   for (int i = 1; i < k; i++) y->x[i].v.delta = x->x[i].v.delta;
   ps_update(ctx, y, 0, k);

@@ -139,8 +139,10 @@ int mut_perturb_forced_dir(const bdpt_vertex *v, vec3 wo, int trans, transport_m
   return 0;
 }
 
-int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
-                      transport_mode mode, bdpt_vertex *OUT, int64_t *rays) {
+/* The type of the vertex bdpt's walk records from `from` along dir into
+ * *OUT; -1 when it records none. */
+static int mp__next(const ps_context *ctx, const bdpt_vertex *from, vec3 dir, transport_mode mode,
+                    bdpt_vertex *OUT, int64_t *rays) {
   bdpt_vertex tmp[2];
   tmp[0] = *from;
   mp__smp smp = {{mp__half, mp__stream, NULL}};
@@ -149,9 +151,25 @@ int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
   int n = bdpt_continue_subpath(ctx->sc, &ctx->rs, &smp.base, mode, from->p, dir, 1.0, tmp, 1, 2,
                                 &cnt);
   if (rays) *rays += cnt.rays;
-  if (n != 2 || tmp[1].type != BDPT_VERTEX_SURFACE) return 0;
+  if (n != 2) return -1;
   *OUT = tmp[1];
+  return (int)OUT->type;
+}
+
+int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
+                      transport_mode mode, bdpt_vertex *OUT, int64_t *rays) {
+  bdpt_vertex v;
+  if (mp__next(ctx, from, dir, mode, &v, rays) != BDPT_VERTEX_SURFACE) return 0;
+  *OUT = v;
   OUT->delta = 0;
+  return 1;
+}
+
+int mut_perturb_trace_sky(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
+                          bdpt_vertex *OUT, int64_t *rays) {
+  bdpt_vertex v;
+  if (mp__next(ctx, from, dir, TRANSPORT_RADIANCE, &v, rays) != BDPT_VERTEX_LIGHT) return 0;
+  *OUT = v;
   return 1;
 }
 

@@ -170,6 +170,11 @@ int mut_perturb_trace(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
                       transport_mode mode, bdpt_vertex *OUT, int64_t *rays);
 int mut_perturb_first_hit(const ps_context *ctx, double rx, double ry, bdpt_vertex *OUT_pinhole,
                           bdpt_vertex *OUT_hit, int64_t *rays);
+/* The escape of a camera-side ray from `from` along dir to the infinite
+ * lights: the endpoint at infinity bdpt's walk records (light -1); 0 when
+ * the ray hits a surface or the scene has no infinite light. */
+int mut_perturb_trace_sky(const ps_context *ctx, const bdpt_vertex *from, vec3 dir,
+                          bdpt_vertex *OUT, int64_t *rays);
 
 /* The offset distributions: a length on [lo, hi] with density 1 / (t
  * ln(hi / lo)) from u in [0, 1), and that density (0 outside). */
