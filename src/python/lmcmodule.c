@@ -6,7 +6,8 @@
  *   r = lmc.render(scene, integrator="pt", spp=16, seed=1, threads=2, **flags)
  *   r.image, r.error, r.stats, r.save("out.exr")
  *   lmc.read("x.exr"), lmc.compare(a, b)
- *   t = lmc.target(scene, space="bdpt", **flags); t.dim, t.f(u), t.grad(u)
+ *   t = lmc.target(scene, space="bdpt", **flags); t.dim, t.f(u), t.grad(u),
+ *   t.hessian(u), t.value(u) (alias t.contribution), t.sample_bootstrap(n, seed)
  *
  * Flags. render and target take every flag of `lmc render` by its name,
  * dashes as underscores (largestep=0.3, adapt="cache"); a value is given
@@ -23,8 +24,11 @@
  * drivers' snapshots (what --snapshot uses): fn(image so far, seconds)
  * with the GIL taken for the call only; an exception from fn stops the
  * render as a Ctrl-C does and propagates. Either exception carries the
- * image of the samples so far as e.lmc_result. A target evaluates with
- * the GIL held (its scratch is one per target object).
+ * image of the samples so far as e.lmc_result. A target evaluates a
+ * batch of states without the GIL, under the target's own lock (its
+ * scratch is one per target object: calls on one target take turns,
+ * targets run in parallel); sample_bootstrap draws without the GIL, on
+ * OpenMP threads of chains of its own.
  *
  * Ownership. A Scene owns its scene; a Result owns its pixels, which
  * r.image views (each access a new view, which keeps the Result alive;

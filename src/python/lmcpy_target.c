@@ -1,17 +1,32 @@
 /*
  * lmcpy_target.c: the module's Target (lmc.target): the target a state
  * space's chains sample, f and its gradient on NumPy arrays, evaluated with
- * the same code the C kernels use (lmcmodule.c has the module's overview).
+ * the same code the C kernels use (lmcmodule.c has the module's overview),
+ * and the samples of the MCMC driver's bootstrap with its estimate of b,
+ * drawn by the driver's own functions (sample_bootstrap, below).
+ *
+ * Threads: a batch's loop runs without the GIL under the target's lock
+ * (lmcpy_enter); the states are the call's own copy, checked before the
+ * loop. sample_bootstrap uses chains of its own, one per OpenMP thread,
+ * never the target's scratch.
  */
 #define NO_IMPORT_ARRAY
 #include "lmcpy.h"
 
+#include <limits.h>
 #include <math.h>
+#include <omp.h>
+#include <pythread.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "lmc/driver/mcmc_internal.h"
 #include "lmc/driver/space.h"
+#include "lmc/kernels/pss.h"
 #include "lmc/states/bdpt_states.h"
+
+/* Batches of at least this many states are evaluated without the GIL. */
+#define LMCPY_NOGIL_BATCH 16
 
 /* --- Target ---------------------------------------------------------------------- */
 
@@ -27,7 +42,30 @@ typedef struct {
   double *grad;         /* owned: dim entries */
   int *hidx;            /* owned: MC_HESS_MAX entries (made by the first hessian call) */
   double *hess;         /* owned: the packed upper triangle of MC_HESS_MAX coordinates */
+  PyThread_type_lock lock; /* owned: held while scratch, grad, contribs, hidx, hess are used */
 } lmcpy_target;
+
+/* An evaluation loop over n states uses the target's scratch under its
+ * lock; from LMCPY_NOGIL_BATCH states on it runs without the GIL, so that
+ * other Python threads (and other targets' loops) run meanwhile. The lock
+ * is taken after the GIL is dropped and released before it is taken back:
+ * its holder never waits for the GIL, so a thread that waits for the lock
+ * holding the GIL (a small batch) cannot deadlock. */
+typedef struct lmcpy_section {
+  PyThreadState *ts; /* NULL: the GIL is held */
+} lmcpy_section;
+
+static lmcpy_section lmcpy_enter(PyThread_type_lock lock, npy_intp n) {
+  lmcpy_section sec = {NULL};
+  if (n >= LMCPY_NOGIL_BATCH) sec.ts = PyEval_SaveThread();
+  PyThread_acquire_lock(lock, WAIT_LOCK);
+  return sec;
+}
+
+static void lmcpy_leave(PyThread_type_lock lock, lmcpy_section sec) {
+  PyThread_release_lock(lock);
+  if (sec.ts) PyEval_RestoreThread(sec.ts);
+}
 
 static void lmcpy_target_dealloc(lmcpy_target *self) {
   if (self->scratch && self->T->scratch_destroy) self->T->scratch_destroy(self->scratch);
@@ -36,6 +74,7 @@ static void lmcpy_target_dealloc(lmcpy_target *self) {
   free(self->grad);
   free(self->hidx);
   free(self->hess);
+  if (self->lock) PyThread_free_lock(self->lock);
   if (self->scene) lmcpy_release(self->scene);
   Py_XDECREF(self->scene);
   Py_TYPE(self)->tp_free((PyObject *)self);
@@ -116,6 +155,12 @@ PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs) {
   self->grad = NULL;
   self->hidx = NULL;
   self->hess = NULL;
+  self->lock = PyThread_allocate_lock();
+  if (!self->lock) {
+    free(F);
+    Py_DECREF(self);
+    return PyErr_NoMemory();
+  }
   if (!lmcpy_resolution(sc, F)) {
     free(F);
     Py_DECREF(self);
@@ -179,10 +224,13 @@ PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs) {
 }
 
 /* u as a C array of float64, shape (dim,) or (N, dim), every number in
- * [0, 1); *OUT_batch: 1 for (N, dim). NULL and ValueError otherwise. */
+ * [0, 1); *OUT_batch: 1 for (N, dim). NULL and ValueError otherwise. The
+ * array is the call's own copy: another thread may change the caller's
+ * while the loop runs without the GIL, and must not slip a number past
+ * the check. */
 static PyArrayObject *lmcpy_states(lmcpy_target *self, PyObject *u, int *OUT_batch) {
-  PyArrayObject *a =
-      (PyArrayObject *)PyArray_FROM_OTF(u, NPY_FLOAT64, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_FORCECAST);
+  PyArrayObject *a = (PyArrayObject *)PyArray_FROM_OTF(
+      u, NPY_FLOAT64, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_FORCECAST | NPY_ARRAY_ENSURECOPY);
   if (!a) return NULL;
   int dim = self->T->dim, nd = PyArray_NDIM(a);
   if (!((nd == 1 && PyArray_DIM(a, 0) == dim) || (nd == 2 && PyArray_DIM(a, 1) == dim))) {
@@ -295,15 +343,18 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
   }
   const double *u = PyArray_DATA(a);
   double *f = PyArray_DATA(fo), *g = go ? PyArray_DATA(go) : NULL;
-  for (npy_intp i = 0; i < n; i++)
-    if (lmcpy_eval(self, u + i * dim, label, &f[i], g ? g + i * dim : NULL)) {
-      Py_DECREF(a);
-      Py_DECREF(fo);
-      Py_XDECREF(go);
-      PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
-      return NULL;
-    }
+  int failed = 0;
+  lmcpy_section sec = lmcpy_enter(self->lock, n);
+  for (npy_intp i = 0; i < n && !failed; i++)
+    failed = lmcpy_eval(self, u + i * dim, label, &f[i], g ? g + i * dim : NULL) != 0;
+  lmcpy_leave(self->lock, sec);
   Py_DECREF(a);
+  if (failed) {
+    Py_DECREF(fo);
+    Py_XDECREF(go);
+    PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
+    return NULL;
+  }
   if (want_grad) {
     Py_DECREF(fo);
     return (PyObject *)go;
@@ -321,25 +372,23 @@ static PyObject *lmcpy_target_grad(lmcpy_target *self, PyObject *args, PyObject 
   return lmcpy_target_call(self, args, kwargs, 1);
 }
 
-/* t.contribution(u, label=None): what each state adds to the image, as the
- * chains splat it: its RGB value (the chain's splat is value / f times
- * the normalisation) and its raster position (rx, ry) in pixels (the film
- * grown by the filter's radius: pixel (x, y) covers [x, x + 1) x [y, y + 1)
- * under a box filter). Returns (value, raster): shapes (3,), (2,) or
- * (N, 3), (N, 2). A labelled target needs the label (the value is f(u, l)'s). */
-static PyObject *lmcpy_target_contribution(lmcpy_target *self, PyObject *args,
-                                           PyObject *kwargs) {
+/* t.value(u, label=None) (and its alias t.contribution): what each state
+ * adds to the image, as the chains splat it: its RGB value (the chain's
+ * splat is value / f times the normalisation) and its raster position
+ * (rx, ry) in pixels (the film grown by the filter's radius: pixel (x, y)
+ * covers [x, x + 1) x [y, y + 1) under a box filter). Returns (value,
+ * raster): shapes (3,), (2,) or (N, 3), (N, 2). A labelled target needs
+ * the label (the value is f(u, l)'s). */
+static PyObject *lmcpy_target_value(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
   static char *kwlist[] = {"u", "label", NULL};
   PyObject *uo, *lo = NULL;
-  if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|O:contribution", kwlist, &uo, &lo))
-    return NULL;
+  if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|O:value", kwlist, &uo, &lo)) return NULL;
   const mc_target *T = self->T;
   int label, batch;
   if (!lmcpy_label(self, lo, &label)) return NULL;
   if (T->n_labels > 0 && label < 0)
     return PyErr_Format(PyExc_ValueError,
-                        "label: the contribution is a label's (t.contribution(u, label=l), l in "
-                        "0 .. %d)",
+                        "label: the value is a label's (t.value(u, label=l), l in 0 .. %d)",
                         T->n_labels - 1);
   PyArrayObject *a = lmcpy_states(self, uo, &batch);
   if (!a) return NULL;
@@ -353,18 +402,21 @@ static PyObject *lmcpy_target_contribution(lmcpy_target *self, PyObject *args,
   if (!vo || !ro) goto fail;
   const double *u = PyArray_DATA(a);
   double *val = PyArray_DATA(vo), *ras = PyArray_DATA(ro);
-  for (npy_intp i = 0; i < n; i++) {
+  int failed = 0;
+  lmcpy_section sec = lmcpy_enter(self->lock, n);
+  for (npy_intp i = 0; i < n && !failed; i++) {
     lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
     mc_value v;
     memset(&v, 0, sizeof v);
-    int r = T->n_labels > 0 ? T->eval_label(T, self->scratch, &smp.base, label, &v, NULL, NULL)
-                            : T->eval(T, self->scratch, &smp.base, &v, NULL, NULL);
-    if (r) {
-      PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
-      goto fail;
-    }
+    failed = T->n_labels > 0 ? T->eval_label(T, self->scratch, &smp.base, label, &v, NULL, NULL)
+                             : T->eval(T, self->scratch, &smp.base, &v, NULL, NULL);
     val[3 * i] = v.value.r, val[3 * i + 1] = v.value.g, val[3 * i + 2] = v.value.b;
     ras[2 * i] = v.rx, ras[2 * i + 1] = v.ry;
+  }
+  lmcpy_leave(self->lock, sec);
+  if (failed) {
+    PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
+    goto fail;
   }
   Py_DECREF(a);
   return Py_BuildValue("(NN)", (PyObject *)vo, (PyObject *)ro);
@@ -419,7 +471,9 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
   if (!ho || (with_grad && (!go || !fo))) goto fail;
   const double *u = PyArray_DATA(a);
   double *H = PyArray_DATA(ho), *g = go ? PyArray_DATA(go) : NULL, *f = fo ? PyArray_DATA(fo) : NULL;
-  for (npy_intp i = 0; i < n; i++) {
+  int failed = 0;
+  lmcpy_section sec = lmcpy_enter(self->lock, n);
+  for (npy_intp i = 0; i < n && !failed; i++) {
     /* Evaluate f, its gradient and its Hessian at state i. */
     lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
     mc_value v;
@@ -427,8 +481,8 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
     int grad_ok = 0, hess_ok = 0, hn = 0;
     if (T->eval_hess(T, self->scratch, &smp.base, label, &v, self->grad, &grad_ok, &hn,
                      self->hidx, self->hess, &hess_ok)) {
-      PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
-      goto fail;
+      failed = 1;
+      break;
     }
     double *Hi = H + (size_t)i * (size_t)dim * (size_t)dim;
     if (f) f[i] = v.f;
@@ -448,6 +502,11 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
       }
     }
   }
+  lmcpy_leave(self->lock, sec);
+  if (failed) {
+    PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
+    goto fail;
+  }
   Py_DECREF(a);
   if (!with_grad) return (PyObject *)ho;
   PyObject *fv = batch ? (PyObject *)fo : PyFloat_FromDouble(f[0]);
@@ -466,6 +525,170 @@ fail:
   return NULL;
 }
 
+/* --- the bootstrap's samples ----------------------------------------------------- */
+
+/* t.sample_bootstrap(n, seed=1, threads=None): the independent samples the
+ * MCMC driver's bootstrap draws for this family, by the driver's own
+ * functions (mcmc_b.c's mcmc__bootstrap_draw, whose loop alone is
+ * written again here): sample j is mc_eval_independent of the stream (seed,
+ * mcmc__boot_seq(g, j)); mc_boot_run with a fixed size (--bootstrap n)
+ * makes b and its variance (mc_boot_update); the state sample j is, as a
+ * chain's start, is what mc_chain_start makes of the same stream (the
+ * label drawn from the stream of chain j, mcmc__chain_seq(g, j)), its
+ * numbers from the chain's lazy vector. A space with its own estimator of
+ * b (mmlt's: every length from whole BDPT samples) gives b by it, with n
+ * samples, as the driver does; the samples then only pick starting
+ * states, as in the driver. */
+
+typedef struct lmcpy_boot {
+  const mc_target *T;
+  int family, nthreads;
+  uint64_t seed;
+  mc_chain **chains; /* one per thread (owned by the caller) */
+  double *u;         /* OUT: n x dim, the states' numbers */
+  int *label;        /* OUT: n, the states' labels (-1: unlabelled) */
+  double *f_state;   /* OUT: n, f of the states (f(u, l) for labelled ones) */
+} lmcpy_boot;
+
+/* mc_boot_draw_fn for one family: samples [boot->n, to[0]). */
+static void lmcpy_boot_draw(void *ctx, mc_boot *boot, int n_fam, const int64_t *to) {
+  lmcpy_boot *C = ctx;
+  const mc_target *T = C->T;
+  const int dim = T->dim;
+  const int64_t from = boot->n, end = to[0];
+  (void)n_fam;
+#pragma omp parallel num_threads(C->nthreads)
+  {
+    mc_chain *c = C->chains[omp_get_thread_num()];
+#pragma omp for schedule(dynamic, 64)
+    for (int64_t j = from; j < end; j++) {
+      /* The bootstrap's value, then the state a chain starting there takes. */
+      const uint64_t seq = mcmc__boot_seq(C->family, j);
+      boot->f[j] = mc_eval_independent(T, c->scratch, C->seed, seq, NULL);
+      C->f_state[j] = mc_chain_start(c, C->seed, seq, mcmc__chain_seq(C->family, (int)j));
+      C->label[j] = T->n_labels > 0 ? c->x.label : -1;
+      mc_pss_materialise(c->pss, C->u + j * dim);
+    }
+  }
+}
+
+/* An int argument in [lo, hi] (0 and ValueError naming it otherwise). */
+static int lmcpy_int_arg(PyObject *o, const char *name, long long lo, long long hi,
+                         long long *OUT) {
+  long long v = -1;
+  int overflow = 0;
+  if (o && PyLong_Check(o) && !PyBool_Check(o)) v = PyLong_AsLongLongAndOverflow(o, &overflow);
+  if (v == -1 && PyErr_Occurred()) return 0;
+  if (!o || !PyLong_Check(o) || PyBool_Check(o) || overflow || v < lo || v > hi) {
+    PyErr_Format(PyExc_ValueError, "%s: %R is not an integer in [%lld, %lld]", name,
+                 o ? o : Py_None, lo, hi);
+    return 0;
+  }
+  *OUT = v;
+  return 1;
+}
+
+static PyObject *lmcpy_target_sample_bootstrap(lmcpy_target *self, PyObject *args,
+                                               PyObject *kwargs) {
+  static char *kwlist[] = {"n", "seed", "threads", NULL};
+  PyObject *no, *so = NULL, *to = NULL;
+  if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|OO:sample_bootstrap", kwlist, &no, &so, &to))
+    return NULL;
+  long long n, seed = 1, threads = omp_get_max_threads();
+  /* n: the samples live in memory (n x dim doubles), and a chain's stream
+   * number is an int. */
+  if (!lmcpy_int_arg(no, "n", 1, INT_MAX, &n)) return NULL;
+  if (so && so != Py_None && !lmcpy_int_arg(so, "seed", 0, INT64_MAX, &seed)) return NULL;
+  if (to && to != Py_None && !lmcpy_int_arg(to, "threads", 1, 1024, &threads)) return NULL;
+  const mc_target *T = self->T;
+  const int dim = T->dim;
+  npy_intp udims[2] = {(npy_intp)n, dim}, ndims[1] = {(npy_intp)n};
+  PyArrayObject *uo = (PyArrayObject *)PyArray_SimpleNew(2, udims, NPY_FLOAT64);
+  PyArrayObject *fo = (PyArrayObject *)PyArray_SimpleNew(1, ndims, NPY_FLOAT64);
+  PyArrayObject *so_ = (PyArrayObject *)PyArray_SimpleNew(1, ndims, NPY_FLOAT64);
+  PyArrayObject *lo = (PyArrayObject *)PyArray_SimpleNew(1, ndims, NPY_INT32);
+  mc_chain **chains = calloc((size_t)threads, sizeof *chains);
+  mc_boot *boot = calloc((size_t)(self->sp.n_fam > 0 ? self->sp.n_fam : 1), sizeof *boot);
+  render_counters *cnt = calloc((size_t)threads, sizeof *cnt);
+  PyObject *res = NULL;
+  if (!uo || !fo || !so_ || !lo) goto done;
+  if (!chains || !boot || !cnt) {
+    PyErr_NoMemory();
+    goto done;
+  }
+  /* One chain per thread, with the large step alone (it only starts). */
+  mc_kernel large;
+  memset(&large, 0, sizeof large);
+  large.name = "large";
+  large.kind = MC_KERNEL_LARGE;
+  const double prob = 1.0;
+  lmc_error err;
+  lmc_error_clear(&err);
+  for (int i = 0; i < threads; i++)
+    if (mc_chain_create(&chains[i], T, &large, &prob, 1, &err) != LMC_OK) {
+      lmcpy_raise(&err);
+      goto done;
+    }
+  lmcpy_boot C = {.T = T,
+                  .family = self->family,
+                  .nthreads = (int)threads,
+                  .seed = (uint64_t)seed,
+                  .chains = chains,
+                  .u = PyArray_DATA(uo),
+                  .label = PyArray_DATA(lo),
+                  .f_state = PyArray_DATA(so_)};
+  mc_boot_params bp = {.fixed = n, .batch = n, .cap_total = n, .rel_err = 0.0,
+                       .seconds = INFINITY, .stop = NULL};
+  mc_boot *B = &boot[self->family];
+  int failed = 0;
+  int64_t shared = 0;
+  double b = 0.0, b_var = 0.0;
+  Py_BEGIN_ALLOW_THREADS
+  /* Draw the samples and estimate b from them (a fixed size: all estimate). */
+  failed = mc_boot_run(B, 1, &bp, lmcpy_boot_draw, &C);
+  b = B->b, b_var = B->b_var;
+  if (!failed && self->sp.estimate_b) {
+    /* The space's own estimator of b, of every family, from n samples. */
+    mc_space_b_request rq = {n, INFINITY, 0.0, n, (uint64_t)seed, (int)threads};
+    mc_boot keep = *B;
+    memset(B, 0, sizeof *B);
+    shared = self->sp.estimate_b(&self->sp, boot, &rq, cnt);
+    failed = shared < 0;
+    b = B->b, b_var = B->b_var;
+    *B = keep;
+  }
+  Py_END_ALLOW_THREADS
+  if (failed) {
+    PyErr_NoMemory();
+    goto done;
+  }
+  memcpy(PyArray_DATA(fo), B->f, (size_t)n * sizeof(double));
+  res = PyDict_New();
+  if (res && !(lmcpy_dict_set(res, "u", (PyObject *)uo) &&
+               lmcpy_dict_set(res, "label",
+                              T->n_labels > 0 ? (PyObject *)lo : (Py_INCREF(Py_None), Py_None)) &&
+               lmcpy_dict_set(res, "f", (PyObject *)fo) &&
+               lmcpy_dict_set(res, "f_state", (PyObject *)so_) &&
+               lmcpy_dict_set(res, "b", PyFloat_FromDouble(b)) &&
+               lmcpy_dict_set(res, "b_se", PyFloat_FromDouble(sqrt(b_var))) &&
+               lmcpy_dict_set(res, "b_samples", PyLong_FromLongLong(shared > 0 ? shared : n)) &&
+               lmcpy_dict_set(res, "seed", PyLong_FromLongLong(seed))))
+    Py_CLEAR(res);
+  uo = fo = so_ = NULL; /* the dict took them (or they went with it) */
+  if (T->n_labels > 0) lo = NULL;
+done:
+  Py_XDECREF(uo);
+  Py_XDECREF(fo);
+  Py_XDECREF(so_);
+  Py_XDECREF(lo);
+  for (int i = 0; chains && i < threads; i++) mc_chain_destroy(chains[i]);
+  free(chains);
+  for (int g = 0; boot && g < self->sp.n_fam; g++) mc_boot_free(&boot[g]);
+  free(boot);
+  free(cnt);
+  return res;
+}
+
 /* t.labels(u): the labels with f > 0 at the numbers u (large-step
  * coordinates) and their f, as a dict {label: f}. */
 static PyObject *lmcpy_target_labels(lmcpy_target *self, PyObject *uo) {
@@ -479,10 +702,9 @@ static PyObject *lmcpy_target_labels(lmcpy_target *self, PyObject *uo) {
     return PyErr_Format(PyExc_ValueError, "labels: u of one state, shape (%d,)", self->T->dim);
   }
   lmcpy_vec_smp smp = lmcpy_vec_at(self->T, PyArray_DATA(a));
+  lmcpy_section sec = lmcpy_enter(self->lock, 1);
   int n = self->T->eval_all(self->T, self->scratch, &smp.base, -1, self->contribs);
-  Py_DECREF(a);
-  if (n < 0) return PyErr_Format(PyExc_RuntimeError, "the target's evaluation failed");
-  PyObject *d = PyDict_New();
+  PyObject *d = n < 0 ? NULL : PyDict_New();
   for (int i = 0; d && i < n; i++) {
     PyObject *k = PyLong_FromLong(self->contribs[i].label);
     PyObject *v = PyFloat_FromDouble(self->contribs[i].v.f);
@@ -490,6 +712,9 @@ static PyObject *lmcpy_target_labels(lmcpy_target *self, PyObject *uo) {
     Py_XDECREF(k);
     Py_XDECREF(v);
   }
+  lmcpy_leave(self->lock, sec);
+  Py_DECREF(a);
+  if (n < 0) return PyErr_Format(PyExc_RuntimeError, "the target's evaluation failed");
   return d;
 }
 
@@ -515,10 +740,17 @@ static PyMethodDef lmcpy_target_methods[] = {
      "hessian(u, label=None, with_grad=False): d^2 f/du^2 by the target's eval_hess (h2mc's), "
      "shape (dim, dim) or (N, dim, dim); 0 off the coordinates f varies with smoothly, NaN "
      "where the target gives none; with_grad=True: (f, grad, hessian) of one evaluation"},
-    {"contribution", (PyCFunction)(void (*)(void))lmcpy_target_contribution,
+    {"value", (PyCFunction)(void (*)(void))lmcpy_target_value, METH_VARARGS | METH_KEYWORDS,
+     "value(u, label=None): (value, raster): what the state adds to the image (RGB, shape (3,) "
+     "or (N, 3); its luminance is f) and where (rx, ry) in pixels, shape (2,) or (N, 2)"},
+    {"contribution", (PyCFunction)(void (*)(void))lmcpy_target_value,
+     METH_VARARGS | METH_KEYWORDS, "contribution(u, label=None): an alias of value(u, label)"},
+    {"sample_bootstrap", (PyCFunction)(void (*)(void))lmcpy_target_sample_bootstrap,
      METH_VARARGS | METH_KEYWORDS,
-     "contribution(u, label=None): (value, raster): what the state adds to the image (RGB, "
-     "shape (3,) or (N, 3)) and where (rx, ry) in pixels, shape (2,) or (N, 2)"},
+     "sample_bootstrap(n, seed=1, threads=None): the n independent samples the MCMC driver's "
+     "bootstrap draws (render seed `seed`, --bootstrap n): a dict with u (n, dim), label (n,) "
+     "or None, f (n,: what b averages), f_state (n,: f of the state a chain starts at), b, "
+     "b_se, b_samples, seed"},
     {"labels", (PyCFunction)lmcpy_target_labels, METH_O,
      "labels(u): {label: f} of every label with f > 0 at u (labelled targets; large-step "
      "coordinates)"},

@@ -35,6 +35,16 @@ What it checks:
     evaluations of f, and tracemalloc over 10^4 single calls.
   - the MALA chain of docs/python.md, run from the docs: its image's mean
     against the emitting box's exact value, b E[1/f] against P(f > 0).
+  - value (and its alias contribution): luminance f, raster on the grown
+    film, bdpt's a label's; batched evaluation releases the GIL (a thread
+    ticks meanwhile) and two threads on one target get the same numbers.
+  - sample_bootstrap: its b equals bit for bit the b_bootstrap of a pssmlt
+    render with the same seed and --bootstrap n (pt and bdpt states); a
+    z-test against a render of another seed and against the mean of f
+    over uniform u; the states' f, labels and numbers against t.f; the
+    same samples on 1 and 2 threads; bad n, seed and threads raise.
+  - the seed sweep of docs/python.md, run from the docs (its plot only
+    where matplotlib is installed): relMSE falls as 1 / spp for each seed.
 """
 import gc
 import os
@@ -522,21 +532,184 @@ def test_docs_mala(monkeypatch, capsys):
     assert abs(hb.mean() - p_support) < 4 * se_h, (hb.mean(), p_support, se_h)
 
 
-def test_target_contribution(scene):
-    """contribution: its luminance is f, its raster position on the grown
-    film; batched = one by one; bdpt needs a label."""
+def test_docs_seed_sweep(tmp_path, monkeypatch, capsys):
+    """The seed sweep of docs/python.md, run as it is, in a folder where
+    its scene path resolves (the plot, where matplotlib is installed, lands
+    there). pt is unbiased with a finite variance on the diffuse sphere,
+    so relMSE ~ c / spp + (the reference's own): a log-log slope near -1
+    for the mean over the seeds (the reference's error, 1/32 of the last
+    point's, bends it by about 0.03), and every seed's relMSE about 32
+    times lower at 32 spp than at 1 (each point averages ~800 pixels: a
+    few percent of spread; 21 leaves room). The seeds' images differ."""
+    os.symlink(os.path.join(SOURCE, "tests"), tmp_path / "tests")
+    monkeypatch.chdir(tmp_path)
+    ns = {}
+    exec(compile(docs_block("<!-- test_docs_seed_sweep"), "docs/python.md", "exec"), ns)
+    out = capsys.readouterr().out
+    assert "slope" in out and "seed 4" in out
+    relmse, spps = ns["relmse"], ns["spps"]
+    assert relmse.shape == (len(ns["seeds"]), len(spps)) and np.all(relmse > 0)
+    assert -1.15 < ns["slope"] < -0.85, ns["slope"]
+    assert np.all(relmse[:, -1] < relmse[:, 0] / 21), relmse
+    assert len(set(relmse[:, 0])) == len(ns["seeds"])  # the seeds' images differ
+    if ns["plt"] is not None:
+        assert (tmp_path / "convergence.png").stat().st_size > 0
+
+
+def test_target_value(scene):
+    """value: its luminance is f, its raster position on the grown film;
+    batched = one by one; contribution is the same function; bdpt needs a
+    label, and a label's value has f(u, l) as its luminance."""
     t = lmc.target(scene, space="pt")
     U = np.random.default_rng(11).random((500, t.dim))
-    value, raster = t.contribution(U)
+    value, raster = t.value(U)
     assert value.shape == (500, 3) and raster.shape == (500, 2)
     lum = value @ np.array([0.212671, 0.715160, 0.072169])  # rgb_luminance's weights
     assert np.allclose(lum, t.f(U), rtol=1e-12, atol=1e-300)
     assert np.all(raster > -1.0) and np.all(raster[:, 0] < W + 1) and np.all(raster[:, 1] < H + 1)
-    v0, r0 = t.contribution(U[0])
+    v0, r0 = t.value(U[0])
     assert v0.shape == (3,) and np.array_equal(v0, value[0]) and np.array_equal(r0, raster[0])
+    cv, cr = t.contribution(U)  # the alias
+    assert np.array_equal(cv, value) and np.array_equal(cr, raster)
+    assert np.array_equal(t.contribution(u=U[0], label=None)[0], v0)
     tb = lmc.target(scene, space="bdpt")
-    with pytest.raises(ValueError, match="label"):
-        tb.contribution(np.full(tb.dim, 0.5))
+    for method in (tb.value, tb.contribution):
+        with pytest.raises(ValueError, match="label"):
+            method(np.full(tb.dim, 0.5))
+    rng, n = np.random.default_rng(12), 0
+    while n < 20:
+        u = rng.random(tb.dim)
+        for label, f in tb.labels(u).items():
+            v, r = tb.value(u, label=label)
+            assert v @ np.array([0.212671, 0.715160, 0.072169]) == pytest.approx(
+                tb.f(u, label=label), rel=1e-12)
+            n += 1
+
+
+def test_target_batches_release_the_gil(scene):
+    """A batch of f runs without the GIL: a thread ticks meanwhile. Two
+    threads evaluating one target (its lock) get what one thread gets."""
+    t = lmc.target(scene, space="bdpt", maxdepth=8)
+    U = np.random.default_rng(13).random((20000, t.dim))
+    done = threading.Event()
+    res = {}
+
+    def work():
+        t0 = time.perf_counter()
+        res["F"] = t.f(U)
+        res["seconds"] = time.perf_counter() - t0
+        done.set()
+
+    th = threading.Thread(target=work)
+    ticks = 0
+    th.start()
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    th.join()
+    assert res["seconds"] > 0.05, "the batch was too short to tell"
+    assert ticks >= 10, (ticks, res["seconds"])  # held, the GIL would allow a tick or two
+    out = [None, None]
+
+    def half(i):
+        out[i] = t.f(U[i::2])
+
+    ths = [threading.Thread(target=half, args=(i,)) for i in range(2)]
+    for x in ths:
+        x.start()
+    for x in ths:
+        x.join()
+    assert np.array_equal(out[0], res["F"][0::2]) and np.array_equal(out[1], res["F"][1::2])
+
+
+# --- the bootstrap's samples -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("space", ["pt", "bdpt"])
+def test_sample_bootstrap_is_the_driver_s(scene, space):
+    """b of sample_bootstrap(n, seed) is the b_bootstrap of a pssmlt render
+    with that seed and --bootstrap n, bit for bit (the same samples, by the
+    same functions). Against a render of another seed and against the mean
+    of f over uniform u (independent estimates of the same E[F]) it must
+    agree within 4 standard errors of the difference."""
+    n = 8000
+    t = lmc.target(scene, space=space, maxdepth=6)
+    bs = t.sample_bootstrap(n, seed=3)
+    r = lmc.render(scene, integrator="pssmlt", states=space, spp=1, maxdepth=6, bootstrap=n,
+                   chains=16, seed=3)
+    assert bs["b"] == r.stats["b_bootstrap"], (bs["b"], r.stats["b_bootstrap"])
+    assert bs["b_se"] == r.stats["b_bootstrap_se"]
+    assert bs["b_samples"] == n and bs["seed"] == 3
+    # b and b_se are the mean of f and its standard error.
+    f = bs["f"]
+    assert bs["b"] == pytest.approx(f.mean(), rel=1e-12)
+    assert bs["b_se"] == pytest.approx(f.std(ddof=1) / np.sqrt(n), rel=1e-9)
+    # A render of another seed: an independent estimate.
+    r2 = lmc.render(scene, integrator="pssmlt", states=space, spp=1, maxdepth=6, bootstrap=n,
+                    chains=16, seed=4)
+    z = (bs["b"] - r2.stats["b_bootstrap"]) / np.hypot(bs["b_se"], r2.stats["b_bootstrap_se"])
+    assert abs(z) < 4.0, (bs["b"], r2.stats["b_bootstrap"], z)
+    assert bs["b"] != r2.stats["b_bootstrap"]  # the seed changes the samples
+    # The mean of F over uniform u.
+    F = t.f(np.random.default_rng(14).random((n, t.dim)))
+    z = (bs["b"] - F.mean()) / np.hypot(bs["b_se"], F.std(ddof=1) / np.sqrt(n))
+    assert abs(z) < 4.0, (bs["b"], F.mean(), z)
+
+
+def test_sample_bootstrap_states(scene):
+    """The states: u in [0, 1)^dim; pt's f at u is the sample's f; bdpt's
+    label is one with f(u, l) > 0 wherever F > 0, and f(u, l) at the
+    state's numbers (the label's own coordinates) is f_state; the same
+    samples on one thread and on two."""
+    t = lmc.target(scene, space="pt", maxdepth=6)
+    bs = t.sample_bootstrap(2000, seed=5, threads=1)
+    assert bs["u"].shape == (2000, t.dim) and bs["u"].dtype == np.float64
+    assert bs["f"].shape == (2000,) and bs["label"] is None
+    assert np.all((bs["u"] >= 0) & (bs["u"] < 1))
+    assert np.array_equal(t.f(bs["u"]), bs["f"]) and np.array_equal(bs["f_state"], bs["f"])
+    assert 0.05 < (bs["f"] > 0).mean() < 1
+    two = t.sample_bootstrap(2000, seed=5, threads=2)
+    for key in ("u", "f", "f_state"):
+        assert np.array_equal(two[key], bs[key]), key
+    assert two["b"] == bs["b"]
+    tb = lmc.target(scene, space="bdpt", maxdepth=6)
+    bb = tb.sample_bootstrap(2000, seed=5)
+    lab, fs, u = bb["label"], bb["f_state"], bb["u"]
+    assert lab.shape == (2000,) and np.all((lab >= 0) & (lab < tb.n_labels))
+    assert np.array_equal(fs > 0, bb["f"] > 0)
+    on = np.nonzero(fs > 0)[0][:300]
+    assert len(on) >= 100
+    f_l = np.array([tb.f(u[i], label=int(lab[i])) for i in on])
+    assert np.allclose(f_l, fs[on], rtol=1e-9, atol=0)
+    # The labels of the large step's reading sum to f (F(u)) where the
+    # label's coordinates are the large step's (roughness_threshold=2).
+    tr = lmc.target(scene, space="bdpt", maxdepth=6, roughness_threshold=2)
+    br = tr.sample_bootstrap(500, seed=5)
+    assert np.allclose(tr.f(br["u"]), br["f"], rtol=1e-12, atol=0)
+
+
+def test_sample_bootstrap_mmlt(scene):
+    """mmlt's b is its own estimator's (whole BDPT samples of every length),
+    as the driver's; it agrees with the mean of the length's f."""
+    t = lmc.target(scene, space="mmlt", length=3, maxdepth=6)
+    bs = t.sample_bootstrap(4000, seed=2)
+    assert bs["b_samples"] >= 4000 and bs["label"] is None
+    F = t.f(np.random.default_rng(15).random((20000, t.dim)))
+    z = (bs["b"] - F.mean()) / np.hypot(bs["b_se"], F.std(ddof=1) / np.sqrt(len(F)))
+    assert abs(z) < 4.0, (bs["b"], F.mean(), z)
+
+
+def test_sample_bootstrap_errors(scene):
+    t = lmc.target(scene, space="pt")
+    for n in (0, -5, 2.5, "10", None, True, 2**40):
+        with pytest.raises(ValueError, match="n:"):
+            t.sample_bootstrap(n, seed=1)
+    for seed in (-1, 2**63, 1.5, "1"):
+        with pytest.raises(ValueError, match="seed:"):
+            t.sample_bootstrap(10, seed=seed)
+    with pytest.raises(ValueError, match="threads:"):
+        t.sample_bootstrap(10, seed=1, threads=0)
+    assert t.sample_bootstrap(1, 2**63 - 1)["u"].shape == (1, t.dim)
 
 
 # --- read and compare ------------------------------------------------------------------------
