@@ -9,6 +9,7 @@
 
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <pythread.h>
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #define PY_ARRAY_UNIQUE_SYMBOL lmcpy_ARRAY_API
 #include <numpy/arrayobject.h>
@@ -69,6 +70,56 @@ PyObject *lmcpy_image_copy(const lmc_image *img);
 /* lmc.read(path, layer=None) and lmc.compare(image, reference). */
 PyObject *lmcpy_read(PyObject *mod, PyObject *args, PyObject *kwargs);
 PyObject *lmcpy_compare(PyObject *mod, PyObject *args);
+
+/* render_request_stop's number for a stop the progress callable asked for
+ * by raising (no signal has it). */
+#define LMCPY_STOP_PROGRESS (-1)
+
+/* What the drivers' snapshot hook (settings.h's snapshot_fn) hands the
+ * progress callable. The drivers call it between their rounds, on the
+ * thread that called render (which gave up the GIL): it develops the film
+ * without the GIL, then takes the GIL only to copy the image into a new
+ * array and call. Once the callable raises, its exception is kept here,
+ * the render is asked to stop, and it is not called again. */
+typedef struct lmcpy_progress {
+  PyObject *fn;        /* borrowed: the callable */
+  lmc_image img;       /* owned: the developed film, kept from one call to the next */
+  PyObject *exc;       /* owned: what the callable raised (NULL: nothing) */
+  int calls;
+} lmcpy_progress;
+
+/* lmcpy_progress.c: the SIGINT handler from the first render that starts
+ * to the last that ends (release: 1 when a Ctrl-C stopped the renders,
+ * with Python's interrupt set); the exception being raised taken (a new
+ * reference, NULL when none) and raised again (its reference taken);
+ * result (may be NULL) attached to the exception being raised as its
+ * lmc_result; p's callable called with a copy of img and the seconds (0
+ * when it raised: its exception in p->exc); the drivers' snapshot hook. */
+void lmcpy_catch_sigint(void);
+int lmcpy_release_sigint(void);
+PyObject *lmcpy_take_exception(void);
+void lmcpy_restore_exception(PyObject *exc);
+void lmcpy_attach_result(PyObject *result);
+int lmcpy_progress_call(lmcpy_progress *p, const lmc_image *img, double seconds);
+void lmcpy_on_snapshot(void *ctx, const struct film *f, double seconds);
+
+/* lmc.target's Target (lmcpy_target.c). */
+typedef struct {
+  PyObject_HEAD
+  lmcpy_scene *scene;   /* a reference */
+  mc_space sp;          /* owned */
+  int created;          /* sp was created (mc_space_free it) */
+  const mc_target *T;   /* the family's target, in sp */
+  int family, length;   /* its index, and its paths' length (0: every length) */
+  void *scratch;        /* owned */
+  mc_contrib *contribs; /* owned: n_labels entries */
+  double *grad;         /* owned: dim entries */
+  int *hidx;            /* owned: MC_HESS_MAX entries (made by the first hessian call) */
+  double *hess;         /* owned: the packed upper triangle of MC_HESS_MAX coordinates */
+  PyThread_type_lock lock; /* owned: held while scratch, grad, contribs, hidx, hess are used */
+} lmcpy_target;
+/* t.sample_bootstrap(n, seed=1, threads=None) (lmcpy_bootstrap.c). */
+PyObject *lmcpy_target_sample_bootstrap(lmcpy_target *self, PyObject *args, PyObject *kwargs);
 
 extern PyTypeObject lmcpy_scene_type;
 extern PyTypeObject lmcpy_target_type;
