@@ -135,10 +135,7 @@ static inline int specular(const movers *mv, const ps_path *x, int j) {
 _Static_assert(INV_BINS <= PS_INV_MAX_BINS, "the bins fit ps_inv");
 
 static inline int inv_bin(const scene *sc, const ps_path *x) {
-  int cx = (int)(x->rx * INV_COLS / sc->cam.width), cy = (int)(x->ry * INV_ROWS / sc->cam.height);
-  cx = cx < 0 ? 0 : cx >= INV_COLS ? INV_COLS - 1 : cx;
-  cy = cy < 0 ? 0 : cy >= INV_ROWS ? INV_ROWS - 1 : cy;
-  return ((x->k - 1) * INV_ROWS + cy) * INV_COLS + cx;
+  return ps_inv_raster_bin(sc, x, INV_COLS, INV_ROWS);
 }
 
 /* Weighted whole paths of length k_only (their weight C(x) / q(x), q the

@@ -82,6 +82,15 @@ static inline void ps_inv_add(ps_inv *s, double w, int b0, int b1) {
   s->V[b1] += w * w, s->V[b0] += w * w;
 }
 
+/* The bin of path x among (length) x (a cols x rows grid of the raster):
+ * the perturbations move paths by a few pixels. */
+static inline int ps_inv_raster_bin(const scene *sc, const ps_path *x, int cols, int rows) {
+  int cx = (int)(x->rx * cols / sc->cam.width), cy = (int)(x->ry * rows / sc->cam.height);
+  cx = cx < 0 ? 0 : cx >= cols ? cols - 1 : cx;
+  cy = cy < 0 ? 0 : cy >= rows ? rows - 1 : cy;
+  return ((x->k - 1) * rows + cy) * cols + cx;
+}
+
 static inline void ps_inv_finish(ps_inv *s) {
   s->min_p = 1.0;
   s->bins = 0;

@@ -470,10 +470,7 @@ _Static_assert(INV_BINS <= PS_INV_MAX_BINS, "the bins fit ps_inv");
 /* (length) x (a raster cell of 4 x 2 pixels): the perturbations move
  * paths by a few pixels. */
 static int inv_bin(const scene *sc, const ps_path *x) {
-  int cx = (int)(x->rx * INV_COLS / sc->cam.width), cy = (int)(x->ry * INV_ROWS / sc->cam.height);
-  cx = cx < 0 ? 0 : cx >= INV_COLS ? INV_COLS - 1 : cx;
-  cy = cy < 0 ? 0 : cy >= INV_ROWS ? INV_ROWS - 1 : cy;
-  return ((x->k - 1) * INV_ROWS + cy) * INV_COLS + cx;
+  return ps_inv_raster_bin(sc, x, INV_COLS, INV_ROWS);
 }
 
 /* A start for the invariance tests: a whole path of length k_only (0: a

@@ -1,6 +1,7 @@
 /*
- * mut_manifold.c: the manifold perturbation on smooth specular chains
- * (mut_manifold.h states the move and its density). Mitsuba 0.6's
+ * mut_manifold.c: the manifold perturbation on chains of smooth and glossy
+ * vertices, and its sky form (mut_manifold.h states the move and its
+ * density). Mitsuba 0.6's
  * manifold perturbation (src/libbidir/mut_manifold.cpp) was read for the
  * method's facts (a walk of the chain behind the perturbed vertex towards
  * its new position, the reverse walk computed and a move whose reverse
@@ -64,8 +65,8 @@ int mut_manifold_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int 
   if (b + 1 >= k || !mm__specular(ctx, x, b + 1)) return 0;
   int c = b + 1;
   while (c < k && mm__specular(ctx, x, c)) c++;
-  if (c - b - 1 > MF_MAX_CHAIN || b - 1 > MF_MAX_CHAIN) return 0;
-  /* x_c is fixed: a D surface or the emitter end; both chains readable. */
+  /* x_c is fixed: a D surface or the emitter end; both chains readable
+   * (their lengths at most MF_MAX_CHAIN among the rest). */
   if (mf_path_chain_fits(ctx, x, b, c, MF_LIGHT_CHAIN) != MF_OK) return 0;
   if (b > 1 && mf_path_chain_fits(ctx, x, 0, b, MF_PATH_GLOSSY) != MF_OK) return 0;
   *OUT_b = b, *OUT_c = c;
