@@ -36,7 +36,7 @@ static inline int make_configs(config *c) {
   /* Diffuse. */
   const double diff_z[] = {1.0, 0.6, 0.05};
   for (int i = 0; i < 3; i++) {
-    bsdf_init_defaults(&c[n].b, BSDF_DIFFUSE);
+    bsdf_init_defaults(&c[n].b, "diffuse");
     c[n].wo = dir(diff_z[i], phi0);
     snprintf(c[n].name, sizeof c[n].name, "diffuse wo.z=%.2f", diff_z[i]);
     n++;
@@ -46,7 +46,7 @@ static inline int make_configs(config *c) {
   const double ph_z[] = {0.95, 0.5, 0.1};
   for (int e = 0; e < 3; e++)
     for (int i = 0; i < 3; i++) {
-      bsdf_init_defaults(&c[n].b, BSDF_PHONG);
+      bsdf_init_defaults(&c[n].b, "phong");
       c[n].b.exponent = exps[e];
       c[n].wo = dir(ph_z[i], phi0);
       snprintf(c[n].name, sizeof c[n].name, "phong n=%g wo.z=%.2f", exps[e], ph_z[i]);
@@ -66,7 +66,7 @@ static inline int make_configs(config *c) {
       for (int v = 0; v < 2; v++) {
         for (int i = 0; i < 3; i++) {
           if (a == 1 && i == 1) continue; /* keep the count down */
-          bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+          bsdf_init_defaults(&c[n].b, "roughconductor");
           c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
           c[n].b.alpha = alphas[a];
           c[n].b.sample_visible = v;
@@ -76,7 +76,7 @@ static inline int make_configs(config *c) {
           n++;
         }
         for (int i = 0; i < 4; i++) {
-          bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIELECTRIC);
+          bsdf_init_defaults(&c[n].b, "roughdielectric");
           c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
           c[n].b.alpha = alphas[a];
           c[n].b.sample_visible = v;
@@ -89,14 +89,14 @@ static inline int make_configs(config *c) {
       }
   /* Mitsuba's default roughness 0.1 on a finer grid (150 x 300 cells). */
   for (int d = 0; d < 2; d++) {
-    bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+    bsdf_init_defaults(&c[n].b, "roughconductor");
     c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
     c[n].wo = dir(0.7, phi0);
     c[n].n_theta = 150;
     c[n].n_phi = 300;
     snprintf(c[n].name, sizeof c[n].name, "roughconductor %s a=0.1 wo.z=0.70", d ? "ggx" : "beckmann");
     n++;
-    bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIELECTRIC);
+    bsdf_init_defaults(&c[n].b, "roughdielectric");
     c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
     c[n].b.sample_visible = d;
     c[n].wo = dir(d ? -0.8 : 0.6 * eta, phi0);
@@ -109,10 +109,19 @@ static inline int make_configs(config *c) {
   /* Plastic (the diffuse lobe; specular samples count as rejected). */
   const double pl_z[] = {0.9, 0.2};
   for (int i = 0; i < 2; i++) {
-    bsdf_init_defaults(&c[n].b, BSDF_PLASTIC);
+    bsdf_init_defaults(&c[n].b, "plastic");
     c[n].b.nonlinear = i;
     c[n].wo = dir(pl_z[i], phi0);
     snprintf(c[n].name, sizeof c[n].name, "plastic nonlinear=%d wo.z=%.2f", i, pl_z[i]);
+    n++;
+  }
+  /* Diffuse transmission, from both sides (the sampler turns away from wo). */
+  const double dt_z[] = {0.8, -0.3};
+  for (int i = 0; i < 2; i++) {
+    bsdf_init_defaults(&c[n].b, "difftrans");
+    c[n].b.transmittance = tex_constant(rgb_make(0.6, 0.5, 0.4));
+    c[n].wo = dir(dt_z[i], phi0);
+    snprintf(c[n].name, sizeof c[n].name, "difftrans wo.z=%.2f", dt_z[i]);
     n++;
   }
   /* Rough diffuse (Oren-Nayar): two roughnesses, the full model and the
@@ -122,7 +131,7 @@ static inline int make_configs(config *c) {
   for (int a = 0; a < 2; a++)
     for (int fa = 0; fa < 2; fa++)
       for (int i = 0; i < 3; i++) {
-        bsdf_init_defaults(&c[n].b, BSDF_ROUGHDIFFUSE);
+        bsdf_init_defaults(&c[n].b, "roughdiffuse");
         c[n].b.alpha = rdf_alpha[a];
         c[n].b.fast_approx = fa;
         c[n].wo = dir(diff_z[i], phi0);
@@ -137,7 +146,7 @@ static inline int make_configs(config *c) {
   for (int v = 0; v < 3; v++)
     for (int an = 0; an < 2; an++)
       for (int i = 0; i < 3; i++) {
-        bsdf_init_defaults(&c[n].b, BSDF_WARD);
+        bsdf_init_defaults(&c[n].b, "ward");
         c[n].b.variant = (ward_variant)v;
         c[n].b.alpha_u = an ? 0.1 : 0.2;
         c[n].b.alpha_v = an ? 0.3 : 0.2;
@@ -158,7 +167,7 @@ static inline int make_configs(config *c) {
   for (int d = 0; d < 2; d++)
     for (int a = 0; a < 2; a++)
       for (int i = 0; i < 3; i++) {
-        bsdf_init_defaults(&c[n].b, BSDF_ROUGHPLASTIC);
+        bsdf_init_defaults(&c[n].b, "roughplastic");
         c[n].b.dist = d ? MF_GGX : MF_BECKMANN;
         c[n].b.alpha = rp_alpha[a];
         c[n].b.sample_visible = !a;
@@ -175,7 +184,7 @@ static inline int make_configs(config *c) {
         n++;
       }
   /* A twosided rough conductor seen from below. */
-  bsdf_init_defaults(&c[n].b, BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&c[n].b, "roughconductor");
   c[n].b.twosided = 1;
   c[n].b.alpha = 0.3;
   c[n].b.dist = MF_GGX;
@@ -184,7 +193,7 @@ static inline int make_configs(config *c) {
   n++;
   /* Masks (their pass-through counts as rejected): on diffuse, and on the
    * twosided rough conductor seen from below. */
-  bsdf_init_defaults(&c[n].b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&c[n].b, "diffuse");
   c[n].b.masked = 1;
   c[n].b.opacity = tex_constant(rgb_make(0.3, 0.6, 0.9));
   c[n].wo = dir(0.7, phi0);

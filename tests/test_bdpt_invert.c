@@ -44,6 +44,7 @@
 #include <cmocka.h>
 
 #include "chi2.h"
+#include "render/bsdf/bsdf_model.h"
 #include "render/integrators/integrator.h"
 #include "render/io/io.h"
 #include "render/rng.h"
@@ -181,8 +182,8 @@ static int refused_in_tail(const bdpt_vertex *path, int n) {
     if (bsdf_invert(h->bsdf, h->tu, h->tv, wo_l, wi_l, path[i].delta, r, u)) continue;
     double pdf = bsdf_pdf(h->bsdf, h->tu, h->tv, wo_l, wi_l);
     if (path[i].delta || !(pdf < 1e-12)) {
-      print_error("vertex %d (bsdf type %d, delta %d) refused at density %g\n", i,
-                  h->bsdf->type, path[i].delta, pdf);
+      print_error("vertex %d (bsdf %s, delta %d) refused at density %g\n", i,
+                  h->bsdf->model->name, path[i].delta, pdf);
       return 0;
     }
     return 1;

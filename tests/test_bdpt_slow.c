@@ -54,7 +54,7 @@
 
 /* ---- scene building ------------------------------------------------------- */
 
-static int add_bsdf(scene *sc, bsdf_type type, rgb refl) {
+static int add_bsdf(scene *sc, const char *type, rgb refl) {
   bsdf b;
   bsdf_init_defaults(&b, type);
   b.diffuse = tex_constant(refl);
@@ -118,7 +118,7 @@ static void add_area_light_quad(scene *sc, double x0, double x1, double z0, doub
   l.mesh = sc->n_meshes;
   int li = scene_add_light(sc, &l, NULL);
   assert_true(li >= 0);
-  int black = add_bsdf(sc, BSDF_DIFFUSE, rgb_gray(0.0));
+  int black = add_bsdf(sc, "diffuse", rgb_gray(0.0));
   add_quad(sc, v3(x0, y, z0), v3(x0, y, z1), v3(x1, y, z1), v3(x1, y, z0), v3(0, -1, 0), black, li);
 }
 
@@ -131,11 +131,11 @@ static void set_camera(scene *sc, vec3 origin, vec3 target, double fov) {
 static scene *scene_box(void) {
   scene *sc;
   assert_int_equal(scene_create(&sc, NULL), LMC_OK);
-  int white = add_bsdf(sc, BSDF_DIFFUSE, rgb_gray(0.6));
-  int red = add_bsdf(sc, BSDF_DIFFUSE, rgb_make(0.6, 0.1, 0.1));
-  int green = add_bsdf(sc, BSDF_DIFFUSE, rgb_make(0.1, 0.6, 0.1));
+  int white = add_bsdf(sc, "diffuse", rgb_gray(0.6));
+  int red = add_bsdf(sc, "diffuse", rgb_make(0.6, 0.1, 0.1));
+  int green = add_bsdf(sc, "diffuse", rgb_make(0.1, 0.6, 0.1));
   bsdf pl;
-  bsdf_init_defaults(&pl, BSDF_PLASTIC);
+  bsdf_init_defaults(&pl, "plastic");
   pl.diffuse = tex_constant(rgb_make(0.2, 0.3, 0.6));
   int plastic = add_bsdf_full(sc, &pl);
   /* Walls with normals pointing inwards. */
@@ -156,9 +156,9 @@ static scene *scene_box(void) {
 static scene *scene_conductor(void) {
   scene *sc;
   assert_int_equal(scene_create(&sc, NULL), LMC_OK);
-  int white = add_bsdf(sc, BSDF_DIFFUSE, rgb_gray(0.5));
+  int white = add_bsdf(sc, "diffuse", rgb_gray(0.5));
   bsdf rc;
-  bsdf_init_defaults(&rc, BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&rc, "roughconductor");
   rc.dist = MF_GGX;
   rc.alpha = 0.2;
   int metal = add_bsdf_full(sc, &rc);
@@ -180,9 +180,9 @@ static scene *scene_conductor(void) {
 static scene *scene_glass(void) {
   scene *sc;
   assert_int_equal(scene_create(&sc, NULL), LMC_OK);
-  int white = add_bsdf(sc, BSDF_DIFFUSE, rgb_gray(0.5));
+  int white = add_bsdf(sc, "diffuse", rgb_gray(0.5));
   bsdf rd;
-  bsdf_init_defaults(&rd, BSDF_ROUGHDIELECTRIC);
+  bsdf_init_defaults(&rd, "roughdielectric");
   rd.dist = MF_GGX;
   rd.alpha = 0.3;
   int glass = add_bsdf_full(sc, &rd);
@@ -219,9 +219,9 @@ static scene *scene_glass(void) {
 static scene *scene_spot(void) {
   scene *sc;
   assert_int_equal(scene_create(&sc, NULL), LMC_OK);
-  int white = add_bsdf(sc, BSDF_DIFFUSE, rgb_gray(0.6));
+  int white = add_bsdf(sc, "diffuse", rgb_gray(0.6));
   bsdf ph;
-  bsdf_init_defaults(&ph, BSDF_PHONG);
+  bsdf_init_defaults(&ph, "phong");
   ph.diffuse = tex_constant(rgb_make(0.3, 0.4, 0.2));
   ph.specular = tex_constant(rgb_gray(0.3));
   ph.exponent = 20.0;

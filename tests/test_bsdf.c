@@ -250,11 +250,11 @@ static void test_mask(void **state) {
   const rgb alpha = rgb_make(0.2, 0.5, 0.9);
   const double prob = rgb_luminance(alpha);
   bsdf models[3];
-  bsdf_init_defaults(&models[0], BSDF_DIFFUSE);
-  bsdf_init_defaults(&models[1], BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&models[0], "diffuse");
+  bsdf_init_defaults(&models[1], "roughconductor");
   models[1].twosided = 1;
   models[1].alpha = 0.3;
-  bsdf_init_defaults(&models[2], BSDF_DIELECTRIC);
+  bsdf_init_defaults(&models[2], "dielectric");
   rng r;
   rng_seed(&r, 99, 5);
   for (int m = 0; m < 3; m++) {
@@ -303,7 +303,7 @@ static void test_mask(void **state) {
   }
   /* Energy of a white diffuse mask, per channel. */
   bsdf white;
-  bsdf_init_defaults(&white, BSDF_DIFFUSE);
+  bsdf_init_defaults(&white, "diffuse");
   white.diffuse = tex_constant(rgb_gray(1.0));
   white.masked = 1;
   white.opacity = tex_constant(alpha);
@@ -366,7 +366,7 @@ static void test_energy(void **state) {
   /* Diffuse: the albedo is the reflectance at every angle (the midpoint
    * rule in cos theta integrates the linear cosine exactly). */
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   b.diffuse = tex_constant(rgb_make(0.2, 0.5, 0.9));
   for (int i = 0; i < 3; i++) {
     rgb a = integrate_f_cos(&b, dir(0.2 + 0.35 * i, 0.3), TRANSPORT_RADIANCE, 200, 64);
@@ -386,7 +386,7 @@ static void test_energy(void **state) {
    * F_i + (1 - F_i) kd (1 - F_dr_int) / (1 - kd F_dr_int). */
   for (int nl = 0; nl < 2; nl++)
     for (int i = 0; i < 3; i++) {
-      bsdf_init_defaults(&b, BSDF_PLASTIC);
+      bsdf_init_defaults(&b, "plastic");
       b.nonlinear = nl;
       b.diffuse = tex_constant(rgb_gray(0.8));
       vec3 wo = dir(0.15 + 0.4 * i, 1.1);
@@ -425,7 +425,7 @@ static void test_energy(void **state) {
   const double exps[] = {1.0, 10.0, 100.0};
   for (int e = 0; e < 3; e++)
     for (int i = 0; i < 3; i++) {
-      bsdf_init_defaults(&b, BSDF_PHONG);
+      bsdf_init_defaults(&b, "phong");
       b.exponent = exps[e];
       b.diffuse = tex_constant(rgb_gray(0.3));
       b.specular = tex_constant(rgb_gray(0.7));
@@ -443,7 +443,7 @@ static void test_energy(void **state) {
   for (int d = 0; d < 2; d++)
     for (int a = 0; a < 2; a++) {
       double se;
-      bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+      bsdf_init_defaults(&b, "roughconductor");
       conductor_lookup("none", &b.cond_eta, &b.cond_k);
       b.dist = dists[d];
       b.alpha = a ? 0.6 : 0.05;
@@ -451,7 +451,7 @@ static void test_energy(void **state) {
       assert_le(alb, 1.0 + 4.0 * se + 1e-9);
       if (!a) assert_true(alb > 0.98);
       checks += 2;
-      bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+      bsdf_init_defaults(&b, "roughdielectric");
       b.dist = dists[d];
       b.alpha = a ? 0.6 : 0.05;
       for (int side = 0; side < 2; side++) {
@@ -469,7 +469,7 @@ static void test_energy(void **state) {
   const double rp_z[] = {0.98, 0.6, 0.25, 0.05};
   for (int d = 0; d < 2; d++)
     for (int a = 0; a < 3; a++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+      bsdf_init_defaults(&b, "roughplastic");
       b.dist = dists[d];
       b.alpha = rp_alpha[a];
       b.nonlinear = a == 1;
@@ -498,12 +498,12 @@ static void test_energy(void **state) {
    * F_i ks + (1 - F_i) kd (linear mode), up to the coating's masking. */
   for (int d = 0; d < 2; d++) {
     bsdf rp, pl;
-    bsdf_init_defaults(&rp, BSDF_ROUGHPLASTIC);
+    bsdf_init_defaults(&rp, "roughplastic");
     rp.dist = dists[d];
     rp.alpha = 0.001;
     rp.diffuse = tex_constant(rgb_gray(0.8));
     bsdf_prepare(&rp);
-    bsdf_init_defaults(&pl, BSDF_PLASTIC);
+    bsdf_init_defaults(&pl, "plastic");
     pl.diffuse = rp.diffuse;
     double fdr_int = 0.0; /* the smooth F_dr(1 / eta), midpoint rule */
     for (int k = 0; k < 200000; k++) {
@@ -579,11 +579,11 @@ static void test_roughdiffuse(void **state) {
   /* alpha = 0 is Lambertian exactly (sigma = 0: A = C1 = 1, the other
    * coefficients 0), in both variants, at random pairs and at the normal. */
   bsdf lam;
-  bsdf_init_defaults(&lam, BSDF_DIFFUSE);
+  bsdf_init_defaults(&lam, "diffuse");
   lam.diffuse = tex_constant(rho);
   int exact = 0;
   for (int fa = 0; fa < 2; fa++) {
-    bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+    bsdf_init_defaults(&b, "roughdiffuse");
     b.diffuse = tex_constant(rho);
     b.alpha = 0.0;
     b.fast_approx = fa;
@@ -604,7 +604,7 @@ static void test_roughdiffuse(void **state) {
   const double alphas[] = {0.1, 0.4, 1.0};
   for (int fa = 0; fa < 2; fa++)
     for (int a = 0; a < 3; a++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      bsdf_init_defaults(&b, "roughdiffuse");
       b.diffuse = tex_constant(rho);
       b.alpha = alphas[a];
       b.fast_approx = fa;
@@ -635,7 +635,7 @@ static void test_roughdiffuse(void **state) {
     double s2 = 0.5 * alphas[a] * alphas[a];
     double A = 1.0 - 0.5 * s2 / (s2 + 0.33), B = 0.45 * s2 / (s2 + 0.09), c4 = 0.17 * s2 / (s2 + 0.13);
     for (int fa = 0; fa < 2; fa++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      bsdf_init_defaults(&b, "roughdiffuse");
       b.diffuse = tex_constant(rgb_gray(1.0));
       b.alpha = alphas[a];
       b.fast_approx = fa;
@@ -660,7 +660,7 @@ static void test_roughdiffuse(void **state) {
   int le1 = 0, le105 = 0, n_alb = 0;
   for (int fa = 0; fa < 2; fa++)
     for (int a = 1; a <= 10; a++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      bsdf_init_defaults(&b, "roughdiffuse");
       b.diffuse = tex_constant(rgb_gray(1.0));
       b.alpha = 0.1 * a;
       b.fast_approx = fa;
@@ -701,7 +701,7 @@ static void test_ward(void **state) {
   const double au_[] = {0.2, 0.1}, av_[] = {0.2, 0.3};
   for (int v = 0; v < 3; v++)
     for (int an = 0; an < 2; an++) {
-      bsdf_init_defaults(&b, BSDF_WARD);
+      bsdf_init_defaults(&b, "ward");
       b.variant = (ward_variant)v;
       b.alpha_u = au_[an];
       b.alpha_v = av_[an];
@@ -720,7 +720,7 @@ static void test_ward(void **state) {
       vec3 wi = warp_square_to_uniform_hemisphere(rng_uniform(&r), rng_uniform(&r));
       if (k & 1) wi = v3_normalize(v3(-wo.x + 0.1 * wi.x, -wo.y + 0.1 * wi.y, wo.z)); /* near the peak */
       vec3 wo90 = v3(-wo.y, wo.x, wo.z), wi90 = v3(-wi.y, wi.x, wi.z);
-      bsdf_init_defaults(&b, BSDF_WARD);
+      bsdf_init_defaults(&b, "ward");
       b.variant = (ward_variant)v;
       b.alpha_u = 0.1;
       b.alpha_v = 0.35;
@@ -755,7 +755,7 @@ static void test_ward(void **state) {
       for (int m = 0; m < 2; m++)
         for (int i = 0; i < 4; i++) {
           if (v == WARD_DUER && zs[i] < 0.4) continue;
-          bsdf_init_defaults(&b, BSDF_WARD);
+          bsdf_init_defaults(&b, "ward");
           b.variant = (ward_variant)v;
           b.alpha_u = alb_au[a];
           b.alpha_v = alb_av[a];
@@ -773,7 +773,7 @@ static void test_ward(void **state) {
         }
   assert_int_equal(n_alb, 2 * 3 * 2 * 4 + 3 * 2 * 2);
   assert_int_equal(bounded, n_alb);
-  bsdf_init_defaults(&b, BSDF_WARD);
+  bsdf_init_defaults(&b, "ward");
   b.variant = WARD_DUER;
   b.alpha_u = 0.3;
   b.alpha_v = 0.6;
@@ -798,11 +798,11 @@ static void test_reciprocity(void **state) {
   const int n_types = 13;
   for (int t = 0; t < n_types; t++) {
     bsdf b;
-    const bsdf_type types[] = {BSDF_DIFFUSE,      BSDF_PHONG,        BSDF_ROUGHCONDUCTOR,
-                               BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC,    BSDF_ROUGHDIELECTRIC,
-                               BSDF_ROUGHDIFFUSE, BSDF_ROUGHDIFFUSE, BSDF_WARD,
-                               BSDF_WARD,         BSDF_WARD,         BSDF_ROUGHPLASTIC,
-                               BSDF_ROUGHPLASTIC};
+    const char *const types[] = {"diffuse",      "phong",        "roughconductor",
+                               "roughconductor", "plastic",    "roughdielectric",
+                               "roughdiffuse", "roughdiffuse", "ward",
+                               "ward",         "ward",         "roughplastic",
+                               "roughplastic"};
     bsdf_init_defaults(&b, types[t]);
     if (t == 3 || t == 12) b.dist = MF_GGX;
     b.nonlinear = t == 12;
@@ -832,7 +832,7 @@ static void test_reciprocity(void **state) {
    * f_imp(a, b) = f_rad(b, a), a outside and b inside. */
   for (int d = 0; d < 2; d++) {
     bsdf b;
-    bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+    bsdf_init_defaults(&b, "roughdielectric");
     b.dist = d ? MF_GGX : MF_BECKMANN;
     b.alpha = 0.5;
     int nonzero = 0;
@@ -873,7 +873,7 @@ static void test_dielectric_delta(void **state) {
   (void)state;
   int checks = 0;
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  bsdf_init_defaults(&b, "dielectric");
   assert_true(bsdf_is_delta(&b));
   checks++;
   const double zs[] = {1.0, 0.7, 0.2, 0.01, -1.0, -0.8, -0.75, -0.5, -0.1};
@@ -935,7 +935,7 @@ static void test_dielectric_delta(void **state) {
   assert_true(bsdf_pdf(&b, 0, 0, wo, v3(-wo.x, -wo.y, wo.z)) == 0.0);
   checks += 3;
   /* Smooth conductor: weight = F_cond * specularReflectance; "none" = 1. */
-  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  bsdf_init_defaults(&b, "conductor");
   bsdf_sample s;
   assert_true(bsdf_sample_f(&b, 0, 0, wo, 0.5, 0.5, 0.5, TRANSPORT_RADIANCE, &s));
   rgb fc = fresnel_conductor(wo.z, b.cond_eta, b.cond_k);
@@ -960,7 +960,7 @@ static void test_thindielectric(void **state) {
   (void)state;
   int checks = 0;
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  bsdf_init_defaults(&b, "thindielectric");
   const double zs[] = {1.0, 0.7, 0.2, 0.01, -1.0, -0.5, -0.05};
   for (int i = 0; i < 7; i++) {
     vec3 wo = dir(zs[i], 0.4 + i);
@@ -1113,43 +1113,43 @@ static void test_tables_defaults(void **state) {
 
   /* Mitsuba's defaults. */
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   assert_near(b.diffuse.value.g, 0.5, 0);
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE);
-  bsdf_init_defaults(&b, BSDF_PHONG);
+  bsdf_init_defaults(&b, "phong");
   assert_near(b.exponent, 30.0, 0);
   assert_near(b.specular.value.r, 0.2, 0);
   assert_near(b.diffuse.value.r, 0.5, 0);
-  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  bsdf_init_defaults(&b, "dielectric");
   assert_near(b.eta, 1.5046 / 1.000277, 1e-15);
   assert_true(bsdf_is_delta(&b));
-  bsdf_init_defaults(&b, BSDF_PLASTIC);
+  bsdf_init_defaults(&b, "plastic");
   assert_near(b.eta, 1.49 / 1.000277, 1e-15);
   assert_near(b.diffuse.value.r, 0.5, 0);
   assert_near(b.specular.value.r, 1.0, 0);
   assert_false(bsdf_is_delta(&b));
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DELTA | BSDF_DIFFUSE_LOBE);
-  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&b, "roughconductor");
   assert_near(b.alpha, 0.1, 0);
   assert_int_equal(b.dist, MF_BECKMANN);
   assert_int_equal(b.sample_visible, 1);
   assert_near(b.cond_eta.r, 0.2004376970 / 1.000277, 1e-12);
-  bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+  bsdf_init_defaults(&b, "roughdielectric");
   assert_near(b.alpha, 0.1, 0);
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY);
-  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  bsdf_init_defaults(&b, "conductor");
   assert_true(bsdf_is_delta(&b));
   checks += 21;
   /* roughdiffuse.cpp: reflectance 0.5, alpha 0.2, useFastApprox false, a
    * glossy lobe; ward.cpp: variant balanced, alpha 0.1, specular 0.2,
    * diffuse 0.5. */
-  bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+  bsdf_init_defaults(&b, "roughdiffuse");
   assert_near(b.diffuse.value.g, 0.5, 0);
   assert_near(b.alpha, 0.2, 0);
   assert_int_equal(b.fast_approx, 0);
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_GLOSSY);
   assert_true(bsdf_is_rough(&b, 0.05));
-  bsdf_init_defaults(&b, BSDF_WARD);
+  bsdf_init_defaults(&b, "ward");
   assert_int_equal(b.variant, WARD_BALANCED);
   assert_near(b.alpha_u, 0.1, 0);
   assert_near(b.alpha_v, 0.1, 0);
@@ -1158,7 +1158,7 @@ static void test_tables_defaults(void **state) {
   assert_int_equal(bsdf_flags(&b), BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY);
   assert_false(bsdf_is_delta(&b));
   checks += 13;
-  bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+  bsdf_init_defaults(&b, "roughplastic");
   assert_near(b.eta, 1.49 / 1.000277, 1e-15);
   assert_near(b.alpha, 0.1, 0);
   assert_int_equal(b.dist, MF_BECKMANN);
@@ -1175,7 +1175,7 @@ static void test_tables_defaults(void **state) {
   assert_false(b.rtrans.ready);
   bsdf_prepare(&b);
   assert_true(b.rtrans.ready && b.rtrans.alpha == b.alpha && b.rtrans.eta == b.eta);
-  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  bsdf_init_defaults(&b, "thindielectric");
   assert_near(b.eta, 1.5046 / 1.000277, 1e-15);
   assert_near(b.specular.value.r, 1.0, 0);
   assert_near(b.transmittance.value.r, 1.0, 0);
@@ -1191,9 +1191,9 @@ static void test_tables_defaults(void **state) {
 static void test_sidedness(void **state) {
   (void)state;
   int checks = 0;
-  const bsdf_type one_sided[] = {BSDF_DIFFUSE,      BSDF_PHONG, BSDF_CONDUCTOR,
-                                 BSDF_ROUGHCONDUCTOR, BSDF_PLASTIC, BSDF_ROUGHDIFFUSE,
-                                 BSDF_WARD,         BSDF_ROUGHPLASTIC};
+  const char *const one_sided[] = {"diffuse",      "phong", "conductor",
+                                 "roughconductor", "plastic", "roughdiffuse",
+                                 "ward",         "roughplastic"};
   vec3 up = dir(0.6, 0.5), up2 = dir(0.7, 2.5), down = dir(-0.6, 0.5), down2 = dir(-0.7, 2.5);
   for (int t = 0; t < 8; t++) {
     bsdf b;
@@ -1229,7 +1229,7 @@ static void test_sidedness(void **state) {
   }
   /* Dielectrics ignore the flag (they have two sides already). */
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+  bsdf_init_defaults(&b, "roughdielectric");
   rgb f0 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);
   b.twosided = 1;
   rgb f1 = bsdf_eval(&b, 0, 0, down, dir(-0.65, 3.5), TRANSPORT_RADIANCE);

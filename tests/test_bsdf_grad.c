@@ -94,12 +94,13 @@ enum {
   M_MASK,
   M_ROUGHDIFFUSE,
   M_WARD,
+  M_DIFFTRANS,
   M_COUNT
 };
 static const char *const g_model_names[M_COUNT] = {
     "diffuse",        "phong",          "conductor", "roughconductor", "dielectric",
     "roughdielectric", "thindielectric", "plastic",   "roughplastic",   "twosided",
-    "mask",           "roughdiffuse",   "ward"};
+    "mask",           "roughdiffuse",   "ward",      "difftrans"};
 
 typedef struct config {
   char name[64];
@@ -114,16 +115,16 @@ static int make_configs(config *c) {
   bsdf b;
 
   /* Diffuse: textured, and the constant default. */
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   b.diffuse = make_bitmap(1.0, 0.0);
   c[n++] = (config){"diffuse bitmap", M_DIFFUSE, b};
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   c[n++] = (config){"diffuse constant", M_DIFFUSE, b};
 
   /* Phong at two exponents, textured diffuse and specular. */
   const double exps[] = {8.0, 150.0};
   for (int i = 0; i < 2; i++) {
-    bsdf_init_defaults(&b, BSDF_PHONG);
+    bsdf_init_defaults(&b, "phong");
     b.exponent = exps[i];
     b.diffuse = make_bitmap(2.0, 0.3);
     b.specular = make_bitmap(1.0, 0.1);
@@ -133,10 +134,10 @@ static int make_configs(config *c) {
   }
 
   /* Smooth conductor: Cu (textured) and a perfect mirror. */
-  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  bsdf_init_defaults(&b, "conductor");
   b.specular = make_bitmap(1.5, 0.2);
   c[n++] = (config){"conductor Cu", M_CONDUCTOR, b};
-  bsdf_init_defaults(&b, BSDF_CONDUCTOR);
+  bsdf_init_defaults(&b, "conductor");
   conductor_lookup("Au", &b.cond_eta, &b.cond_k);
   c[n++] = (config){"conductor Au", M_CONDUCTOR, b};
 
@@ -145,7 +146,7 @@ static int make_configs(config *c) {
   for (int d = 0; d < 2; d++)
     for (int vis = 0; vis < 2; vis++)
       for (int a = 0; a < 2; a++) {
-        bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+        bsdf_init_defaults(&b, "roughconductor");
         b.dist = d ? MF_GGX : MF_BECKMANN;
         b.sample_visible = vis;
         b.alpha = alphas[a];
@@ -157,7 +158,7 @@ static int make_configs(config *c) {
       }
 
   /* Smooth dielectric (textured transmittance). */
-  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  bsdf_init_defaults(&b, "dielectric");
   b.transmittance = make_bitmap(1.0, 0.0);
   b.specular = make_bitmap(2.0, 0.5);
   c[n++] = (config){"dielectric", M_DIELECTRIC, b};
@@ -166,7 +167,7 @@ static int make_configs(config *c) {
   for (int d = 0; d < 2; d++)
     for (int vis = 0; vis < 2; vis++)
       for (int a = 0; a < 2; a++) {
-        bsdf_init_defaults(&b, BSDF_ROUGHDIELECTRIC);
+        bsdf_init_defaults(&b, "roughdielectric");
         b.dist = d ? MF_GGX : MF_BECKMANN;
         b.sample_visible = vis;
         b.alpha = alphas[a];
@@ -178,7 +179,7 @@ static int make_configs(config *c) {
       }
 
   /* Thin dielectric (textured reflectance and transmittance). */
-  bsdf_init_defaults(&b, BSDF_THINDIELECTRIC);
+  bsdf_init_defaults(&b, "thindielectric");
   b.transmittance = make_bitmap(1.0, 0.3);
   b.specular = make_bitmap(2.0, 0.1);
   c[n++] = (config){"thindielectric", M_THINDIEL, b};
@@ -187,7 +188,7 @@ static int make_configs(config *c) {
    * with the smaller, nonlinear with GGX, textured base. */
   for (int d = 0; d < 2; d++)
     for (int a = 0; a < 2; a++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHPLASTIC);
+      bsdf_init_defaults(&b, "roughplastic");
       b.dist = d ? MF_GGX : MF_BECKMANN;
       b.sample_visible = !a;
       b.alpha = alphas[a];
@@ -202,7 +203,7 @@ static int make_configs(config *c) {
 
   /* Plastic, linear and nonlinear. */
   for (int nl = 0; nl < 2; nl++) {
-    bsdf_init_defaults(&b, BSDF_PLASTIC);
+    bsdf_init_defaults(&b, "plastic");
     b.nonlinear = nl;
     b.diffuse = make_bitmap(1.0, 0.4);
     c[n] = (config){"", M_PLASTIC, b};
@@ -211,34 +212,34 @@ static int make_configs(config *c) {
   }
 
   /* Twosided: diffuse, rough conductor, plastic. */
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   b.twosided = 1;
   b.diffuse = make_bitmap(1.0, 0.0);
   c[n++] = (config){"twosided diffuse", M_TWOSIDED, b};
-  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&b, "roughconductor");
   b.twosided = 1;
   b.dist = MF_GGX;
   b.alpha = 0.3;
   c[n++] = (config){"twosided roughconductor", M_TWOSIDED, b};
-  bsdf_init_defaults(&b, BSDF_PLASTIC);
+  bsdf_init_defaults(&b, "plastic");
   b.twosided = 1;
   c[n++] = (config){"twosided plastic", M_TWOSIDED, b};
 
   /* Mask: a textured opacity on diffuse (derivatives in tu, tv through
    * the lobe probability), a constant one on a twosided rough conductor
    * and on the smooth dielectric. */
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   b.masked = 1;
   b.opacity = make_bitmap(1.0, 0.3);
   c[n++] = (config){"mask diffuse", M_MASK, b};
-  bsdf_init_defaults(&b, BSDF_ROUGHCONDUCTOR);
+  bsdf_init_defaults(&b, "roughconductor");
   b.twosided = 1;
   b.dist = MF_GGX;
   b.alpha = 0.3;
   b.masked = 1;
   b.opacity = tex_constant(rgb_make(0.2, 0.5, 0.9));
   c[n++] = (config){"mask twosided roughconductor", M_MASK, b};
-  bsdf_init_defaults(&b, BSDF_DIELECTRIC);
+  bsdf_init_defaults(&b, "dielectric");
   b.masked = 1;
   b.opacity = tex_constant(rgb_make(0.7, 0.6, 0.5));
   c[n++] = (config){"mask dielectric", M_MASK, b};
@@ -247,7 +248,7 @@ static int make_configs(config *c) {
   const double rd_alphas[] = {0.3, 0.8};
   for (int fa = 0; fa < 2; fa++)
     for (int a = 0; a < 2; a++) {
-      bsdf_init_defaults(&b, BSDF_ROUGHDIFFUSE);
+      bsdf_init_defaults(&b, "roughdiffuse");
       b.fast_approx = fa;
       b.alpha = rd_alphas[a];
       b.diffuse = make_bitmap(1.0, 0.3);
@@ -258,7 +259,7 @@ static int make_configs(config *c) {
 
   /* Ward: the three variants anisotropic, balanced isotropic; textured. */
   for (int v = 0; v < 4; v++) {
-    bsdf_init_defaults(&b, BSDF_WARD);
+    bsdf_init_defaults(&b, "ward");
     b.variant = v < 3 ? (ward_variant)v : WARD_BALANCED;
     b.alpha_u = v < 3 ? 0.15 : 0.3;
     b.alpha_v = v < 3 ? 0.4 : 0.3;
@@ -269,14 +270,20 @@ static int make_configs(config *c) {
              b.alpha_v);
     n++;
   }
+
+  /* Diffuse transmission: textured, and the constant default. */
+  bsdf_init_defaults(&b, "difftrans");
+  b.transmittance = make_bitmap(1.0, 0.2);
+  c[n++] = (config){"difftrans bitmap", M_DIFFTRANS, b};
+  bsdf_init_defaults(&b, "difftrans");
+  c[n++] = (config){"difftrans constant", M_DIFFTRANS, b};
   assert_true(n <= MAX_CONFIGS);
   return n;
 }
 
 /* 1 when the model answers queries from below the surface. */
 static int both_sides(const bsdf *b) {
-  return b->twosided || b->masked || b->type == BSDF_DIELECTRIC ||
-         b->type == BSDF_ROUGHDIELECTRIC || b->type == BSDF_THINDIELECTRIC;
+  return b->twosided || b->masked || (bsdf_flags(b) & BSDF_TRANSMISSION);
 }
 
 /* ---- Evaluation of everything at one point x[NVAR]. ----------------------- */
@@ -617,7 +624,7 @@ static void test_normal_incidence(void **state) {
   long finite = 0, values = 0;
   for (int fa = 0; fa < 2; fa++) {
     config cf;
-    bsdf_init_defaults(&cf.b, BSDF_ROUGHDIFFUSE);
+    bsdf_init_defaults(&cf.b, "roughdiffuse");
     cf.b.fast_approx = fa;
     cf.b.alpha = 0.5;
     cf.b.diffuse = tex_constant(rgb_make(0.3, 0.6, 0.9));

@@ -43,24 +43,24 @@
 static int make_delta_configs(config *c, int n) {
   const double phi0 = 1.1;
   const double eta = 1.5;
-  bsdf_init_defaults(&c[n].b, BSDF_CONDUCTOR);
+  bsdf_init_defaults(&c[n].b, "conductor");
   c[n].wo = dir(0.6, phi0);
   snprintf(c[n].name, sizeof c[n].name, "conductor wo.z=0.60");
   n++;
   const double di_z[] = {0.8, 0.2, -0.9, -0.5}; /* -0.5: past the critical angle */
   for (int i = 0; i < 4; i++) {
-    bsdf_init_defaults(&c[n].b, BSDF_DIELECTRIC);
+    bsdf_init_defaults(&c[n].b, "dielectric");
     c[n].b.eta = eta;
     c[n].wo = dir(di_z[i], phi0);
     snprintf(c[n].name, sizeof c[n].name, "dielectric wo.z=%.2f", di_z[i]);
     n++;
   }
-  bsdf_init_defaults(&c[n].b, BSDF_THINDIELECTRIC);
+  bsdf_init_defaults(&c[n].b, "thindielectric");
   c[n].b.eta = eta;
   c[n].wo = dir(-0.4, phi0);
   snprintf(c[n].name, sizeof c[n].name, "thindielectric wo.z=-0.40");
   n++;
-  bsdf_init_defaults(&c[n].b, BSDF_PLASTIC);
+  bsdf_init_defaults(&c[n].b, "plastic");
   c[n].wo = dir(0.3, phi0);
   snprintf(c[n].name, sizeof c[n].name, "plastic wo.z=0.30");
   n++;
@@ -71,7 +71,7 @@ static int make_delta_configs(config *c, int n) {
   c[n].b.opacity = tex_constant(rgb_make(0.2, 0.5, 0.8));
   snprintf(c[n].name, sizeof c[n].name, "mask thindielectric wo.z=-0.40");
   n++;
-  bsdf_init_defaults(&c[n].b, BSDF_PHONG);
+  bsdf_init_defaults(&c[n].b, "phong");
   c[n].b.exponent = 10.0;
   c[n].b.twosided = 1;
   c[n].b.masked = 1;
@@ -198,7 +198,7 @@ static void test_posterior(void **state) {
    * the first candidate (the diffuse lobe wherever it has density). */
   int controls = 0, candidates = 0;
   for (int k = 0; k < n; k++) {
-    if (c[k].b.type != BSDF_PHONG && c[k].b.type != BSDF_ROUGHPLASTIC) continue;
+    if (!bsdf_is(&c[k].b, "phong") && !bsdf_is(&c[k].b, "roughplastic")) continue;
     candidates++;
     double p = posterior_pvalue(&c[k], 5000 + (uint64_t)k, 72000, 1);
     if (p < 1e-6) controls++;

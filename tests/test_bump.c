@@ -154,7 +154,7 @@ static void test_frame(void **state) {
   int checks = 0;
   const vec3 x = v3(1, 0, 0), y = v3(0, 1, 0), z = v3(0, 0, 1);
   bsdf b;
-  bsdf_init_defaults(&b, BSDF_DIFFUSE);
+  bsdf_init_defaults(&b, "diffuse");
   /* Unbumped, and bumped by a constant: the frame of n. */
   frame f = bsdf_shading_frame(&b, 0.3, 0.4, x, y, z, z);
   assert_true(f.n.x == 0.0 && f.n.y == 0.0 && f.n.z == 1.0);
@@ -192,7 +192,7 @@ static void test_frame(void **state) {
   /* An anisotropic ward without a bump: the normal kept, x along dpdu
    * made orthogonal to it. */
   bsdf w;
-  bsdf_init_defaults(&w, BSDF_WARD);
+  bsdf_init_defaults(&w, "ward");
   w.alpha_u = 0.1, w.alpha_v = 0.3;
   assert_true(bsdf_is_anisotropic(&w) && bsdf_needs_tangents(&w));
   f = bsdf_shading_frame(&w, 0.3, 0.4, v3(1.0, 1.0, 0.3), y, z, z);
@@ -222,11 +222,11 @@ static void test_duals(void **state) {
   ad_arena A;
   assert_int_equal(ad_arena_init(&A, g_buf, sizeof g_buf / sizeof g_buf[0], 5), 0);
   bsdf models[3];
-  bsdf_init_defaults(&models[0], BSDF_DIFFUSE);
+  bsdf_init_defaults(&models[0], "diffuse");
   models[0].bumped = 1;
   models[0].bump = tex_bitmap(&g_img);
   models[0].bump.uscale = 1.3;
-  bsdf_init_defaults(&models[1], BSDF_WARD);
+  bsdf_init_defaults(&models[1], "ward");
   models[1].alpha_u = 0.1, models[1].alpha_v = 0.3;
   models[2] = models[1];
   models[2].bumped = 1;

@@ -84,8 +84,7 @@ static int one_lobe(const scene *sc, const bdpt_vertex *v) {
   if (v->type == BDPT_VERTEX_LIGHT)
     return v->light >= 0 && sc->lights[v->light].type == LIGHT_AREA;
   if (v->type != BDPT_VERTEX_SURFACE || v->delta || !v->hit.bsdf) return 0;
-  bsdf_type t = v->hit.bsdf->type;
-  return t == BSDF_DIFFUSE || t == BSDF_ROUGHCONDUCTOR;
+  return bsdf_is(v->hit.bsdf, "diffuse") || bsdf_is(v->hit.bsdf, "roughconductor");
 }
 
 /* The continuous numbers of the subpath's first nv vertices (indices into

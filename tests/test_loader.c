@@ -299,7 +299,7 @@ static void test_warnings(void **state) {
   for (int i = 0; i < s->n_bsdfs; i++)
     if (strcmp(s->bsdfs[i].id, "w") == 0) {
       found = 1;
-      assert_int_equal(s->bsdfs[i].type, BSDF_DIFFUSE);
+      assert_true(bsdf_is(&s->bsdfs[i], "diffuse"));
       assert_true(near(s->bsdfs[i].diffuse.value.g, 0.5, 1e-12));
     }
   assert_true(found);
@@ -475,7 +475,7 @@ static void test_rough_plastic_thin(void **state) {
   assert_int_equal(load_quiet("/tmp/lmc_loader_rp.xml", &s, &warnings), LMC_OK);
   assert_int_equal(warnings, 0);
   const bsdf *rp = find_bsdf(s, "rp");
-  assert_int_equal(rp->type, BSDF_ROUGHPLASTIC);
+  assert_true(bsdf_is(rp, "roughplastic"));
   assert_int_equal(rp->dist, MF_GGX);
   assert_true(near(rp->alpha, 0.1, 0));
   assert_int_equal(rp->nonlinear, 1);
@@ -485,13 +485,13 @@ static void test_rough_plastic_thin(void **state) {
   assert_true(rp->rtrans.ready && rp->rtrans.dist == MF_GGX && rp->rtrans.alpha == 0.1 &&
               rp->rtrans.eta == rp->eta);
   const bsdf *rp2 = find_bsdf(s, "rp2");
-  assert_int_equal(rp2->type, BSDF_ROUGHPLASTIC);
+  assert_true(bsdf_is(rp2, "roughplastic"));
   assert_int_equal(rp2->twosided, 1);
   assert_true(near(rp2->alpha, 0.1, 0) && rp2->dist == MF_BECKMANN && rp2->nonlinear == 0);
   assert_true(near(rp2->eta, 1.49 / 1.000277, 1e-12));
   assert_true(rp2->rtrans.ready && rp2->rtrans.alpha == rp2->alpha);
   const bsdf *th = find_bsdf(s, "th");
-  assert_int_equal(th->type, BSDF_THINDIELECTRIC);
+  assert_true(bsdf_is(th, "thindielectric"));
   assert_true(near(th->eta, 1.3330, 1e-12));
   assert_true(near(th->transmittance.value.r, 0.9, 1e-15) && near(th->specular.value.r, 1.0, 0));
   scene_destroy(s);
@@ -507,7 +507,7 @@ static void test_rough_plastic_thin(void **state) {
   assert_int_equal(load_quiet("/tmp/lmc_loader_rp_tex.xml", &s, &warnings), LMC_OK);
   assert_int_equal(warnings, 1);
   rp = find_bsdf(s, "rp");
-  assert_int_equal(rp->type, BSDF_ROUGHPLASTIC);
+  assert_true(bsdf_is(rp, "roughplastic"));
   assert_true(near(rp->alpha, 0.1, 0));
   scene_destroy(s);
 }
@@ -659,11 +659,11 @@ static void test_mitsuba_defaults(void **state) {
   static const char *const names[4] = {"lamp", "plain", "glassy", "moving"};
   for (int i = 0; i < 4; i++, checks++) assert_string_equal(s->meshes[i].name, names[i]);
   const bsdf *lamp = &s->bsdfs[s->meshes[0].bsdf], *plain = &s->bsdfs[s->meshes[1].bsdf];
-  assert_int_equal(lamp->type, BSDF_DIFFUSE);
+  assert_true(bsdf_is(lamp, "diffuse"));
   assert_true(rgb_is_black(lamp->diffuse.value) && lamp->diffuse.image == NULL);
-  assert_int_equal(plain->type, BSDF_DIFFUSE);
+  assert_true(bsdf_is(plain, "diffuse"));
   assert_true(near(plain->diffuse.value.r, 0.5, 0.0) && near(plain->diffuse.value.b, 0.5, 0.0));
-  assert_int_equal(s->bsdfs[s->meshes[2].bsdf].type, BSDF_DIELECTRIC);
+  assert_true(bsdf_is(&s->bsdfs[s->meshes[2].bsdf], "dielectric"));
   checks += 5;
   /* The unit cube moved by the first keyframe (x + 3), not the second. */
   assert_true(near(mesh_mean_x(&s->meshes[3]), 3.0, 1e-6));
@@ -731,9 +731,9 @@ static void test_mask_loader(void **state) {
   assert_int_equal(warnings, 0);
   const bsdf *half = find_bsdf(s, "half"), *tinted = find_bsdf(s, "tinted");
   const bsdf *leaf = find_bsdf(s, "leaf");
-  assert_true(half->masked && half->twosided && half->type == BSDF_ROUGHCONDUCTOR);
+  assert_true(half->masked && half->twosided && bsdf_is(half, "roughconductor"));
   assert_true(half->opacity.type == TEX_CONSTANT && half->opacity.value.g == 0.5);
-  assert_true(tinted->masked && tinted->type == BSDF_DIFFUSE);
+  assert_true(tinted->masked && bsdf_is(tinted, "diffuse"));
   assert_true(tinted->opacity.value.r == 0.1 && tinted->opacity.value.b == 0.3);
   checks += 4;
   /* The leaf's opacity: the texture file's green channel, in all three. */
@@ -816,7 +816,7 @@ static void test_bump_loader(void **state) {
   assert_int_equal(load_quiet("/tmp/lmc_loader_bump.xml", &s, &warnings), LMC_OK);
   assert_int_equal(warnings, 1); /* the PLY quad */
   const bsdf *b = find_bsdf(s, "bumpy");
-  assert_true(b->bumped && b->type == BSDF_ROUGHCONDUCTOR && b->bump.type == TEX_BITMAP);
+  assert_true(b->bumped && bsdf_is(b, "roughconductor") && b->bump.type == TEX_BITMAP);
   lmc_image ref = {0};
   lmc_error err;
   lmc_error_clear(&err);
@@ -939,18 +939,18 @@ static void test_roughdiffuse_ward(void **state) {
   scene *s = load_case_ok("/tmp/lmc_loader_rdward.xml", xml, 0, &warnings);
   assert_int_equal(warnings, 0);
   const bsdf *rd = find_bsdf(s, "rd");
-  assert_int_equal(rd->type, BSDF_ROUGHDIFFUSE);
+  assert_true(bsdf_is(rd, "roughdiffuse"));
   assert_int_equal(rd->diffuse.type, TEX_CONSTANT);
   assert_true(near(rd->diffuse.value.r, 0.3, 1e-15) && near(rd->diffuse.value.b, 0.3, 1e-15));
   assert_true(near(rd->alpha, 0.4, 0));
   assert_int_equal(rd->fast_approx, 0);
   const bsdf *rd2 = find_bsdf(s, "rd2");
-  assert_int_equal(rd2->type, BSDF_ROUGHDIFFUSE);
+  assert_true(bsdf_is(rd2, "roughdiffuse"));
   assert_true(near(rd2->diffuse.value.b, 0.7, 1e-15) && near(rd2->diffuse.value.r, 0.1, 1e-15));
   assert_true(near(rd2->alpha, 0.2, 0)); /* Mitsuba's default */
   assert_int_equal(rd2->fast_approx, 1);
   const bsdf *wd = find_bsdf(s, "wd");
-  assert_int_equal(wd->type, BSDF_WARD);
+  assert_true(bsdf_is(wd, "ward"));
   assert_int_equal(wd->variant, WARD_DUER);
   assert_true(near(wd->alpha_u, 0.1, 0) && near(wd->alpha_v, 0.3, 0));
   assert_true(near(wd->specular.value.g, 0.25, 1e-15) && near(wd->diffuse.value.g, 0.6, 1e-15));
@@ -973,7 +973,7 @@ static void test_roughdiffuse_ward(void **state) {
   s = load_case_ok("/tmp/lmc_loader_rdtex.xml", xml_tex, 1, &warnings);
   assert_int_equal(warnings, 1);
   const bsdf *rt = find_bsdf(s, "rt");
-  assert_int_equal(rt->type, BSDF_ROUGHDIFFUSE);
+  assert_true(bsdf_is(rt, "roughdiffuse"));
   assert_true(near(rt->alpha, 0.2, 0));
   scene_destroy(s);
 }
@@ -1062,21 +1062,21 @@ static void test_happy(void **state) {
 
   /* BSDFs. */
   const bsdf *d = find_bsdf(s, "d");
-  assert_int_equal(d->type, BSDF_DIFFUSE);
+  assert_true(bsdf_is(d, "diffuse"));
   assert_int_equal(d->diffuse.type, TEX_BITMAP);
   assert_ptr_equal(d->diffuse.image, &s->images[0]);
   assert_int_equal(s->images[0].channels, 3);
   assert_true(near(d->diffuse.uscale, 2.0, 0) && near(d->diffuse.vscale, 1.0, 0));
   assert_true(near(d->diffuse.voffset, 0.5, 0));
   const bsdf *ph = find_bsdf(s, "ph");
-  assert_int_equal(ph->type, BSDF_PHONG);
+  assert_true(bsdf_is(ph, "phong"));
   assert_true(near(ph->exponent, 40.0, 0));
   assert_true(near(ph->specular.value.r, 0.3, 1e-15));
   assert_int_equal(ph->diffuse.type, TEX_CHECKERBOARD);
   assert_true(near(ph->diffuse.color0.r, 0.4, 1e-15) && near(ph->diffuse.color1.r, 0.2, 1e-15));
   assert_true(near(ph->diffuse.uscale, 3.0, 0));
   const bsdf *rc = find_bsdf(s, "rc");
-  assert_int_equal(rc->type, BSDF_ROUGHCONDUCTOR);
+  assert_true(bsdf_is(rc, "roughconductor"));
   assert_int_equal(rc->dist, MF_GGX);
   assert_true(near(rc->alpha, 0.2, 1e-15));
   assert_true(near(rc->cond_eta.r, 0.1, 1e-15) && near(rc->cond_eta.b, 0.55, 1e-15));
@@ -1086,27 +1086,27 @@ static void test_happy(void **state) {
   const bsdf *gl = find_bsdf(s, "gl");
   double water = 0.0;
   assert_true(ior_lookup("water", &water));
-  assert_int_equal(gl->type, BSDF_DIELECTRIC);
+  assert_true(bsdf_is(gl, "dielectric"));
   assert_true(near(gl->eta, water, 1e-12));
   const bsdf *rg = find_bsdf(s, "rg");
-  assert_int_equal(rg->type, BSDF_ROUGHDIELECTRIC);
+  assert_true(bsdf_is(rg, "roughdielectric"));
   assert_int_equal(rg->dist, MF_BECKMANN);
   assert_true(near(rg->eta, 1.2, 1e-12) && near(rg->alpha, 0.3, 1e-15));
   assert_int_equal(rg->sample_visible, 0);
   const bsdf *pl = find_bsdf(s, "pl");
-  assert_int_equal(pl->type, BSDF_PLASTIC);
+  assert_true(bsdf_is(pl, "plastic"));
   assert_true(near(pl->eta, 1.5, 1e-15));
   assert_int_equal(pl->nonlinear, 1);
   /* sRGB 128/255 decodes to 0.2158605. */
   assert_true(near(pl->diffuse.value.g, 0.2158605, 1e-6));
   const bsdf *ts = find_bsdf(s, "ts");
-  assert_int_equal(ts->type, BSDF_DIFFUSE);
+  assert_true(bsdf_is(ts, "diffuse"));
   assert_int_equal(ts->twosided, 1);
   assert_true(near(ts->diffuse.value.b, 0.6, 1e-15));
   const bsdf *incl = find_bsdf(s, "incl");
   rgb au_eta, au_k;
   assert_true(conductor_lookup("Au", &au_eta, &au_k));
-  assert_int_equal(incl->type, BSDF_CONDUCTOR);
+  assert_true(bsdf_is(incl, "conductor"));
   assert_true(near(incl->cond_eta.r, au_eta.r, 1e-12) && near(incl->cond_k.b, au_k.b, 1e-12));
 
   /* Shapes: names, flags, transforms, default BSDF, the area light. */
@@ -1136,7 +1136,7 @@ static void test_happy(void **state) {
       assert_ptr_equal(b, rc);
       checked++;
     } else if (strcmp(m->name, "plain") == 0) {
-      assert_int_equal(b->type, BSDF_DIFFUSE);
+      assert_true(bsdf_is(b, "diffuse"));
       assert_true(near(b->diffuse.value.r, 0.5, 0));
       assert_int_equal(m->light, -1);
       assert_true(near(m->p[2], 7.0, 1e-6)); /* the <matrix> moved it to z = 7 */

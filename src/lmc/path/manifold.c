@@ -24,6 +24,7 @@
 #include "ad/dual.h"
 #include "ad/dual_math.h"
 #include "ad/dual_vec3.h"
+#include "render/bsdf/bsdf_model.h"
 
 /* Duals one constraint makes (about 70; room to spare). */
 #define MF__ARENA_DUALS 256
@@ -425,7 +426,7 @@ static int mf__trace_ray(const scene *sc, const mf_chain *proto, vec3 org, vec3 
 
     if (v->kind == MF_REFRACT) {
       const bsdf *b = &sc->bsdfs[sc->meshes[h.mesh].bsdf];
-      if (b->type != BSDF_DIELECTRIC && b->type != BSDF_ROUGHDIELECTRIC) return MF_EBSDF;
+      if (!b->model->refracts) return MF_EBSDF;
       v->eta = b->eta;
     }
     vec3 wo;
@@ -626,8 +627,7 @@ int mf_path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flag
   double sp = v3_dot(ps_dir(p, j, j - 1), x->v.n), sn = v3_dot(ps_dir(p, j, j + 1), x->v.n);
   *OUT_kind = MF_REFLECT;
   if (sp * sn > 0.0) return MF_OK;
-  if (bs->masked || (bs->type != BSDF_DIELECTRIC && bs->type != BSDF_ROUGHDIELECTRIC) ||
-      !(bs->eta > 0.0))
+  if (bs->masked || !bs->model->refracts || !(bs->eta > 0.0))
     return MF_EBSDF;
   *OUT_kind = MF_REFRACT;
   *OUT_eta = bs->eta;

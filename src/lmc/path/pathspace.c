@@ -14,6 +14,8 @@
 #include <limits.h>
 #include <string.h>
 
+#include "render/bsdf/bsdf_model.h"
+
 void ps_context_init(ps_context *ctx, const scene *sc, const render_settings *rs) {
   memset(ctx, 0, sizeof *ctx);
   ctx->sc = sc;
@@ -32,15 +34,7 @@ int ps_glossy_vertex(const ps_context *ctx, const bdpt_vertex *v) {
   if (v->type != BDPT_VERTEX_SURFACE) return 0;
   const bsdf *b = v->hit.bsdf;
   if (!b || b->masked || !(ctx->glossy_rough > 0.0)) return 0;
-  switch (b->type) {
-  case BSDF_ROUGHCONDUCTOR:
-  case BSDF_ROUGHDIELECTRIC:
-  case BSDF_PHONG:
-  case BSDF_WARD:
-    return !bsdf_is_rough(b, ctx->glossy_rough);
-  default:
-    return 0;
-  }
+  return b->model->chain && !bsdf_is_rough(b, ctx->glossy_rough);
 }
 
 int ps_glossy(const ps_context *ctx, const ps_path *p, int i) {

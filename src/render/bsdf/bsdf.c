@@ -1,7 +1,8 @@
 /*
- * bsdf.c: the BSDF front end: dispatch on the model, the twosided flip,
- * Fresnel equations, the named IOR and conductor tables, and Mitsuba 0.6's
- * default parameters. The models live in bsdf_smooth.c and bsdf_rough.c.
+ * bsdf.c: the BSDF front end: the call through the model's record
+ * (bsdf_model.h), the twosided flip and the mask, Fresnel equations, the
+ * named IOR and conductor tables, and the defaults the models share. The
+ * models live in models/, one file each, registered in bsdf_models.c.
  * The Fresnel equations, the sample record and the dispatch are written
  * once (bsdf_generic.h) and compiled here twice, in doubles (bsdf.h) and in
  * duals (bsdf_ad.h, for the gradients of lmc and h2mc); render/real.h says
@@ -36,6 +37,7 @@
 
 #include "render/bsdf/bsdf_ad_internal.h"
 #include "render/bsdf/bsdf_internal.h"
+#include "render/bsdf/bsdf_model.h"
 #include "render/warp.h"
 
 /* ---- Fresnel (value-only parts) --------------------------------------- */
@@ -169,11 +171,11 @@ int conductor_lookup(const char *name, rgb *eta, rgb *k) {
   return 0;
 }
 
-/* ---- Defaults, flags --------------------------------------------------- */
+/* ---- Defaults, flags: read from the model's record ------------------------- */
 
-void bsdf_init_defaults(bsdf *b, bsdf_type type) {
+void bsdf_init_model(bsdf *b, const bsdf_model *m) {
   memset(b, 0, sizeof *b);
-  b->type = type;
+  b->model = m;
   b->twosided = 0;
   b->diffuse = tex_constant(rgb_gray(0.5));
   b->specular = tex_constant(rgb_gray(1.0));
@@ -186,109 +188,46 @@ void bsdf_init_defaults(bsdf *b, bsdf_type type) {
   b->fast_approx = 0;
   b->alpha_u = b->alpha_v = 0.1;
   b->variant = WARD_BALANCED;
+  b->eta = 1.0;
   /* Conductors: Cu against air (Mitsuba divides eta and k by extEta). */
-  const double air = 1.000277;
   rgb ce = rgb_gray(0.0), ck = rgb_gray(0.0); /* (Cu is in the table) */
   conductor_lookup("Cu", &ce, &ck);
-  b->cond_eta = rgb_scale(ce, 1.0 / air);
-  b->cond_k = rgb_scale(ck, 1.0 / air);
-  switch (type) {
-  case BSDF_PHONG:
-    b->specular = tex_constant(rgb_gray(0.2));
-    b->eta = 1.0;
-    break;
-  case BSDF_DIELECTRIC:
-  case BSDF_ROUGHDIELECTRIC:
-  case BSDF_THINDIELECTRIC:
-    b->eta = 1.5046 / air; /* bk7 / air */
-    break;
-  case BSDF_PLASTIC:
-  case BSDF_ROUGHPLASTIC:
-    b->eta = 1.49 / air; /* polypropylene / air */
-    break;
-  case BSDF_ROUGHDIFFUSE:
-    b->alpha = 0.2;
-    b->eta = 1.0;
-    break;
-  case BSDF_WARD:
-    b->specular = tex_constant(rgb_gray(0.2));
-    b->eta = 1.0;
-    break;
-  default:
-    b->eta = 1.0;
-    break;
-  }
+  b->cond_eta = rgb_scale(ce, 1.0 / BSDF_AIR_IOR);
+  b->cond_k = rgb_scale(ck, 1.0 / BSDF_AIR_IOR);
+  if (m->defaults) m->defaults(b);
 }
 
-/* The lobes of the model itself (without its mask). */
-static int bsdf__model_flags(const bsdf *b) {
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE;
-  case BSDF_PHONG:
-  case BSDF_WARD:
-  case BSDF_ROUGHPLASTIC:
-    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_GLOSSY;
-  case BSDF_CONDUCTOR:
-    return BSDF_REFLECTION | BSDF_DELTA;
-  case BSDF_ROUGHCONDUCTOR:
-  case BSDF_ROUGHDIFFUSE: /* Mitsuba's flag for roughdiffuse: f is not constant */
-    return BSDF_REFLECTION | BSDF_GLOSSY;
-  case BSDF_DIELECTRIC:
-  case BSDF_THINDIELECTRIC:
-    return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DELTA;
-  case BSDF_ROUGHDIELECTRIC:
-    return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_GLOSSY;
-  case BSDF_PLASTIC:
-    return BSDF_REFLECTION | BSDF_DIFFUSE_LOBE | BSDF_DELTA;
-  case BSDF_TYPE_COUNT:
-    break;
-  }
-  return 0;
+int bsdf_init_defaults(bsdf *b, const char *name) {
+  const bsdf_model *m = bsdf_model_find(name);
+  bsdf_init_model(b, m ? m : bsdf_model_find("diffuse"));
+  return m != NULL;
+}
+
+int bsdf_is(const bsdf *b, const char *name) {
+  return b->model && strcmp(b->model->name, name) == 0;
 }
 
 int bsdf_flags(const bsdf *b) {
   /* A mask adds its pass-through: a delta transmission. */
-  return bsdf__model_flags(b) | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
+  return b->model->flags | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
 }
 
 /* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
 int bsdf_is_delta(const bsdf *b) {
-  return b->type == BSDF_CONDUCTOR || b->type == BSDF_DIELECTRIC ||
-         b->type == BSDF_THINDIELECTRIC;
+  return (b->model->flags & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0;
+}
+
+int bsdf_is_anisotropic(const bsdf *b) {
+  return b->model->anisotropic && b->model->anisotropic(b);
 }
 
 void bsdf_prepare(bsdf *b) {
-  if (b->type != BSDF_ROUGHPLASTIC) return;
-  bsdf_rtrans *rt = &b->rtrans;
-  if (rt->ready && rt->dist == b->dist && rt->alpha == b->alpha && rt->eta == b->eta) return;
-  bsdf__rtrans_fill(rt, b->dist, b->alpha, b->eta);
+  if (b->model->prepare) b->model->prepare(b);
 }
 
 int bsdf_is_rough(const bsdf *b, double rough_min) {
   if (b->masked) return 0; /* the pass-through is a delta lobe */
-  switch (b->type) {
-  case BSDF_DIFFUSE:
-  case BSDF_ROUGHDIFFUSE:
-    return 1.0 > rough_min;
-  case BSDF_PHONG:
-    /* A diffuse part makes it rough; a pure lobe of exponent n is as wide
-     * as a Beckmann lobe of alpha = sqrt(2 / (n + 2)) (Walter et al. 2007). */
-    if (rgb_luminance(tex_mean(&b->diffuse)) > 0.0) return 1.0 > rough_min;
-    return sqrt(2.0 / (b->exponent + 2.0)) > rough_min;
-  case BSDF_ROUGHCONDUCTOR:
-  case BSDF_ROUGHDIELECTRIC:
-  case BSDF_ROUGHPLASTIC:
-    /* roughplastic by its coating alone, as roughconductor: a narrow
-     * glossy lobe over the diffuse base keeps relative parametrization. */
-    return b->alpha > rough_min;
-  case BSDF_WARD:
-    /* As phong; the lobe's roughness is Mitsuba's (alphaU + alphaV) / 2. */
-    if (rgb_luminance(tex_mean(&b->diffuse)) > 0.0) return 1.0 > rough_min;
-    return 0.5 * (b->alpha_u + b->alpha_v) > rough_min;
-  default:
-    return 0; /* delta lobes: smooth conductor and dielectrics, plastic's coating */
-  }
+  return b->model->roughness && b->model->roughness(b) > rough_min;
 }
 
 /* ---- Arena bookkeeping of the dual entry points ------------------------------ */

@@ -1,7 +1,7 @@
 /*
  * bsdf.h: the BSDF models of Mitsuba 0.5/0.6 that research scenes use.
  *
- * Models (parameters as Mitsuba names them; see the .c files for the papers):
+ * Models (parameters as Mitsuba names them; models/NAME.c for the papers):
  *   diffuse         reflectance
  *   phong           diffuseReflectance, specularReflectance, exponent
  *                   (Mitsuba's energy-normalised modified Phong)
@@ -21,6 +21,7 @@
  *                   distribution, alpha, intIOR, extIOR, specularReflectance,
  *                   diffuseReflectance, nonlinear (bsdf_prepare precomputes
  *                   its rough transmittance)
+ *   difftrans       ideal diffuse transmission: transmittance
  *   twosided        the flag `twosided` on the wrapped model
  *   bumpmap         the flag `bumped` and the displacement texture `bump` on
  *                   the wrapped model (Mitsuba's bumpmap): the surface's
@@ -65,20 +66,7 @@
 #include "render/frame.h"
 #include "render/vec3.h"
 
-typedef enum bsdf_type {
-  BSDF_DIFFUSE = 0,
-  BSDF_PHONG,
-  BSDF_CONDUCTOR,
-  BSDF_ROUGHCONDUCTOR,
-  BSDF_DIELECTRIC,
-  BSDF_ROUGHDIELECTRIC,
-  BSDF_PLASTIC,
-  BSDF_ROUGHDIFFUSE,
-  BSDF_WARD,
-  BSDF_ROUGHPLASTIC,
-  BSDF_THINDIELECTRIC,
-  BSDF_TYPE_COUNT
-} bsdf_type;
+struct bsdf_model;
 
 typedef enum mf_dist { MF_BECKMANN = 0, MF_GGX } mf_dist;
 
@@ -115,7 +103,7 @@ typedef struct bsdf_rtrans {
 } bsdf_rtrans;
 
 typedef struct bsdf {
-  bsdf_type type;
+  const struct bsdf_model *model; /* its record (bsdf_model.h) */
   int twosided;
   texture diffuse;       /* diffuse, roughdiffuse: reflectance; phong, plastics, ward:
                             diffuseReflectance */
@@ -154,8 +142,13 @@ typedef struct bsdf_sample {
   double pdf_rev;
 } bsdf_sample;
 
-/* Fills the defaults Mitsuba uses for the model `type`. */
-void bsdf_init_defaults(bsdf *b, bsdf_type type);
+/* Fills the defaults Mitsuba uses for the model registered as `name`
+ * (bsdf_model.h); returns 0, leaving a diffuse model, when there is none. */
+int bsdf_init_defaults(bsdf *b, const char *name);
+/* The same for the record m. */
+void bsdf_init_model(bsdf *b, const struct bsdf_model *m);
+/* 1 when b's model is the one registered as `name`. */
+int bsdf_is(const bsdf *b, const char *name);
 /* Precomputes what a model needs once its parameters are set (for
  * roughplastic the rough transmittance table: 20 ms for GGX, 80 ms for
  * Beckmann); a no-op for the other models. Call again after changing dist,
@@ -209,9 +202,7 @@ int bsdf_is_rough(const bsdf *b, double rough_min);
 
 /* 1 when the model's lobe is anisotropic (ward with alphaU != alphaV): its
  * shading frame's first axis must follow dpdu, as Mitsuba's. */
-static inline int bsdf_is_anisotropic(const bsdf *b) {
-  return b->type == BSDF_WARD && b->alpha_u != b->alpha_v;
-}
+int bsdf_is_anisotropic(const bsdf *b);
 /* 1 when the model needs the hit's uv tangents (bsdf_shading_frame): a bump
  * map or an anisotropic lobe. */
 static inline int bsdf_needs_tangents(const bsdf *b) { return b->bumped || bsdf_is_anisotropic(b); }

@@ -212,8 +212,7 @@ RRGB R_FN(bsdf__plastic_kd)(R_CTX const bsdf *b, REAL tu, REAL tv, double fdr) {
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */
 static int R_FN(bsdf__flip)(const bsdf *b, REAL3 wo) {
-  return b->twosided && R_V(wo.z) < 0.0 && b->type != BSDF_DIELECTRIC &&
-         b->type != BSDF_ROUGHDIELECTRIC && b->type != BSDF_THINDIELECTRIC;
+  return b->twosided && R_V(wo.z) < 0.0 && !(b->model->flags & BSDF_TRANSMISSION);
 }
 
 /* The twosided flip of a (wo, wi) pair: both mirrored to the upper side. */
@@ -229,18 +228,7 @@ RRGB R_FN(bsdf_eval)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
   size_t mark = ad_arena_mark(A);
 #endif
   R_FN(bsdf__flip_pair)(R_ARG b, &wo, &wi);
-  RRGB f;
-  switch (b->type) {
-#define BSDF__CASE(TYPE, NAME)                                                                     \
-  case TYPE:                                                                                       \
-    f = R_FN(bsdf__##NAME##_eval)(R_ARG b, tu, tv, wo, wi, mode);                                  \
-    break;
-    BSDF__CASES
-#undef BSDF__CASE
-  default:
-    f = RRGB_ZERO();
-    break;
-  }
+  RRGB f = b->model->R_FN(eval)(R_ARG b, tu, tv, wo, wi, mode);
   if (b->masked) f = RRGB_MUL(f, R_FN(tex_eval)(R_ARG &b->opacity, tu, tv));
 #if R_DUAL
   ad *keep[3] = {&f.r, &f.g, &f.b};
@@ -254,18 +242,7 @@ REAL R_FN(bsdf_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
   size_t mark = ad_arena_mark(A);
 #endif
   R_FN(bsdf__flip_pair)(R_ARG b, &wo, &wi);
-  REAL p;
-  switch (b->type) {
-#define BSDF__CASE(TYPE, NAME)                                                                     \
-  case TYPE:                                                                                       \
-    p = R_FN(bsdf__##NAME##_pdf)(R_ARG b, tu, tv, wo, wi);                                         \
-    break;
-    BSDF__CASES
-#undef BSDF__CASE
-  default:
-    p = R_C(0.0);
-    break;
-  }
+  REAL p = b->model->R_FN(pdf)(R_ARG b, tu, tv, wo, wi);
   if (b->masked) {
     RRGB alpha;
     p = R_MUL(p, R_FN(bsdf__mask_prob)(R_ARG b, tu, tv, &alpha));
@@ -279,28 +256,15 @@ REAL R_FN(bsdf_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi) {
 
 RRGB R_FN(bsdf_eval_pdf)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL3 wi,
                          transport_mode mode, REAL *OUT_pdf) {
-  REAL3 fo = wo, fi = wi;
-  R_FN(bsdf__flip_pair)(R_ARG b, &fo, &fi);
-  RRGB f;
-  switch (b->type) {
-  case BSDF_PHONG:
-    f = R_FN(bsdf__phong_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
-    break;
-  case BSDF_ROUGHCONDUCTOR:
-    f = R_FN(bsdf__roughconductor_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
-    break;
-  case BSDF_ROUGHDIELECTRIC:
-    f = R_FN(bsdf__roughdielectric_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
-    break;
-  case BSDF_ROUGHPLASTIC:
-    f = R_FN(bsdf__roughplastic_eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
-    break;
-  default:
+  if (!b->model->R_FN(eval_pdf)) {
     /* Nothing to share: the two dispatchers (each applies the flip and
      * the mask itself). */
     *OUT_pdf = R_FN(bsdf_pdf)(R_ARG b, tu, tv, wo, wi);
     return R_FN(bsdf_eval)(R_ARG b, tu, tv, wo, wi, mode);
   }
+  REAL3 fo = wo, fi = wi;
+  R_FN(bsdf__flip_pair)(R_ARG b, &fo, &fi);
+  RRGB f = b->model->R_FN(eval_pdf)(R_ARG b, tu, tv, fo, fi, mode, OUT_pdf);
   if (b->masked) {
     RRGB alpha;
     *OUT_pdf = R_MUL(*OUT_pdf, R_FN(bsdf__mask_prob)(R_ARG b, tu, tv, &alpha));
@@ -339,16 +303,7 @@ int R_FN(bsdf_sample_f)(R_CTX const bsdf *b, REAL tu, REAL tv, REAL3 wo, REAL u_
   }
   int flip = R_FN(bsdf__flip)(b, wo);
   if (flip) wo.z = R_NEG(wo.z);
-  switch (b->type) {
-#define BSDF__CASE(TYPE, NAME)                                                                     \
-  case TYPE:                                                                                       \
-    ok = R_FN(bsdf__##NAME##_sample)(R_ARG b, tu, tv, wo, u_lobe, u1, u2, mode, out);              \
-    break;
-    BSDF__CASES
-#undef BSDF__CASE
-  default:
-    break;
-  }
+  ok = b->model->R_FN(sample)(R_ARG b, tu, tv, wo, u_lobe, u1, u2, mode, out);
   if (flip) out->wi.z = R_NEG(out->wi.z);
   if (b->masked && ok) {
     /* The wrapped lobe's f times the opacity, its density times P. */
@@ -372,6 +327,17 @@ done:;
 /* ---- The inverse of bsdf_sample_f (values only) ------------------------------ */
 
 #if !R_DUAL
+int bsdf__same_dir(vec3 a, vec3 b) { return v3_len2(v3_sub(a, b)) < 1e-10; }
+
+int bsdf__invert_delta(double lo, double hi, const double r[4], double OUT_u[3], double *OUT_pmf) {
+  if (!(hi > lo)) return 0;
+  OUT_u[0] = warp_uniform_in(lo, hi, r[1]);
+  OUT_u[1] = r[2];
+  OUT_u[2] = r[3];
+  *OUT_pmf = hi - lo;
+  return 1;
+}
+
 int bsdf__invert_cosine(vec3 wi, double lo, double hi, const double r[4], double OUT_u[3]) {
   if (!(wi.z > 0.0)) return 0;
   OUT_u[0] = warp_uniform_in(lo, hi, r[1]);
@@ -398,15 +364,7 @@ static int bsdf__invert_model(const bsdf *b, double tu, double tv, vec3 wo, vec3
     wi.z = -wi.z;
   }
   *OUT_pmf = 1.0;
-  switch (b->type) {
-#define BSDF__CASE(TYPE, NAME)                                                                     \
-  case TYPE:                                                                                       \
-    return bsdf__##NAME##_invert(b, tu, tv, wo, wi, delta, r, OUT_u, OUT_pmf);
-    BSDF__CASES
-#undef BSDF__CASE
-  default:
-    return 0;
-  }
+  return b->model->invert(b, tu, tv, wo, wi, delta, r, OUT_u, OUT_pmf);
 }
 
 /* bsdf_invert without the check that the sampler gives wi back. */

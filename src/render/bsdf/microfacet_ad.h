@@ -2,7 +2,7 @@
  * microfacet_ad.h: the microfacet distributions of microfacet.h (Beckmann
  * and GGX: D, Smith Lambda / G1 / G, sampling of all or of the visible
  * normals, and the sampling density) in dual arithmetic, for the rough
- * models of bsdf_rough.c.
+ * models (models/rough*.c).
  *
  * The same source as the plain functions (microfacet_generic.h, compiled
  * twice by microfacet.c; see microfacet.h for the papers: Walter et al.

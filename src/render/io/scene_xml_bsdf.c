@@ -3,14 +3,15 @@
  * and BSDFs (Mitsuba's names and defaults, bsdf.h), for
  * scene_xml_internal.h.
  */
-#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/bsdf/bsdf_model.h"
 #include "render/io/scene_xml_internal.h"
+#include "render/plugin.h"
 
 /* ---- Textures. ---------------------------------------------------------- */
 
@@ -307,105 +308,11 @@ static lmc_status xml__inner_bsdf(builder *B, pset *o, pset **out) {
   return LMC_OK;
 }
 
-/* A roughness (alpha, alphaU, alphaV) as xml__float reads it; a texture
- * there (Mitsuba allows one) is not supported: it warns and counts as
- * absent, so the default applies. */
-static lmc_status xml__alpha(builder *B, pset *o, const char *name, double def, double *out,
-                             int *found) {
-  prop *p = xml__find(o, name);
-  if (p && (p->kind == PROP_OBJECT || p->kind == PROP_REF)) {
-    lmc_warn(p->file, p->line, "a textured roughness '%s' is not supported: using %g", name, def);
-    *out = def;
-    *found = 0;
-    return LMC_OK;
-  }
-  return xml__float(B, o, name, def, out, found);
-}
-
-/* Microfacet parameters shared by the rough models. */
-static lmc_status xml__rough(builder *B, pset *o, bsdf *b) {
-  lmc_status st;
-  const char *d;
-  prop *p;
-  if ((st = xml__string(B, o, "distribution", "beckmann", &d, &p)) != LMC_OK) return st;
-  if (strcmp(d, "beckmann") == 0) b->dist = MF_BECKMANN;
-  else if (strcmp(d, "ggx") == 0) b->dist = MF_GGX;
-  else {
-    lmc_warn(p->file, p->line, "microfacet distribution \"%s\" is not supported: using beckmann",
-             d);
-    b->dist = MF_BECKMANN;
-  }
-  double alpha, au, av;
-  int has_a, has_u, has_v;
-  if ((st = xml__alpha(B, o, "alpha", b->alpha, &alpha, &has_a)) != LMC_OK) return st;
-  if ((st = xml__alpha(B, o, "alphaU", alpha, &au, &has_u)) != LMC_OK) return st;
-  if ((st = xml__alpha(B, o, "alphaV", alpha, &av, &has_v)) != LMC_OK) return st;
-  if ((has_u || has_v) && au != av) {
-    lmc_warn(o->file, o->line,
-             "anisotropic roughness (alphaU %g, alphaV %g) is not supported: using their mean",
-             au, av);
-  }
-  b->alpha = 0.5 * (au + av);
-  if (!(b->alpha > 0.0))
-    return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughness alpha must be positive");
-  return xml__bool(B, o, "sampleVisible", b->sample_visible, &b->sample_visible, NULL);
-}
-
 /* 1 when o has a property `name` (without marking it read). */
 static int xml__has(const pset *o, const char *name) {
   for (int i = 0; i < o->n_props; i++)
     if (strcmp(o->props[i].name, name) == 0) return 1;
   return 0;
-}
-
-/* A roughness that Mitsuba also takes as a texture (roughdiffuse's alpha,
- * ward's alphaU and alphaV): a <float>, or a texture, which warns and
- * gives `def` (the models take one roughness per BSDF). *found as
- * xml__float's. */
-static lmc_status xml__roughness(builder *B, pset *o, const char *name, double def, double *out,
-                                 int *found) {
-  prop *p = xml__find(o, name);
-  if (p && (p->kind == PROP_OBJECT || p->kind == PROP_REF)) {
-    if (found) *found = 1;
-    lmc_warn(p->file, p->line, "a textured '%s' is not supported: using %g", name, def);
-    *out = def;
-    return LMC_OK;
-  }
-  return xml__float(B, o, name, def, out, found);
-}
-
-enum { BSDF_TEX_DIFFUSE = 1, BSDF_TEX_SPECULAR = 2, BSDF_TEX_TRANSMITTANCE = 4 };
-
-/* The textures `which` of a BSDF, each defaulting to the model's own
- * value: diffuseReflectance, specularReflectance, specularTransmittance
- * (image indices into img[0], img[1], img[2]). */
-static lmc_status xml__bsdf_textures(builder *B, pset *o, bsdf *b, int which, int img[3]) {
-  static const char *const names[3] = {"diffuseReflectance", "specularReflectance",
-                                       "specularTransmittance"};
-  texture *tex[3] = {&b->diffuse, &b->specular, &b->transmittance};
-  for (int i = 0; i < 3; i++) {
-    if (!(which & (1 << i))) continue;
-    lmc_status st = xml__texture(B, o, names[i], tex_mean(tex[i]), tex[i], &img[i]);
-    if (st != LMC_OK) return st;
-  }
-  return LMC_OK;
-}
-
-/* eta = intIOR / extIOR of a dielectric interface (Mitsuba's defaults:
- * the named material int_default inside, air outside); eta = 1 warns,
- * saying what it means for this model. */
-static lmc_status xml__eta(builder *B, pset *o, const char *int_default, const char *at_one,
-                           double *OUT_eta) {
-  lmc_status st;
-  double int_ior, ext_ior, def_int = 1.5, air = 1.000277;
-  ior_lookup(int_default, &def_int);
-  ior_lookup("air", &air);
-  if ((st = xml__ior(B, o, "intIOR", def_int, &int_ior)) != LMC_OK) return st;
-  if ((st = xml__ior(B, o, "extIOR", air, &ext_ior)) != LMC_OK) return st;
-  *OUT_eta = int_ior / ext_ior;
-  if (*OUT_eta == 1.0)
-    lmc_warn(o->file, o->line, "%s with intIOR = extIOR (eta = 1): %s", o->type, at_one);
-  return LMC_OK;
 }
 
 texture *xml__tex_slot(bsdf *b, int which) {
@@ -461,6 +368,92 @@ static lmc_status xml__bump(builder *B, pset *o, bsdf *b, int *img) {
   return xml__texture_object(B, tex, rgb_gray(0.0), &b->bump, img);
 }
 
+/* ---- The property readers of render/plugin.h, over one pset ----------------- */
+
+struct plugin_props {
+  builder *B;
+  pset *o;
+  bsdf *b;   /* the model being read: its texture slots */
+  int *img;  /* image index per slot (XML__TEX_SLOTS), -1: none */
+};
+
+const char *props_type(const plugin_props *p) { return p->o->type; }
+
+int props_has(const plugin_props *p, const char *name) { return xml__has(p->o, name); }
+
+lmc_status props_float(plugin_props *p, const char *name, double def, double *OUT,
+                       int *OUT_found) {
+  return xml__float(p->B, p->o, name, def, OUT, OUT_found);
+}
+
+lmc_status props_bool(plugin_props *p, const char *name, int def, int *OUT) {
+  return xml__bool(p->B, p->o, name, def, OUT, NULL);
+}
+
+lmc_status props_string(plugin_props *p, const char *name, const char *def, const char **OUT) {
+  return xml__string(p->B, p->o, name, def, OUT, NULL);
+}
+
+lmc_status props_rgb(plugin_props *p, const char *name, rgb def, rgb *OUT) {
+  return xml__rgb(p->B, p->o, name, def, OUT, NULL);
+}
+
+lmc_status props_ior(plugin_props *p, const char *name, double def, double *OUT) {
+  return xml__ior(p->B, p->o, name, def, OUT);
+}
+
+lmc_status props_roughness(plugin_props *p, const char *name, double def, double *OUT,
+                           int *OUT_found) {
+  prop *q = xml__find(p->o, name);
+  if (q && (q->kind == PROP_OBJECT || q->kind == PROP_REF)) {
+    lmc_warn(q->file, q->line, "a textured roughness '%s' is not supported: using %g", name, def);
+    *OUT = def;
+    if (OUT_found) *OUT_found = 0;
+    return LMC_OK;
+  }
+  return xml__float(p->B, p->o, name, def, OUT, OUT_found);
+}
+
+lmc_status props_texture(plugin_props *p, const char *name, rgb def, texture *OUT) {
+  int slot = 0;
+  while (slot < XML__TEX_SLOTS && xml__tex_slot(p->b, slot) != OUT) slot++;
+  if (slot == XML__TEX_SLOTS)
+    return xml__fail(p->B, LMC_EINVAL, p->o->file, p->o->line,
+                     "internal: '%s' is not one of the BSDF's texture slots", name);
+  return xml__texture(p->B, p->o, name, def, OUT, &p->img[slot]);
+}
+
+/* The file and line of property `name` of p, or of its element. */
+static void props__where(plugin_props *p, const char *name, const char **file, int *line) {
+  prop *q = name ? xml__find(p->o, name) : NULL;
+  *file = q ? q->file : p->o->file;
+  *line = q ? q->line : p->o->line;
+}
+
+lmc_status props_fail(plugin_props *p, const char *name, const char *fmt, ...) {
+  char msg[900];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  const char *file;
+  int line;
+  props__where(p, name, &file, &line);
+  return xml__fail(p->B, LMC_EPARSE, file, line, "%s", msg);
+}
+
+void props_warn(plugin_props *p, const char *name, const char *fmt, ...) {
+  char msg[900];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  const char *file;
+  int line;
+  props__where(p, name, &file, &line);
+  lmc_warn(file, line, "%s", msg);
+}
+
 /* Fills *b from a bsdf object; img[XML__TEX_SLOTS] get image indices of
  * the textures of xml__tex_slot (-1: none). Does not add to the scene. */
 static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_SLOTS],
@@ -481,7 +474,7 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
       if (strcmp(t, "twosided") == 0)
         return xml__fail(B, LMC_EPARSE, o->file, o->line, "<bsdf type=\"twosided\"> needs a nested BSDF");
       lmc_warn(o->file, o->line, "BSDF \"%s\" is not supported and wraps nothing: using diffuse", t);
-      bsdf_init_defaults(b, BSDF_DIFFUSE);
+      bsdf_init_defaults(b, "diffuse");
       for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
       return LMC_OK;
     }
@@ -506,104 +499,16 @@ static lmc_status xml__make_bsdf(builder *B, pset *o, bsdf *b, int img[XML__TEX_
     return LMC_OK;
   }
 
-  if (strcmp(t, "diffuse") == 0) {
-    bsdf_init_defaults(b, BSDF_DIFFUSE);
-    if ((st = xml__texture(B, o, "reflectance", rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK)
-      return st;
-  } else if (strcmp(t, "phong") == 0) {
-    bsdf_init_defaults(b, BSDF_PHONG);
-    if ((st = xml__float(B, o, "exponent", b->exponent, &b->exponent, NULL)) != LMC_OK) return st;
-    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
-      return st;
-  } else if (strcmp(t, "conductor") == 0 || strcmp(t, "roughconductor") == 0) {
-    int rough = t[0] == 'r';
-    bsdf_init_defaults(b, rough ? BSDF_ROUGHCONDUCTOR : BSDF_CONDUCTOR);
-    rgb eta = b->cond_eta, k = b->cond_k;
-    const char *mat;
-    prop *mp;
-    if ((st = xml__string(B, o, "material", NULL, &mat, &mp)) != LMC_OK) return st;
-    if (mat && !conductor_lookup(mat, &eta, &k))
-      return xml__fail(B, LMC_EPARSE, mp->file, mp->line, "unknown conductor material '%s'", mat);
-    if ((st = xml__rgb(B, o, "eta", eta, &eta, NULL)) != LMC_OK) return st;
-    if ((st = xml__rgb(B, o, "k", k, &k, NULL)) != LMC_OK) return st;
-    double ext;
-    if ((st = xml__ior(B, o, "extEta", 1.0, &ext)) != LMC_OK) return st;
-    b->cond_eta = rgb_scale(eta, 1.0 / ext);
-    b->cond_k = rgb_scale(k, 1.0 / ext);
-    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_SPECULAR, img)) != LMC_OK) return st;
-    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
-  } else if (strcmp(t, "dielectric") == 0 || strcmp(t, "roughdielectric") == 0 ||
-             strcmp(t, "thindielectric") == 0) {
-    int rough = t[0] == 'r', thin = t[0] == 't';
-    bsdf_init_defaults(b, thin    ? BSDF_THINDIELECTRIC
-                          : rough ? BSDF_ROUGHDIELECTRIC
-                                  : BSDF_DIELECTRIC);
-    if ((st = xml__eta(B, o, "bk7",
-                       thin ? "a slab that reflects nothing, invisible"
-                            : "an index-matched interface, invisible",
-                       &b->eta)) != LMC_OK)
-      return st;
-    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_SPECULAR | BSDF_TEX_TRANSMITTANCE, img)) !=
-        LMC_OK)
-      return st;
-    if (rough && (st = xml__rough(B, o, b)) != LMC_OK) return st;
-  } else if (strcmp(t, "plastic") == 0 || strcmp(t, "roughplastic") == 0) {
-    int rough = t[0] == 'r';
-    bsdf_init_defaults(b, rough ? BSDF_ROUGHPLASTIC : BSDF_PLASTIC);
-    if ((st = xml__eta(B, o, "polypropylene", "no specular coating, only the diffuse base",
-                       &b->eta)) != LMC_OK)
-      return st;
-    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
-      return st;
-    if ((st = xml__bool(B, o, "nonlinear", b->nonlinear, &b->nonlinear, NULL)) != LMC_OK)
-      return st;
-    if (rough) {
-      if ((st = xml__rough(B, o, b)) != LMC_OK) return st;
-      /* Mitsuba 0.6 tabulates the rough transmittance for alpha in [0, 4]
-       * and rejects the scene beyond; it is computed here for any alpha. */
-      if (b->alpha > 4.0)
-        lmc_warn(o->file, o->line,
-                 "roughplastic alpha %g is above 4, where Mitsuba 0.6 refuses it; accepted here",
-                 b->alpha);
-    }
-  } else if (strcmp(t, "roughdiffuse") == 0) {
-    /* Mitsuba reads `reflectance`, or `diffuseReflectance` when there is no
-     * `reflectance`. */
-    bsdf_init_defaults(b, BSDF_ROUGHDIFFUSE);
-    const char *rname = xml__has(o, "reflectance") ? "reflectance" : "diffuseReflectance";
-    if ((st = xml__texture(B, o, rname, rgb_gray(0.5), &b->diffuse, &img[0])) != LMC_OK) return st;
-    if ((st = xml__roughness(B, o, "alpha", b->alpha, &b->alpha, NULL)) != LMC_OK) return st;
-    if (!(b->alpha >= 0.0))
-      return xml__fail(B, LMC_EPARSE, o->file, o->line, "roughdiffuse alpha must be >= 0");
-    if ((st = xml__bool(B, o, "useFastApprox", 0, &b->fast_approx, NULL)) != LMC_OK) return st;
-  } else if (strcmp(t, "ward") == 0) {
-    bsdf_init_defaults(b, BSDF_WARD);
-    const char *v;
-    prop *vp;
-    if ((st = xml__string(B, o, "variant", "balanced", &v, &vp)) != LMC_OK) return st;
-    /* Mitsuba lower-cases the name. */
-    char lower[16];
-    size_t n = 0;
-    for (; v[n] && n + 1 < sizeof lower; n++) lower[n] = (char)tolower((unsigned char)v[n]);
-    lower[n] = '\0';
-    if (strcmp(lower, "ward") == 0) b->variant = WARD_ORIGINAL;
-    else if (strcmp(lower, "ward-duer") == 0) b->variant = WARD_DUER;
-    else if (strcmp(lower, "balanced") == 0) b->variant = WARD_BALANCED;
-    else
-      return xml__fail(B, LMC_EPARSE, vp->file, vp->line,
-                       "ward variant \"%s\" must be \"ward\", \"ward-duer\" or \"balanced\"", v);
-    double alpha;
-    if ((st = xml__roughness(B, o, "alpha", 0.1, &alpha, NULL)) != LMC_OK) return st;
-    if ((st = xml__roughness(B, o, "alphaU", alpha, &b->alpha_u, NULL)) != LMC_OK) return st;
-    if ((st = xml__roughness(B, o, "alphaV", alpha, &b->alpha_v, NULL)) != LMC_OK) return st;
-    if (!(b->alpha_u > 0.0) || !(b->alpha_v > 0.0))
-      return xml__fail(B, LMC_EPARSE, o->file, o->line, "ward alphaU and alphaV must be positive");
-    if ((st = xml__bsdf_textures(B, o, b, BSDF_TEX_DIFFUSE | BSDF_TEX_SPECULAR, img)) != LMC_OK)
-      return st;
-  } else {
+  /* A model: its record's defaults, then its own parameters. */
+  const bsdf_model *m = bsdf_model_find(t);
+  if (!m) {
     lmc_warn(o->file, o->line, "unknown BSDF type \"%s\": using diffuse with reflectance 0.5", t);
-    bsdf_init_defaults(b, BSDF_DIFFUSE);
+    bsdf_init_defaults(b, "diffuse");
     for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
+  } else {
+    bsdf_init_model(b, m);
+    plugin_props props = {B, o, b, img};
+    if (m->read && (st = m->read(b, &props)) != LMC_OK) return st;
   }
   if (o->id[0]) snprintf(b->id, sizeof b->id, "%.63s", o->id);
   xml__warn_unused(o);
@@ -636,7 +541,7 @@ lmc_status xml__default_bsdf(builder *B, int black, int *out_index) {
   if (B->default_bsdf[black] < 0) {
     bsdf b;
     memset(&b, 0, sizeof b);
-    bsdf_init_defaults(&b, BSDF_DIFFUSE);
+    bsdf_init_defaults(&b, "diffuse");
     b.diffuse = tex_constant(rgb_gray(black ? 0.0 : 0.5));
     snprintf(b.id, sizeof b.id, "%s", black ? "(default black)" : "(default diffuse)");
     int idx = scene_add_bsdf(B->s, &b, B->err);

@@ -1,81 +1,16 @@
 /*
- * bsdf_rough.c: the microfacet models of Walter, Marschner, Li and Torrance
- * 2007, "Microfacet Models for Refraction through Rough Surfaces", with the
- * distributions of microfacet.h, as Mitsuba 0.6's roughconductor,
- * roughdielectric and roughplastic define them (roughplastic's base seen
- * through the coating by Mitsuba's "rough Fresnel transmittance").
- *
- * roughconductor (one-sided). With h = normalize(wo + wi):
- *   f = F_cond(wo . h) D(h) G(wo, wi, h) / (4 cos_o cos_i) * specularReflectance.
- * Sampling draws a normal m (visible normals of wo, or D(m) cos(theta_m))
- * and reflects wo about it; the density of wi is
- *   pdf = p_m(h) / (4 |wi . h|).
- *
- * roughdielectric (both sides; wo.z < 0 means wo is inside, where the IOR
- * is eta = intIOR / extIOR). Let e = eta_i / eta_o be the IOR of wi's side
- * over the IOR of wo's side (e = eta when wo is outside, 1/eta inside).
- *   reflection (cos_o cos_i > 0):  h = normalize(wo + wi),
- *     f_r = F D G / (4 |cos_o| |cos_i|) * specularReflectance;
- *   refraction (cos_o cos_i < 0):  h = normalize(wo + e wi) (the generalised
- *     half vector), flipped to the upper hemisphere,
- *     f_t = (1 - F) D G e^2 |wo.h| |wi.h| / (|cos_o| |cos_i| (wo.h + e wi.h)^2)
- *           * specularTransmittance,
- *     times 1/e^2 in radiance mode (radiance is compressed when it enters a
- *     denser medium), so that f_imp(wo, wi) = f_rad(wi, wo).
- * F = fresnel_dielectric(wo . h, eta). Sampling: a normal m is drawn as for
- * the conductor (from the side of wo, i.e. with wo mirrored to the upper
- * hemisphere), reflection is chosen with probability F(wo . m), refraction
- * otherwise. Densities of wi:
- *   reflection  F p_m(h) / (4 |wi.h|),
- *   refraction  (1 - F) p_m(h) e^2 |wi.h| / (wo.h + e wi.h)^2.
- * Without visible-normal sampling, Mitsuba samples a slightly wider
- * distribution, alpha (1.2 - 0.2 sqrt(|cos_o|)) (Walter et al.'s trick to
- * lower the weights at grazing angles); the pdf uses the same alpha.
- *
- * roughplastic (one-sided; Mitsuba 0.6's roughplastic.cpp). A rough
- * dielectric coating (eta, Beckmann or GGX alpha) over a Lambertian base kd,
- * the sum of a specular and a diffuse lobe, with h = normalize(wo + wi):
- *   f_s = ks F(wo.h) D(h) G(wo, wi, h) / (4 cos_o cos_i),
- *   f_d = kd' T(cos_o) T(cos_i) / (pi eta^2),
- *   kd' = kd / (1 - F_dr)  or, nonlinear,  kd / (1 - kd F_dr).
- * T(c) is the rough transmittance: the energy that light arriving at cosine
- * c from outside carries through the rough interface, the hemispherical
- * integral of roughdielectric's refraction lobe (importance transport);
- * F_dr = 1 - int_0^1 2 c T_int(c) dc is the interface's diffuse reflectance
- * seen from inside (T_int: the same at 1 / eta). As alpha -> 0, T -> 1 - F
- * and F_dr -> plastic's F_dr: smooth plastic's diffuse term. Mitsuba 0.6
- * reads T and F_dr from tables it ships (data/microfacet/beckmann.dat and
- * ggx.dat, tricubic in cos^(1/4), alpha^(1/4), eta^(1/4)); here they are
- * computed when the model
- * is prepared (bsdf_prepare) for its own (dist, alpha, eta): T at 65 nodes
- * uniform in cos^(1/4) (where the boundary layer of width ~alpha near
- * grazing is resolved), by a product Gauss-Legendre rule over the visible
- * normals of each direction, interpolated by a C1 cubic; F_dr by
- * Gauss-Legendre in the cosine. Against Mitsuba's GGX table the nodes agree
- * to 1e-4 (8e-4 at alpha = 1); against its Beckmann table to 0.6%, the
- * difference of our exact Smith G1 and Mitsuba's rational approximation.
- * Sampling (Mitsuba's rule): the specular lobe with probability
- *   p_s = (1 - T_o) w / ((1 - T_o) w + T_o (1 - w)),  T_o = T(cos_o),
- * w the specular sampling weight (as for plastic), drawing a normal as the
- * rough conductor does and reflecting wo about it; else cosine-weighted.
- *   pdf = p_s p_m(h) / (4 wi.h) + (1 - p_s) cos_i / pi.
- * f is symmetric in (wo, wi): the model is reciprocal (its pdf is not).
- *
- * Sample weights are computed as f |cos_i| / pdf from the one function
- * that evaluates both (bsdf__rc_eval_pdf, bsdf__rd_eval_pdf,
- * bsdf__rp_eval_pdf), which eval
- * and pdf call too, so the three can never disagree. The models are
- * written once (bsdf_rough_generic.h) and compiled here twice, in doubles
- * and in duals (render/real.h).
+ * bsdf_rtrans.c: roughplastic's rough transmittance (models/roughplastic.c
+ * says what it is and how it is used): T(c) at BSDF_RTRANS_NODES nodes
+ * uniform in cos^(1/4), by a product Gauss-Legendre rule over the visible
+ * normals of each direction, and the interface's diffuse reflectance seen
+ * from inside, by Gauss-Legendre in the cosine. Values only.
  */
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
 
-#include "render/bsdf/bsdf_ad_internal.h"
 #include "render/bsdf/bsdf_internal.h"
 #include "render/bsdf/microfacet.h"
-#include "render/bsdf/microfacet_ad.h"
 
 /* ---- roughplastic's rough transmittance (values only) ------------------- */
 
@@ -115,7 +50,7 @@ static void bsdf__gauss_legendre(int n, double *x, double *w) {
 /* T(c) = int f_t(wo, wi) |cos wi| dwi: the energy that light arriving at
  * cosine c on the side of relative IOR eta (eta < 1: from inside) carries
  * through the rough interface, importance transport (no 1/eta^2), as
- * bsdf_rough.c's roughdielectric refraction defines f_t. With wi refracted
+ * models/roughdielectric.c's refraction defines f_t. With wi refracted
  * through the normal m, the refraction Jacobian cancels f_t's and
  *   T = int D_wo(m) (1 - F(wo.m)) G1(wi, m) dm,
  * D_wo the visible normals of wo (microfacet.h). The integral is taken
@@ -200,13 +135,3 @@ const bsdf_rtrans *bsdf__rtrans_get(const bsdf *b) {
   bsdf__rtrans_fill(rt, b->dist, b->alpha, b->eta);
   return rt;
 }
-
-/* The models in doubles (bsdf_internal.h), then in duals
- * (bsdf_ad_internal.h), from one source. */
-#define R_DUAL 0
-#include "render/real.h"
-#include "render/bsdf/bsdf_rough_generic.h"
-#undef R_DUAL
-#define R_DUAL 1
-#include "render/real.h"
-#include "render/bsdf/bsdf_rough_generic.h"
