@@ -27,7 +27,7 @@ typedef struct config {
   int n_theta, n_phi; /* chi-square grid (finer for the sharpest lobes) */
 } config;
 
-#define MAX_CONFIGS 128
+#define MAX_CONFIGS 160
 
 /* Every non-delta configuration of the chi-square and consistency tests. */
 static inline int make_configs(config *c) {
@@ -122,6 +122,27 @@ static inline int make_configs(config *c) {
     c[n].b.transmittance = tex_constant(rgb_make(0.6, 0.5, 0.4));
     c[n].wo = dir(dt_z[i], phi0);
     snprintf(c[n].name, sizeof c[n].name, "difftrans wo.z=%.2f", dt_z[i]);
+    n++;
+  }
+  /* Blends (their BSDFs in static storage: the configurations are copied):
+   * rough gold over a diffuse base, and smooth glass with a diffuse
+   * transmitter (its delta lobes count as rejected, as plastic's). */
+  static bsdf blend_parts[4];
+  bsdf_init_defaults(&blend_parts[0], "diffuse");
+  blend_parts[0].diffuse = tex_constant(rgb_make(0.7, 0.5, 0.3));
+  bsdf_init_defaults(&blend_parts[1], "roughconductor");
+  blend_parts[1].alpha = 0.3;
+  bsdf_init_defaults(&blend_parts[2], "dielectric");
+  bsdf_init_defaults(&blend_parts[3], "difftrans");
+  const double bl_w[] = {0.3, 0.6}, bl_z[] = {0.7, -0.5};
+  for (int i = 0; i < 2; i++) {
+    bsdf_init_defaults(&c[n].b, "blendbsdf");
+    c[n].b.diffuse = tex_constant(rgb_gray(bl_w[i]));
+    c[n].b.nested_bsdf[0] = &blend_parts[2 * i];
+    c[n].b.nested_bsdf[1] = &blend_parts[2 * i + 1];
+    c[n].wo = dir(bl_z[i], phi0);
+    snprintf(c[n].name, sizeof c[n].name, "blendbsdf %s w=%g wo.z=%.2f",
+             i ? "dielectric+difftrans" : "diffuse+roughconductor", bl_w[i], bl_z[i]);
     n++;
   }
   /* Rough diffuse (Oren-Nayar): two roughnesses, the full model and the

@@ -95,12 +95,13 @@ enum {
   M_ROUGHDIFFUSE,
   M_WARD,
   M_DIFFTRANS,
+  M_BLEND,
   M_COUNT
 };
 static const char *const g_model_names[M_COUNT] = {
     "diffuse",        "phong",          "conductor", "roughconductor", "dielectric",
     "roughdielectric", "thindielectric", "plastic",   "roughplastic",   "twosided",
-    "mask",           "roughdiffuse",   "ward",      "difftrans"};
+    "mask",           "roughdiffuse",   "ward",      "difftrans", "blendbsdf"};
 
 typedef struct config {
   char name[64];
@@ -277,6 +278,25 @@ static int make_configs(config *c) {
   c[n++] = (config){"difftrans bitmap", M_DIFFTRANS, b};
   bsdf_init_defaults(&b, "difftrans");
   c[n++] = (config){"difftrans constant", M_DIFFTRANS, b};
+
+  /* Blends (their BSDFs in static storage): a textured weight over
+   * textured diffuse and rough gold; smooth glass with a phong lobe. */
+  static bsdf parts[4];
+  bsdf_init_defaults(&parts[0], "diffuse");
+  parts[0].diffuse = make_bitmap(1.0, 0.4);
+  bsdf_init_defaults(&parts[1], "roughconductor");
+  parts[1].alpha = 0.25;
+  bsdf_init_defaults(&parts[2], "dielectric");
+  bsdf_init_defaults(&parts[3], "phong");
+  for (int i = 0; i < 2; i++) {
+    bsdf_init_defaults(&b, "blendbsdf");
+    b.diffuse = i ? tex_constant(rgb_gray(0.4)) : make_bitmap(0.5, 0.2);
+    b.nested_bsdf[0] = &parts[2 * i];
+    b.nested_bsdf[1] = &parts[2 * i + 1];
+    c[n++] = (config){"", M_BLEND, b};
+    snprintf(c[n - 1].name, sizeof c[n - 1].name, "blendbsdf %s",
+             i ? "dielectric+phong" : "diffuse+roughconductor (textured weight)");
+  }
   assert_true(n <= MAX_CONFIGS);
   return n;
 }

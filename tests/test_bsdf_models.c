@@ -41,7 +41,8 @@
 /* The models of Mitsuba 0.6 that lmc registers (bsdf.h lists them). */
 static const char *const mitsuba_names[] = {
     "diffuse",        "phong",   "conductor",    "roughconductor", "dielectric", "roughdielectric",
-    "thindielectric", "plastic", "roughplastic", "roughdiffuse",   "ward",       "difftrans"};
+    "thindielectric", "plastic", "roughplastic", "roughdiffuse",   "ward",       "difftrans",
+    "blendbsdf"};
 #define N_NAMES ((int)(sizeof mitsuba_names / sizeof mitsuba_names[0]))
 
 static void test_registry(void **state) {
@@ -75,6 +76,10 @@ static void test_registry(void **state) {
 static void test_records_whole(void **state) {
   (void)state;
   int n, checks = 0;
+  /* Nested BSDFs for the models made of others: two diffuse ones. */
+  static bsdf parts[2];
+  bsdf_init_defaults(&parts[0], "diffuse");
+  bsdf_init_defaults(&parts[1], "diffuse");
   const bsdf_model *const *list = bsdf_model_list(&n);
   for (int i = 0; i < n; i++) {
     const bsdf_model *m = list[i];
@@ -93,11 +98,14 @@ static void test_records_whole(void **state) {
     /* The front end answers from the record. */
     bsdf b;
     bsdf_init_model(&b, m);
-    assert_int_equal(bsdf_flags(&b), m->flags);
-    assert_int_equal(bsdf_is_delta(&b), (m->flags & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0);
+    b.nested_bsdf[0] = &parts[0], b.nested_bsdf[1] = &parts[1];
+    int lobes = m->lobes ? m->lobes(&b) : m->flags;
+    assert_int_equal(lobes & ~m->flags, 0); /* flags: every lobe it can have */
+    assert_int_equal(bsdf_flags(&b), lobes);
+    assert_int_equal(bsdf_is_delta(&b), (lobes & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0);
     assert_int_equal(bsdf_is_rough(&b, 0.0), m->roughness != NULL);
     b.masked = 1;
-    assert_int_equal(bsdf_flags(&b), m->flags | BSDF_TRANSMISSION | BSDF_DELTA);
+    assert_int_equal(bsdf_flags(&b), lobes | BSDF_TRANSMISSION | BSDF_DELTA);
     assert_false(bsdf_is_rough(&b, 0.0));
     checks++;
   }
@@ -117,7 +125,7 @@ static void test_sampling_coverage(void **state) {
     if (!found) print_error("model %s has no chi-square configuration\n", list[i]->name);
     covered += found > 0;
   }
-  assert_int_equal(needed, 9); /* all but the smooth conductor and dielectrics */
+  assert_int_equal(needed, 10); /* all but the smooth conductor and dielectrics */
   assert_int_equal(covered, needed);
 }
 
@@ -183,11 +191,13 @@ static void test_loader(void **state) {
   const bsdf_model *const *list = bsdf_model_list(&n);
   for (int i = 0; i < n; i++) {
     char el[128];
-    snprintf(el, sizeof el, "<bsdf type=\"%s\"/>", list[i]->name);
+    /* A model made of others gets two. */
+    snprintf(el, sizeof el, "<bsdf type=\"%s\">%s</bsdf>", list[i]->name,
+             list[i]->lobes ? "<bsdf type=\"diffuse\"/><bsdf type=\"roughconductor\"/>" : "");
     scene *s = scene_with(el, "models");
     assert_non_null(s);
-    assert_int_equal(s->n_bsdfs, 1);
-    assert_ptr_equal(s->bsdfs[0].model, list[i]);
+    assert_int_equal(s->n_bsdfs, list[i]->lobes ? 3 : 1);
+    assert_ptr_equal(s->bsdfs[s->meshes[0].bsdf].model, list[i]);
     scene_destroy(s);
     checks++;
   }
@@ -198,6 +208,23 @@ static void test_loader(void **state) {
   rgb t = tex_mean(&s->bsdfs[0].transmittance);
   assert_true(t.r == 0.3 && t.g == 0.2 && t.b == 0.1);
   scene_destroy(s);
+  /* A blend: its weight and its two BSDFs, linked to the scene's. */
+  s = scene_with(
+      "<bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.25\"/>"
+      "<bsdf type=\"diffuse\"/><bsdf type=\"dielectric\"/></bsdf>",
+      "blend");
+  assert_non_null(s);
+  const bsdf *bl = &s->bsdfs[s->meshes[0].bsdf];
+  assert_true(tex_mean(&bl->diffuse).g == 0.25);
+  assert_true(bsdf_is(bl->nested_bsdf[0], "diffuse") && bsdf_is(bl->nested_bsdf[1], "dielectric"));
+  assert_int_equal(bsdf_flags(bl),
+                   BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DIFFUSE_LOBE | BSDF_DELTA);
+  scene_destroy(s);
+  /* A blend of one BSDF, and one that contains itself: errors. */
+  assert_null(scene_with("<bsdf type=\"blendbsdf\"><bsdf type=\"diffuse\"/></bsdf>", "blend1"));
+  assert_null(scene_with(
+      "<bsdf type=\"blendbsdf\" id=\"me\"><bsdf type=\"diffuse\"/><ref id=\"me\"/></bsdf>",
+      "blendself"));
   /* A parameter out of range: an error naming the element's line. */
   assert_null(
       scene_with("<bsdf type=\"roughdiffuse\"><float name=\"alpha\" value=\"-1\"/></bsdf>", "bad"));

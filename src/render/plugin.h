@@ -43,6 +43,10 @@ lmc_status props_roughness(plugin_props *p, const char *name, double def, double
 /* A colour or a texture (nested <texture> or <ref>) into *OUT, one of the
  * model's texture slots (the loader keeps its bitmap's image attached). */
 lmc_status props_texture(plugin_props *p, const char *name, rgb def, struct texture *OUT);
+/* The BSDFs nested in the element (<bsdf> children or <ref>s to BSDFs, in
+ * document order), each built into the scene: their scene indices into
+ * OUT_index (at most max; more is an error), their number in *OUT_n. */
+lmc_status props_bsdfs(plugin_props *p, int max, int *OUT_index, int *OUT_n);
 /* An error at the property `name` (the element when name is NULL or
  * absent): LMC_EPARSE with the message; returns that status. */
 lmc_status props_fail(plugin_props *p, const char *name, const char *fmt, ...)

@@ -112,7 +112,10 @@ lmc_status scene_finalize(scene *s, lmc_error *err) {
   if (n_tris == 0 && s->n_lights == 0)
     return lmc_error_set(err, LMC_EINVAL, s->path, 0, "the scene has neither geometry nor lights");
 
-  for (int i = 0; i < s->n_bsdfs; i++) s->tex_filtered |= bsdf_is_tex_filtered(&s->bsdfs[i]);
+  for (int i = 0; i < s->n_bsdfs; i++) {
+    bsdf_link(&s->bsdfs[i], s->bsdfs);
+    s->tex_filtered |= bsdf_is_tex_filtered(&s->bsdfs[i]);
+  }
 
   /* The accelerator. */
   st = accel_create(&s->accel, s->meshes, s->n_meshes, err);

@@ -189,6 +189,7 @@ void bsdf_init_model(bsdf *b, const bsdf_model *m) {
   b->alpha_u = b->alpha_v = 0.1;
   b->variant = WARD_BALANCED;
   b->eta = 1.0;
+  b->nested[0] = b->nested[1] = -1;
   /* Conductors: Cu against air (Mitsuba divides eta and k by extEta). */
   rgb ce = rgb_gray(0.0), ck = rgb_gray(0.0); /* (Cu is in the table) */
   conductor_lookup("Cu", &ce, &ck);
@@ -207,15 +208,22 @@ int bsdf_is(const bsdf *b, const char *name) {
   return b->model && strcmp(b->model->name, name) == 0;
 }
 
+void bsdf_link(bsdf *b, const bsdf *all) {
+  for (int k = 0; k < 2; k++) b->nested_bsdf[k] = b->nested[k] >= 0 ? &all[b->nested[k]] : NULL;
+}
+
+/* The model's own lobes (without the mask). */
+static int bsdf__lobes(const bsdf *b) {
+  return b->model->lobes ? b->model->lobes(b) : b->model->flags;
+}
+
 int bsdf_flags(const bsdf *b) {
   /* A mask adds its pass-through: a delta transmission. */
-  return b->model->flags | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
+  return bsdf__lobes(b) | (b->masked ? BSDF_TRANSMISSION | BSDF_DELTA : 0);
 }
 
 /* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
-int bsdf_is_delta(const bsdf *b) {
-  return (b->model->flags & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0;
-}
+int bsdf_is_delta(const bsdf *b) { return (bsdf__lobes(b) & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0; }
 
 int bsdf_is_anisotropic(const bsdf *b) {
   return b->model->anisotropic && b->model->anisotropic(b);

@@ -22,6 +22,8 @@
  *                   diffuseReflectance, nonlinear (bsdf_prepare precomputes
  *                   its rough transmittance)
  *   difftrans       ideal diffuse transmission: transmittance
+ *   blendbsdf       (1 - weight) f0 + weight f1 of two nested BSDFs (nested,
+ *                   nested_bsdf): weight (in the diffuse slot)
  *   twosided        the flag `twosided` on the wrapped model
  *   bumpmap         the flag `bumped` and the displacement texture `bump` on
  *                   the wrapped model (Mitsuba's bumpmap): the surface's
@@ -125,6 +127,11 @@ typedef struct bsdf {
   texture opacity;       /* mask: per-channel opacity in [0, 1] (1: opaque) */
   int nonlinear;         /* plastics: Mitsuba's `nonlinear` */
   bsdf_rtrans rtrans;    /* roughplastic: its rough transmittance (bsdf_prepare) */
+  /* Models that combine others (blendbsdf): the scene's indices of their
+   * BSDFs (-1: none) and the BSDFs themselves, which scene_finalize points
+   * at the scene's (bsdf_link); a BSDF built by hand sets the pointers. */
+  int nested[2];
+  const struct bsdf *nested_bsdf[2];
   char id[64];           /* the XML id, for messages */
 } bsdf;
 
@@ -149,6 +156,8 @@ int bsdf_init_defaults(bsdf *b, const char *name);
 void bsdf_init_model(bsdf *b, const struct bsdf_model *m);
 /* 1 when b's model is the one registered as `name`. */
 int bsdf_is(const bsdf *b, const char *name);
+/* Points b's nested BSDFs at all[b->nested[k]] (scene_finalize). */
+void bsdf_link(bsdf *b, const bsdf *all);
 /* Precomputes what a model needs once its parameters are set (for
  * roughplastic the rough transmittance table: 20 ms for GGX, 80 ms for
  * Beckmann); a no-op for the other models. Call again after changing dist,

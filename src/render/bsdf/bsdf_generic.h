@@ -212,7 +212,7 @@ RRGB R_FN(bsdf__plastic_kd)(R_CTX const bsdf *b, REAL tu, REAL tv, double fdr) {
 
 /* 1 when the model is reflection-only and the twosided flip applies to wo. */
 static int R_FN(bsdf__flip)(const bsdf *b, REAL3 wo) {
-  return b->twosided && R_V(wo.z) < 0.0 && !(b->model->flags & BSDF_TRANSMISSION);
+  return b->twosided && R_V(wo.z) < 0.0 && !(bsdf__lobes(b) & BSDF_TRANSMISSION);
 }
 
 /* The twosided flip of a (wo, wi) pair: both mirrored to the upper side. */

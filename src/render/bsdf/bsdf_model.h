@@ -36,6 +36,9 @@ typedef struct bsdf_model {
   double (*roughness)(const bsdf *b);
   /* 1 when its lobe is anisotropic for b's parameters (NULL: never). */
   int (*anisotropic)(const bsdf *b);
+  /* Its lobes for b's parameters, when they are not always `flags` (a
+   * model made of others: NULL, flags). */
+  int (*lobes)(const bsdf *b);
 
   rgb (*eval)(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi, transport_mode mode);
   double (*pdf)(const bsdf *b, double tu, double tv, vec3 wo, vec3 wi);

@@ -21,8 +21,9 @@
   X(plastic)            \
   X(roughplastic)       \
   X(roughdiffuse)       \
-  X(ward)                                                                                        \
-  X(difftrans)
+  X(ward)               \
+  X(difftrans)          \
+  X(blendbsdf)
 
 #define BSDF__DECLARE(NAME) extern const bsdf_model bsdf_model_##NAME;
 BSDF__MODELS(BSDF__DECLARE)

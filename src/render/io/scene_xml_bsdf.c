@@ -423,6 +423,29 @@ lmc_status props_texture(plugin_props *p, const char *name, rgb def, texture *OU
   return xml__texture(p->B, p->o, name, def, OUT, &p->img[slot]);
 }
 
+lmc_status props_bsdfs(plugin_props *p, int max, int *OUT_index, int *OUT_n) {
+  *OUT_n = 0;
+  for (int i = 0; i < p->o->n_props; i++) {
+    prop *q = &p->o->props[i];
+    pset *c = NULL;
+    if (q->kind == PROP_OBJECT && strcmp(q->obj->tag, "bsdf") == 0) c = q->obj;
+    else if (q->kind == PROP_REF) {
+      lmc_status st = xml__deref(p->B, q, &c);
+      if (st != LMC_OK) return st;
+      if (strcmp(c->tag, "bsdf") != 0) continue;
+    } else {
+      continue;
+    }
+    q->used = 1;
+    if (*OUT_n == max)
+      return xml__fail(p->B, LMC_EPARSE, q->file, q->line, "<bsdf type=\"%s\"> takes %d BSDFs",
+                       p->o->type, max);
+    lmc_status st = xml__bsdf(p->B, c, &OUT_index[(*OUT_n)++]);
+    if (st != LMC_OK) return st;
+  }
+  return LMC_OK;
+}
+
 /* The file and line of property `name` of p, or of its element. */
 static void props__where(plugin_props *p, const char *name, const char **file, int *line) {
   prop *q = name ? xml__find(p->o, name) : NULL;
@@ -521,10 +544,14 @@ lmc_status xml__bsdf(builder *B, pset *o, int *out_index) {
     *out_index = o->index;
     return LMC_OK;
   }
+  if (o->building)
+    return xml__fail(B, LMC_EPARSE, o->file, o->line, "the BSDF contains itself (through a <ref>)");
   bsdf b;
   memset(&b, 0, sizeof b);
   int img[XML__TEX_SLOTS];
+  o->building = 1;
   lmc_status st = xml__make_bsdf(B, o, &b, img, 0);
+  o->building = 0;
   if (st != LMC_OK) return st;
   bsdf_prepare(&b);
   int idx = scene_add_bsdf(B->s, &b, B->err);
