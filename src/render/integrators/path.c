@@ -1,7 +1,8 @@
 /*
  * path.c: the differentiable path sampler (see path.h): pt_li's estimator
  * written once in dual arithmetic, run twice ("locate, then re-evaluate").
- * The emitters in duals are in path_lights.c, one bidirectional strategy
+ * The emitters in duals are light.c's (light_ad.h; path_lights.c notes
+ * their choices in the topology), one bidirectional strategy
  * in path_bdpt.c; path_internal.h is what they share.
  *
  * Pass 1 (tangent length 0) traces rays with Embree on the values and
@@ -22,7 +23,8 @@
  *              shading normal normalize(b0 n0 + b1 n1 + b2 n2) (turned to the
  *              geometric side), its frame (Duff et al. 2017) and the texture
  *              coordinates, all as in scene_intersect.
- *  lights      light.c's sampling routines: an area light's triangle is
+ *  lights      light.c's sampling routines in duals (light_ad.h, one
+ *              source with the plain ones): an area light's triangle is
  *              chosen by the discrete part of u1 (fixed), the remapped u1'
  *              = (u1 - cdf_i) / width_i keeps derivative 1 / width_i; the
  *              envmap's pixel is fixed and the position inside it moves

@@ -126,170 +126,22 @@ static ad pbd__cam_we(path__ctx *c, adv3 w, ad *OUT_rx, ad *OUT_ry) {
 }
 
 /* ---------------------------------------------------------------------------
- * Emission sampling (light.c's light_sample_le) in duals.
+ * Emission sampling (light.c's light_sample_le, light_ad.h) in duals.
  */
 
-/* Concentric map (Shirley and Chiu 1997), warp_square_to_disk_concentric. */
-static void pbd__concentric(ad_arena *A, ad u1, ad u2, ad *OUT_x, ad *OUT_y) {
-  ad a = ad_sub_s(A, ad_mul_s(A, u1, 2.0), 1.0), b = ad_sub_s(A, ad_mul_s(A, u2, 2.0), 1.0);
-  if (a.v == 0.0 && b.v == 0.0) {
-    *OUT_x = *OUT_y = ad_const(A, 0.0);
-    return;
-  }
-  ad r, phi;
-  if (fabs(a.v) > fabs(b.v)) {
-    r = a;
-    phi = ad_mul_s(A, ad_div(A, b, a), M_PI / 4.0); /* (pi/4) b/a */
-  } else {
-    r = b;
-    phi = ad_s_sub(A, M_PI / 2.0, ad_mul_s(A, ad_div(A, a, b), M_PI / 4.0)); /* pi/2 - (pi/4) a/b */
-  }
-  *OUT_x = ad_mul(A, r, ad_cos(A, phi));
-  *OUT_y = ad_mul(A, r, ad_sin(A, phi));
-}
-
-/* Direction with cosine z and azimuth 2 pi u2 (the sphere and cone warps). */
-static adv3 pbd__z_phi(ad_arena *A, ad z, ad u2) {
-  ad r = ad_safe_sqrt(A, ad_s_sub(A, 1.0, ad_sqr(A, z)));
-  ad phi = ad_mul_s(A, u2, 2.0 * M_PI);
-  phi.v = 2.0 * M_PI * u2.v;
-  return (adv3){ad_mul(A, r, ad_cos(A, phi)), ad_mul(A, r, ad_sin(A, phi)), z};
-}
-
-/* frame_to_world for a constant frame: s x + t y + n z. */
-static adv3 pbd__frame_to_world_c(ad_arena *A, const frame *f, adv3 v) {
-  adv3 r;
-  r.x = ad_add(A, ad_lincomb(A, f->s.x, v.x, f->t.x, v.y), ad_mul_s(A, v.z, f->n.x));
-  r.y = ad_add(A, ad_lincomb(A, f->s.y, v.x, f->t.y, v.y), ad_mul_s(A, v.z, f->n.y));
-  r.z = ad_add(A, ad_lincomb(A, f->s.z, v.x, f->t.z, v.y), ad_mul_s(A, v.z, f->n.z));
-  return r;
-}
-
-/* A point on the disk of radius r facing unit dir, just outside the
- * scene's bounding sphere (light.c's light__disk_point):
- *   p = center + (s x + t y - dir) r,  (x, y) concentric,  (s, t) frame_from_z(dir). */
-static adv3 pbd__disk_point(path__ctx *c, adv3 dir, ad u1, ad u2) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  ad x, y;
-  pbd__concentric(A, u1, u2, &x, &y);
-  ad_frame f = adv3_frame_from_z(A, dir);
-  adv3 off = {ad_add(A, ad_mul(A, f.s.x, x), ad_mul(A, f.t.x, y)),
-              ad_add(A, ad_mul(A, f.s.y, x), ad_mul(A, f.t.y, y)),
-              ad_add(A, ad_mul(A, f.s.z, x), ad_mul(A, f.t.z, y))};
-  adv3 p;
-  p.x = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.x, dir.x), sc->radius), sc->center.x);
-  p.y = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.y, dir.y), sc->radius), sc->center.y);
-  p.z = ad_add_s(A, ad_mul_s(A, ad_sub(A, off.z, dir.z), sc->radius), sc->center.z);
-  return p;
-}
-
-typedef struct pbd__le {
-  adv3 p;      /* origin */
-  vec3 n;      /* area lights: the emitting side's normal; zero otherwise */
-  adv3 dir;    /* unit emission direction */
-  adrgb le;
-  double pdf_pos; /* constant for every light type */
-  ad pdf_dir;
-} pbd__le;
-
-/* light_sample_le from (u1, u2) (position) and (u3, u4) (direction). */
+/* light_sample_le in duals (light_ad.h), its choices noted in the topology. */
+typedef light_le_sample_ad pbd__le;
 static int pbd__sample_le(path__ctx *c, const light *l, ad u1, ad u2, ad u3, ad u4,
                           pbd__le *out) {
-  ad_arena *A = c->A;
-  const scene *sc = c->sc;
-  double disk_pdf = 1.0 / (M_PI * sc->radius * sc->radius);
-  out->n = v3(0.0, 0.0, 0.0);
-  switch (l->type) {
-  case LIGHT_AREA: {
-    /* Position by area, direction cosine-weighted (Malley) around n. */
-    path__area_point(c, l, u1, u2, &out->p, &out->n);
-    ad x, y;
-    pbd__concentric(A, u3, u4, &x, &y);
-    ad z = ad_safe_sqrt(A, ad_sub(A, ad_s_sub(A, 1.0, ad_sqr(A, x)), ad_sqr(A, y)));
-    frame f = frame_from_z(out->n);
-    out->dir = adv3_normalize(A, pbd__frame_to_world_c(A, &f, (adv3){x, y, z}));
-    out->le = adrgb_const(A, l->value);
-    out->pdf_pos = 1.0 / l->area;
-    out->pdf_dir = z.v > 0.0 ? ad_div_s(A, z, M_PI) : ad_const(A, 0.0);
-    out->pdf_dir.v = z.v > 0.0 ? z.v / M_PI : 0.0;
-    return out->pdf_dir.v > 0.0;
-  }
-  case LIGHT_POINT:
-    out->p = path__cv(A, l->pos);
-    out->dir = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 2.0)), u4);
-    out->le = adrgb_const(A, l->value);
-    out->pdf_pos = 1.0;
-    out->pdf_dir = ad_const(A, 1.0 / (4.0 * M_PI));
-    return 1;
-  case LIGHT_SPOT: {
-    /* Uniform in the cone cos theta >= cos_cutoff, times the falloff. */
-    adv3 local = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 1.0 - l->cos_cutoff)), u4);
-    out->p = path__cv(A, l->pos);
-    out->dir = adv3_normalize(A, pbd__frame_to_world_c(A, &l->frm, local));
-    out->le = path__rgb_scale_c(A, l->value, path__spot_falloff(A, l, local.z));
-    out->pdf_pos = 1.0;
-    out->pdf_dir = ad_const(A, 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff)));
-    return !path__rgb_black(out->le);
-  }
-  case LIGHT_DIRECTIONAL:
-    out->dir = path__cv(A, l->frm.n);
-    out->p = pbd__disk_point(c, out->dir, u1, u2);
-    out->le = adrgb_const(A, l->value);
-    out->pdf_pos = disk_pdf;
-    out->pdf_dir = ad_const(A, 1.0);
-    return 1;
-  case LIGHT_CONSTANT:
-    out->dir = pbd__z_phi(A, ad_s_sub(A, 1.0, ad_mul_s(A, u3, 2.0)), u4);
-    out->p = pbd__disk_point(c, out->dir, u1, u2);
-    out->le = adrgb_const(A, l->value);
-    out->pdf_pos = disk_pdf;
-    out->pdf_dir = ad_const(A, 1.0 / (4.0 * M_PI));
-    return 1;
-  case LIGHT_ENVMAP: {
-    /* The direction towards the environment by (u3, u4); the ray travels back. */
-    ad uu, vv, st;
-    double pdf_uv, uv[2];
-    path__env_sample_uv(c, l, u3, u4, &uu, &vv, &pdf_uv, uv);
-    adv3 w_env = path__env_uv_to_dir(A, l, uu, vv, &st);
-    if (!(st.v > 0.0) || !(pdf_uv > 0.0)) return 0;
-    out->dir = adv3_neg(A, w_env);
-    out->p = pbd__disk_point(c, out->dir, u1, u2);
-    out->le = adrgb_const(A, path__env_eval_uv(l, uv[0], uv[1]));
-    out->pdf_pos = disk_pdf;
-    out->pdf_dir = ad_s_div(A, pdf_uv, ad_mul_s(A, st, 2.0 * M_PI * M_PI));
-    out->pdf_dir.v = pdf_uv / (2.0 * M_PI * M_PI * st.v);
-    return isfinite(out->pdf_dir.v);
-  }
-  }
-  return 0;
+  int ok = light_sample_le_ad(c->A, l, c->sc, u1, u2, u3, u4, out);
+  path__light_topo(c, out->tri, out->cell);
+  return ok;
 }
 
 /* The solid-angle density of light_pdf_le for emission from p (normal n)
  * along the unit travel direction w. */
 static ad pbd__pdf_le_dir(path__ctx *c, const light *l, adv3 p, vec3 n, adv3 w) {
-  ad_arena *A = c->A;
-  switch (l->type) {
-  case LIGHT_AREA: {
-    ad cs = path__dot_c(A, n, w);
-    if (!(cs.v > 0.0)) return ad_const(A, 0.0);
-    ad r = ad_div_s(A, cs, M_PI);
-    r.v = cs.v / M_PI;
-    return r;
-  }
-  case LIGHT_POINT:
-  case LIGHT_CONSTANT:
-    return ad_const(A, 1.0 / (4.0 * M_PI));
-  case LIGHT_SPOT:
-    return ad_const(A, v3_dot(path__val(w), l->frm.n) >= l->cos_cutoff
-                           ? 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff))
-                           : 0.0);
-  case LIGHT_DIRECTIONAL:
-    return ad_const(A, 1.0);
-  case LIGHT_ENVMAP:
-    return path__pdf_li(c, l, p, adv3_neg(A, w), p, n);
-  }
-  return ad_const(A, 0.0);
+  return light_pdf_le_dir_ad(c->A, l, c->sc, p, n, w);
 }
 
 /* ---------------------------------------------------------------------------

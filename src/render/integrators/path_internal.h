@@ -22,6 +22,7 @@
 #include "ad/dual_vec3.h"
 #include "render/bsdf/bsdf_ad.h"
 #include "render/integrators/path.h"
+#include "render/lights/light_ad.h"
 
 /* A surface vertex re-evaluated in duals on its recorded triangle. */
 typedef struct path__hit {
@@ -178,16 +179,8 @@ static inline ad path__mis(ad_arena *A, ad a, ad b) {
 
 
 
-typedef struct path__li {
-  adv3 wi;     /* towards the light */
-  double dist; /* INFINITY for infinite and directional lights */
-  vec3 p;      /* value of the light point (for the shadow ray) */
-  adv3 pd;     /* the light point as a dual (area lights; the value p otherwise) */
-  vec3 n;      /* area lights: the emitting side's normal; zero otherwise */
-  adrgb li;
-  ad pdf;      /* solid angle (1 for delta lights) */
-  int delta;
-} path__li;
+/* A light sample from a receiver, in duals (light_ad.h). */
+typedef light_li_sample_ad path__li;
 
 /* ---- Shared routines (path.c) -------------------------------------------- */
 
@@ -212,16 +205,12 @@ int path__blocked(path__ctx *c, vec3 p, vec3 wi, vec3 lp, int infinite);
 void path__camera_ray(path__ctx *c, ad u0, ad u1, ad *OUT_rx, ad *OUT_ry, adv3 *OUT_org,
                       adv3 *OUT_dir);
 
-/* Emitters in duals (light.c's formulas). */
-rgb path__env_eval_uv(const light *l, double u, double v);
-ad path__env_sin_theta(ad_arena *A, const light *l, adv3 w);
+/* Emitters in duals (light_ad.h, path_lights.c): the density of direct
+ * sampling, direct sampling with its choices noted in the topology, and
+ * that noting for a light sample's triangle (tri) and pixel (cell). */
 ad path__pdf_li(path__ctx *c, const light *l, adv3 ref, adv3 w, adv3 p, vec3 n);
-ad path__spot_falloff(ad_arena *A, const light *l, ad cos_theta);
-void path__area_point(path__ctx *c, const light *l, ad u1, ad u2, adv3 *p, vec3 *n);
-int path__env_sample_uv(path__ctx *c, const light *l, ad u1, ad u2, ad *uu, ad *vv,
-                        double *pdf_uv, double uv[2]);
-adv3 path__env_uv_to_dir(ad_arena *A, const light *l, ad uu, ad vv, ad *sin_theta);
 int path__sample_li(path__ctx *c, const light *l, adv3 ref, ad u1, ad u2, path__li *out);
+void path__light_topo(path__ctx *c, int64_t tri, const int64_t cell[2]);
 unsigned path__emit_flag(const light *l);
 unsigned path__lobe_flag(int bsdf_flags);
 

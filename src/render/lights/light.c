@@ -63,6 +63,7 @@
  * delta lights with dist = INFINITY, but no ray can hit them.
  */
 #include "render/lights/light.h"
+#include "render/lights/light_ad.h"
 
 #include <float.h>
 #include <math.h>
@@ -89,23 +90,6 @@ static void light__triangle(const mesh *m, int64_t tri, vec3 *a, vec3 *b, vec3 *
   *c = mesh_position(m, idx[2]);
 }
 
-/* A point on an area light, uniform by area: a triangle chosen by area
- * with u1 (reused inside the cell), a uniform point on it with (u1', u2).
- * *n is the emitting side's normal. */
-static int64_t light__sample_area_point(const light *l, const struct scene *s, double u1,
-                                        double u2, vec3 *p, vec3 *n) {
-  const mesh *m = &s->meshes[l->mesh];
-  double u1r;
-  int tri = distrib1d_sample_discrete(&l->tri_dist, u1, NULL, &u1r); /* pmf unused: one load less */
-  double b1, b2;
-  warp_square_to_triangle(u1r, u2, &b1, &b2);
-  vec3 a, b, c;
-  light__triangle(m, tri, &a, &b, &c);
-  *p = v3_add(v3_add(v3_scale(a, 1.0 - b1 - b2), v3_scale(b, b1)), v3_scale(c, b2));
-  *n = mesh_hit_normals(m, tri, a, b, c, b1, b2, NULL);
-  return tri;
-}
-
 /* Barycentrics (b1, b2) of p on the triangle (a, b, c): least squares in
  * the triangle's plane. Returns 0 for a degenerate triangle. */
 static int light__barycentrics(vec3 a, vec3 b, vec3 c, vec3 p, double *OUT_b1, double *OUT_b2) {
@@ -120,7 +104,7 @@ static int light__barycentrics(vec3 a, vec3 b, vec3 c, vec3 p, double *OUT_b1, d
 }
 
 /* The emitting side's normal at point p of triangle tri of an area light
- * (the normal light__sample_area_point gave it). Returns 0 for a
+ * (the normal light__area_point gave it). Returns 0 for a
  * degenerate triangle. */
 static int light__area_normal(const light *l, const struct scene *s, int64_t tri, vec3 p,
                               vec3 *OUT_n) {
@@ -131,17 +115,6 @@ static int light__area_normal(const light *l, const struct scene *s, int64_t tri
   if (!light__barycentrics(a, b, c, p, &b1, &b2)) return 0;
   *OUT_n = mesh_hit_normals(m, tri, a, b, c, b1, b2, NULL);
   return 1;
-}
-
-/* Mitsuba's spot falloff as a function of the cosine to the axis. */
-static double light__spot_falloff(const light *l, double cos_theta) {
-  if (cos_theta <= l->cos_cutoff) return 0.0;
-  if (cos_theta >= l->cos_beam) return 1.0;
-  double width = l->cutoff - l->beam_width;
-  if (!(width > 0.0)) return 1.0;
-  /* (cutoff - theta) / (cutoff - beam_width), theta = acos(cos_theta) */
-  double theta = acos(fmin(1.0, fmax(-1.0, cos_theta)));
-  return fmin(1.0, fmax(0.0, (l->cutoff - theta) / width));
 }
 
 /* Pixel (x, y) of the environment map as RGB (grey and RGBA accepted). */
@@ -179,15 +152,6 @@ static int light__env_dir_to_uv(const light *l, vec3 dir, double *u, double *v, 
   return 1;
 }
 
-/* Lat-long (u, v) -> unit world direction (towards the environment). */
-static vec3 light__env_uv_to_dir(const light *l, double u, double v, double *sin_theta) {
-  double phi = 2.0 * M_PI * u, theta = M_PI * v;
-  double st = sin(theta), ct = cos(theta);
-  *sin_theta = st;
-  vec3 d = v3(sin(phi) * st, ct, -cos(phi) * st);
-  return v3_normalize(xform_vector(&l->to_world, d));
-}
-
 /* Radiance of the envmap for lat-long (u, v). */
 static rgb light__env_eval_uv(const light *l, double u, double v) {
   int x, y;
@@ -202,16 +166,6 @@ static double light__env_pdf_uv(const light *l, double u, double v, double sin_t
   return distrib2d_pdf(&l->env_dist, u, v) / (2.0 * M_PI * M_PI * sin_theta);
 }
 
-/* A point uniformly on the disk of radius r perpendicular to unit dir,
- * centred at center - dir * r (the plane that rays along dir leave from). */
-vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
-  double x, y;
-  warp_square_to_disk_concentric(u1, u2, &x, &y);
-  frame f = frame_from_z(dir);
-  vec3 offset = v3_add(v3_scale(f.s, x), v3_scale(f.t, y));
-  return v3_add(s->center, v3_scale(v3_sub(offset, dir), s->radius));
-}
-
 void light_disk_invert(const struct scene *s, vec3 dir, vec3 p, double *OUT_u1, double *OUT_u2) {
   /* p = center + r (x s + y t - dir) */
   frame f = frame_from_z(dir);
@@ -221,6 +175,24 @@ void light_disk_invert(const struct scene *s, vec3 dir, vec3 p, double *OUT_u1, 
 
 double light_disk_pdf(const struct scene *s) {
   return 1.0 / (M_PI * s->radius * s->radius);
+}
+
+/* ---------------------------------------------------------------------------
+ * Direct sampling from a receiver and emission, in doubles (light.h) and in
+ * duals (light_ad.h), from one source.
+ */
+
+#define R_DUAL 0
+#include "render/real.h"
+#include "render/lights/light_generic.h"
+#undef R_DUAL
+#define R_DUAL 1
+#include "render/real.h"
+#include "render/lights/light_generic.h"
+#undef R_DUAL
+
+vec3 light_disk_point(const struct scene *s, vec3 dir, double u1, double u2) {
+  return light__disk_point(s, dir, u1, u2);
 }
 
 /* ---------------------------------------------------------------------------
@@ -364,115 +336,9 @@ double light_power(const light *l, const struct scene *s) {
 }
 
 /* ---------------------------------------------------------------------------
- * Direct sampling from a receiver.
+ * Emission seen by a ray and the emission densities (the sampling routines
+ * are light_generic.h's, above).
  */
-
-int light_sample_li(const light *l, const struct scene *s, vec3 ref, double u1, double u2,
-                    light_li_sample *out) {
-  memset(out, 0, sizeof *out);
-  out->tri = -1;
-  switch (l->type) {
-  case LIGHT_AREA: {
-    /* Choose a triangle by area, then a uniform point on it. */
-    vec3 p, n;
-    int64_t tri = light__sample_area_point(l, s, u1, u2, &p, &n);
-    /* Convert the area density 1/A to solid angle: d^2 / cos_l. */
-    vec3 d = v3_sub(p, ref);
-    double dist2 = v3_len2(d);
-    if (!(dist2 > 0.0)) return 0;
-    double dist = sqrt(dist2);
-    vec3 wi = v3_scale(d, 1.0 / dist);
-    double cos_l = -v3_dot(n, wi);
-    if (!(cos_l > 0.0)) return 0; /* ref is behind the emitting side */
-    out->wi = wi;
-    out->dist = dist;
-    out->p = p;
-    out->n = n;
-    out->li = l->value;
-    out->pdf = dist2 / (cos_l * l->area);
-    out->delta = 0;
-    out->tri = tri;
-    return isfinite(out->pdf) && out->pdf > 0.0;
-  }
-  case LIGHT_POINT:
-  case LIGHT_SPOT: {
-    vec3 d = v3_sub(l->pos, ref);
-    double dist2 = v3_len2(d);
-    if (!(dist2 > 0.0)) return 0;
-    double dist = sqrt(dist2);
-    vec3 wi = v3_scale(d, 1.0 / dist);
-    double falloff = 1.0;
-    if (l->type == LIGHT_SPOT) {
-      falloff = light__spot_falloff(l, -v3_dot(wi, l->frm.n));
-      if (!(falloff > 0.0)) return 0;
-    }
-    out->wi = wi;
-    out->dist = dist;
-    out->p = l->pos;
-    out->li = rgb_scale(l->value, falloff / dist2);
-    out->pdf = 1.0;
-    out->delta = 1;
-    return 1;
-  }
-  case LIGHT_DIRECTIONAL:
-    out->wi = v3_neg(l->frm.n);
-    out->dist = INFINITY;
-    out->p = v3_fma(ref, out->wi, 2.0 * s->radius);
-    out->li = l->value;
-    out->pdf = 1.0;
-    out->delta = 1;
-    return 1;
-  case LIGHT_CONSTANT:
-    out->wi = warp_square_to_uniform_sphere(u1, u2);
-    out->dist = INFINITY;
-    out->p = v3_fma(ref, out->wi, 2.0 * s->radius);
-    out->li = l->value;
-    out->pdf = 1.0 / (4.0 * M_PI);
-    out->delta = 0;
-    return 1;
-  case LIGHT_ENVMAP: {
-    /* Pick (u, v) in proportion to luminance * sin(theta), map to the
-     * sphere, divide by the Jacobian 2 pi^2 sin(theta). */
-    double uv[2], pdf_uv, sin_theta;
-    distrib2d_sample(&l->env_dist, u1, u2, uv, &pdf_uv);
-    vec3 wi = light__env_uv_to_dir(l, uv[0], uv[1], &sin_theta);
-    if (!(sin_theta > 0.0) || !(pdf_uv > 0.0)) return 0;
-    out->wi = wi;
-    out->dist = INFINITY;
-    out->p = v3_fma(ref, wi, 2.0 * s->radius);
-    out->li = light__env_eval_uv(l, uv[0], uv[1]);
-    out->pdf = pdf_uv / (2.0 * M_PI * M_PI * sin_theta);
-    out->delta = 0;
-    return isfinite(out->pdf);
-  }
-  }
-  return 0;
-}
-
-double light_pdf_li(const light *l, const struct scene *s, vec3 ref, vec3 wi, vec3 p, vec3 n) {
-  (void)s;
-  switch (l->type) {
-  case LIGHT_AREA: {
-    /* (1/A) d^2 / cos_l, zero when wi reaches the back of the light. */
-    double dist2 = v3_len2(v3_sub(p, ref));
-    double cos_l = -v3_dot(n, wi);
-    if (!(cos_l > 0.0) || !(dist2 > 0.0) || !(l->area > 0.0)) return 0.0;
-    return dist2 / (cos_l * l->area);
-  }
-  case LIGHT_POINT:
-  case LIGHT_SPOT:
-  case LIGHT_DIRECTIONAL:
-    return 0.0;
-  case LIGHT_CONSTANT:
-    return 1.0 / (4.0 * M_PI);
-  case LIGHT_ENVMAP: {
-    double u, v, sin_theta;
-    if (!light__env_dir_to_uv(l, wi, &u, &v, &sin_theta)) return 0.0;
-    return light__env_pdf_uv(l, u, v, sin_theta);
-  }
-  }
-  return 0.0;
-}
 
 rgb light_le_area(const light *l, vec3 n, vec3 w) {
   if (l->type != LIGHT_AREA) return rgb_zero();
@@ -500,114 +366,25 @@ rgb light_le_pdf_infinite(const light *l, const struct scene *s, vec3 dir, doubl
   return light__env_eval_uv(l, u, v);
 }
 
-/* ---------------------------------------------------------------------------
- * Emission.
- */
-
-int light_sample_le(const light *l, const struct scene *s, double u1, double u2, double u3,
-                    double u4, light_le_sample *out) {
-  memset(out, 0, sizeof *out);
-  out->tri = -1;
-  switch (l->type) {
-  case LIGHT_AREA: {
-    /* Position by area (u1, u2), direction cosine-weighted (u3, u4). */
-    out->tri = light__sample_area_point(l, s, u1, u2, &out->p, &out->n);
-    vec3 local = warp_square_to_cosine_hemisphere(u3, u4);
-    frame f = frame_from_z(out->n);
-    out->dir = v3_normalize(frame_to_world(&f, local));
-    out->le = l->value;
-    out->pdf_pos = 1.0 / l->area;
-    out->pdf_dir = warp_square_to_cosine_hemisphere_pdf(local);
-    return out->pdf_dir > 0.0;
-  }
-  case LIGHT_POINT:
-    out->p = l->pos;
-    out->dir = warp_square_to_uniform_sphere(u3, u4);
-    out->le = l->value;
-    out->pdf_pos = 1.0;
-    out->pdf_dir = 1.0 / (4.0 * M_PI);
-    out->delta_pos = 1;
-    return 1;
-  case LIGHT_SPOT: {
-    vec3 local = warp_square_to_uniform_cone(u3, u4, l->cos_cutoff);
-    out->p = l->pos;
-    out->dir = v3_normalize(frame_to_world(&l->frm, local));
-    out->le = rgb_scale(l->value, light__spot_falloff(l, local.z));
-    out->pdf_pos = 1.0;
-    out->pdf_dir = 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff));
-    out->delta_pos = 1;
-    return !rgb_is_black(out->le);
-  }
-  case LIGHT_DIRECTIONAL:
-    out->dir = l->frm.n;
-    out->p = light_disk_point(s, out->dir, u1, u2);
-    out->n = out->dir;
-    out->le = l->value;
-    out->pdf_pos = light_disk_pdf(s);
-    out->pdf_dir = 1.0;
-    out->delta_dir = 1;
-    return 1;
-  case LIGHT_CONSTANT:
-    /* Travel direction uniform (u3, u4); radiance arrives from -dir. */
-    out->dir = warp_square_to_uniform_sphere(u3, u4);
-    out->p = light_disk_point(s, out->dir, u1, u2);
-    out->n = out->dir;
-    out->le = l->value;
-    out->pdf_pos = light_disk_pdf(s);
-    out->pdf_dir = 1.0 / (4.0 * M_PI);
-    return 1;
-  case LIGHT_ENVMAP: {
-    /* Importance-sample the direction towards the environment (u3, u4);
-     * the ray travels the opposite way. */
-    double uv[2], pdf_uv, sin_theta;
-    distrib2d_sample(&l->env_dist, u3, u4, uv, &pdf_uv);
-    vec3 w_env = light__env_uv_to_dir(l, uv[0], uv[1], &sin_theta);
-    if (!(sin_theta > 0.0) || !(pdf_uv > 0.0)) return 0;
-    out->dir = v3_neg(w_env);
-    out->p = light_disk_point(s, out->dir, u1, u2);
-    out->n = out->dir;
-    out->le = light__env_eval_uv(l, uv[0], uv[1]);
-    out->pdf_pos = light_disk_pdf(s);
-    out->pdf_dir = pdf_uv / (2.0 * M_PI * M_PI * sin_theta);
-    return isfinite(out->pdf_dir);
-  }
-  }
-  return 0;
-}
-
 void light_pdf_le(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 dir,
                   double *OUT_pdf_pos, double *OUT_pdf_dir) {
-  (void)p;
-  double pdf_pos = 0.0, pdf_dir = 0.0;
+  double pdf_pos = 0.0;
   switch (l->type) {
   case LIGHT_AREA:
     pdf_pos = l->area > 0.0 ? 1.0 / l->area : 0.0;
-    pdf_dir = fmax(0.0, v3_dot(n, dir)) / M_PI;
     break;
   case LIGHT_POINT:
-    pdf_pos = 1.0;
-    pdf_dir = 1.0 / (4.0 * M_PI);
-    break;
   case LIGHT_SPOT:
     pdf_pos = 1.0;
-    pdf_dir = v3_dot(dir, l->frm.n) >= l->cos_cutoff ? 1.0 / (2.0 * M_PI * (1.0 - l->cos_cutoff))
-                                                     : 0.0;
     break;
   case LIGHT_DIRECTIONAL:
-    pdf_pos = light_disk_pdf(s);
-    pdf_dir = 1.0;
-    break;
   case LIGHT_CONSTANT:
-    pdf_pos = light_disk_pdf(s);
-    pdf_dir = 1.0 / (4.0 * M_PI);
-    break;
   case LIGHT_ENVMAP:
     pdf_pos = light_disk_pdf(s);
-    pdf_dir = light_pdf_li(l, s, p, v3_neg(dir), p, n);
     break;
   }
   if (OUT_pdf_pos) *OUT_pdf_pos = pdf_pos;
-  if (OUT_pdf_dir) *OUT_pdf_dir = pdf_dir;
+  if (OUT_pdf_dir) *OUT_pdf_dir = light_pdf_le_dir(l, s, p, n, dir);
 }
 
 int light_sample_dir(const light *l, vec3 n, double u3, double u4, vec3 *OUT_dir,
@@ -639,7 +416,7 @@ int light_sample_dir(const light *l, vec3 n, double u3, double u4, vec3 *OUT_dir
  * The inverses of the samplers.
  */
 
-/* The (u1, u2) of light__sample_area_point giving p on triangle tri: its
+/* The (u1, u2) of light__area_point giving p on triangle tri: its
  * barycentrics (least squares in the triangle's plane) through
  * warp_triangle_to_square, u1 moved into the triangle's cell. */
 static int light__invert_area_point(const light *l, const struct scene *s, int64_t tri, vec3 p,

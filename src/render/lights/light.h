@@ -113,6 +113,10 @@ rgb light_le_infinite(const light *l, vec3 dir);
  * lights only (others: black, density 0). */
 rgb light_le_pdf_infinite(const light *l, const struct scene *s, vec3 dir, double *OUT_pdf);
 
+/* The solid-angle density of light_sample_le emitting from p (normal n)
+ * along the unit travel direction dir (light_pdf_le's pdf_dir). */
+double light_pdf_le_dir(const light *l, const struct scene *s, vec3 p, vec3 n, vec3 dir);
+
 /* Samples an emitted ray (BDPT light subpaths) from four numbers. */
 int light_sample_le(const light *l, const struct scene *s, double u1, double u2, double u3,
                     double u4, light_le_sample *out);
