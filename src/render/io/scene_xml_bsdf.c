@@ -453,28 +453,33 @@ static void props__where(plugin_props *p, const char *name, const char **file, i
   *line = q ? q->line : p->o->line;
 }
 
-lmc_status props_fail(plugin_props *p, const char *name, const char *fmt, ...) {
+/* An error (fail: LMC_EPARSE, returned) or a warning (LMC_OK) with the
+ * message fmt at property `name` of p (props__where). */
+static lmc_status props__report(plugin_props *p, const char *name, int fail, const char *fmt,
+                                va_list ap) {
   char msg[900];
-  va_list ap;
-  va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
   const char *file;
   int line;
   props__where(p, name, &file, &line);
-  return xml__fail(p->B, LMC_EPARSE, file, line, "%s", msg);
+  if (fail) return xml__fail(p->B, LMC_EPARSE, file, line, "%s", msg);
+  lmc_warn(file, line, "%s", msg);
+  return LMC_OK;
+}
+
+lmc_status props_fail(plugin_props *p, const char *name, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  lmc_status st = props__report(p, name, 1, fmt, ap);
+  va_end(ap);
+  return st;
 }
 
 void props_warn(plugin_props *p, const char *name, const char *fmt, ...) {
-  char msg[900];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
+  props__report(p, name, 0, fmt, ap);
   va_end(ap);
-  const char *file;
-  int line;
-  props__where(p, name, &file, &line);
-  lmc_warn(file, line, "%s", msg);
 }
 
 /* Fills *b from a bsdf object; img[XML__TEX_SLOTS] get image indices of
