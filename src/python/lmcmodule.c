@@ -25,15 +25,16 @@
  * with the GIL taken for the call only; an exception from fn stops the
  * render as a Ctrl-C does and propagates. Either exception carries the
  * image of the samples so far as e.lmc_result. A target evaluates a
- * batch of states without the GIL, under the target's own lock (its
- * scratch is one per target object: calls on one target take turns,
- * targets run in parallel); sample_bootstrap draws without the GIL, on
- * OpenMP threads of chains of its own.
+ * batch of states without the GIL, under the target's own lock (calls on
+ * one target take turns, targets run in parallel), a batch of
+ * LMCPY_PARALLEL_BATCH states or more on OpenMP threads, each with a
+ * scratch of its own; sample_bootstrap draws without the GIL, on OpenMP
+ * threads of chains of its own.
  *
  * Ownership. A Scene owns its scene; a Result owns its pixels, which
  * r.image views (each access a new view, which keeps the Result alive;
  * the Result keeps none: no cycle); a Target owns its
- * state space and scratch and keeps its Scene alive.
+ * state space and scratches and keeps its Scene alive.
  */
 #include "lmcpy.h"
 

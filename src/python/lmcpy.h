@@ -103,6 +103,15 @@ void lmcpy_attach_result(PyObject *result);
 int lmcpy_progress_call(lmcpy_progress *p, const lmc_image *img, double seconds);
 void lmcpy_on_snapshot(void *ctx, const struct film *f, double seconds);
 
+/* What one thread evaluating a target's states uses (lmcpy_target.c). */
+typedef struct lmcpy_worker {
+  void *scratch;        /* owned */
+  mc_contrib *contribs; /* owned: n_labels entries */
+  double *grad;         /* owned: dim entries */
+  int *hidx;            /* owned: MC_HESS_MAX entries (made by the first hessian call) */
+  double *hess;         /* owned: the packed upper triangle of MC_HESS_MAX coordinates */
+} lmcpy_worker;
+
 /* lmc.target's Target (lmcpy_target.c). */
 typedef struct {
   PyObject_HEAD
@@ -111,12 +120,10 @@ typedef struct {
   int created;          /* sp was created (mc_space_free it) */
   const mc_target *T;   /* the family's target, in sp */
   int family, length;   /* its index, and its paths' length (0: every length) */
-  void *scratch;        /* owned */
-  mc_contrib *contribs; /* owned: n_labels entries */
-  double *grad;         /* owned: dim entries */
-  int *hidx;            /* owned: MC_HESS_MAX entries (made by the first hessian call) */
-  double *hess;         /* owned: the packed upper triangle of MC_HESS_MAX coordinates */
-  PyThread_type_lock lock; /* owned: held while scratch, grad, contribs, hidx, hess are used */
+  lmcpy_worker *w;      /* owned: w[0] made with the target, one per OpenMP thread of a
+                           batch made by its first batch */
+  int n_w;
+  PyThread_type_lock lock; /* owned: held while the workers are used */
 } lmcpy_target;
 /* t.sample_bootstrap(n, seed=1, threads=None) (lmcpy_bootstrap.c). */
 PyObject *lmcpy_target_sample_bootstrap(lmcpy_target *self, PyObject *args, PyObject *kwargs);

@@ -7,13 +7,17 @@
  *
  * Threads: a batch's loop runs without the GIL under the target's lock
  * (lmcpy_enter); the states are the call's own copy, checked before the
- * loop. sample_bootstrap uses chains of its own, one per OpenMP thread,
- * never the target's scratch.
+ * loop. A batch of LMCPY_PARALLEL_BATCH states or more is shared among
+ * OpenMP threads, each with its own worker (scratch and buffers): each
+ * state's numbers are those of one call alone, whatever the threads.
+ * sample_bootstrap uses chains of its own, one per OpenMP thread, never
+ * the target's workers.
  */
 #define NO_IMPORT_ARRAY
 #include "lmcpy.h"
 
 #include <math.h>
+#include <omp.h>
 #include <pythread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,8 +25,10 @@
 #include "lmc/driver/space.h"
 #include "lmc/states/bdpt_states.h"
 
-/* Batches of at least this many states are evaluated without the GIL. */
+/* Batches of at least this many states are evaluated without the GIL, and
+ * from LMCPY_PARALLEL_BATCH on by every OpenMP thread. */
 #define LMCPY_NOGIL_BATCH 16
+#define LMCPY_PARALLEL_BATCH 32
 
 /* --- Target ---------------------------------------------------------------------- */
 
@@ -49,13 +55,58 @@ static void lmcpy_leave(PyThread_type_lock lock, lmcpy_section sec) {
   if (sec.ts) PyEval_RestoreThread(sec.ts);
 }
 
+static void lmcpy_worker_free(const mc_target *T, lmcpy_worker *w) {
+  if (w->scratch && T->scratch_destroy) T->scratch_destroy(w->scratch);
+  free(w->contribs);
+  free(w->grad);
+  free(w->hidx);
+  free(w->hess);
+}
+
+/* Makes the target have n workers (and, with hess, their Hessian
+ * buffers); 0 when out of memory. Called with the lock held (or before
+ * the target is shared). */
+static int lmcpy_workers(lmcpy_target *self, int n, int hess) {
+  const mc_target *T = self->T;
+  if (n > self->n_w) {
+    lmcpy_worker *w = realloc(self->w, (size_t)n * sizeof *w);
+    if (!w) return 0;
+    self->w = w;
+    for (; self->n_w < n; self->n_w++) {
+      lmcpy_worker *k = &w[self->n_w];
+      memset(k, 0, sizeof *k);
+      k->scratch = T->scratch_create ? T->scratch_create(T) : NULL;
+      k->grad = malloc((size_t)T->dim * sizeof *k->grad);
+      k->contribs = calloc((size_t)(T->n_labels > 0 ? T->n_labels : 1), sizeof *k->contribs);
+      if ((T->scratch_create && !k->scratch) || !k->grad || !k->contribs) {
+        lmcpy_worker_free(T, k);
+        return 0;
+      }
+    }
+  }
+  for (int i = 0; hess && i < n; i++) {
+    lmcpy_worker *k = &self->w[i];
+    if (!k->hidx) k->hidx = malloc(MC_HESS_MAX * sizeof *k->hidx);
+    if (!k->hess) k->hess = malloc((size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2 * sizeof *k->hess);
+    if (!k->hidx || !k->hess) return 0;
+  }
+  return 1;
+}
+
+/* The threads a batch of n states runs on: 1, or (from
+ * LMCPY_PARALLEL_BATCH states on) OpenMP's, when their workers can be
+ * made; with the lock held. */
+static int lmcpy_batch_threads(lmcpy_target *self, npy_intp n, int hess) {
+  int nt = n >= LMCPY_PARALLEL_BATCH ? omp_get_max_threads() : 1;
+  if (nt > n) nt = (int)n;
+  while (nt > 1 && !lmcpy_workers(self, nt, hess)) nt--;
+  return nt >= 1 && lmcpy_workers(self, 1, hess) ? nt : 0;
+}
+
 static void lmcpy_target_dealloc(lmcpy_target *self) {
-  if (self->scratch && self->T->scratch_destroy) self->T->scratch_destroy(self->scratch);
+  for (int i = 0; self->T && i < self->n_w; i++) lmcpy_worker_free(self->T, &self->w[i]);
+  free(self->w);
   if (self->created) mc_space_free(&self->sp);
-  free(self->contribs);
-  free(self->grad);
-  free(self->hidx);
-  free(self->hess);
   if (self->lock) PyThread_free_lock(self->lock);
   if (self->scene) lmcpy_release(self->scene);
   Py_XDECREF(self->scene);
@@ -132,11 +183,8 @@ PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs) {
   self->scene = NULL;
   self->created = 0;
   self->T = NULL;
-  self->scratch = NULL;
-  self->contribs = NULL;
-  self->grad = NULL;
-  self->hidx = NULL;
-  self->hess = NULL;
+  self->w = NULL;
+  self->n_w = 0;
   self->lock = PyThread_allocate_lock();
   if (!self->lock) {
     free(F);
@@ -194,11 +242,7 @@ PyObject *lmcpy_make_target(PyObject *mod, PyObject *args, PyObject *kwargs) {
   }
   self->T = &self->sp.fam[self->family].target;
   self->length = self->sp.fam[self->family].length;
-  self->scratch = self->T->scratch_create ? self->T->scratch_create(self->T) : NULL;
-  self->grad = malloc((size_t)self->T->dim * sizeof *self->grad);
-  self->contribs = calloc((size_t)(self->T->n_labels > 0 ? self->T->n_labels : 1),
-                          sizeof *self->contribs);
-  if ((self->T->scratch_create && !self->scratch) || !self->grad || !self->contribs) {
+  if (!lmcpy_workers(self, 1, 0)) {
     Py_DECREF(self);
     return PyErr_NoMemory();
   }
@@ -276,30 +320,29 @@ static int lmcpy_label_needed(lmcpy_target *self, PyObject *label, const char *w
 /* f at one state (label -1: F(u), the sum over the labels, on a labelled
  * target); with grad (not NULL) also its gradient, NaN where the target
  * gives none. -1 when the evaluation fails. */
-static int lmcpy_eval(lmcpy_target *self, const double *u, int label, double *OUT_f,
-                      double *grad) {
-  const mc_target *T = self->T;
+static int lmcpy_eval(const mc_target *T, lmcpy_worker *w, const double *u, int label,
+                      double *OUT_f, double *grad) {
   lmcpy_vec_smp smp = lmcpy_vec_at(T, u);
   mc_value v;
   memset(&v, 0, sizeof v);
   int ok = 0, r;
   if (T->n_labels > 0 && label < 0) {
-    int n = T->eval_all(T, self->scratch, &smp.base, -1, self->contribs);
+    int n = T->eval_all(T, w->scratch, &smp.base, -1, w->contribs);
     if (n < 0) return -1;
     double F = 0.0;
-    for (int i = 0; i < n; i++) F += self->contribs[i].v.f;
+    for (int i = 0; i < n; i++) F += w->contribs[i].v.f;
     *OUT_f = F;
     return 0;
   }
   if (T->n_labels > 0)
-    r = T->eval_label(T, self->scratch, &smp.base, label, &v, grad ? self->grad : NULL,
+    r = T->eval_label(T, w->scratch, &smp.base, label, &v, grad ? w->grad : NULL,
                       grad ? &ok : NULL);
   else
-    r = T->eval(T, self->scratch, &smp.base, &v, grad ? self->grad : NULL, grad ? &ok : NULL);
+    r = T->eval(T, w->scratch, &smp.base, &v, grad ? w->grad : NULL, grad ? &ok : NULL);
   if (r) return -1;
   *OUT_f = v.f;
   if (grad)
-    for (int i = 0; i < T->dim; i++) grad[i] = ok ? self->grad[i] : NAN;
+    for (int i = 0; i < T->dim; i++) grad[i] = ok ? w->grad[i] : NAN;
   return 0;
 }
 
@@ -337,8 +380,18 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
   double *f = PyArray_DATA(fo), *g = go ? PyArray_DATA(go) : NULL;
   int failed = 0;
   lmcpy_section sec = lmcpy_enter(self->lock, n);
-  for (npy_intp i = 0; i < n && !failed; i++)
-    failed = lmcpy_eval(self, u + i * dim, label, &f[i], g ? g + i * dim : NULL) != 0;
+  int nt = lmcpy_batch_threads(self, n, 0);
+  failed = nt == 0;
+  const mc_target *T = self->T;
+  lmcpy_worker *W = self->w;
+#pragma omp parallel for num_threads(nt > 0 ? nt : 1) schedule(dynamic, 4) if (nt > 1)
+  for (npy_intp i = 0; i < n; i++) {
+    if (nt == 0 || lmcpy_eval(T, &W[omp_get_thread_num()], u + i * dim, label, &f[i],
+                              g ? g + i * dim : NULL) != 0) {
+#pragma omp atomic write
+      failed = 1;
+    }
+  }
   lmcpy_leave(self->lock, sec);
   Py_DECREF(a);
   if (failed) {
@@ -392,12 +445,22 @@ static PyObject *lmcpy_target_value(lmcpy_target *self, PyObject *args, PyObject
   double *val = PyArray_DATA(vo), *ras = PyArray_DATA(ro);
   int failed = 0;
   lmcpy_section sec = lmcpy_enter(self->lock, n);
-  for (npy_intp i = 0; i < n && !failed; i++) {
+  int nt = lmcpy_batch_threads(self, n, 0);
+  failed = nt == 0;
+  lmcpy_worker *W = self->w;
+#pragma omp parallel for num_threads(nt > 0 ? nt : 1) schedule(dynamic, 4) if (nt > 1)
+  for (npy_intp i = 0; i < n; i++) {
+    if (nt == 0) continue;
+    void *scratch = W[omp_get_thread_num()].scratch;
     lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
     mc_value v;
     memset(&v, 0, sizeof v);
-    failed = T->n_labels > 0 ? T->eval_label(T, self->scratch, &smp.base, label, &v, NULL, NULL)
-                             : T->eval(T, self->scratch, &smp.base, &v, NULL, NULL);
+    int r = T->n_labels > 0 ? T->eval_label(T, scratch, &smp.base, label, &v, NULL, NULL)
+                            : T->eval(T, scratch, &smp.base, &v, NULL, NULL);
+    if (r) {
+#pragma omp atomic write
+      failed = 1;
+    }
     val[3 * i] = v.value.r, val[3 * i + 1] = v.value.g, val[3 * i + 2] = v.value.b;
     ras[2 * i] = v.rx, ras[2 * i + 1] = v.ry;
   }
@@ -437,10 +500,6 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
                         self->sp.name);
   int label, batch;
   if (!lmcpy_label_needed(self, lo, "Hessian", "hessian", "", &label)) return NULL;
-  if (!self->hidx) self->hidx = malloc(MC_HESS_MAX * sizeof *self->hidx);
-  if (!self->hess)
-    self->hess = malloc((size_t)MC_HESS_MAX * (MC_HESS_MAX + 1) / 2 * sizeof *self->hess);
-  if (!self->hidx || !self->hess) return PyErr_NoMemory();
   PyArrayObject *a = lmcpy_states(self, uo, &batch);
   if (!a) return NULL;
   int dim = T->dim;
@@ -457,21 +516,28 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
   double *H = PyArray_DATA(ho), *g = go ? PyArray_DATA(go) : NULL, *f = fo ? PyArray_DATA(fo) : NULL;
   int failed = 0;
   lmcpy_section sec = lmcpy_enter(self->lock, n);
-  for (npy_intp i = 0; i < n && !failed; i++) {
+  int nt = lmcpy_batch_threads(self, n, 1);
+  failed = nt == 0;
+  lmcpy_worker *W = self->w;
+#pragma omp parallel for num_threads(nt > 0 ? nt : 1) schedule(dynamic, 2) if (nt > 1)
+  for (npy_intp i = 0; i < n; i++) {
+    if (nt == 0) continue;
+    lmcpy_worker *w = &W[omp_get_thread_num()];
     /* Evaluate f, its gradient and its Hessian at state i. */
     lmcpy_vec_smp smp = lmcpy_vec_at(T, u + i * dim);
     mc_value v;
     memset(&v, 0, sizeof v);
     int grad_ok = 0, hess_ok = 0, hn = 0;
-    if (T->eval_hess(T, self->scratch, &smp.base, label, &v, self->grad, &grad_ok, &hn,
-                     self->hidx, self->hess, &hess_ok)) {
+    if (T->eval_hess(T, w->scratch, &smp.base, label, &v, w->grad, &grad_ok, &hn, w->hidx,
+                     w->hess, &hess_ok)) {
+#pragma omp atomic write
       failed = 1;
-      break;
+      continue;
     }
     double *Hi = H + (size_t)i * (size_t)dim * (size_t)dim;
     if (f) f[i] = v.f;
     if (g)
-      for (int k = 0; k < dim; k++) g[(size_t)i * dim + k] = grad_ok ? self->grad[k] : NAN;
+      for (int k = 0; k < dim; k++) g[(size_t)i * dim + k] = grad_ok ? w->grad[k] : NAN;
     if (!(grad_ok && hess_ok)) {
       for (size_t k = 0; k < (size_t)dim * (size_t)dim; k++) Hi[k] = NAN;
       continue;
@@ -479,9 +545,9 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
     /* Unpack the upper triangle over hidx: entry (p, q), p <= q, at
      * p hn - p (p - 1) / 2 + q - p (target.h). */
     for (int p = 0; p < hn; p++) {
-      const double *row = self->hess + (size_t)p * hn - (size_t)p * (size_t)(p - 1) / 2 - p;
+      const double *row = w->hess + (size_t)p * hn - (size_t)p * (size_t)(p - 1) / 2 - p;
       for (int q = p; q < hn; q++) {
-        int r = self->hidx[p], c = self->hidx[q];
+        int r = w->hidx[p], c = w->hidx[q];
         Hi[(size_t)r * dim + c] = Hi[(size_t)c * dim + r] = row[q];
       }
     }
@@ -524,11 +590,12 @@ static PyObject *lmcpy_target_labels(lmcpy_target *self, PyObject *uo) {
   }
   lmcpy_vec_smp smp = lmcpy_vec_at(self->T, PyArray_DATA(a));
   lmcpy_section sec = lmcpy_enter(self->lock, 1);
-  int n = self->T->eval_all(self->T, self->scratch, &smp.base, -1, self->contribs);
+  lmcpy_worker *w = &self->w[0];
+  int n = self->T->eval_all(self->T, w->scratch, &smp.base, -1, w->contribs);
   PyObject *d = n < 0 ? NULL : PyDict_New();
   for (int i = 0; d && i < n; i++) {
-    PyObject *k = PyLong_FromLong(self->contribs[i].label);
-    PyObject *v = PyFloat_FromDouble(self->contribs[i].v.f);
+    PyObject *k = PyLong_FromLong(w->contribs[i].label);
+    PyObject *v = PyFloat_FromDouble(w->contribs[i].v.f);
     if (!k || !v || PyDict_SetItem(d, k, v) < 0) Py_CLEAR(d);
     Py_XDECREF(k);
     Py_XDECREF(v);

@@ -622,6 +622,38 @@ def test_target_batches_release_the_gil(scene):
     assert np.array_equal(out[0], res["F"][0::2]) and np.array_equal(out[1], res["F"][1::2])
 
 
+def test_target_batches_on_threads_are_one_by_one(scene):
+    """A batch of 32 states or more runs on every OpenMP thread, each with a
+    scratch of its own: f, grad, value and hessian of every state are bit
+    for bit those of a call with that state alone (one thread, the
+    target's first scratch), whatever order the threads take them in."""
+    t = lmc.target(scene, space="pt", maxdepth=6)
+    U = np.random.default_rng(21).random((96, t.dim))
+    F, G = t.f(U), t.grad(U)
+    V, R = t.value(U)
+    checked = 0
+    for i in range(len(U)):
+        assert F[i] == t.f(U[i])
+        assert np.array_equal(G[i], t.grad(U[i]), equal_nan=True)
+        v, r = t.value(U[i])
+        assert np.array_equal(V[i], v) and np.array_equal(R[i], r)
+        checked += 1
+    tb = lmc.target(scene, space="bdpt", maxdepth=6)
+    rng, X = np.random.default_rng(22), []
+    while len(X) < 40:
+        u = rng.random(tb.dim)
+        if 2 in tb.labels(u):
+            X.append(u)
+    X = np.array(X)
+    fb, gb, hb = tb.hessian(X, label=2, with_grad=True)
+    for i in range(len(X)):
+        f1, g1, h1 = tb.hessian(X[i], label=2, with_grad=True)
+        assert f1 == fb[i] and np.array_equal(g1, gb[i], equal_nan=True)
+        assert np.array_equal(h1, hb[i], equal_nan=True)
+        checked += 1
+    assert checked == 96 + 40
+
+
 # --- the bootstrap's samples -----------------------------------------------------------------
 
 
