@@ -2,7 +2,7 @@
  * bsdf_internal.h: what the BSDF files share (not API). bsdf.c calls the
  * models through their records (bsdf_model.h) and holds Fresnel, the IOR
  * tables and the common defaults; each model is one file of models/, its
- * body compiled twice (bsdf_model_twice.h); bsdf_rtrans.c has
+ * body compiled twice (render/model_twice.h); bsdf_rtrans.c has
  * roughplastic's rough transmittance table. The helpers below are in
  * doubles; their dual forms are in bsdf_ad_internal.h.
  *

@@ -5,15 +5,15 @@
  * f = R / pi; cosine-weighted sampling, pdf = cos(wi) / pi.
  *
  * The body below the #else is written once in render/real.h's vocabulary
- * and compiled twice by bsdf_model_twice.h, in doubles and in duals.
+ * and compiled twice by model_twice.h, in doubles and in duals.
  */
 #ifndef R_DUAL
 #include <math.h>
 
 #include "render/bsdf/bsdf_model_file.h"
 
-#define BSDF_MODEL_BODY "render/bsdf/models/diffuse.c"
-#include "render/bsdf/bsdf_model_twice.h"
+#define MODEL_BODY "render/bsdf/models/diffuse.c"
+#include "render/model_twice.h"
 
 /* ---- The inverse of the sampler (values only; bsdf_invert) ----------------- */
 

@@ -25,7 +25,7 @@
  * (1 - w) cos(wi) / pi. x and y are the shading frame's axes.
  *
  * The body below the #else is written once in render/real.h's vocabulary
- * and compiled twice by bsdf_model_twice.h, in doubles and in duals.
+ * and compiled twice by model_twice.h, in doubles and in duals.
  */
 #ifndef R_DUAL
 #include <math.h>
@@ -34,8 +34,8 @@
 
 #include "render/bsdf/bsdf_model_file.h"
 
-#define BSDF_MODEL_BODY "render/bsdf/models/ward.c"
-#include "render/bsdf/bsdf_model_twice.h"
+#define MODEL_BODY "render/bsdf/models/ward.c"
+#include "render/model_twice.h"
 
 /* ---- The inverse of the sampler (values only; bsdf_invert) ----------------- */
 

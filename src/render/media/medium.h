@@ -1,0 +1,80 @@
+/*
+ * medium.h: participating media, Mitsuba 0.6's `homogeneous` medium: the
+ * transmittance along a segment and free-flight sampling, in doubles and
+ * in duals from one source (medium_generic.h, compiled twice by medium.c).
+ *
+ * A homogeneous medium has per-channel absorption sigma_a and scattering
+ * sigma_s coefficients (per unit length, Mitsuba's `scale` applied),
+ * extinction sigma_t = sigma_a + sigma_s, and a phase function (phase.h).
+ * Along a segment of length t the transmittance is exp(-sigma_t t) per
+ * channel.
+ *
+ * Free flight (Mitsuba's "balance" strategy): u_ch picks one of the three
+ * channels c uniformly, u_t the distance t = -log(1 - u_t) / sigma_t[c]
+ * (exponential in that channel). A distance below t_max is a scattering
+ * event inside the segment; else the flight reaches t_max. The densities
+ * are the channels' average (one-sample MIS over the channels):
+ *   scattering at t   p(t) = (1/3) sum_c sigma_t[c] exp(-sigma_t[c] t),
+ *   reaching t_max    P    = (1/3) sum_c exp(-sigma_t[c] t_max),
+ * and the sample's weight is the transmittance exp(-sigma_t t), times
+ * sigma_s, over p(t) (scattering), or over P (reaching t_max). A channel
+ * with sigma_t 0 never scatters (its distance is infinite). The inverse
+ * gives numbers (u_ch, u_t) with which the sampler makes a given event,
+ * the channel picked by its share of the density.
+ */
+#ifndef LMC_RENDER_MEDIUM_H
+#define LMC_RENDER_MEDIUM_H
+
+#include "ad/dual.h"
+#include "render/media/phase.h"
+#include "render/rgb_ad.h"
+#include "render/spectrum.h"
+
+typedef struct medium {
+  rgb sigma_a, sigma_s; /* per unit length (scale applied) */
+  rgb sigma_t;          /* sigma_a + sigma_s (medium_set) */
+  phase ph;
+  char id[64];          /* the XML id, for messages */
+} medium;
+
+/* A free flight's outcome. */
+typedef struct medium_flight {
+  int scattered; /* 1: a scattering event at t < t_max; 0: the flight reached t_max */
+  double t;      /* the event's distance (t_max when it reached it) */
+  rgb weight;    /* transmittance (times sigma_s when scattered) over the density */
+  double pdf;    /* p(t) (scattered) or P (reached t_max) */
+} medium_flight;
+
+/* In duals: the distance and the weight move with u_t (and with the
+ * segment's length when it reached t_max). */
+typedef struct medium_flight_ad {
+  int scattered;
+  ad t;
+  adrgb weight;
+  ad pdf;
+} medium_flight_ad;
+
+/* Sets m's coefficients (sigma_t from them) and an isotropic phase function. */
+void medium_set(medium *m, rgb sigma_a, rgb sigma_s);
+
+/* exp(-sigma_t t). */
+rgb medium_transmittance(const medium *m, double t);
+adrgb medium_transmittance_ad(ad_arena *A, const medium *m, ad t);
+/* A free flight over a segment of length t_max (INFINITY: unbounded) from
+ * (u_ch, u_t); 0 when nothing can happen (a medium that does not
+ * extinguish, unbounded). */
+int medium_sample_flight(const medium *m, double t_max, double u_ch, double u_t,
+                         medium_flight *OUT);
+int medium_sample_flight_ad(ad_arena *A, const medium *m, ad t_max, ad u_ch, ad u_t,
+                            medium_flight_ad *OUT);
+/* The density of a flight's outcome: p(t) for scattering at t, P for
+ * reaching t_max (scattered = 0, t = t_max). */
+double medium_flight_pdf(const medium *m, int scattered, double t);
+ad medium_flight_pdf_ad(ad_arena *A, const medium *m, int scattered, ad t);
+/* The inverse of medium_sample_flight from two uniform numbers r: (u_ch,
+ * u_t) making the outcome (scattered at t, or reaching t = t_max); 0 when
+ * the sampler cannot make it. */
+int medium_invert_flight(const medium *m, int scattered, double t, const double r[2],
+                         double OUT_u[2]);
+
+#endif
