@@ -513,7 +513,8 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
   PyArrayObject *fo = with_grad ? (PyArrayObject *)PyArray_SimpleNew(1, &n, NPY_FLOAT64) : NULL;
   if (!ho || (with_grad && (!go || !fo))) goto fail;
   const double *u = PyArray_DATA(a);
-  double *H = PyArray_DATA(ho), *g = go ? PyArray_DATA(go) : NULL, *f = fo ? PyArray_DATA(fo) : NULL;
+  double *H = PyArray_DATA(ho), *g = go ? PyArray_DATA(go) : NULL;
+  double *f = fo ? PyArray_DATA(fo) : NULL;
   int failed = 0;
   lmcpy_section sec = lmcpy_enter(self->lock, n);
   int nt = lmcpy_batch_threads(self, n, 1);

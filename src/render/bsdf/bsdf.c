@@ -223,7 +223,9 @@ int bsdf_flags(const bsdf *b) {
 }
 
 /* (A mask's pass-through is a delta lobe: the wrapped model decides.) */
-int bsdf_is_delta(const bsdf *b) { return (bsdf__lobes(b) & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0; }
+int bsdf_is_delta(const bsdf *b) {
+  return (bsdf__lobes(b) & (BSDF_DIFFUSE_LOBE | BSDF_GLOSSY)) == 0;
+}
 
 int bsdf_is_anisotropic(const bsdf *b) {
   return b->model->anisotropic && b->model->anisotropic(b);
