@@ -24,7 +24,13 @@
  *     fresh numbers, are made again by the sampler, and the numbers found
  *     are uniform (chi-square on a 16 x 16 grid);
  *   - the flight in duals: values as plain (1e-12), d t / d u_t and the
- *     weight's derivatives against central differences.
+ *     weight's derivatives against central differences;
+ *   - the loader: Mitsuba's homogeneous medium from a preset (Skin1 by
+ *     default, Regular Milk with its anisotropy), from sigmaA and sigmaS,
+ *     from sigmaT and albedo, scaled; hg and isotropic phase functions; a
+ *     shape's interior and exterior and the sensor's medium; errors at
+ *     their lines (both parameter pairs, an unknown preset, hg's g out of
+ *     range, a negative coefficient, a shape's medium without a name).
  * Fixed seeds; every test counts its checks and asserts the count.
  */
 #include <setjmp.h>
@@ -39,9 +45,11 @@
 
 #include "ad/dual_math.h"
 #include "chi2.h"
+#include "load_scene.h"
 #include "render/frame.h"
 #include "render/media/medium.h"
 #include "render/rng.h"
+#include "render/scene.h"
 #include "render/warp.h"
 #include "test_util.h"
 
@@ -53,7 +61,7 @@
 static double g_buf[1 << 14];
 
 /* The phase functions under test. */
-static int make_phases(phase *ph) {
+static int make_phases(phase_fn *ph) {
   int n = 0;
   phase_init(&ph[n++], "isotropic");
   const double gs[] = {0.8, 0.3, -0.5, 0.95, 5e-5};
@@ -65,7 +73,7 @@ static int make_phases(phase *ph) {
 }
 
 typedef struct phase_ctx {
-  const phase *ph;
+  const phase_fn *ph;
   vec3 wo;
 } phase_ctx;
 
@@ -83,7 +91,7 @@ static double chi_pdf(void *ctx, vec3 w) {
 
 static void test_phase_sampling(void **state) {
   (void)state;
-  phase ph[8];
+  phase_fn ph[8];
   int n = make_phases(ph), checks = 0;
   double level = chi2_sidak(ALPHA, N_CHI2);
   rng r;
@@ -112,7 +120,7 @@ static void test_phase_sampling(void **state) {
 
 static void test_phase_invert(void **state) {
   (void)state;
-  phase ph[8];
+  phase_fn ph[8];
   int n = make_phases(ph), checks = 0;
   rng r;
   rng_seed(&r, 6, 1);
@@ -134,7 +142,7 @@ static void test_phase_invert(void **state) {
 
 /* Plain sample as a function of x = (u1, u2, wo.x, wo.y, wo.z) (wo
  * normalised): the direction and the density, 4 outputs. */
-static void phase_plain(const phase *ph, const double x[5], double out[4]) {
+static void phase_plain(const phase_fn *ph, const double x[5], double out[4]) {
   vec3 wo = v3_normalize(v3(x[2], x[3], x[4])), wi;
   double pdf;
   phase_sample(ph, wo, x[0], x[1], &wi, &pdf);
@@ -143,7 +151,7 @@ static void phase_plain(const phase *ph, const double x[5], double out[4]) {
 
 static void test_phase_duals(void **state) {
   (void)state;
-  phase ph[8];
+  phase_fn ph[8];
   int n = make_phases(ph), checks = 0;
   rng r;
   rng_seed(&r, 7, 1);
@@ -325,11 +333,96 @@ static void test_flight_duals(void **state) {
   assert_true(scattered > 50 && scattered < checks - 50); /* both outcomes checked */
 }
 
+/* A scene with a sensor, a light and `body`. */
+static scene *media_scene(const char *body, const char *tag) {
+  char xml[4096];
+  snprintf(xml, sizeof xml,
+           "<scene version=\"0.6.0\">\n"
+           "  <sensor type=\"perspective\">%s<film type=\"hdrfilm\">"
+           "<integer name=\"width\" value=\"4\"/><integer name=\"height\" value=\"4\"/>"
+           "</film></sensor>\n"
+           "  <emitter type=\"constant\"/>\n%s</scene>\n",
+           strstr(body, "<!--cam-->") ? "<ref id=\"fog\"/>" : "", body);
+  lmc_warn_set_quiet(1);
+  scene *s = try_load_scene_text(xml, tag);
+  lmc_warn_set_quiet(0);
+  return s;
+}
+
+static int near3(rgb a, rgb b, double tol) {
+  return fabs(a.r - b.r) <= tol && fabs(a.g - b.g) <= tol && fabs(a.b - b.b) <= tol;
+}
+
+static void test_loader(void **state) {
+  (void)state;
+  int checks = 0;
+  scene *s = media_scene(
+      "  <medium type=\"homogeneous\" id=\"fog\">\n"
+      "    <rgb name=\"sigmaA\" value=\"0.1, 0.2, 0.3\"/><rgb name=\"sigmaS\" value=\"1, 2, 3\"/>\n"
+      "    <float name=\"scale\" value=\"2\"/>\n"
+      "    <phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase>\n"
+      "  </medium>\n"
+      "  <medium type=\"homogeneous\" id=\"skin\"/>\n"
+      "  <medium type=\"homogeneous\" id=\"milk\"><string name=\"material\" value=\"regular "
+      "milk\"/></medium>\n"
+      "  <medium type=\"homogeneous\" id=\"ta\"><rgb name=\"sigmaT\" value=\"4\"/>"
+      "<rgb name=\"albedo\" value=\"0.25, 0.5, 1\"/></medium>\n"
+      "  <shape type=\"sphere\"><bsdf type=\"dielectric\"/><ref name=\"interior\" id=\"milk\"/>"
+      "<ref name=\"exterior\" id=\"fog\"/></shape>\n"
+      "<!--cam-->\n",
+      "media");
+  assert_non_null(s);
+  assert_int_equal(s->n_media, 4);
+  const medium *fog = &s->media[0], *skin = &s->media[1], *milk = &s->media[2], *ta = &s->media[3];
+  assert_true(strcmp(fog->id, "fog") == 0 && strcmp(ta->id, "ta") == 0);
+  assert_true(near3(fog->sigma_a, rgb_make(0.2, 0.4, 0.6), 1e-12));
+  assert_true(near3(fog->sigma_s, rgb_make(2, 4, 6), 1e-12));
+  assert_true(near3(fog->sigma_t, rgb_make(2.2, 4.4, 6.6), 1e-12));
+  assert_true(strcmp(fog->ph.model->name, "hg") == 0 && fog->ph.g == 0.5);
+  checks += 4;
+  /* Mitsuba's default preset Skin1, per metre (its table times 100). */
+  assert_true(near3(skin->sigma_s, rgb_make(74, 88, 101), 1e-4));
+  assert_true(near3(skin->sigma_a, rgb_make(3.2, 17, 48), 1e-4));
+  assert_true(strcmp(skin->ph.model->name, "isotropic") == 0);
+  /* Regular Milk: sigma_s reduced by its g (0.75, 0.714, 0.681). */
+  assert_true(
+      near3(milk->sigma_s, rgb_make(1820.52 * 0.25, 2038.26 * 0.286, 2236.98 * 0.319), 2e-2));
+  assert_true(near3(ta->sigma_s, rgb_make(1, 2, 4), 1e-12) &&
+              near3(ta->sigma_a, rgb_make(3, 2, 0), 1e-12));
+  checks += 5;
+  /* The sphere's interior and exterior; the camera's medium. */
+  assert_int_equal(s->n_meshes, 1);
+  assert_int_equal(s->meshes[0].interior, 3);
+  assert_int_equal(s->meshes[0].exterior, 1);
+  assert_int_equal(s->cam.medium, 1);
+  checks += 3;
+  scene_destroy(s);
+  /* Errors. */
+  static const char *const bad[] = {
+      "<medium type=\"homogeneous\"><rgb name=\"sigmaA\" value=\"1\"/><rgb name=\"sigmaT\" "
+      "value=\"1\"/></medium>",
+      "<medium type=\"homogeneous\"><string name=\"material\" value=\"Gravy\"/></medium>",
+      "<medium type=\"homogeneous\"><phase type=\"hg\"><float name=\"g\" "
+      "value=\"1\"/></phase></medium>",
+      "<medium type=\"homogeneous\"><rgb name=\"sigmaS\" value=\"-1, 1, 1\"/></medium>",
+      "<shape type=\"sphere\"><medium type=\"homogeneous\"/></shape>",
+      "<medium type=\"homogeneous\"><string name=\"material\" value=\"Apple\"/>"
+      "<rgb name=\"sigmaS\" value=\"1\"/></medium>",
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++, checks++) {
+    char body[1024];
+    snprintf(body, sizeof body, "  %s\n", bad[i]);
+    assert_null(media_scene(body, "badmedia"));
+  }
+  assert_int_equal(checks, 12 + 6);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_phase_sampling), cmocka_unit_test(test_phase_invert),
       cmocka_unit_test(test_phase_duals),    cmocka_unit_test(test_flight_distribution),
       cmocka_unit_test(test_flight_invert),  cmocka_unit_test(test_flight_duals),
+      cmocka_unit_test(test_loader),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

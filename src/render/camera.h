@@ -29,6 +29,7 @@ typedef struct camera {
   double near_clip, far_clip;
   double fov_deg;        /* the scene's fov and the axis it applies to */
   char fov_axis[16];
+  int medium;            /* 1 + index into scene->media of the medium around it; 0: none */
 } camera;
 
 /* Sets the projection from Mitsuba's fov (degrees) and fovAxis

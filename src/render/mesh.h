@@ -43,6 +43,8 @@ typedef struct mesh {
   int flip_normals;
   int bsdf;       /* index into scene->bsdfs */
   int light;      /* index into scene->lights, or -1 */
+  int interior;   /* 1 + index into scene->media of the medium inside it; 0: none */
+  int exterior;   /* the same for the medium outside it */
   char name[128]; /* for messages: "file.obj" or the XML id */
 } mesh;
 

@@ -40,6 +40,7 @@ void scene_destroy(scene *s) {
   free(s->meshes);
   free(s->bsdfs);
   free(s->lights);
+  free(s->media);
   free(s->images);
   free(s->infinite_lights);
   free(s->params);
@@ -77,6 +78,13 @@ int scene_add_light(scene *s, const light *l, lmc_error *err) {
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding a light");
   s->lights[s->n_lights] = *l;
   return s->n_lights++;
+}
+
+int scene_add_medium(scene *s, const medium *m, lmc_error *err) {
+  if (!scene__grow((void **)&s->media, &s->cap_media, s->n_media, sizeof(medium)))
+    return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory adding a medium");
+  s->media[s->n_media] = *m;
+  return s->n_media++;
 }
 
 int scene_add_image(scene *s, lmc_image *img, lmc_error *err) {

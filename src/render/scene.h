@@ -16,6 +16,7 @@
 #include "render/film.h"
 #include "render/frame.h"
 #include "render/lights/light.h"
+#include "render/media/medium.h"
 #include "render/mesh.h"
 #include "render/settings.h"
 
@@ -38,6 +39,8 @@ typedef struct scene {
   int n_bsdfs, cap_bsdfs;
   light *lights;
   int n_lights, cap_lights;
+  medium *media;           /* participating media (no integrator renders them yet) */
+  int n_media, cap_media;
   lmc_image *images;       /* texture images (pointers into it are stable after finalize) */
   int n_images, cap_images;
   int tex_filtered;        /* some BSDF has a MIP-filtered texture (tex_is_filtered) */
@@ -78,6 +81,8 @@ void scene_destroy(scene *s);
 int scene_add_bsdf(scene *s, const bsdf *b, lmc_error *err);
 int scene_add_mesh(scene *s, mesh *m, lmc_error *err);
 int scene_add_light(scene *s, const light *l, lmc_error *err);
+/* Copies a medium into the scene; returns its index or a negative status. */
+int scene_add_medium(scene *s, const medium *m, lmc_error *err);
 /* Takes ownership of img's pixels; returns the index. Pointers to scene
  * images are only valid after scene_finalize (the array may grow before). */
 int scene_add_image(scene *s, lmc_image *img, lmc_error *err);

@@ -14,6 +14,9 @@
  *               (Mitsuba's names and defaults; see bsdf.h);
  *   texture     bitmap, checkerboard and scale, built when a BSDF refers to
  *               them;
+ *   medium      homogeneous with its phase function (scene_xml_medium.c),
+ *               in a shape (interior, exterior), the sensor or at the top
+ *               level; read and checked, not rendered (a warning);
  *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
  *               cylinder, with an optional nested area emitter; without a
  *               BSDF, Mitsuba's default: black when it emits, else diffuse
@@ -135,17 +138,18 @@ static lmc_status xml__shape_mesh(builder *B, pset *o, mesh *m, const char **OUT
   return LMC_OK;
 }
 
-/* The shape's BSDF (its first, else Mitsuba's default) into *OUT_bsdf and
- * its area emitter (the first, or NULL) into *OUT_emitter. Media are not
- * rendered: a shape that is only a medium boundary (no BSDF, no emitter)
- * is Mitsuba's index-matched null interface, which without its medium
- * changes no ray; *OUT_skip says to leave it out. */
-static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset **OUT_emitter,
-                                      int *OUT_skip) {
+/* The shape's BSDF (its first, else Mitsuba's default) into *OUT_bsdf,
+ * its area emitter (the first, or NULL) into *OUT_emitter and its media
+ * (name="interior", "exterior") into m. Media are not rendered: a shape
+ * that is only a medium boundary (no BSDF, no emitter) is Mitsuba's
+ * index-matched null interface, which without its medium changes no ray;
+ * *OUT_skip says to leave it out. */
+static lmc_status xml__shape_children(builder *B, pset *o, mesh *m, int *OUT_bsdf,
+                                      pset **OUT_emitter, int *OUT_skip) {
   lmc_status st;
   int bsdf_index = -1;
   pset *emitter = NULL;
-  const prop *medium = NULL;
+  const prop *boundary = NULL;
   *OUT_skip = 0;
   for (int i = 0; i < o->n_props; i++) {
     prop *p = &o->props[i];
@@ -180,23 +184,29 @@ static lmc_status xml__shape_children(builder *B, pset *o, int *OUT_bsdf, pset *
       emitter = c;
     } else if (strcmp(c->tag, "medium") == 0) {
       p->used = 1;
-      for (int k = 0; p->kind == PROP_OBJECT && k < c->n_props; k++) c->props[k].used = 1;
-      if (!medium) medium = p;
+      int mi;
+      if ((st = xml__medium(B, c, &mi)) != LMC_OK) return st;
+      if (strcmp(p->name, "interior") == 0) m->interior = mi + 1;
+      else if (strcmp(p->name, "exterior") == 0) m->exterior = mi + 1;
+      else
+        return xml__fail(B, LMC_EPARSE, p->file, p->line,
+                         "a medium in a shape needs name=\"interior\" or name=\"exterior\"");
+      if (!boundary) boundary = p;
     } else if (p->kind == PROP_REF) {
       return xml__fail(B, LMC_EPARSE, p->file, p->line,
                        "<ref id=\"%s\"> inside a shape must name a BSDF or a medium, not a <%s>",
                        p->ref, c->tag);
     }
   }
-  if (medium && bsdf_index < 0 && !emitter) {
-    lmc_warn(medium->file, medium->line,
+  if (boundary && bsdf_index < 0 && !emitter) {
+    lmc_warn(boundary->file, boundary->line,
              "participating media are not supported: medium ignored, and its boundary shape "
              "(no BSDF: an index-matched null interface) left out");
     *OUT_skip = 1;
     return LMC_OK;
   }
-  if (medium)
-    lmc_warn(medium->file, medium->line,
+  if (boundary)
+    lmc_warn(boundary->file, boundary->line,
              "participating media are not supported: medium ignored (light crosses the shape's "
              "interior unattenuated)");
   if (bsdf_index < 0 && (st = xml__default_bsdf(B, emitter != NULL, &bsdf_index)) != LMC_OK)
@@ -268,7 +278,7 @@ static lmc_status xml__shape(builder *B, pset *o) {
   pset *emitter = NULL;
   rgb radiance = rgb_gray(1.0);
   if ((st = xml__shape_place(B, o, label, &m)) != LMC_OK) goto fail;
-  if ((st = xml__shape_children(B, o, &bsdf_index, &emitter, &skip)) != LMC_OK) goto fail;
+  if ((st = xml__shape_children(B, o, &m, &bsdf_index, &emitter, &skip)) != LMC_OK) goto fail;
   if (skip) {
     for (int i = 0; i < o->n_props; i++) o->props[i].used = 1;
     mesh_free(&m);
@@ -495,6 +505,21 @@ static lmc_status xml__sensor(builder *B, pset *o) {
                      c->far_clip);
   static const char *const silent[] = {"focusDistance", "shutterOpen", "shutterClose", NULL};
   xml__accept(o, silent);
+  /* The medium around the camera (a <medium> or a <ref> to one). */
+  for (int i = 0; i < o->n_props; i++) {
+    prop *p = &o->props[i];
+    pset *m = NULL;
+    if (p->kind == PROP_OBJECT) m = p->obj;
+    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &m)) != LMC_OK) return st;
+    if (!m || strcmp(m->tag, "medium") != 0) continue;
+    p->used = 1;
+    int mi;
+    if ((st = xml__medium(B, m, &mi)) != LMC_OK) return st;
+    c->medium = mi + 1;
+    if (mi >= 0)
+      lmc_warn(p->file, p->line,
+               "participating media are not rendered yet: the camera's medium is ignored");
+  }
   xml__warn_unused(o);
   B->have_sensor = 1;
   return LMC_OK;
@@ -519,6 +544,17 @@ static void xml__check_light(builder *B, const pset *root) {
     lmc_warn(root->file, 0, "the scene has no emitter: the image will be black");
 }
 
+/* A top-level <medium>: built (its parameters checked), not rendered. */
+static lmc_status xml__top_medium(builder *B, pset *o) {
+  int mi;
+  lmc_status st = xml__medium(B, o, &mi);
+  if (st == LMC_OK && mi >= 0)
+    lmc_warn(o->file, o->line,
+             "participating media are not rendered yet: medium loaded and ignored (light "
+             "crosses it unattenuated)");
+  return st;
+}
+
 static lmc_status xml__build(builder *B, pset *root) {
   lmc_status st;
   if ((st = xml__register_ids(B, root)) != LMC_OK) return st;
@@ -539,6 +575,7 @@ static lmc_status xml__build(builder *B, pset *root) {
     if (strcmp(tag, "sensor") == 0) st = xml__sensor(B, o);
     else if (strcmp(tag, "bsdf") == 0) st = xml__bsdf(B, o, &dummy);
     else if (strcmp(tag, "texture") == 0) st = LMC_OK; /* built when referenced */
+    else if (strcmp(tag, "medium") == 0) st = xml__top_medium(B, o);
     else if (strcmp(tag, "shape") == 0) st = xml__shape(B, o);
     else if (strcmp(tag, "emitter") == 0) st = xml__emitter(B, o);
     else if (strcmp(tag, "integrator") == 0) st = xml__integrator(B, o, 0);

@@ -370,13 +370,6 @@ static lmc_status xml__bump(builder *B, pset *o, bsdf *b, int *img) {
 
 /* ---- The property readers of render/plugin.h, over one pset ----------------- */
 
-struct plugin_props {
-  builder *B;
-  pset *o;
-  bsdf *b;   /* the model being read: its texture slots */
-  int *img;  /* image index per slot (XML__TEX_SLOTS), -1: none */
-};
-
 const char *props_type(const plugin_props *p) { return p->o->type; }
 
 int props_has(const plugin_props *p, const char *name) { return xml__has(p->o, name); }

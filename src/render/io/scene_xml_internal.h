@@ -12,6 +12,7 @@
 
 #include "render/io/io.h"
 #include "render/io/props.h"
+#include "render/plugin.h"
 
 #define XML_PI 3.14159265358979323846
 
@@ -140,6 +141,21 @@ int64_t xml__bad_texels(lmc_image *img, int repair);
 
 /* Builds a bsdf object into the scene once; returns its index. */
 lmc_status xml__bsdf(builder *B, pset *o, int *out_index);
+
+/* render/plugin.h's property set: one element read by a model (a BSDF:
+ * b and img give its texture slots; else both NULL). */
+struct plugin_props {
+  builder *B;
+  pset *o;
+  bsdf *b;  /* the BSDF being read: its texture slots */
+  int *img; /* image index per slot (XML__TEX_SLOTS), -1: none */
+};
+
+/* ---- Media (scene_xml_medium.c). ------------------------------------------- */
+
+/* Builds a <medium> into the scene once: *out_index its index, or -1 for a
+ * medium type lmc does not have (warned). */
+lmc_status xml__medium(builder *B, pset *o, int *out_index);
 
 /* The BSDF of a shape that names none, as Mitsuba gives it: black when
  * the shape emits (black = 1), else diffuse 0.5; shared, made once. */

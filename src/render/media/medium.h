@@ -26,14 +26,16 @@
 #define LMC_RENDER_MEDIUM_H
 
 #include "ad/dual.h"
+#include "render/error.h"
 #include "render/media/phase.h"
+#include "render/plugin.h"
 #include "render/rgb_ad.h"
 #include "render/spectrum.h"
 
 typedef struct medium {
   rgb sigma_a, sigma_s; /* per unit length (scale applied) */
   rgb sigma_t;          /* sigma_a + sigma_s (medium_set) */
-  phase ph;
+  phase_fn ph;
   char id[64];          /* the XML id, for messages */
 } medium;
 
@@ -56,6 +58,19 @@ typedef struct medium_flight_ad {
 
 /* Sets m's coefficients (sigma_t from them) and an isotropic phase function. */
 void medium_set(medium *m, rgb sigma_a, rgb sigma_s);
+/* Mitsuba 0.6's homogeneous medium's parameters (its phase function is
+ * read apart, from the nested <phase>): `material`, a preset by name (case
+ * ignored; Mitsuba's default Skin1), or sigmaA and sigmaS, or sigmaT and
+ * albedo (each pair starting from the preset's values; mixing the pairs,
+ * or a preset with either, is an error), g (the preset's scattering
+ * anisotropy, by which sigma_s is reduced to sigma_s (1 - g), as Mitsuba
+ * does), and `scale` applied to the coefficients. Negative or non-finite
+ * coefficients are errors at their line. */
+lmc_status medium_read(medium *m, plugin_props *p);
+/* A preset of Mitsuba's (Jensen et al. 2001; Narasimhan et al. 2006):
+ * sigma_s, sigma_a (per metre: Mitsuba's tables times 100) and g; 0 when
+ * `name` is none of them. */
+int medium_material(const char *name, rgb *OUT_sigma_s, rgb *OUT_sigma_a, rgb *OUT_g);
 
 /* exp(-sigma_t t). */
 rgb medium_transmittance(const medium *m, double t);

@@ -32,7 +32,7 @@ const phase_model *const *phase_model_list(int *OUT_count) {
   return phase__models;
 }
 
-int phase_init(phase *ph, const char *name) {
+int phase_init(phase_fn *ph, const char *name) {
   const phase_model *m = phase_model_find(name);
   memset(ph, 0, sizeof *ph);
   ph->model = m ? m : phase_model_find("isotropic");
@@ -40,21 +40,21 @@ int phase_init(phase *ph, const char *name) {
   return m != NULL;
 }
 
-double phase_eval(const phase *ph, vec3 wo, vec3 wi) { return ph->model->eval(ph, wo, wi); }
+double phase_eval(const phase_fn *ph, vec3 wo, vec3 wi) { return ph->model->eval(ph, wo, wi); }
 
-int phase_sample(const phase *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf) {
+int phase_sample(const phase_fn *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf) {
   return ph->model->sample(ph, wo, u1, u2, OUT_wi, OUT_pdf);
 }
 
-int phase_invert(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
+int phase_invert(const phase_fn *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
   return ph->model->invert(ph, wo, wi, OUT_u);
 }
 
-ad phase_eval_ad(ad_arena *A, const phase *ph, adv3 wo, adv3 wi) {
+ad phase_eval_ad(ad_arena *A, const phase_fn *ph, adv3 wo, adv3 wi) {
   return ph->model->eval_ad(A, ph, wo, wi);
 }
 
-int phase_sample_ad(ad_arena *A, const phase *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
+int phase_sample_ad(ad_arena *A, const phase_fn *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
                     ad *OUT_pdf) {
   return ph->model->sample_ad(A, ph, wo, u1, u2, OUT_wi, OUT_pdf);
 }

@@ -25,20 +25,20 @@
 
 struct phase_model;
 
-typedef struct phase {
+typedef struct phase_fn {
   const struct phase_model *model;
   double g; /* hg: the mean cosine of the deflection, in (-1, 1) (Mitsuba's default 0.8) */
-} phase;
+} phase_fn;
 
 typedef struct phase_model {
   const char *name; /* Mitsuba's plugin name */
-  void (*defaults)(phase *ph);
-  lmc_status (*read)(phase *ph, plugin_props *p);
-  double (*eval)(const phase *ph, vec3 wo, vec3 wi);
-  int (*sample)(const phase *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf);
-  int (*invert)(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]);
-  ad (*eval_ad)(ad_arena *A, const phase *ph, adv3 wo, adv3 wi);
-  int (*sample_ad)(ad_arena *A, const phase *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
+  void (*defaults)(phase_fn *ph);
+  lmc_status (*read)(phase_fn *ph, plugin_props *p);
+  double (*eval)(const phase_fn *ph, vec3 wo, vec3 wi);
+  int (*sample)(const phase_fn *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf);
+  int (*invert)(const phase_fn *ph, vec3 wo, vec3 wi, double OUT_u[2]);
+  ad (*eval_ad)(ad_arena *A, const phase_fn *ph, adv3 wo, adv3 wi);
+  int (*sample_ad)(ad_arena *A, const phase_fn *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
                    ad *OUT_pdf);
 } phase_model;
 
@@ -46,15 +46,15 @@ typedef struct phase_model {
 const phase_model *phase_model_find(const char *name);
 const phase_model *const *phase_model_list(int *OUT_count);
 /* Mitsuba's defaults for the model `name`; 0 (and isotropic) when unknown. */
-int phase_init(phase *ph, const char *name);
+int phase_init(phase_fn *ph, const char *name);
 
 /* The front end: the model's operations (phase.c). p(wo, wi); a sample
  * and its density (0 when there is none); the numbers of a direction. */
-double phase_eval(const phase *ph, vec3 wo, vec3 wi);
-int phase_sample(const phase *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf);
-int phase_invert(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]);
-ad phase_eval_ad(ad_arena *A, const phase *ph, adv3 wo, adv3 wi);
-int phase_sample_ad(ad_arena *A, const phase *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
+double phase_eval(const phase_fn *ph, vec3 wo, vec3 wi);
+int phase_sample(const phase_fn *ph, vec3 wo, double u1, double u2, vec3 *OUT_wi, double *OUT_pdf);
+int phase_invert(const phase_fn *ph, vec3 wo, vec3 wi, double OUT_u[2]);
+ad phase_eval_ad(ad_arena *A, const phase_fn *ph, adv3 wo, adv3 wi);
+int phase_sample_ad(ad_arena *A, const phase_fn *ph, adv3 wo, ad u1, ad u2, adv3 *OUT_wi,
                     ad *OUT_pdf);
 
 #endif

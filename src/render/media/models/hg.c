@@ -25,7 +25,7 @@
 #define MODEL_BODY "render/media/models/hg.c"
 #include "render/model_twice.h"
 
-static int phase__hg_invert(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
+static int phase__hg_invert(const phase_fn *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
   double g = ph->g;
   frame f = frame_from_z(v3_neg(wo));
   vec3 l = frame_to_local(&f, wi);
@@ -42,9 +42,9 @@ static int phase__hg_invert(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]) 
   return 1;
 }
 
-static void phase__hg_defaults(phase *ph) { ph->g = 0.8; }
+static void phase__hg_defaults(phase_fn *ph) { ph->g = 0.8; }
 
-static lmc_status phase__hg_read(phase *ph, plugin_props *p) {
+static lmc_status phase__hg_read(phase_fn *ph, plugin_props *p) {
   lmc_status st = props_float(p, "g", ph->g, &ph->g, NULL);
   if (st != LMC_OK) return st;
   if (!(ph->g > -1.0 && ph->g < 1.0))
@@ -72,11 +72,11 @@ static REAL R_FN(phase__hg_p)(R_CTX double g, REAL c) {
   return R_S_DIV((1.0 - g * g) / (4.0 * M_PI), R_MUL(t, R_SQRT(t)));
 }
 
-static REAL R_FN(phase__hg_eval)(R_CTX const phase *ph, REAL3 wo, REAL3 wi) {
+static REAL R_FN(phase__hg_eval)(R_CTX const phase_fn *ph, REAL3 wo, REAL3 wi) {
   return R_FN(phase__hg_p)(R_ARG ph->g, R_NEG(R3_DOT(wo, wi)));
 }
 
-static int R_FN(phase__hg_sample)(R_CTX const phase *ph, REAL3 wo, REAL u1, REAL u2,
+static int R_FN(phase__hg_sample)(R_CTX const phase_fn *ph, REAL3 wo, REAL u1, REAL u2,
                                   REAL3 *OUT_wi, REAL *OUT_pdf) {
   double g = ph->g;
   REAL c;

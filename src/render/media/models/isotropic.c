@@ -14,7 +14,7 @@
 #define MODEL_BODY "render/media/models/isotropic.c"
 #include "render/model_twice.h"
 
-static int phase__isotropic_invert(const phase *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
+static int phase__isotropic_invert(const phase_fn *ph, vec3 wo, vec3 wi, double OUT_u[2]) {
   (void)ph;
   frame f = frame_from_z(v3_neg(wo));
   vec3 l = frame_to_local(&f, wi);
@@ -34,12 +34,12 @@ const phase_model phase_model_isotropic = {
 
 #else /* the body, in render/real.h's vocabulary */
 
-static REAL R_FN(phase__isotropic_eval)(R_CTX const phase *ph, REAL3 wo, REAL3 wi) {
+static REAL R_FN(phase__isotropic_eval)(R_CTX const phase_fn *ph, REAL3 wo, REAL3 wi) {
   (void)ph, (void)wo, (void)wi;
   return R_C(1.0 / (4.0 * M_PI));
 }
 
-static int R_FN(phase__isotropic_sample)(R_CTX const phase *ph, REAL3 wo, REAL u1, REAL u2,
+static int R_FN(phase__isotropic_sample)(R_CTX const phase_fn *ph, REAL3 wo, REAL u1, REAL u2,
                                          REAL3 *OUT_wi, REAL *OUT_pdf) {
   (void)ph;
   /* cos theta = 1 - 2 u1, phi = 2 pi u2, about -wo */
