@@ -15,7 +15,7 @@
 #   LMC_JOBS      parallel build jobs (default: the number of cores)
 #   LMC_DEMO_SPP  mutations per pixel of the demo's LMC render (default 340, about a
 #                 minute on 2 cores; the test suite's test_demo runs it with 8)
-#   LMC_FUZZ_SECONDS  seconds per fuzz target in `test` (default 15; 0 skips fuzzing)
+#   LMC_FUZZ_SECONDS  seconds per fuzz target in `test` (default 10; 0 skips fuzzing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -61,13 +61,13 @@ case "$mode" in
     build build-sanitize -DLMC_SANITIZE=ON
     ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -L fast
-    if [ "${LMC_FUZZ_SECONDS:-15}" -gt 0 ]; then
+    if [ "${LMC_FUZZ_SECONDS:-10}" -gt 0 ]; then
       # Only the fuzz targets: clang's warnings elsewhere are gcc's business.
       cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DLMC_WERROR=ON \
         -DCMAKE_C_COMPILER=clang -DLMC_FUZZ=ON -DLMC_MPI=OFF -DBUILD_TESTING=OFF >/dev/null
       cmake --build build-fuzz -j "$jobs" --target fuzz_xml fuzz_obj fuzz_ply fuzz_serialized \
         fuzz_png fuzz_jpeg fuzz_exr
-      bash scripts/fuzz.sh build-fuzz "${LMC_FUZZ_SECONDS:-15}"
+      bash scripts/fuzz.sh build-fuzz "${LMC_FUZZ_SECONDS:-10}"
     fi
     ;;
   *)

@@ -29,7 +29,7 @@ static const struct {
   int scene, k_only, n;
   double power, glossy_power; /* the wrong densities */
 } controls[] = {{R_POINT, 4, 16000000, 0.0, 1.0},
-                {R_SKY, 4, 12000000, 0.0, 1.0},
+                {R_SKY, 4, 4000000, 0.0, 1.0},
                 {R_MIRROR, 5, 8000000, 1.0, 0.0}};
 
 static void test_rough_controls(void **state) {
