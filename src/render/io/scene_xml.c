@@ -388,6 +388,21 @@ static lmc_status xml__film(builder *B, pset *f, int *w, int *h) {
   return LMC_OK;
 }
 
+/* The medium around the camera: the sensor's <medium> (or <ref> to one). */
+static lmc_status xml__sensor_medium(builder *B, pset *o, camera *c) {
+  pset *m;
+  prop *next;
+  lmc_status st = xml__nested(B, o, "medium", &m, &next);
+  if (st != LMC_OK || !m) return st;
+  int mi;
+  if ((st = xml__medium(B, m, &mi)) != LMC_OK) return st;
+  c->medium = mi + 1;
+  if (mi >= 0)
+    lmc_warn(m->file, m->line,
+             "participating media are not rendered yet: the camera's medium is ignored");
+  return LMC_OK;
+}
+
 static lmc_status xml__sensor(builder *B, pset *o) {
   lmc_status st;
   const char *t = o->type;
@@ -505,21 +520,7 @@ static lmc_status xml__sensor(builder *B, pset *o) {
                      c->far_clip);
   static const char *const silent[] = {"focusDistance", "shutterOpen", "shutterClose", NULL};
   xml__accept(o, silent);
-  /* The medium around the camera (a <medium> or a <ref> to one). */
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    pset *m = NULL;
-    if (p->kind == PROP_OBJECT) m = p->obj;
-    else if (p->kind == PROP_REF && (st = xml__deref(B, p, &m)) != LMC_OK) return st;
-    if (!m || strcmp(m->tag, "medium") != 0) continue;
-    p->used = 1;
-    int mi;
-    if ((st = xml__medium(B, m, &mi)) != LMC_OK) return st;
-    c->medium = mi + 1;
-    if (mi >= 0)
-      lmc_warn(p->file, p->line,
-               "participating media are not rendered yet: the camera's medium is ignored");
-  }
+  if ((st = xml__sensor_medium(B, o, c)) != LMC_OK) return st;
   xml__warn_unused(o);
   B->have_sensor = 1;
   return LMC_OK;

@@ -114,11 +114,8 @@ static lmc_status xml__uv_params(builder *B, pset *o, texture *t) {
 
 static lmc_status xml__texture_object(builder *B, pset *o, rgb def, texture *out, int *image);
 
-/* The first object of o with tag `tag` (a nested element or a <ref> to
- * one), marked read, into *OUT_first (NULL: none); the property of the
- * next one, if there is one, into *OUT_next (left unread). */
-static lmc_status xml__nested(builder *B, pset *o, const char *tag, pset **OUT_first,
-                              prop **OUT_next) {
+lmc_status xml__nested(builder *B, pset *o, const char *tag, pset **OUT_first,
+                       prop **OUT_next) {
   *OUT_first = NULL;
   *OUT_next = NULL;
   for (int i = 0; i < o->n_props; i++) {

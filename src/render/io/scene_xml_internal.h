@@ -151,6 +151,11 @@ struct plugin_props {
   int *img; /* image index per slot (XML__TEX_SLOTS), -1: none */
 };
 
+/* The first object of o with tag `tag` (a nested element or a <ref> to
+ * one), marked read, into *OUT_first (NULL: none); the property of the
+ * next one, if there is one, into *OUT_next (left unread). */
+lmc_status xml__nested(builder *B, pset *o, const char *tag, pset **OUT_first, prop **OUT_next);
+
 /* ---- Media (scene_xml_medium.c). ------------------------------------------- */
 
 /* Builds a <medium> into the scene once: *out_index its index, or -1 for a

@@ -15,23 +15,13 @@
  * one), isotropic without. */
 static lmc_status xml__phase(builder *B, pset *o, phase_fn *OUT) {
   phase_init(OUT, "isotropic");
-  pset *found = NULL;
-  for (int i = 0; i < o->n_props; i++) {
-    prop *p = &o->props[i];
-    pset *c = NULL;
-    if (p->kind == PROP_OBJECT)
-      c = p->obj;
-    else if (p->kind == PROP_REF) {
-      lmc_status st = xml__deref(B, p, &c);
-      if (st != LMC_OK) return st;
-    }
-    if (!c || strcmp(c->tag, "phase") != 0) continue;
-    p->used = 1;
-    if (found) {
-      lmc_warn(p->file, p->line, "a medium has one phase function: using the first");
-      continue;
-    }
-    found = c;
+  pset *found;
+  prop *next;
+  lmc_status st = xml__nested(B, o, "phase", &found, &next);
+  if (st != LMC_OK) return st;
+  if (next) {
+    lmc_warn(next->file, next->line, "a medium has one phase function: using the first");
+    next->used = 1;
   }
   if (!found) return LMC_OK;
   if (!phase_init(OUT, found->type)) {
@@ -41,7 +31,7 @@ static lmc_status xml__phase(builder *B, pset *o, phase_fn *OUT) {
     return LMC_OK;
   }
   plugin_props pp = {B, found, NULL, NULL};
-  lmc_status st = OUT->model->read ? OUT->model->read(OUT, &pp) : LMC_OK;
+  st = OUT->model->read ? OUT->model->read(OUT, &pp) : LMC_OK;
   if (st == LMC_OK) xml__warn_unused(found);
   return st;
 }

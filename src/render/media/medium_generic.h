@@ -10,15 +10,18 @@ RRGB R_FN(medium_transmittance)(R_CTX const medium *m, REAL t) {
                    R_EXP(R_MUL_S(t, -m->sigma_t.b)));
 }
 
-REAL R_FN(medium_flight_pdf)(R_CTX const medium *m, int scattered, REAL t) {
+/* The flight's density from the transmittance T(t): the channels' mean
+ * of sigma_t T (scattered at t) or of T (reached t). */
+static REAL R_FN(medium__pdf_of)(R_CTX const medium *m, int scattered, RRGB T) {
+  REAL e[3] = {T.r, T.g, T.b};
   const double st[3] = {m->sigma_t.r, m->sigma_t.g, m->sigma_t.b};
   REAL sum = R_C(0.0);
-  for (int c = 0; c < 3; c++) {
-    /* scattering: sigma_t exp(-sigma_t t); reaching t: exp(-sigma_t t) */
-    REAL e = R_EXP(R_MUL_S(t, -st[c]));
-    sum = R_ADD(sum, scattered ? R_MUL_S(e, st[c]) : e);
-  }
+  for (int c = 0; c < 3; c++) sum = R_ADD(sum, scattered ? R_MUL_S(e[c], st[c]) : e[c]);
   return R_MUL_S(sum, 1.0 / 3.0);
+}
+
+REAL R_FN(medium_flight_pdf)(R_CTX const medium *m, int scattered, REAL t) {
+  return R_FN(medium__pdf_of)(R_ARG m, scattered, R_FN(medium_transmittance)(R_ARG m, t));
 }
 
 int R_FN(medium_sample_flight)(R_CTX const medium *m, REAL t_max, REAL u_ch, REAL u_t,
@@ -37,10 +40,10 @@ int R_FN(medium_sample_flight)(R_CTX const medium *m, REAL t_max, REAL u_ch, REA
   if (!inside && !isfinite(R_V(t_max))) return 0;
   out->scattered = inside;
   out->t = t;
-  out->pdf = R_FN(medium_flight_pdf)(R_ARG m, inside, t);
+  RRGB w = R_FN(medium_transmittance)(R_ARG m, t);
+  out->pdf = R_FN(medium__pdf_of)(R_ARG m, inside, w);
   if (!(R_V(out->pdf) > 0.0) || !isfinite(R_V(out->pdf))) return 0;
   /* weight = T(t) (sigma_s when scattered) / pdf */
-  RRGB w = R_FN(medium_transmittance)(R_ARG m, t);
   if (inside) w = RRGB_MUL(w, RRGB_CONST(m->sigma_s));
   out->weight = RRGB_SCALE(w, R_INV(out->pdf));
   return 1;
