@@ -211,7 +211,7 @@ static double scale__one(int64_t want, int threads, int w, int h, int keep) {
   scale__reset_peak();
   long long before_accel = scale__status_bytes("VmRSS");
   t0 = omp_get_wtime();
-  st = accel_create(&a, s->meshes, s->n_meshes, &err);
+  st = accel_create(&a, s->meshes, s->n_meshes, 0, &err);
   double t_embree = omp_get_wtime() - t0;
   long long accel_bytes = scale__status_bytes("VmRSS") - before_accel;
   accel_destroy(a);

@@ -178,6 +178,35 @@ static void test_black_scenes_warn(void **state) {
   assert_int_equal(checks, 6 * 6 + 1);
 }
 
+/* Media: pt renders them without a word; every other integrator warns once
+ * (naming the medium's file and line) and renders, or exits 2 without an
+ * image under --strict. */
+static void test_media_warn(void **state) {
+  (void)state;
+  static const char *const integrators[] = {"pt", "bdpt", "direct", "pssmlt", "lmc", "mlt"};
+  static const char *const needle = "data/media/slab.xml:27: integrator";
+  int checks = 0;
+  for (size_t i = 0; i < sizeof integrators / sizeof integrators[0]; i++) {
+    char args[1024];
+    struct stat sb;
+    remove(TMP "/media.exr");
+    snprintf(args, sizeof args,
+             "render data/media/slab.xml --integrator %s --spp 2 -q -o " TMP "/media.exr",
+             integrators[i]);
+    int rc = run_lmc(args), warned = i > 0;
+    if (rc != 0 || count_of(err_text, needle) != warned || stat(TMP "/media.exr", &sb) != 0)
+      fail_msg("lmc %s: exit %d, expected 0, %d warning(s) and an image; stderr: %s", args, rc,
+               warned, err_text);
+    remove(TMP "/media.exr");
+    strncat(args, " --strict", sizeof args - strlen(args) - 1);
+    rc = run_lmc(args);
+    if (rc != (warned ? 2 : 0) || (stat(TMP "/media.exr", &sb) == 0) == warned)
+      fail_msg("lmc %s: exit %d, expected %d; stderr: %s", args, rc, warned ? 2 : 0, err_text);
+    checks += 2;
+  }
+  assert_int_equal(checks, 12);
+}
+
 /* Reads an EXR written by the CLI; fails the test when it cannot. */
 static lmc_image read_exr(const char *path) {
   lmc_image img = {0};
@@ -632,6 +661,7 @@ int main(void) {
       cmocka_unit_test(test_help_lists_every_flag),
       cmocka_unit_test(test_bad_flags_exit_2_naming_the_flag),
       cmocka_unit_test(test_black_scenes_warn),
+      cmocka_unit_test(test_media_warn),
       cmocka_unit_test(test_malformed_scene_names_file_and_line),
       cmocka_unit_test(test_flag_syntax_and_determinism),
       cmocka_unit_test(test_resolution_override),

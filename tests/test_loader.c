@@ -273,7 +273,7 @@ static void test_warnings(void **state) {
   (void)state;
   write_text("/tmp/lmc_loader_warn.xml",
              HEAD SENSOR LIGHT
-             "  <medium type=\"homogeneous\" id=\"fog\"/>\n"               /* 1: element */
+             "  <medium type=\"heterogeneous\" id=\"fog\"/>\n"             /* 1: medium type */
              "  <bsdf type=\"weirdbsdf\" id=\"w\"/>\n"                     /* 2: plugin type */
              "  <shape type=\"cube\">\n"
              "    <bsdf type=\"diffuse\">\n"
@@ -622,10 +622,10 @@ static double mesh_mean_x(const mesh *m) {
 
 /* A shape that emits and names no BSDF is black (Mitsuba: diffuse of
  * reflectance 0), one that does not emit is diffuse 0.5; a shape that is
- * only a medium boundary is Mitsuba's null interface, which without media
- * is no surface at all (left out, with a warning), one with a BSDF keeps
- * it (the medium warned about); an <animation> renders its first keyframe
- * (a warning), and an empty or malformed one is an error at its line. */
+ * only a medium boundary is Mitsuba's index-matched interface (no BSDF:
+ * bsdf -1, its medium inside), one with a BSDF keeps it (and its medium);
+ * an <animation> renders its first keyframe (a warning), and an empty or
+ * malformed one is an error at its line. */
 static void test_mitsuba_defaults(void **state) {
   (void)state;
   int checks = 0;
@@ -635,16 +635,16 @@ static void test_mitsuba_defaults(void **state) {
              "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"
              "  </shape>\n"
              "  <shape type=\"cube\" id=\"plain\"/>\n"                              /* 9 */
-             "  <medium type=\"homogeneous\" id=\"fog\"/>\n"                        /* 10: w1 */
+             "  <medium type=\"homogeneous\" id=\"fog\"/>\n"                        /* 10 */
              "  <shape type=\"cube\" id=\"boundary\">\n"                            /* 11 */
-             "    <ref name=\"interior\" id=\"fog\"/>\n"                            /* 12: w2 */
+             "    <ref name=\"interior\" id=\"fog\"/>\n"                            /* 12 */
              "  </shape>\n"
              "  <shape type=\"cube\" id=\"glassy\">\n"
              "    <bsdf type=\"dielectric\"/>\n"
-             "    <medium type=\"homogeneous\" name=\"interior\"/>\n"               /* 16: w3 */
+             "    <medium type=\"homogeneous\" name=\"interior\"/>\n"               /* 16 */
              "  </shape>\n"
              "  <shape type=\"cube\" id=\"moving\">\n"
-             "    <animation name=\"toWorld\">\n"                                   /* 19: w4 */
+             "    <animation name=\"toWorld\">\n"                                   /* 19: w1 */
              "      <transform time=\"0\"><translate x=\"3\"/></transform>\n"
              "      <transform time=\"1\"><translate x=\"7\"/></transform>\n"
              "    </animation>\n"
@@ -653,20 +653,26 @@ static void test_mitsuba_defaults(void **state) {
   scene *s;
   int warnings;
   assert_int_equal(load_quiet("/tmp/lmc_loader_defaults.xml", &s, &warnings), LMC_OK);
-  assert_int_equal(warnings, 4);
-  /* lamp, plain, glassy, moving; the boundary left out. */
-  assert_int_equal(s->n_meshes, 4);
-  static const char *const names[4] = {"lamp", "plain", "glassy", "moving"};
-  for (int i = 0; i < 4; i++, checks++) assert_string_equal(s->meshes[i].name, names[i]);
+  assert_int_equal(warnings, 1);
+  /* lamp, plain, boundary, glassy, moving. */
+  assert_int_equal(s->n_meshes, 5);
+  static const char *const names[5] = {"lamp", "plain", "boundary", "glassy", "moving"};
+  for (int i = 0; i < 5; i++, checks++) assert_string_equal(s->meshes[i].name, names[i]);
+  assert_int_equal(s->meshes[2].bsdf, -1);
+  assert_int_equal(s->meshes[2].interior, 1);
+  assert_int_equal(s->meshes[2].exterior, 0);
+  assert_int_equal(s->meshes[3].interior, 2);
+  assert_non_null(s->accel_media);
+  checks += 4;
   const bsdf *lamp = &s->bsdfs[s->meshes[0].bsdf], *plain = &s->bsdfs[s->meshes[1].bsdf];
   assert_true(bsdf_is(lamp, "diffuse"));
   assert_true(rgb_is_black(lamp->diffuse.value) && lamp->diffuse.image == NULL);
   assert_true(bsdf_is(plain, "diffuse"));
   assert_true(near(plain->diffuse.value.r, 0.5, 0.0) && near(plain->diffuse.value.b, 0.5, 0.0));
-  assert_true(bsdf_is(&s->bsdfs[s->meshes[2].bsdf], "dielectric"));
+  assert_true(bsdf_is(&s->bsdfs[s->meshes[3].bsdf], "dielectric"));
   checks += 5;
   /* The unit cube moved by the first keyframe (x + 3), not the second. */
-  assert_true(near(mesh_mean_x(&s->meshes[3]), 3.0, 1e-6));
+  assert_true(near(mesh_mean_x(&s->meshes[4]), 3.0, 1e-6));
   assert_true(near(mesh_mean_x(&s->meshes[1]), 0.0, 1e-6));
   checks += 2;
   scene_destroy(s);
@@ -696,7 +702,7 @@ static void test_mitsuba_defaults(void **state) {
       fail_msg("animation case %zu: status %d, line %d (expected %d), message '%s'", i, (int)st,
                err.line, bad_line[i], err.msg);
   }
-  assert_int_equal(checks, 14);
+  assert_int_equal(checks, 19);
 }
 
 /* Mitsuba's mask: the wrapped BSDF with the flag and its opacity (0.5 by

@@ -428,8 +428,10 @@ static int render__load_and_run(const lmc_render_input *in, const render_setting
     scene_destroy(s);
     return EXIT_BADINPUT;
   }
+  render_media_note(s, rs.integrator);
   /* --strict: every warning so far (a plugin lmc lacks or replaced, a
-   * scene without light, ...) means the image would not be the scene's. */
+   * scene without light, media the integrator does not render, ...)
+   * means the image would not be the scene's. */
   if (rs.strict && lmc_warning_count() > 0) {
     fprintf(stderr, "lmc: --strict: %s loaded with %d warning%s (above): not rendering\n",
             in->scene_path, lmc_warning_count(), lmc_warning_count() == 1 ? "" : "s");

@@ -23,8 +23,11 @@ typedef struct accel_hit {
   double b1, b2; /* barycentrics: p = (1-b1-b2) a + b1 b + b2 c */
 } accel_hit;
 
-/* Builds the accelerator over meshes (borrowed: they must outlive it). */
-lmc_status accel_create(accel **out, const mesh *meshes, int n_meshes, lmc_error *err);
+/* Builds the accelerator over meshes (borrowed: they must outlive it);
+ * the index-matched medium boundaries (mesh.h: bsdf -1) only with
+ * with_null. */
+lmc_status accel_create(accel **out, const mesh *meshes, int n_meshes, int with_null,
+                        lmc_error *err);
 void accel_destroy(accel *a);
 /* Closest hit with t in (tmin, tmax); returns 1 on a hit. */
 int accel_intersect(const accel *a, vec3 org, vec3 dir, double tmin, double tmax,

@@ -29,7 +29,8 @@ static void accel__on_error(void *user, enum RTCError code, const char *str) {
            str ? str : "(no message)");
 }
 
-lmc_status accel_create(accel **out, const mesh *meshes, int n_meshes, lmc_error *err) {
+lmc_status accel_create(accel **out, const mesh *meshes, int n_meshes, int with_null,
+                        lmc_error *err) {
   *out = NULL;
   accel *a = calloc(1, sizeof *a);
   if (!a) return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory building the accelerator");
@@ -46,7 +47,7 @@ lmc_status accel_create(accel **out, const mesh *meshes, int n_meshes, lmc_error
   /* Attach every non-empty mesh under its own index. */
   for (int i = 0; i < n_meshes; i++) {
     const mesh *m = &meshes[i];
-    if (m->n_triangles <= 0 || m->n_vertices <= 0) continue;
+    if (m->n_triangles <= 0 || m->n_vertices <= 0 || (m->bsdf < 0 && !with_null)) continue;
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m->p, 0,
                                3 * sizeof(float), (size_t)m->n_vertices);

@@ -41,7 +41,9 @@ typedef struct mesh {
   uint32_t *idx;  /* owned: 3 * n_triangles */
   int face_normals;
   int flip_normals;
-  int bsdf;       /* index into scene->bsdfs */
+  int bsdf;       /* index into scene->bsdfs; -1: an index-matched boundary between media
+                     (no BSDF: light crosses it unchanged), which only the integrators that
+                     render media see (scene_intersect_media) */
   int light;      /* index into scene->lights, or -1 */
   int interior;   /* 1 + index into scene->media of the medium inside it; 0: none */
   int exterior;   /* the same for the medium outside it */

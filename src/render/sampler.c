@@ -33,6 +33,11 @@ const sampler_layout sampler_layout_pt = {
                [LMC_STREAM_LIGHT] = {{0}, 0, {2}, 1},
                [LMC_STREAM_CONNECT] = {{0}, 0, {2}, 1}}};
 
+const sampler_layout sampler_layout_pt_media = {
+    .stream = {[LMC_STREAM_CAMERA] = {{2}, 1, {2, 1, 2, 1, 2, 1}, 6},
+               [LMC_STREAM_LIGHT] = {{0}, 0, {2}, 1},
+               [LMC_STREAM_CONNECT] = {{0}, 0, {2}, 1}}};
+
 const sampler_layout sampler_layout_bdpt = {
     .stream = {[LMC_STREAM_CAMERA] = {{2}, 1, {1, 2, 1}, 3},
                [LMC_STREAM_LIGHT] = {{1, 2, 2}, 3, {1, 2, 1}, 3},

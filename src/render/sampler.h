@@ -103,6 +103,9 @@ typedef struct sampler_layout {
 /* pt_li's layout (integrator.h): film pair, then per bounce light choice,
  * light point, lobe, direction, roulette. */
 extern const sampler_layout sampler_layout_pt;
+/* pt_li_media's: the same with the free flight's pair (channel, distance)
+ * first in every bounce. */
+extern const sampler_layout sampler_layout_pt_media;
 /* bdpt_li's layout (integrator.h): camera stream film pair, then per vertex
  * lobe, direction, roulette; light stream light choice, position,
  * direction, then per vertex as the camera's; connect stream light choice

@@ -33,6 +33,7 @@ lmc_status scene_create(scene **out, lmc_error *err) {
 void scene_destroy(scene *s) {
   if (!s) return;
   accel_destroy(s->accel);
+  accel_destroy(s->accel_media);
   for (int i = 0; i < s->n_meshes; i++) mesh_free(&s->meshes[i]);
   for (int i = 0; i < s->n_lights; i++) light_free(&s->lights[i]);
   for (int i = 0; i < s->n_images; i++) image_free(&s->images[i]);
@@ -126,8 +127,12 @@ lmc_status scene_finalize(scene *s, lmc_error *err) {
   }
 
   /* The accelerator. */
-  st = accel_create(&s->accel, s->meshes, s->n_meshes, err);
+  st = accel_create(&s->accel, s->meshes, s->n_meshes, 0, err);
   if (st) return st;
+  int n_null = 0;
+  for (int i = 0; i < s->n_meshes; i++) n_null += s->meshes[i].bsdf < 0;
+  if (n_null > 0 && (st = accel_create(&s->accel_media, s->meshes, s->n_meshes, 1, err)))
+    return st;
 
   /* Lights: sampling distributions, the list of infinite ones, and the
    * light choice in proportion to power. */
@@ -163,10 +168,8 @@ double scene_ray_eps(const scene *s, vec3 p) {
   return 2e-5 * (1.0 + m);
 }
 
-int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
-                    surface_hit *OUT_hit) {
-  accel_hit ah;
-  if (!accel_intersect(s->accel, org, dir, tmin, tmax, &ah)) return 0;
+/* The hit ah of the ray (org, dir) as a surface_hit. */
+static int scene__hit(const scene *s, accel_hit ah, vec3 org, vec3 dir, surface_hit *OUT_hit) {
   const mesh *m = &s->meshes[ah.mesh];
   /* The triangle's corners, loaded once for the refinement, the hit point
    * and the geometric normal. */
@@ -203,14 +206,30 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
     h->tu = ah.b1;
     h->tv = ah.b2;
   }
-  h->bsdf = &s->bsdfs[m->bsdf];
+  h->bsdf = m->bsdf >= 0 ? &s->bsdfs[m->bsdf] : NULL;
   h->light = m->light;
   /* A bump map tilts the shading frame by its displacement's slope; an
    * anisotropic lobe turns it to follow dpdu. */
   vec3 dpdu, dpdv;
-  if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, ah.prim, p0, p1, p2, &dpdu, &dpdv))
+  if (h->bsdf && bsdf_needs_tangents(h->bsdf) &&
+      mesh_uv_tangents(m, ah.prim, p0, p1, p2, &dpdu, &dpdv))
     h->sh = bsdf_shading_frame(h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
   return 1;
+}
+
+int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
+                    surface_hit *OUT_hit) {
+  accel_hit ah;
+  if (!accel_intersect(s->accel, org, dir, tmin, tmax, &ah)) return 0;
+  return scene__hit(s, ah, org, dir, OUT_hit);
+}
+
+int scene_intersect_media(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
+                          surface_hit *OUT_hit) {
+  accel_hit ah;
+  if (!accel_intersect(s->accel_media ? s->accel_media : s->accel, org, dir, tmin, tmax, &ah))
+    return 0;
+  return scene__hit(s, ah, org, dir, OUT_hit);
 }
 
 int scene_tex_footprint(const scene *s, const surface_hit *h, vec3 org, vec3 dx, vec3 dy,

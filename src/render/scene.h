@@ -39,7 +39,7 @@ typedef struct scene {
   int n_bsdfs, cap_bsdfs;
   light *lights;
   int n_lights, cap_lights;
-  medium *media;           /* participating media (no integrator renders them yet) */
+  medium *media;           /* participating media (rendered by pt; scene_media_note) */
   int n_media, cap_media;
   lmc_image *images;       /* texture images (pointers into it are stable after finalize) */
   int n_images, cap_images;
@@ -55,7 +55,9 @@ typedef struct scene {
   vec3 center;
   double radius;           /* bounding sphere radius (> 0) */
   distrib1d light_select;  /* light choice, in proportion to power */
-  accel *accel;
+  accel *accel;            /* every surface with a BSDF */
+  accel *accel_media;      /* the same and the index-matched medium boundaries; NULL when
+                              there are none (scene_intersect_media uses accel) */
   int finalized;
 } scene;
 
@@ -91,6 +93,24 @@ lmc_status scene_finalize(scene *s, lmc_error *err);
 /* Closest surface along the ray (dir unit), with t in (tmin, tmax). */
 int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
                     surface_hit *OUT_hit);
+/* The same among the surfaces and the index-matched boundaries between
+ * media (mesh.h: bsdf -1), whose hits have bsdf NULL: what the
+ * integrators that render media trace. */
+int scene_intersect_media(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
+                          surface_hit *OUT_hit);
+/* The medium (1 + index into s->media; 0: none) a ray along dir enters
+ * from the hit h, having come in medium cur: the hit shape's exterior when
+ * dir leaves on the side of h->ng, else its interior, for a shape that
+ * bounds media (Mitsuba's getTargetMedium); cur for one that does not. */
+static inline int scene_medium_after(const scene *s, const surface_hit *h, int cur, vec3 dir) {
+  const mesh *m = &s->meshes[h->mesh];
+  if (!m->interior && !m->exterior) return cur;
+  return v3_dot(dir, h->ng) > 0.0 ? m->exterior : m->interior;
+}
+/* The medium by its 1-based index (0: NULL, none). */
+static inline const medium *scene_medium(const scene *s, int index) {
+  return index > 0 ? &s->media[index - 1] : NULL;
+}
 /* The footprint on the texture coordinates of the camera ray's hit h: the
  * rays from org along dx and dy (the ray differentials, unit or not) meet
  * h's tangent plane at p + dpdx and p + dpdy, and (du, dv) solve

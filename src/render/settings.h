@@ -59,6 +59,8 @@ typedef struct render_settings {
   int n_params;
   int quiet;             /* no progress bar */
   int strict;            /* --strict: what would render wrong stops the render (LMC_ESTRICT) */
+  int no_media;          /* pt renders the scene's media as empty space (the MCMC driver's
+                            direct pass, beside chains that do not render media) */
 } render_settings;
 
 static inline render_settings render_settings_default(void) {

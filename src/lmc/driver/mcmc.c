@@ -296,6 +296,7 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
     if (!(rs->set & SET_SPP)) prs.set &= ~(unsigned)SET_SPP;
   }
   prs.quiet = 1;
+  prs.no_media = 1;
   render_stats pst;
   lmc_status status = render_run(R->s, &prs, R->out, &pst, err);
   if (status) return status;

@@ -27,6 +27,7 @@
 
 #define PT_DIMS_CAMERA 2
 #define PT_DIMS_PER_BOUNCE 7
+#define PT_DIMS_MEDIA 2
 
 /* A record of the rays an integrator traced (benchmarks only). */
 typedef struct ray_record {
@@ -81,6 +82,35 @@ static inline int render_blocked(const scene *s, render_counters *cnt, vec3 p, v
   return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
 }
 
+/* 1 when the integrator `name` renders participating media (pt); the
+ * others render a scene's media as empty space, after
+ * render_media_note's warning. */
+int render_integrator_media(const char *name);
+/* Warns (naming the first medium's file and line) when s has media that
+ * the integrator `name` does not render; 1 when it warned. */
+int render_media_note(const scene *s, const char *name);
+
+/* How many index-matched boundaries between media a ray may cross before
+ * the integrators that render media give it up (as absorbed). */
+#define RENDER_MAX_CROSSINGS 1000
+
+/* The closest surface or boundary between media along (org, dir) from
+ * tmin (scene_intersect_media), counted (and logged). */
+static inline int render_trace_media(const scene *s, render_counters *cnt, vec3 org, vec3 dir,
+                                     double tmin, surface_hit *OUT_h) {
+  cnt->rays++;
+  ray_log_add(cnt, org, dir, tmin, INFINITY, 0);
+  return scene_intersect_media(s, org, dir, tmin, INFINITY, OUT_h);
+}
+
+/* The shadow ray of render_blocked through media: 1 when no surface
+ * blocks it, with the transmittance along it in *OUT_T, starting in the
+ * medium med (1-based, 0: none) and crossing the index-matched boundaries
+ * between media on its way (media_trace.c); 0 when blocked (or after
+ * RENDER_MAX_CROSSINGS boundaries). */
+int render_transmittance(const scene *s, render_counters *cnt, vec3 p, vec3 wi, vec3 lp,
+                         double dist, int med, rgb *OUT_T);
+
 /* A camera ray's differentials: the directions of the rays through the film
  * points one (scaled) step along x and along y, from the same origin. */
 typedef struct ray_diff {
@@ -93,6 +123,16 @@ typedef struct ray_diff {
  * over its footprint (scene_tex_footprint), as Mitsuba's path tracer. */
 rgb pt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
           const ray_diff *rd, render_counters *cnt);
+/* The same through the scene's participating media (Mitsuba's volpath):
+ * the camera ray starts in the camera's medium; each segment's free
+ * flight (medium.h's track across the index-matched boundaries it
+ * crosses) ends at a surface or at a scattering point, where next-event
+ * estimation (with the transmittance to the light) and the phase
+ * function's sample are joined by MIS as at a surface. With media the
+ * layout takes two numbers more per bounce, first: the flight's channel
+ * and distance (PT_DIMS_MEDIA). */
+rgb pt_li_media(const scene *s, const render_settings *rs, lmc_sampler *smp, vec3 org, vec3 dir,
+                const ray_diff *rd, render_counters *cnt);
 
 /* ---- Direct illumination (integrator_direct.c) ---------------------------
  *

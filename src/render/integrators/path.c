@@ -367,6 +367,7 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
   ad_fmin(A, ad_const(A, 0.95), ad_mul_s(A, ad_fmax(A, (beta).r, ad_fmax(A, (beta).g, (beta).b)), (eta)))
 #define PT_LOBE(flags) path__lobe_flag(flags)
 #define PT_FOOTPRINT(h, depth, org) ((void)0)
+#define PT_MEDIA_CODE 0
 #include "render/integrators/pt_generic.h"
 
 /* The unidirectional estimator: the film position and the camera ray, then

@@ -142,7 +142,9 @@ static rgb render__pt(const scene *s, const render_settings *rs, const direct_se
                     v3_add(dir, v3_scale(v3_sub(dy, dir), diff_scale))};
     prd = &rd;
   }
-  return ds ? direct_li(s, rs, ds, smp, org, dir, prd, cnt) : pt_li(s, rs, smp, org, dir, prd, cnt);
+  if (ds) return direct_li(s, rs, ds, smp, org, dir, prd, cnt);
+  return s->n_media > 0 && !rs->no_media ? pt_li_media(s, rs, smp, org, dir, prd, cnt)
+                                         : pt_li(s, rs, smp, org, dir, prd, cnt);
 }
 
 /* Hands rs->snapshot_fn the image so far: the camera estimates plus the
@@ -209,6 +211,7 @@ static rgb render__sample(const scene *s, const render_settings *rs, int x, int 
     sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
                        use_bdpt ? &sampler_layout_bdpt
                        : ds     ? &sampler_layout_direct
+                       : s->n_media > 0 && !rs->no_media ? &sampler_layout_pt_media
                                 : &sampler_layout_pt);
     smp = &smp_store.sobol.base;
   } else {

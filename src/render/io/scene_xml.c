@@ -16,13 +16,13 @@
  *               them;
  *   medium      homogeneous with its phase function (scene_xml_medium.c),
  *               in a shape (interior, exterior), the sensor or at the top
- *               level; read and checked, not rendered (a warning);
+ *               level (rendered by pt; the other integrators warn);
  *   shape       obj, ply, serialized, rectangle, cube, sphere, disk,
  *               cylinder, with an optional nested area emitter; without a
  *               BSDF, Mitsuba's default: black when it emits, else diffuse
  *               0.5; a shape that is only a medium boundary (a medium, no
- *               BSDF, no emitter) is Mitsuba's index-matched null
- *               interface, which without media changes no ray: left out;
+ *               BSDF, no emitter) is Mitsuba's index-matched interface
+ *               (mesh.h: bsdf -1), seen only where media are rendered;
  *   emitter     point, spot, directional, constant, envmap; sunsky, sky
  *               and sun, rasterized into an envmap (sunsky.h) as Mitsuba
  *               does (with sunRadiusScale 0 the sun is a directional
@@ -140,10 +140,9 @@ static lmc_status xml__shape_mesh(builder *B, pset *o, mesh *m, const char **OUT
 
 /* The shape's BSDF (its first, else Mitsuba's default) into *OUT_bsdf,
  * its area emitter (the first, or NULL) into *OUT_emitter and its media
- * (name="interior", "exterior") into m. Media are not rendered: a shape
- * that is only a medium boundary (no BSDF, no emitter) is Mitsuba's
- * index-matched null interface, which without its medium changes no ray;
- * *OUT_skip says to leave it out. */
+ * (name="interior", "exterior") into m. A shape that is only a medium
+ * boundary (no BSDF, no emitter) is Mitsuba's index-matched interface:
+ * *OUT_bsdf -1. *OUT_skip says to leave the shape out. */
 static lmc_status xml__shape_children(builder *B, pset *o, mesh *m, int *OUT_bsdf,
                                       pset **OUT_emitter, int *OUT_skip) {
   lmc_status st;
@@ -199,16 +198,11 @@ static lmc_status xml__shape_children(builder *B, pset *o, mesh *m, int *OUT_bsd
     }
   }
   if (boundary && bsdf_index < 0 && !emitter) {
-    lmc_warn(boundary->file, boundary->line,
-             "participating media are not supported: medium ignored, and its boundary shape "
-             "(no BSDF: an index-matched null interface) left out");
-    *OUT_skip = 1;
+    if (!m->interior && !m->exterior) *OUT_skip = 1; /* (media lmc lacks: warned) */
+    *OUT_bsdf = -1;
+    *OUT_emitter = NULL;
     return LMC_OK;
   }
-  if (boundary)
-    lmc_warn(boundary->file, boundary->line,
-             "participating media are not supported: medium ignored (light crosses the shape's "
-             "interior unattenuated)");
   if (bsdf_index < 0 && (st = xml__default_bsdf(B, emitter != NULL, &bsdf_index)) != LMC_OK)
     return st;
   *OUT_bsdf = bsdf_index;
@@ -285,7 +279,7 @@ static lmc_status xml__shape(builder *B, pset *o) {
     return LMC_OK;
   }
   m.bsdf = bsdf_index;
-  if (B->s->bsdfs[bsdf_index].bumped && !m.uv)
+  if (bsdf_index >= 0 && B->s->bsdfs[bsdf_index].bumped && !m.uv)
     lmc_warn(o->file, o->line,
              "a bump map on a shape without texture coordinates is ignored (as in Mitsuba)");
   if (emitter) {
@@ -397,9 +391,6 @@ static lmc_status xml__sensor_medium(builder *B, pset *o, camera *c) {
   int mi;
   if ((st = xml__medium(B, m, &mi)) != LMC_OK) return st;
   c->medium = mi + 1;
-  if (mi >= 0)
-    lmc_warn(m->file, m->line,
-             "participating media are not rendered yet: the camera's medium is ignored");
   return LMC_OK;
 }
 
@@ -545,15 +536,11 @@ static void xml__check_light(builder *B, const pset *root) {
     lmc_warn(root->file, 0, "the scene has no emitter: the image will be black");
 }
 
-/* A top-level <medium>: built (its parameters checked), not rendered. */
+/* A top-level <medium>: built (its parameters checked), for the shapes and
+ * the sensor that refer to it. */
 static lmc_status xml__top_medium(builder *B, pset *o) {
   int mi;
-  lmc_status st = xml__medium(B, o, &mi);
-  if (st == LMC_OK && mi >= 0)
-    lmc_warn(o->file, o->line,
-             "participating media are not rendered yet: medium loaded and ignored (light "
-             "crosses it unattenuated)");
-  return st;
+  return xml__medium(B, o, &mi);
 }
 
 static lmc_status xml__build(builder *B, pset *root) {

@@ -85,7 +85,8 @@ lmc_status xml__integrator(builder *B, pset *o, int nested) {
                                        "directSamples", "luminanceSamples", "separateDirect",
                                        "lightImage", "sampleDirect", "granularity", NULL};
   if (strcmp(t, "path") == 0 || strcmp(t, "volpath") == 0 || strcmp(t, "volpath_simple") == 0) {
-    if (t[0] == 'v') lmc_warn(o->file, o->line, "integrator \"%s\" maps to path tracing (no media)", t);
+    /* (volpath: lmc's pt renders media; so does it for Mitsuba's path,
+     * which would cross them unattenuated: docs/mitsuba-scenes.md) */
     if (choose) xml__set_integrator(r, "pt");
   } else if (strcmp(t, "bdpt") == 0) {
     if (choose) xml__set_integrator(r, "bdpt");

@@ -3,7 +3,7 @@
  * <phase> into the scene (render/media/). The medium reads its own
  * parameters (medium_read); the phase function is found by name among the
  * phase models (phase.h) and reads its own. Other medium types warn and
- * stand for no medium. No integrator renders media yet: the callers warn.
+ * stand for no medium.
  */
 #include <stdio.h>
 #include <string.h>
@@ -68,6 +68,8 @@ lmc_status xml__medium(builder *B, pset *o, int *out_index) {
              strategy);
   xml__warn_unused(o);
   if (o->id[0]) snprintf(m.id, sizeof m.id, "%.63s", o->id);
+  snprintf(m.file, sizeof m.file, "%s", o->file);
+  m.line = o->line;
   int idx = scene_add_medium(B->s, &m, B->err);
   if (idx < 0) return (lmc_status)idx;
   o->built = 1;

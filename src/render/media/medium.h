@@ -37,6 +37,8 @@ typedef struct medium {
   rgb sigma_t;          /* sigma_a + sigma_s (medium_set) */
   phase_fn ph;
   char id[64];          /* the XML id, for messages */
+  char file[256];       /* where it was declared (the XML element), for messages */
+  int line;
 } medium;
 
 /* A free flight's outcome. */
@@ -55,6 +57,26 @@ typedef struct medium_flight_ad {
   adrgb weight;
   ad pdf;
 } medium_flight_ad;
+
+/* A free flight across a segment made of pieces in different media (the
+ * ray crossing index-matched boundaries): the channel c picked by u_ch
+ * and the optical depth tau = -log(1 - u_t) still to travel in it. Each
+ * piece of length len in medium m (NULL: vacuum) either spends sigma_t[c]
+ * len of tau, or scatters where tau runs out; T is the transmittance so
+ * far, per channel. A single piece is medium_sample_flight's flight; over
+ * several the densities are the same means over the channels of the
+ * accumulated transmittance (medium_track_pdf). */
+typedef struct medium_track {
+  int c;
+  double tau;
+  rgb T;
+} medium_track;
+
+typedef struct medium_track_ad {
+  int c;
+  ad tau;
+  adrgb T;
+} medium_track_ad;
 
 /* Sets m's coefficients (sigma_t from them) and an isotropic phase function. */
 void medium_set(medium *m, rgb sigma_a, rgb sigma_s);
@@ -86,6 +108,16 @@ int medium_sample_flight_ad(ad_arena *A, const medium *m, ad t_max, ad u_ch, ad 
  * reaching t_max (scattered = 0, t = t_max). */
 double medium_flight_pdf(const medium *m, int scattered, double t);
 ad medium_flight_pdf_ad(ad_arena *A, const medium *m, int scattered, ad t);
+/* A track's start from (u_ch, u_t); its next piece (1: it scatters there,
+ * at *OUT_t from the piece's start); the density of its outcome from the
+ * transmittance T it gathered: scattering in m (scattered 1), or passing
+ * every piece (0; m unused). */
+void medium_track_begin(double u_ch, double u_t, medium_track *k);
+void medium_track_begin_ad(ad_arena *A, ad u_ch, ad u_t, medium_track_ad *k);
+int medium_track_piece(const medium *m, double len, medium_track *k, double *OUT_t);
+int medium_track_piece_ad(ad_arena *A, const medium *m, ad len, medium_track_ad *k, ad *OUT_t);
+double medium_track_pdf(const medium *m, int scattered, rgb T);
+ad medium_track_pdf_ad(ad_arena *A, const medium *m, int scattered, adrgb T);
 /* The inverse of medium_sample_flight from two uniform numbers r: (u_ch,
  * u_t) making the outcome (scattered at t, or reaching t = t_max); 0 when
  * the sampler cannot make it. */

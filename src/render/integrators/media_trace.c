@@ -1,0 +1,52 @@
+/*
+ * media_trace.c: shadow rays through participating media (integrator.h's
+ * render_transmittance): the transmittance of each medium the segment
+ * crosses between the index-matched boundaries on its way; and which
+ * integrators render media.
+ */
+#include "render/integrators/integrator.h"
+
+#include <string.h>
+
+int render_integrator_media(const char *name) { return strcmp(name, "pt") == 0; }
+
+int render_media_note(const scene *s, const char *name) {
+  if (s->n_media == 0 || render_integrator_media(name)) return 0;
+  const medium *m = &s->media[0];
+  lmc_warn(m->file, m->line,
+           "integrator %s does not render participating media yet: the scene's %d medi%s "
+           "ignored (light crosses %s unattenuated); pt renders them",
+           name, s->n_media, s->n_media == 1 ? "um is" : "a are", s->n_media == 1 ? "it" : "them");
+  return 1;
+}
+
+int render_transmittance(const scene *s, render_counters *cnt, vec3 p, vec3 wi, vec3 lp,
+                         double dist, int med, rgb *OUT_T) {
+  rgb T = rgb_gray(1.0);
+  const medium *m = scene_medium(s, med);
+  if (!s->accel_media) {
+    /* No boundary without a BSDF: one medium all the way. */
+    if (render_blocked(s, cnt, p, wi, lp, dist)) return 0;
+    *OUT_T = m ? medium_transmittance(m, dist) : T;
+    return 1;
+  }
+  vec3 o = p;
+  double tmin = scene_ray_eps(s, p);
+  for (int n = 0; n <= RENDER_MAX_CROSSINGS; n++) {
+    double rest = isinf(dist) ? INFINITY : v3_len(v3_sub(lp, o));
+    double tmax = isinf(dist) ? INFINITY : rest - scene_ray_eps(s, lp);
+    surface_hit h;
+    cnt->rays++;
+    ray_log_add(cnt, o, wi, tmin, tmax, 1);
+    if (!(tmax > tmin) || !scene_intersect_media(s, o, wi, tmin, tmax, &h)) {
+      *OUT_T = m ? rgb_mul(T, medium_transmittance(m, rest)) : T;
+      return 1;
+    }
+    if (h.bsdf) return 0;
+    if (m) T = rgb_mul(T, medium_transmittance(m, h.t));
+    m = scene_medium(s, med = scene_medium_after(s, &h, med, wi));
+    o = h.p;
+    tmin = scene_ray_eps(s, h.p);
+  }
+  return 0;
+}

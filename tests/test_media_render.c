@@ -1,0 +1,214 @@
+/*
+ * test_media_render.c: rendering participating media (pt through media,
+ * integrator.h's pt_li_media) against scenes whose pixel values are known
+ * exactly (tests/data/media), and the scene's parts that media use.
+ *
+ *  slab.xml            an absorbing slab behind an index-matched boundary
+ *                      in front of a uniform emitter: L exp(-sigma_a);
+ *  furnace.xml         a closed box emitting L inwards, filled with fogs
+ *                      that scatter and do not absorb (the camera's
+ *                      medium, a sphere behind an index-matched boundary,
+ *                      a glass sphere's interior): exactly L;
+ *  single_scatter.xml  single scattering of a directional light through a
+ *                      slab towards the camera (maxDepth 2): sigma_s p(0)
+ *                      E exp(-sigma_t).
+ * Every pixel of these scenes has the same expectation and the pixels are
+ * independent, so the spread of their values gives the standard error of
+ * the image mean; each channel's mean must lie within 5 SE (plus the
+ * scene's stated geometric error) of the exact value: 3 scenes x 2
+ * samplers x 3 channels = 18 comparisons, a false alarm about 1e-5.
+ *
+ * Also: the index-matched boundary is seen only by scene_intersect_media,
+ * render_transmittance multiplies each medium's transmittance along a
+ * shadow ray across boundaries (against exp of the pieces, 1e-12) and a
+ * surface blocks it, and the integrators that do not render media say so
+ * (render_media_note). Fixed seeds; checks counted.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "render/integrators/integrator.h"
+#include "render/io/io.h"
+#include "load_scene.h"
+#include "test_util.h"
+
+/* Renders path with pt and checks the image mean of every channel against
+ * expect within 5 SE + rel_tol; the number of checks. */
+static int check_uniform(const char *path, int sampler, int64_t spp, rgb expect, double rel_tol) {
+  scene *s = load_scene(path);
+  assert_true(s->n_media > 0);
+  lmc_error err;
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "pt");
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  rs.threads = 2;
+  rs.seed = 11;
+  rs.sampler = sampler;
+  rs.quiet = 1;
+  film f;
+  render_stats rst;
+  assert_int_equal(render_run(s, &rs, &f, &rst, &err), LMC_OK);
+  assert_int_equal(rst.passes, spp);
+  assert_int_equal(rst.nan_samples, 0);
+  lmc_image img;
+  assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
+  const double ex[3] = {expect.r, expect.g, expect.b};
+  int n = img.width * img.height, checks = 0;
+  for (int c = 0; c < 3; c++) {
+    double sum = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; i++) {
+      double v = img.data[3 * i + c];
+      sum += v;
+      sum2 += v * v;
+    }
+    double mean = sum / n, var = fmax(0.0, (sum2 - n * mean * mean) / (n - 1.0));
+    double se = sqrt(var / n), tol = 5.0 * se + rel_tol * ex[c];
+    printf("%s (sampler %d) channel %d: mean %.6f, exact %.6f, SE %.2e\n", path, sampler, c, mean,
+           ex[c], se);
+    if (!(fabs(mean - ex[c]) <= tol))
+      fail_msg("%s (sampler %d) channel %d: mean %.6f, exact %.6f (SE %.2e)", path, sampler, c,
+               mean, ex[c], se);
+    checks++;
+  }
+  image_free(&img);
+  film_free(&f);
+  scene_destroy(s);
+  return checks;
+}
+
+static void test_slab(void **state) {
+  (void)state;
+  rgb ex = rgb_make(2.0 * exp(-0.5), 3.0 * exp(-1.0), 4.0 * exp(-2.0));
+  int checks = 0;
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++)
+    checks += check_uniform("data/media/slab.xml", smp, 256, ex, 1e-4);
+  assert_int_equal(checks, 6);
+}
+
+static void test_furnace(void **state) {
+  (void)state;
+  int checks = 0;
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++)
+    checks += check_uniform("data/media/furnace.xml", smp, 64, rgb_make(1.0, 2.0, 3.0), 1e-9);
+  assert_int_equal(checks, 6);
+}
+
+static void test_single_scatter(void **state) {
+  (void)state;
+  double g = 0.3, p0 = (1.0 + g) / (4.0 * 3.14159265358979323846 * (1.0 - g) * (1.0 - g));
+  rgb ex = rgb_make(0.3 * p0 * 1.0 * exp(-0.4), 0.6 * p0 * 2.0 * exp(-0.7),
+                    1.2 * p0 * 3.0 * exp(-1.3));
+  int checks = 0;
+  for (int smp = LMC_SAMPLER_INDEPENDENT; smp <= LMC_SAMPLER_SOBOL; smp++)
+    checks += check_uniform("data/media/single_scatter.xml", smp, 64, ex, 1e-4);
+  assert_int_equal(checks, 6);
+}
+
+/* Two nested boxes of media, each behind an index-matched boundary, and a
+ * diffuse wall: what surfaces the queries see, and the transmittance of
+ * shadow rays through them. */
+static void test_boundaries(void **state) {
+  (void)state;
+  static const char xml[] =
+      "<scene version=\"0.6.0\">"
+      "  <sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" "
+      "    value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor>"
+      "  <medium type=\"homogeneous\" id=\"outer\"><rgb name=\"sigmaA\" value=\"0.1, 0.2, 0.3\"/>"
+      "    <rgb name=\"sigmaS\" value=\"0, 0, 0\"/></medium>"
+      "  <medium type=\"homogeneous\" id=\"inner\"><rgb name=\"sigmaA\" value=\"1, 0.5, 0\"/>"
+      "    <rgb name=\"sigmaS\" value=\"0.5, 0, 0\"/></medium>"
+      "  <shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"2\"/></transform>"
+      "    <ref name=\"interior\" id=\"outer\"/></shape>"
+      "  <shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"1\"/></transform>"
+      "    <ref name=\"interior\" id=\"inner\"/><ref name=\"exterior\" id=\"outer\"/></shape>"
+      "  <shape type=\"rectangle\"><transform name=\"toWorld\"><translate z=\"-5\"/></transform>"
+      "  </shape>"
+      "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"8\"/></emitter>"
+      "</scene>";
+  scene *s = try_load_scene_text(xml, "media_boundaries");
+  assert_non_null(s);
+  int checks = 0;
+  assert_int_equal(s->n_meshes, 3);
+  assert_int_equal(s->meshes[0].bsdf, -1);
+  assert_int_equal(s->meshes[1].bsdf, -1);
+  assert_true(s->meshes[2].bsdf >= 0);
+  assert_non_null(s->accel_media);
+  /* From z = 4 down the axis: the integrators without media see only the
+   * wall; with media, the outer box's face at z = 2 (no BSDF) first. */
+  surface_hit h;
+  vec3 o = v3(0.1, 0.05, 4.0), d = v3(0.0, 0.0, -1.0);
+  assert_true(scene_intersect(s, o, d, 0.0, INFINITY, &h));
+  assert_int_equal(h.mesh, 2);
+  assert_non_null(h.bsdf);
+  assert_true(scene_intersect_media(s, o, d, 0.0, INFINITY, &h));
+  assert_int_equal(h.mesh, 0);
+  assert_null(h.bsdf);
+  assert_near(h.t, 2.0, 1e-9);
+  /* Entering along -z (against the outer face's normal): the interior;
+   * leaving it again along +z: the exterior (none). */
+  assert_int_equal(scene_medium_after(s, &h, 0, d), 1);
+  assert_int_equal(scene_medium_after(s, &h, 1, v3_neg(d)), 0);
+  checks += 4;
+  /* A shadow ray from inside the inner box (z = 0.5, in "inner") up to
+   * z = 3: 0.5 in inner, 1 in outer, 1 in vacuum. */
+  render_counters cnt = {0};
+  rgb T;
+  vec3 p = v3(0.1, 0.05, 0.5), lp = v3(0.1, 0.05, 3.0);
+  assert_true(render_transmittance(s, &cnt, p, v3(0, 0, 1), lp, 2.5, 2, &T));
+  const double ia[3] = {1.5, 0.5, 0.0}, oa[3] = {0.1, 0.2, 0.3};
+  double Tc[3] = {T.r, T.g, T.b};
+  for (int c = 0; c < 3; c++) {
+    assert_near(Tc[c], exp(-0.5 * ia[c] - 1.0 * oa[c]), 1e-12);
+    checks++;
+  }
+  assert_int_equal(cnt.rays, 3); /* two boundaries crossed, then the free rest */
+  /* Towards infinity along +z: through both media, out of the scene. */
+  assert_true(render_transmittance(s, &cnt, p, v3(0, 0, 1), v3(0, 0, 0), INFINITY, 2, &T));
+  assert_near(T.b, exp(-0.3), 1e-12);
+  /* Down to the wall and beyond: blocked. */
+  assert_false(render_transmittance(s, &cnt, p, v3(0, 0, -1), v3(0.1, 0.05, -6.0), 6.5, 2, &T));
+  checks += 2;
+  assert_int_equal(checks, 9);
+  scene_destroy(s);
+}
+
+/* pt renders media; the others say that they do not, naming the medium's
+ * file and line, once per call. */
+static void test_media_note(void **state) {
+  (void)state;
+  scene *s = load_scene("data/media/slab.xml");
+  assert_true(render_integrator_media("pt"));
+  int w0 = lmc_warning_count();
+  assert_int_equal(render_media_note(s, "pt"), 0);
+  assert_int_equal(lmc_warning_count(), w0);
+  static const char *const others[] = {"bdpt", "direct", "pssmlt", "mmlt", "lmc", "h2mc", "mlt"};
+  for (int i = 0; i < 7; i++) {
+    assert_false(render_integrator_media(others[i]));
+    assert_int_equal(render_media_note(s, others[i]), 1);
+    assert_int_equal(lmc_warning_count(), w0 + i + 1);
+  }
+  assert_true(strstr(s->media[0].file, "slab.xml") != NULL);
+  assert_int_equal(s->media[0].line, 27);
+  scene_destroy(s);
+  /* No media: nothing to say. */
+  s = load_scene("data/analytic/furnace.xml");
+  assert_int_equal(render_media_note(s, "bdpt"), 0);
+  scene_destroy(s);
+}
+
+int main(void) {
+  lmc_warn_set_quiet(1);
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_slab),           cmocka_unit_test(test_furnace),
+      cmocka_unit_test(test_single_scatter), cmocka_unit_test(test_boundaries),
+      cmocka_unit_test(test_media_note),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
