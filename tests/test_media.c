@@ -25,6 +25,10 @@
  *     are uniform (chi-square on a 16 x 16 grid);
  *   - the flight in duals: values as plain (1e-12), d t / d u_t and the
  *     weight's derivatives against central differences;
+ *   - a track across pieces (two media and vacuum between them): where it
+ *     scatters against the pieces' optical depths (chi-square), the mean
+ *     weights (transmittance; 1 - it), the density of 1,000 outcomes
+ *     against its closed form (1e-12);
  *   - the loader: Mitsuba's homogeneous medium from a preset (Skin1 by
  *     default, Regular Milk with its anisotropy), from sigmaA and sigmaS,
  *     from sigmaT and albedo, scaled; hg and isotropic phase functions; a
@@ -55,7 +59,7 @@
 
 /* 6 chi-square tests of phase functions (one a model), 1 of flights, 1 of
  * the inverse's uniformity: the Sidak level of 1e-3 over 8. */
-#define N_CHI2 8
+#define N_CHI2 9
 #define ALPHA 1e-3
 
 static double g_buf[1 << 14];
@@ -258,6 +262,93 @@ static void test_flight_distribution(void **state) {
   assert_false(medium_sample_flight(&m, INFINITY, 0.9, 0.3, &f));
 }
 
+/* A track across three pieces: 0.8 in a medium, 0.3 of vacuum, 1.0 in
+ * another whose channels differ (albedo 1 in both): where it scatters over
+ * 42 bins of [0, 2.1) and the cell of tracks that pass, against the
+ * channels' mean of exp(-tau_c) differences (chi-square); the weights'
+ * means (passing: the transmittance; scattering: 1 - it, as albedo 1
+ * gives) within 5 SE; the density medium_track_pdf gives each outcome
+ * against its closed form. */
+static void test_track_pieces(void **state) {
+  (void)state;
+  medium m1, m2;
+  medium_set(&m1, rgb_make(0.0, 0.0, 0.0), rgb_make(1.5, 0.2, 0.7));
+  medium_set(&m2, rgb_make(0.0, 0.0, 0.0), rgb_make(0.1, 2.5, 0.0));
+  const medium *piece[3] = {&m1, NULL, &m2};
+  const double len[3] = {0.8, 0.3, 1.0}, total = 2.1;
+  const double s1[3] = {1.5, 0.2, 0.7}, s2[3] = {0.1, 2.5, 0.0};
+  /* the optical depth of channel c at distance t */
+#define TAU(c, t) \
+  (s1[c] * fmin((t), 0.8) + s2[c] * fmax(0.0, (t) - 1.1))
+  enum { BINS = 42 };
+  const int64_t n = 400000;
+  double obs[BINS + 1] = {0}, expct[BINS + 1] = {0};
+  double sum_pass[3] = {0}, sum2_pass[3] = {0}, sum_scat[3] = {0}, sum2_scat[3] = {0};
+  int pdf_checks = 0;
+  rng r;
+  rng_seed(&r, 9, 1);
+  for (int64_t i = 0; i < n; i++) {
+    medium_track k;
+    medium_track_begin(rng_uniform(&r), rng_uniform(&r), &k);
+    double start = 0.0, t = 0.0;
+    int j = 0, scattered = 0;
+    for (; j < 3; start += len[j], j++)
+      if (medium_track_piece(piece[j], len[j], &k, &t)) {
+        scattered = 1;
+        break;
+      }
+    double pdf = medium_track_pdf(scattered ? piece[j] : NULL, scattered, k.T);
+    double at = start + t, w[3] = {k.T.r, k.T.g, k.T.b};
+    if (i < 1000) {
+      /* the density in closed form: the channels' mean of sigma_t exp(-tau) */
+      double want = 0.0;
+      for (int c = 0; c < 3; c++)
+        want += (scattered ? (j == 0 ? s1[c] : s2[c]) : 1.0) * exp(-TAU(c, scattered ? at : total));
+      assert_near(pdf, want / 3.0, 1e-12 * want);
+      pdf_checks++;
+    }
+    int b = scattered ? (int)(at / total * BINS) : BINS;
+    obs[scattered && b >= BINS ? BINS - 1 : b] += 1.0;
+    for (int c = 0; c < 3; c++) {
+      double sig = scattered ? (j == 0 ? s1[c] : s2[c]) : 0.0;
+      double pass = scattered ? 0.0 : w[c] / pdf, scat = scattered ? sig * w[c] / pdf : 0.0;
+      sum_pass[c] += pass, sum2_pass[c] += pass * pass;
+      sum_scat[c] += scat, sum2_scat[c] += scat * scat;
+    }
+  }
+  assert_int_equal(pdf_checks, 1000);
+  for (int b = 0; b < BINS; b++) {
+    double a = total * b / BINS, e = total * (b + 1) / BINS, q = 0.0;
+    for (int c = 0; c < 3; c++) q += (exp(-TAU(c, a)) - exp(-TAU(c, e))) / 3.0;
+    expct[b] = q * (double)n;
+  }
+  double pass = 0.0;
+  for (int c = 0; c < 3; c++) pass += exp(-TAU(c, total)) / 3.0;
+  expct[BINS] = pass * (double)n;
+  /* (the bins inside the vacuum expect nothing and see nothing) */
+  int empty = 0;
+  for (int b = 0; b < BINS; b++)
+    if (expct[b] == 0.0) {
+      assert_true(obs[b] == 0.0);
+      empty++;
+    }
+  assert_int_equal(empty, 6);
+  double p = chi2_pvalue(obs, expct, BINS + 1, 5.0, NULL, NULL);
+  double level = chi2_sidak(ALPHA, N_CHI2);
+  if (!(p > level)) fail_msg("track: chi-square p = %g (level %g)", p, level);
+  int checks = 0;
+  for (int c = 0; c < 3; c++) {
+    double T = exp(-TAU(c, total));
+    double mp = sum_pass[c] / n, sp = sqrt(fmax(0.0, sum2_pass[c] / n - mp * mp) / n);
+    double ms = sum_scat[c] / n, ss = sqrt(fmax(0.0, sum2_scat[c] / n - ms * ms) / n);
+    assert_near(mp, T, 5.0 * sp + 1e-12);
+    assert_near(ms, 1.0 - T, 5.0 * ss + 1e-12);
+    checks += 2;
+  }
+  assert_int_equal(checks, 6);
+#undef TAU
+}
+
 static void test_flight_invert(void **state) {
   (void)state;
   medium m = test_medium();
@@ -422,6 +513,7 @@ int main(void) {
       cmocka_unit_test(test_phase_sampling), cmocka_unit_test(test_phase_invert),
       cmocka_unit_test(test_phase_duals),    cmocka_unit_test(test_flight_distribution),
       cmocka_unit_test(test_flight_invert),  cmocka_unit_test(test_flight_duals),
+      cmocka_unit_test(test_track_pieces),
       cmocka_unit_test(test_loader),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
