@@ -43,6 +43,11 @@ const sampler_layout sampler_layout_bdpt = {
                [LMC_STREAM_LIGHT] = {{1, 2, 2}, 3, {1, 2, 1}, 3},
                [LMC_STREAM_CONNECT] = {{0}, 0, {1, 2}, 2}}};
 
+const sampler_layout sampler_layout_bdpt_media = {
+    .stream = {[LMC_STREAM_CAMERA] = {{2}, 1, {2, 1, 2, 1}, 4},
+               [LMC_STREAM_LIGHT] = {{1, 2, 2}, 3, {2, 1, 2, 1}, 4},
+               [LMC_STREAM_CONNECT] = {{0}, 0, {1, 2}, 2}}};
+
 static uint32_t sampler__reverse(uint32_t x) {
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
   x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);

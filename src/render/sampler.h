@@ -111,6 +111,9 @@ extern const sampler_layout sampler_layout_pt_media;
  * direction, then per vertex as the camera's; connect stream light choice
  * and point, per camera vertex. */
 extern const sampler_layout sampler_layout_bdpt;
+/* bdpt_li's through media: the free flight's pair (channel, distance)
+ * first in every vertex of both subpaths. */
+extern const sampler_layout sampler_layout_bdpt_media;
 
 typedef struct lmc_sobol_sampler {
   lmc_sampler base;

@@ -21,7 +21,14 @@
  *   BDPT_CAM_PDF_DIR(w), BDPT_PDF_LE_DIR(l, p, n, w), BDPT_PDF_LI(l, ref,
  *                     w, p, n): the camera's direction density and the
  *                     emitters' emission and direct-sampling densities in
- *                     its arithmetic (camera.c's and light.c's).
+ *                     its arithmetic (camera.c's and light.c's);
+ *   BDPT_MEDIA_CODE   1: the walk and the connections through participating
+ *                     media are compiled (the plain side, used when its
+ *                     walker's and joiner's `media` is set: medium
+ *                     vertices, free flights across index-matched
+ *                     boundaries, the flights' densities in pdf_fwd and
+ *                     pdf_rev, the connections' transmittance); 0: the
+ *                     dual side, which has no media yet.
  */
 
 /* ---- Vertex queries -------------------------------------------------------- */
@@ -53,8 +60,24 @@ static int bdpt__has_normal(const BDPT_VERTEX *v) { return v3_len2(v->n) > 0.0; 
 
 /* Scattering vertex whose BSDF has a non-delta part (can be connected). */
 static int bdpt__connectible(const BDPT_VERTEX *v) {
-  return v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf);
+  return (v->type == BDPT_VERTEX_SURFACE && !bsdf_is_delta(v->hit.bsdf)) ||
+         v->type == BDPT_VERTEX_MEDIUM;
 }
+
+#if BDPT_MEDIA_CODE
+/* The free-flight density with which a segment of transmittance T ends at
+ * x: scattering there (a medium vertex, in its medium), or passing on to it
+ * (medium.h's track). */
+static double bdpt__flight(const scene *sc, const bdpt_vertex *x, rgb T) {
+  int scat = x->type == BDPT_VERTEX_MEDIUM;
+  return medium_track_pdf(scat ? scene_medium(sc, x->med) : NULL, scat, T);
+}
+
+/* The medium a ray from x along d starts in. */
+static int bdpt__medium_toward(const scene *sc, const bdpt_vertex *x, vec3 d) {
+  return x->type == BDPT_VERTEX_SURFACE ? scene_medium_after(sc, &x->hit, x->med, d) : x->med;
+}
+#endif
 
 /* Unit direction from vertex a towards vertex b (either may be at infinity). */
 static REAL3 bdpt__dir_to(BDPT_CTX, const BDPT_VERTEX *a, const BDPT_VERTEX *b) {
@@ -85,6 +108,12 @@ static REAL bdpt__shading_correction(R_CTX const BDPT_HIT *h, REAL3 wo, REAL3 wi
  * with the correction above in importance mode; 0 when a direction breaks
  * the side rule. */
 static RRGB bdpt__f_cos(R_CTX const BDPT_VERTEX *v, REAL3 wi, transport_mode mode) {
+#if BDPT_MEDIA_CODE
+  if (v->type == BDPT_VERTEX_MEDIUM) {
+    REAL ph = R_FN(phase_eval)(R_ARG v->ph, v->wo, wi);
+    return RRGB_MAKE(ph, ph, ph);
+  }
+#endif
   const BDPT_HIT *h = &v->hit;
   REAL3 wo_l, wi_l;
   if (!bdpt__side_ok(R_ARG h, v->wo, &wo_l) || !bdpt__side_ok(R_ARG h, wi, &wi_l))
@@ -170,6 +199,11 @@ static REAL bdpt__pdf(BDPT_CTX, const BDPT_VERTEX *v, const BDPT_VERTEX *prev,
   REAL pdf_sa;
   if (v->type == BDPT_VERTEX_CAMERA) {
     pdf_sa = BDPT_CAM_PDF_DIR(wi);
+#if BDPT_MEDIA_CODE
+  } else if (v->type == BDPT_VERTEX_MEDIUM) {
+    if (!prev) return R_C(0.0);
+    pdf_sa = R_FN(phase_eval)(R_ARG v->ph, bdpt__dir_to(BDPT_C, v, prev), wi);
+#endif
   } else {
     if (!prev) return R_C(0.0);
     const BDPT_HIT *h = &v->hit;
@@ -184,9 +218,10 @@ static REAL bdpt__pdf(BDPT_CTX, const BDPT_VERTEX *v, const BDPT_VERTEX *prev,
 
 /* The power-heuristic weight of strategy (s, t) over every strategy of the
  * same path (pbrt's ratio walk; integrator_bdpt.c). sampled: the light
- * vertex of an s = 1 connection (NULL: lp[0]). */
+ * vertex of an s = 1 connection (NULL: lp[0]); t_conn: through media, the
+ * connection's transmittance (NULL: no media). */
 static REAL bdpt__mis_weight(BDPT_CTX, const BDPT_VERTEX *cam, int t, const BDPT_VERTEX *lp,
-                             int s, const BDPT_VERTEX *sampled) {
+                             int s, const BDPT_VERTEX *sampled, const rgb *t_conn) {
   BDPT_ARENA
   const scene *sc = BDPT_SC;
   if (t < 1 || s + t < 2) return R_C(0.0);
@@ -203,6 +238,18 @@ static REAL bdpt__mis_weight(BDPT_CTX, const BDPT_VERTEX *cam, int t, const BDPT
   if (ptm) ptm_rev = s > 0 ? bdpt__pdf(BDPT_C, pt, qs, ptm) : bdpt__pdf_light(BDPT_C, pt, ptm);
   if (qs) qs_rev = bdpt__pdf(BDPT_C, pt, ptm, qs);
   if (qsm) qsm_rev = bdpt__pdf(BDPT_C, qs, pt, qsm);
+#if BDPT_MEDIA_CODE
+  /* Each density with its segment's free flight: the connection's for pt
+   * and qs, their own subpaths' for ptm and qsm. */
+  if (t_conn) {
+    if (s > 0) pt_rev = R_MUL_S(pt_rev, bdpt__flight(sc, pt, *t_conn));
+    if (ptm) ptm_rev = R_MUL_S(ptm_rev, bdpt__flight(sc, ptm, pt->tseg));
+    if (qs) qs_rev = R_MUL_S(qs_rev, bdpt__flight(sc, qs, *t_conn));
+    if (qsm) qsm_rev = R_MUL_S(qsm_rev, bdpt__flight(sc, qsm, qs->tseg));
+  }
+#else
+  (void)t_conn;
+#endif
 
   REAL sum = R_C(0.0);
 
@@ -252,12 +299,59 @@ static REAL bdpt__mis_weight(BDPT_CTX, const BDPT_VERTEX *cam, int t, const BDPT
  * u2, J), BDPT_W_PDF_REV(bs, h, wo_l) (the reverse density of a BSDF
  * sample), BDPT_W_RR_Q(mode, beta, beta1, eta) and BDPT_W_SET_LOBE(v,
  * flags). */
+#if BDPT_MEDIA_CODE
+/* The free flight from org along dir from the medium *med, across the
+ * index-matched boundaries on the way (*med follows them): to the first
+ * surface with a BSDF (1, in *h), a scattering point (2, at *OUT_mp), or
+ * out of the scene (0); the track's transmittance in *OUT_T, the flight's
+ * density in *OUT_pdf and its weight (T, times sigma_s at a scattering
+ * point, over the density) in *OUT_w. -1: lost (too many boundaries, or a
+ * density of 0). */
+static int bdpt__fly(BDPT_WALK_CTX, vec3 org, vec3 dir, double tmin, int *med, double u_ch,
+                     double u_t, surface_hit *h, vec3 *OUT_mp, rgb *OUT_T, double *OUT_pdf,
+                     rgb *OUT_w) {
+  const scene *sc = w->sc;
+  medium_track k;
+  medium_track_begin(u_ch, u_t, &k);
+  int found = 0;
+  const medium *m = NULL;
+  for (int n = 0;; n++) {
+    if (n > RENDER_MAX_CROSSINGS) return -1;
+    int hit = BDPT_W_INTERSECT_MEDIA(org, dir, tmin, h);
+    m = scene_medium(sc, *med);
+    double t;
+    if (m && medium_track_piece(m, hit ? h->t : INFINITY, &k, &t)) {
+      *OUT_mp = v3_fma(org, dir, t);
+      found = 2;
+      break;
+    }
+    m = NULL;
+    if (!hit) break;
+    if (h->bsdf) {
+      found = 1;
+      break;
+    }
+    *med = scene_medium_after(sc, h, *med, dir);
+    org = h->p;
+    tmin = scene_ray_eps(sc, h->p);
+  }
+  *OUT_T = k.T;
+  *OUT_pdf = medium_track_pdf(m, found == 2, k.T);
+  if (!(*OUT_pdf > 0.0)) return -1;
+  *OUT_w = rgb_scale(found == 2 ? rgb_mul(k.T, m->sigma_s) : k.T, 1.0 / *OUT_pdf);
+  return found;
+}
+#endif
+
 static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, double tmin,
                       RRGB beta, REAL pdf_dir, int planar, BDPT_VERTEX *path, int n,
                       int max_vertices) {
   BDPT_WALK_PROLOGUE
   const scene *sc = w->sc;
   double eta_scale = 1.0; /* radiance compression undone for Russian roulette */
+#if BDPT_MEDIA_CODE
+  int med = w->med; /* the medium the walk travels in */
+#endif
   while (n < max_vertices) {
     BDPT_VERTEX *prev = &path[n - 1];
     BDPT_VERTEX *v = &path[n];
@@ -265,23 +359,77 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
     size_t mark = ad_arena_mark(A);
 #endif
     memset(v, 0, sizeof *v);
-    v->beta = beta;
     v->pdf_rev = R_C(0.0);
     v->jac = R_C(1.0);
 
-    /* Find the next vertex; a camera ray that escapes ends on the
-     * infinite lights. */
-    if (!BDPT_W_INTERSECT(org, dir, tmin, &v->hit)) {
+    /* Find the next vertex (through media: a surface or a scattering
+     * point, with the flight's weight and density); a camera ray that
+     * escapes ends on the infinite lights. */
+    int found;
+#if BDPT_MEDIA_CODE
+    vec3 mp;
+    double flight = 1.0; /* the flight's density */
+    if (w->media) {
+      double u_ch = BDPT_W_DRAW(0), u_t = BDPT_W_DRAW(1);
+      rgb fw;
+      found = bdpt__fly(w, org, dir, tmin, &med, u_ch, u_t, &v->hit, &mp, &v->tseg, &flight, &fw);
+      if (found < 0) break;
+      v->med = med;
+      beta = rgb_mul(beta, fw);
+      if (rgb_is_black(beta)) break;
+    } else
+#endif
+      found = BDPT_W_INTERSECT(org, dir, tmin, &v->hit);
+    v->beta = beta;
+    if (!found) {
       if (mode == TRANSPORT_RADIANCE && sc->n_infinite > 0) {
         v->type = BDPT_VERTEX_LIGHT;
         v->light = -1;
         v->dir = R3_NEG(dir);
         v->p = BDPT_W_FAR_POINT(org, dir);
         v->pdf_fwd = pdf_dir; /* solid angle: the vertex is at infinity */
+#if BDPT_MEDIA_CODE
+        v->pdf_fwd *= flight;
+#endif
         n++;
       }
       break;
     }
+#if BDPT_MEDIA_CODE
+    if (found == 2) {
+      /* A scattering point: its density from prev (no normal: 1 / d^2, or
+       * the planar density of a light at infinity) times the flight's. */
+      v->type = BDPT_VERTEX_MEDIUM;
+      v->light = -1;
+      v->p = mp;
+      v->wo = v3_neg(dir);
+      v->ph = &scene_medium(sc, med)->ph;
+      v->pdf_fwd = (planar ? pdf_dir : bdpt__convert(BDPT_C, pdf_dir, prev, v)) * flight;
+      n++;
+      int live = n < max_vertices;
+      double u_lobe = BDPT_W_DRAW(0), u1 = BDPT_W_DRAW(live), u2 = BDPT_W_DRAW(live);
+      double u_rr = BDPT_W_DRAW(0);
+      (void)u_lobe;
+      if (!live) break;
+      /* The phase function's sample (weight 1; symmetric: the reverse
+       * density is the same). */
+      vec3 wi;
+      double pdf;
+      if (!phase_sample(v->ph, v->wo, u1, u2, &wi, &pdf)) break;
+      prev->pdf_rev = bdpt__convert(BDPT_C, pdf, v, prev) * bdpt__flight(sc, prev, v->tseg);
+      if (n - 1 >= w->rs->rrdepth) {
+        double q = BDPT_W_RR_Q(mode, beta, path[1].beta, eta_scale);
+        if (!(u_rr < q)) break;
+        beta = rgb_scale(beta, 1.0 / q);
+      }
+      org = mp;
+      dir = wi;
+      tmin = 0.0;
+      pdf_dir = pdf;
+      planar = 0;
+      continue;
+    }
+#endif
     v->type = BDPT_VERTEX_SURFACE;
     v->light = v->hit.light;
     v->p = v->hit.p;
@@ -291,6 +439,9 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
       v->pdf_fwd = R_MUL(pdf_dir, R_FABS(R3_DOT_C(v->n, dir)));
     else
       v->pdf_fwd = bdpt__convert(BDPT_C, pdf_dir, prev, v);
+#if BDPT_MEDIA_CODE
+    v->pdf_fwd *= flight;
+#endif
     n++;
 
     /* This vertex's numbers (always taken, differentiated only when a
@@ -368,6 +519,12 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
     beta = RRGB_MUL(beta, weight);
     if (mode == TRANSPORT_RADIANCE && (bs.flags & BSDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
     prev->pdf_rev = bdpt__convert(BDPT_C, pdf_rev_sa, v, prev);
+#if BDPT_MEDIA_CODE
+    if (w->media) {
+      prev->pdf_rev *= bdpt__flight(sc, prev, v->tseg);
+      med = scene_medium_after(sc, &v->hit, med, wi);
+    }
+#endif
     if (RRGB_IS_BLACK(beta)) break;
 
     /* Russian roulette on the scattering throughput (n - 1 segments so
@@ -423,7 +580,29 @@ typedef struct bdpt__join {
   unsigned emit, lobes;
   BDPT_VERTEX sampled;
   int has_sampled;
+#if BDPT_MEDIA_CODE
+  rgb tconn; /* through media: the connection's transmittance */
+#endif
 } bdpt__join;
+
+#if BDPT_MEDIA_CODE
+/* Through media, the shadow ray from x (at p) along d to lp (dist away,
+ * INFINITY: towards a light at infinity): 1 when unblocked, the
+ * connection's transmittance into J->tconn and J->L. */
+static int bdpt__join_clear(BDPT_JOIN_CTX, const bdpt_vertex *x, vec3 p, vec3 d, vec3 lp,
+                            double dist, bdpt__join *J) {
+  const scene *sc = j->sc;
+  if (!render_transmittance(sc, j->cnt, p, d, lp, dist, bdpt__medium_toward(sc, x, d), &J->tconn) ||
+      rgb_is_black(J->tconn))
+    return 0;
+  J->L = rgb_mul(J->L, J->tconn);
+  return 1;
+}
+#define BDPT__CLEAR(x, p, d, lp, dist, blocked) \
+  (j->media ? bdpt__join_clear(j, (x), (p), (d), (lp), (dist), J) : !(blocked))
+#else
+#define BDPT__CLEAR(x, p, d, lp, dist, blocked) (!(blocked))
+#endif
 
 /* s = 0: the camera subpath ends on an emitter. */
 static void bdpt__join_emitter(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt__join *J) {
@@ -475,7 +654,8 @@ static void bdpt__join_camera(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, const BDPT_
   J->L = RRGB_SCALE(RRGB_MUL(qs->beta, f), R_DIV(R_MUL(we, cos_cam), d2));
   if (RRGB_IS_BLACK(J->L)) return;
   J->stage = 3;
-  if (BDPT_J_SEGMENT_BLOCKED(cam[0].p, dir, qs->p)) {
+  if (!BDPT__CLEAR(&cam[0], cam[0].p, dir, qs->p, sqrt(d2),
+                   BDPT_J_SEGMENT_BLOCKED(cam[0].p, dir, qs->p))) {
     J->L = RRGB_ZERO();
     return;
   }
@@ -510,7 +690,7 @@ static void bdpt__join_light(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t, bdpt_
   J->L = RRGB_SCALE(RRGB_MUL(pt->beta, RRGB_MUL(f, ls.li)), inv_pdf);
   if (RRGB_IS_BLACK(J->L)) return;
   J->stage = 3;
-  if (BDPT_J_BLOCKED(pt->p, ls.wi, ls.p, ls.dist)) {
+  if (!BDPT__CLEAR(pt, pt->p, ls.wi, ls.p, ls.dist, BDPT_J_BLOCKED(pt->p, ls.wi, ls.p, ls.dist))) {
     J->L = RRGB_ZERO();
     return;
   }
@@ -554,7 +734,7 @@ static void bdpt__join_vertices(BDPT_JOIN_CTX, const BDPT_VERTEX *cam, int t,
   J->L = RRGB_SCALE(RRGB_MUL(RRGB_MUL(qs->beta, fq), RRGB_MUL(fp, pt->beta)), R_INV(d2));
   if (RRGB_IS_BLACK(J->L)) return;
   J->stage = 3;
-  if (BDPT_J_SEGMENT_BLOCKED(qs->p, w, pt->p)) {
+  if (!BDPT__CLEAR(qs, qs->p, w, pt->p, sqrt(d2), BDPT_J_SEGMENT_BLOCKED(qs->p, w, pt->p))) {
     J->L = RRGB_ZERO();
     return;
   }
@@ -627,6 +807,12 @@ static int bdpt__light_walk(BDPT_WALK_CTX, int max_vertices, BDPT_VERTEX *path) 
     pdf_next = les.pdf_dir;
   }
   double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, R3_V(les.p)) : 0.0;
+#if BDPT_MEDIA_CODE
+  /* The medium the light sits in (none at infinity). */
+  if (w->media)
+    w->med = y0->med =
+        far ? 0 : render_medium_at(sc, l->type == LIGHT_AREA ? l->mesh : -1, les.p, les.n, les.dir);
+#endif
   return bdpt__walk(w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
                     max_vertices);
 }
@@ -644,6 +830,9 @@ static void bdpt__camera_vertex(BDPT_WALK_CTX, BDPT_VERTEX *z0) {
   z0->pdf_fwd = R_C(1.0);
   z0->pdf_rev = R_C(0.0);
   z0->dir = z0->wo = R3_CONST(0.0, 0.0, 0.0);
+#if BDPT_MEDIA_CODE
+  z0->med = w->media ? w->sc->cam.medium : 0;
+#endif
 }
 
 /* The camera subpath from z_0 along the camera ray (org, dir). */
@@ -651,6 +840,9 @@ static int bdpt__camera_walk(BDPT_WALK_CTX, REAL3 org, REAL3 dir, int max_vertic
                              BDPT_VERTEX *path) {
   BDPT_WALK_PROLOGUE
   REAL pdf_dir = BDPT_CAM_PDF_DIR(dir);
+#if BDPT_MEDIA_CODE
+  w->med = path[0].med;
+#endif
   return bdpt__walk(w, TRANSPORT_RADIANCE, org, dir, 0.0, RRGB_CONST(rgb_gray(1.0)), pdf_dir, 0,
                     path, 1, max_vertices);
 }

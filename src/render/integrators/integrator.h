@@ -90,6 +90,13 @@ int render_integrator_media(const char *name);
  * the integrator `name` does not render; 1 when it warned. */
 int render_media_note(const scene *s, const char *name);
 
+/* The medium (1-based; 0: none) a ray from p along dir starts in: on a
+ * mesh that bounds media (mesh_index >= 0, n its normal at p) by the side dir
+ * leaves on; elsewhere the medium around p, found by a probe ray to the
+ * first boundary between media (the side it arrives from), 0 when there
+ * is none (media_trace.c). */
+int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir);
+
 /* How many index-matched boundaries between media a ray may cross before
  * the integrators that render media give it up (as absorbed). */
 #define RENDER_MAX_CROSSINGS 1000
@@ -258,7 +265,8 @@ static inline double mis_power(double a, double b) {
 typedef enum bdpt_vertex_type {
   BDPT_VERTEX_CAMERA = 0, /* the pinhole */
   BDPT_VERTEX_LIGHT,      /* a light endpoint (also an escaped camera ray: light = -1) */
-  BDPT_VERTEX_SURFACE     /* a scattering vertex (possibly on an area light) */
+  BDPT_VERTEX_SURFACE,    /* a scattering vertex (possibly on an area light) */
+  BDPT_VERTEX_MEDIUM      /* a scattering point in a medium (bdpt through media) */
 } bdpt_vertex_type;
 
 /* One subpath vertex. Densities are per unit area at the vertex, except
@@ -283,6 +291,12 @@ typedef struct bdpt_vertex {
   double jac;      /* rough: d(direction numbers) / d(spherical coordinates) = pdf J,
                       pdf the BSDF's solid-angle density of the direction and J the
                       sphere map's; 1 otherwise */
+  /* Through media (bdpt_li on a scene with media; else 0 and unset): */
+  int med;         /* the medium (1-based; 0: none) a MEDIUM vertex lies in, or the one a
+                      SURFACE vertex was reached through, the camera's, a light's */
+  rgb tseg;        /* the transmittance of the segment from the previous vertex of its
+                      subpath (pdf_fwd holds that segment's free-flight density) */
+  const phase_fn *ph; /* MEDIUM: its medium's phase function */
 } bdpt_vertex;
 
 /* How a subpath reads its direction numbers (the MCMC reparametrization,

@@ -102,11 +102,19 @@ typedef struct bdpt__walker {
   lmc_sampler *smp;
   const bdpt_param *par;
   render_counters *cnt;
+  int media; /* through the scene's media (bdpt_li on a scene with media) */
+  int med;   /* then the medium the walk starts in */
 } bdpt__walker;
 
 static int bdpt__intersect(bdpt__walker *w, vec3 org, vec3 dir, double tmin, surface_hit *h) {
   w->cnt->rays++;
   return scene_intersect(w->sc, org, dir, tmin, INFINITY, h);
+}
+
+static int bdpt__intersect_media(bdpt__walker *w, vec3 org, vec3 dir, double tmin,
+                                 surface_hit *h) {
+  w->cnt->rays++;
+  return scene_intersect_media(w->sc, org, dir, tmin, INFINITY, h);
 }
 
 /* The point standing for an escaped ray's vertex: beyond the scene. */
@@ -124,6 +132,8 @@ static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_sc
   const scene *scene_ = w->sc; \
   (void)scene_;
 #define BDPT_W_INTERSECT(org, dir, tmin, hit) bdpt__intersect(w, (org), (dir), (tmin), (hit))
+#define BDPT_W_INTERSECT_MEDIA(org, dir, tmin, hit) \
+  bdpt__intersect_media(w, (org), (dir), (tmin), (hit))
 #define BDPT_W_DRAW(diff) sampler_next(w->smp)
 #define BDPT_W_TOPO(x) ((void)0)
 #define BDPT_W_FAR_POINT(org, dir) bdpt__far_point(w->sc, (org), (dir))
@@ -143,6 +153,7 @@ typedef struct bdpt__joiner {
   const scene *sc;
   render_counters *cnt;
   const double *u_connect;
+  int media; /* through the scene's media */
 } bdpt__joiner;
 
 static int bdpt__segment_blocked(bdpt__joiner *j, vec3 a, vec3 b) {
@@ -176,6 +187,7 @@ static int bdpt__numbers(const bdpt__joiner *j, double u[3]) {
 #define BDPT_J_EMIT(l) 0u
 #define BDPT_J_EMIT_AREA 0u
 #define BDPT_J_LOBES(v) 0u
+#define BDPT_MEDIA_CODE 1
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
@@ -221,7 +233,7 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
                           bdpt_vertex *OUT_path, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (max_vertices < 1) return 0;
-  bdpt__walker w = {sc, rs, smp, par, cnt};
+  bdpt__walker w = {sc, rs, smp, par, cnt, 0, 0};
   bdpt__camera_vertex(&w, &OUT_path[0]);
   vec3 org, dir;
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
@@ -236,7 +248,7 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
 int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                          int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
                          render_counters *cnt) {
-  bdpt__walker w = {sc, rs, smp, par, cnt};
+  bdpt__walker w = {sc, rs, smp, par, cnt, 0, 0};
   return bdpt__light_walk(&w, max_vertices, OUT_path);
 }
 
@@ -469,7 +481,7 @@ void bdpt_resplit(const scene *sc, const bdpt_vertex *x, int k, int s, int t,
 
 double bdpt_mis_weight(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
                        int s, const bdpt_vertex *sampled) {
-  return bdpt__mis_weight(sc, cam, t, lp, s, sampled);
+  return bdpt__mis_weight(sc, cam, t, lp, s, sampled, NULL);
 }
 
 void bdpt_path_pdfs(const scene *sc, bdpt_vertex *cam, int t, bdpt_vertex *lp, int s) {
@@ -575,7 +587,7 @@ int bdpt_continue_subpath(const scene *sc, const render_settings *rs, lmc_sample
                           bdpt_vertex *path, int n, int max_vertices, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (n < 1 || n >= max_vertices) return n;
-  bdpt__walker w = {sc, rs, smp, NULL, cnt};
+  bdpt__walker w = {sc, rs, smp, NULL, cnt, 0, 0};
   double tmin = scene_ray_eps(sc, org);
   return bdpt__walk(&w, mode, org, dir, tmin, rgb_gray(1.0), pdf_dir, 0, path, n, max_vertices);
 }
@@ -584,19 +596,21 @@ int bdpt_continue_subpath(const scene *sc, const render_settings *rs, lmc_sample
  * One strategy.
  */
 
-rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
-                 const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
-                 render_counters *cnt) {
+/* bdpt_connect, through the scene's media when `media` is set. */
+static rgb bdpt__connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp,
+                         int s, const double *u_connect, double *OUT_rx, double *OUT_ry,
+                         double *OUT_weight, render_counters *cnt, int media) {
   if (OUT_weight) *OUT_weight = 0.0;
   if (t < 1 || s + t < 2 || (s == 1 && t == 1)) return rgb_zero();
   /* An escaped camera ray is only an emitter (s = 0). */
   if (t > 1 && s != 0 && cam[t - 1].type == BDPT_VERTEX_LIGHT) return rgb_zero();
-  bdpt__joiner jn = {sc, cnt, u_connect};
+  bdpt__joiner jn = {sc, cnt, u_connect, media};
   bdpt__join J;
   J.L = rgb_zero();
   J.stage = 0;
   J.emit = J.lobes = 0;
   J.has_sampled = 0;
+  J.tconn = rgb_gray(1.0);
   if (s == 0)
     bdpt__join_emitter(&jn, cam, t, &J);
   else if (t == 1)
@@ -606,9 +620,16 @@ rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vert
   else
     bdpt__join_vertices(&jn, cam, t, lp, s, &J);
   if (rgb_is_black(J.L)) return rgb_zero();
-  double w = bdpt_mis_weight(sc, cam, t, lp, s, J.has_sampled ? &J.sampled : NULL);
+  double w = bdpt__mis_weight(sc, cam, t, lp, s, J.has_sampled ? &J.sampled : NULL,
+                              media ? &J.tconn : NULL);
   if (OUT_weight) *OUT_weight = w;
   return rgb_scale(J.L, w);
+}
+
+rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
+                 const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
+                 render_counters *cnt) {
+  return bdpt__connect(sc, cam, t, lp, s, u_connect, OUT_rx, OUT_ry, OUT_weight, cnt, 0);
 }
 
 /* ---------------------------------------------------------------------------
@@ -627,11 +648,20 @@ rgb bdpt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, double 
   int max_cam, max_light;
   bdpt_subpath_limits(rs, &max_cam, &max_light);
 
-  /* The two subpaths, each from its own stream. */
+  /* The two subpaths, each from its own stream (through the scene's
+   * media, when it has some). */
+  int media = s->n_media > 0 && !rs->no_media;
+  bdpt__walker w = {sc, rs, smp, NULL, cnt, media, 0};
   sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  int nc = bdpt_camera_subpath(sc, rs, smp, rx, ry, max_cam, cam, cnt);
+  int nc = 0;
+  if (max_cam >= 1) {
+    bdpt__camera_vertex(&w, &cam[0]);
+    vec3 org, dir;
+    camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
+    nc = bdpt__camera_walk(&w, org, dir, max_cam, cam);
+  }
   sampler_use_stream(smp, LMC_STREAM_LIGHT);
-  int nl = bdpt_light_subpath(sc, rs, smp, max_light, lp, cnt);
+  int nl = bdpt__light_walk(&w, max_light, lp);
   sampler_use_stream(smp, LMC_STREAM_CONNECT);
 
   /* Every strategy (s, t); t = 1 goes to the splat film. */
@@ -647,7 +677,7 @@ rgb bdpt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, double 
       if (st >= 2 && st > nl) break;
       if (!bdpt__counts(rs, length)) continue;
       double prx = 0.0, pry = 0.0;
-      rgb c = bdpt_connect(sc, cam, t, lp, st, u, &prx, &pry, NULL, cnt);
+      rgb c = bdpt__connect(sc, cam, t, lp, st, u, &prx, &pry, NULL, cnt, media);
       if (rgb_is_black(c)) continue;
       if (t == 1) {
         if (rgb_isfinite(c))

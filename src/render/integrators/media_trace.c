@@ -8,14 +8,16 @@
 
 #include <string.h>
 
-int render_integrator_media(const char *name) { return strcmp(name, "pt") == 0; }
+int render_integrator_media(const char *name) {
+  return strcmp(name, "pt") == 0 || strcmp(name, "bdpt") == 0;
+}
 
 int render_media_note(const scene *s, const char *name) {
   if (s->n_media == 0 || render_integrator_media(name)) return 0;
   const medium *m = &s->media[0];
   lmc_warn(m->file, m->line,
            "integrator %s does not render participating media yet: the scene's %d medi%s "
-           "ignored (light crosses %s unattenuated); pt renders them",
+           "ignored (light crosses %s unattenuated); pt and bdpt render them",
            name, s->n_media, s->n_media == 1 ? "um is" : "a are", s->n_media == 1 ? "it" : "them");
   return 1;
 }
@@ -45,6 +47,28 @@ int render_transmittance(const scene *s, render_counters *cnt, vec3 p, vec3 wi, 
     if (h.bsdf) return 0;
     if (m) T = rgb_mul(T, medium_transmittance(m, h.t));
     m = scene_medium(s, med = scene_medium_after(s, &h, med, wi));
+    o = h.p;
+    tmin = scene_ray_eps(s, h.p);
+  }
+  return 0;
+}
+
+int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir) {
+  if (mesh_index >= 0) {
+    const mesh *m = &s->meshes[mesh_index];
+    if (m->interior || m->exterior) return v3_dot(dir, n) > 0.0 ? m->exterior : m->interior;
+  }
+  /* A probe along a fixed direction (no axis: it meets no edge-on face of a
+   * box) to the first boundary of a medium. */
+  const vec3 probe = v3_normalize(v3(0.2718, 0.9129, 0.3046));
+  vec3 o = p;
+  double tmin = scene_ray_eps(s, p);
+  surface_hit h;
+  for (int k = 0; k <= RENDER_MAX_CROSSINGS; k++) {
+    if (!scene_intersect_media(s, o, probe, tmin, INFINITY, &h)) return 0;
+    const mesh *m = &s->meshes[h.mesh];
+    if ((m->interior || m->exterior) && h.mesh != mesh_index)
+      return scene_medium_after(s, &h, 0, v3_neg(probe));
     o = h.p;
     tmin = scene_ray_eps(s, h.p);
   }

@@ -234,6 +234,7 @@ static unsigned pbd__connect_lobes(const path__bdv *v) {
 #define BDPT_J_EMIT(l) path__emit_flag(l)
 #define BDPT_J_EMIT_AREA PATH_EMIT_AREA
 #define BDPT_J_LOBES(v) pbd__connect_lobes(v)
+#define BDPT_MEDIA_CODE 0
 #include "render/integrators/bdpt_generic.h"
 
 /* ---------------------------------------------------------------------------
@@ -331,7 +332,7 @@ static void pbd__estimate(path__ctx *c, adrgb *OUT_L, ad *OUT_rx, ad *OUT_ry) {
    * dropped). */
   size_t mark = ad_arena_mark(A);
   const path__bdv *samp = J.has_sampled ? &J.sampled : NULL;
-  ad w = ad_arena_rewind_keep(A, mark, bdpt__mis_weight(c, cam, t, lp, s, samp));
+  ad w = ad_arena_rewind_keep(A, mark, bdpt__mis_weight(c, cam, t, lp, s, samp, NULL));
   *OUT_L = adrgb_scale(A, J.L, w);
   /* Absolute directions: the value in their measure. */
   if (st->rough_min < 1.0) {

@@ -209,7 +209,8 @@ static rgb render__sample(const scene *s, const render_settings *rs, int x, int 
   uint64_t pixel = (uint64_t)y * (uint64_t)s->cam.width + (uint64_t)x;
   if (rs->sampler == LMC_SAMPLER_SOBOL) {
     sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
-                       use_bdpt ? &sampler_layout_bdpt
+                       use_bdpt ? (s->n_media > 0 && !rs->no_media ? &sampler_layout_bdpt_media
+                                                                   : &sampler_layout_bdpt)
                        : ds     ? &sampler_layout_direct
                        : s->n_media > 0 && !rs->no_media ? &sampler_layout_pt_media
                                 : &sampler_layout_pt);
