@@ -18,6 +18,10 @@
  * scene's stated geometric error) of the exact value: 3 scenes x 2
  * samplers x 3 channels = 18 comparisons, a false alarm about 1e-5.
  *
+ * pt and bdpt render each, with both samplers. bdpt's subpaths through the
+ * furnace keep the densities its MIS weights recompute (each vertex's
+ * pdf_fwd and pdf_rev, free flight included, to 1e-9).
+ *
  * Also: the index-matched boundary is seen only by scene_intersect_media,
  * render_transmittance multiplies each medium's transmittance along a
  * shadow ray across boundaries (against exp of the pieces, 1e-12) and a
@@ -186,6 +190,56 @@ static void test_boundaries(void **state) {
   scene_destroy(s);
 }
 
+/* The free-flight density with which a segment of transmittance T ends at
+ * x (medium.h's track): scattering there, or passing on. */
+static double flight_pdf(const scene *s, const bdpt_vertex *x, rgb T) {
+  int scat = x->type == BDPT_VERTEX_MEDIUM;
+  return medium_track_pdf(scat ? scene_medium(s, x->med) : NULL, scat, T);
+}
+
+/* bdpt's subpaths through the furnace's fogs: every density the walks keep
+ * (pdf_fwd of each vertex, pdf_rev of each vertex the walk went back to)
+ * against the density functions the MIS weights recompute them with
+ * (bdpt_vertex_pdf*, integrator.h), times the segment's free flight,
+ * to 1e-9. Medium vertices and surfaces, on both subpaths, are counted. */
+static void test_bdpt_densities(void **state) {
+  (void)state;
+  scene *s = load_scene("data/media/furnace.xml");
+  render_settings rs = s->settings;
+  render_counters cnt = {0};
+  int checks = 0, medium_checks = 0;
+  for (int k = 0; k < 400; k++) {
+    lmc_indep_sampler smp;
+    indep_sampler_init(&smp, 5, (uint64_t)k);
+    bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
+    int nc, nl;
+    bdpt_subpaths(s, &rs, &smp.base, 3.5 + 0.04 * k, 9.5, 1, cam, &nc, lp, &nl, &cnt);
+    for (int side = 0; side < 2; side++) {
+      const bdpt_vertex *x = side ? lp : cam;
+      int n = side ? nl : nc;
+      for (int i = 1; i < n; i++) {
+        const bdpt_vertex *v = &x[i], *prev = &x[i - 1];
+        if (v->type == BDPT_VERTEX_LIGHT) continue; /* (an escaped ray) */
+        double want = i == 1 && side ? bdpt_vertex_pdf_light(s, prev, v)
+                                     : bdpt_vertex_pdf(s, prev, i > 1 ? &x[i - 2] : NULL, v);
+        want *= flight_pdf(s, v, v->tseg);
+        assert_near(v->pdf_fwd, want, 1e-9 * want);
+        checks++;
+        medium_checks += v->type == BDPT_VERTEX_MEDIUM;
+        /* The walk went on from v: prev's reverse density, from v. */
+        if (i + 1 < n && !v->delta && !(i == 1 && side == 0)) {
+          double rev = bdpt_vertex_pdf(s, v, &x[i + 1], prev) * flight_pdf(s, prev, v->tseg);
+          assert_near(prev->pdf_rev, rev, 1e-9 * rev);
+          checks++;
+        }
+      }
+    }
+  }
+  printf("bdpt densities: %d checked, %d at medium vertices\n", checks, medium_checks);
+  assert_true(checks > 2000 && medium_checks > 500);
+  scene_destroy(s);
+}
+
 /* pt renders media; the others say that they do not, naming the medium's
  * file and line, once per call. */
 static void test_media_note(void **state) {
@@ -216,7 +270,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_slab),           cmocka_unit_test(test_furnace),
       cmocka_unit_test(test_single_scatter), cmocka_unit_test(test_boundaries),
-      cmocka_unit_test(test_media_note),
+      cmocka_unit_test(test_media_note),     cmocka_unit_test(test_bdpt_densities),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

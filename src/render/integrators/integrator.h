@@ -337,6 +337,15 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
                           double ry, int max_vertices, const bdpt_param *par,
                           bdpt_vertex *OUT_path, render_counters *cnt);
 
+/* Both subpaths of one bdpt_li sample, from smp's camera and light streams
+ * (left on the connect stream), through the scene's media when `media` is
+ * set (each vertex then two numbers more, first: its flight's; MEDIUM
+ * vertices; every density with its free flight's). The vertex counts into
+ * *OUT_nc and *OUT_nl. */
+void bdpt_subpaths(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                   double ry, int media, bdpt_vertex *OUT_cam, int *OUT_nc, bdpt_vertex *OUT_lp,
+                   int *OUT_nl, render_counters *cnt);
+
 /* The light subpath from the current stream of smp (BDPT_DIMS_LIGHT_START,
  * then BDPT_DIMS_PER_VERTEX per surface vertex); path[0] is the light.
  * Returns the number of vertices written (0 ... max_vertices). */

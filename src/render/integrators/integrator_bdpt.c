@@ -641,28 +641,34 @@ static int bdpt__counts(const render_settings *rs, int length) {
   return rs->mindepth <= 0 || length >= rs->mindepth;
 }
 
+void bdpt_subpaths(const scene *sc, const render_settings *rs, lmc_sampler *smp, double rx,
+                   double ry, int media, bdpt_vertex *OUT_cam, int *OUT_nc, bdpt_vertex *OUT_lp,
+                   int *OUT_nl, render_counters *cnt) {
+  int max_cam, max_light;
+  bdpt_subpath_limits(rs, &max_cam, &max_light);
+  bdpt__walker w = {sc, rs, smp, NULL, cnt, media, 0};
+  sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  *OUT_nc = 0;
+  if (max_cam >= 1) {
+    bdpt__camera_vertex(&w, &OUT_cam[0]);
+    vec3 org, dir;
+    camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
+    *OUT_nc = bdpt__camera_walk(&w, org, dir, max_cam, OUT_cam);
+  }
+  sampler_use_stream(smp, LMC_STREAM_LIGHT);
+  *OUT_nl = bdpt__light_walk(&w, max_light, OUT_lp);
+  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+}
+
 rgb bdpt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, double rx, double ry,
             film *splat, render_counters *cnt) {
   const scene *sc = s;
   bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
-  int max_cam, max_light;
-  bdpt_subpath_limits(rs, &max_cam, &max_light);
 
   /* The two subpaths, each from its own stream (through the scene's
    * media, when it has some). */
-  int media = s->n_media > 0 && !rs->no_media;
-  bdpt__walker w = {sc, rs, smp, NULL, cnt, media, 0};
-  sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  int nc = 0;
-  if (max_cam >= 1) {
-    bdpt__camera_vertex(&w, &cam[0]);
-    vec3 org, dir;
-    camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
-    nc = bdpt__camera_walk(&w, org, dir, max_cam, cam);
-  }
-  sampler_use_stream(smp, LMC_STREAM_LIGHT);
-  int nl = bdpt__light_walk(&w, max_light, lp);
-  sampler_use_stream(smp, LMC_STREAM_CONNECT);
+  int media = s->n_media > 0 && !rs->no_media, nc, nl;
+  bdpt_subpaths(sc, rs, smp, rx, ry, media, cam, &nc, lp, &nl, cnt);
 
   /* Every strategy (s, t); t = 1 goes to the splat film. */
   rgb L = rgb_zero();
