@@ -72,4 +72,28 @@ static inline scene *load_analytic_scene(const char *name) {
   return load_source_scene("tests/data/analytic/%s", name);
 }
 
+#ifdef LMC_RENDER_INTEGRATOR_H
+/* s rendered by a pixel integrator (render_run: pt, bdpt, direct) on 2
+ * threads with the scene's settings but these, developed into *OUT (the
+ * caller's: image_free); the test fails when the render does, or takes
+ * other than spp passes. */
+static inline void render_image(const scene *s, const char *integrator, int sampler, int64_t spp,
+                                uint64_t seed, lmc_image *OUT, render_stats *OUT_stats) {
+  lmc_error err;
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  rs.threads = 2;
+  rs.seed = seed;
+  rs.sampler = sampler;
+  rs.quiet = 1;
+  film f;
+  assert_int_equal(render_run(s, &rs, &f, OUT_stats, &err), LMC_OK);
+  assert_int_equal(OUT_stats->passes, spp);
+  assert_int_equal(film_develop(&f, OUT, &err), LMC_OK);
+  film_free(&f);
+}
+#endif
+
 #endif

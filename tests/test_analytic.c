@@ -67,22 +67,9 @@ static int pixel_group(const scene *s, int x, int y) {
 static int check_scene(const char *path, const char *integrator, int sampler, int64_t spp,
                        const rgb expect[MAX_GROUPS], int min_groups, double *OUT_var0) {
   scene *s = load_scene(path);
-
-  lmc_error err;
-  render_settings rs = s->settings;
-  snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
-  rs.spp = spp;
-  rs.set |= SET_SPP;
-  rs.threads = 2;
-  rs.seed = 7;
-  rs.sampler = sampler;
-  rs.quiet = 1;
-  film f;
   render_stats rst;
-  assert_int_equal(render_run(s, &rs, &f, &rst, &err), LMC_OK);
-  assert_int_equal(rst.passes, spp);
   lmc_image img;
-  assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
+  render_image(s, integrator, sampler, spp, 7, &img, &rst);
 
   /* Accumulate group statistics. */
   group_stats gs[MAX_GROUPS];
@@ -120,7 +107,6 @@ static int check_scene(const char *path, const char *integrator, int sampler, in
   }
   assert_true(groups >= min_groups);
   image_free(&img);
-  film_free(&f);
   scene_destroy(s);
   return checks;
 }

@@ -42,28 +42,16 @@
 #include "load_scene.h"
 #include "test_util.h"
 
-/* Renders path with pt and checks the image mean of every channel against
+/* Renders path with integrator and checks the image mean of every channel against
  * expect within 5 SE + rel_tol; the number of checks. */
 static int check_uniform(const char *path, const char *integrator, int sampler, int64_t spp,
                          rgb expect, double rel_tol) {
   scene *s = load_scene(path);
   assert_true(s->n_media > 0);
-  lmc_error err;
-  render_settings rs = s->settings;
-  snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
-  rs.spp = spp;
-  rs.set |= SET_SPP;
-  rs.threads = 2;
-  rs.seed = 11;
-  rs.sampler = sampler;
-  rs.quiet = 1;
-  film f;
   render_stats rst;
-  assert_int_equal(render_run(s, &rs, &f, &rst, &err), LMC_OK);
-  assert_int_equal(rst.passes, spp);
-  assert_int_equal(rst.nan_samples, 0);
   lmc_image img;
-  assert_int_equal(film_develop(&f, &img, &err), LMC_OK);
+  render_image(s, integrator, sampler, spp, 11, &img, &rst);
+  assert_int_equal(rst.nan_samples, 0);
   const double ex[3] = {expect.r, expect.g, expect.b};
   int n = img.width * img.height, checks = 0;
   for (int c = 0; c < 3; c++) {
@@ -83,7 +71,6 @@ static int check_uniform(const char *path, const char *integrator, int sampler, 
     checks++;
   }
   image_free(&img);
-  film_free(&f);
   scene_destroy(s);
   return checks;
 }
