@@ -133,6 +133,9 @@ lmc_status scene_finalize(scene *s, lmc_error *err) {
   for (int i = 0; i < s->n_meshes; i++) n_null += s->meshes[i].bsdf < 0;
   if (n_null > 0 && (st = accel_create(&s->accel_media, s->meshes, s->n_meshes, 1, err)))
     return st;
+  /* The medium outside every boundary: the camera's, if the camera is there. */
+  if (s->n_media > 0 && scene_locate_medium(s, s->cam.pos, -1) < 0)
+    s->ambient_medium = s->cam.medium;
 
   /* Lights: sampling distributions, the list of infinite ones, and the
    * light choice in proportion to power. */
@@ -230,6 +233,24 @@ int scene_intersect_media(const scene *s, vec3 org, vec3 dir, double tmin, doubl
   if (!accel_intersect(s->accel_media ? s->accel_media : s->accel, org, dir, tmin, tmax, &ah))
     return 0;
   return scene__hit(s, ah, org, dir, OUT_hit);
+}
+
+int scene_locate_medium(const scene *s, vec3 p, int skip) {
+  /* A probe along a fixed direction (no axis: it meets no box face edge
+   * on) to the first shape that bounds media. */
+  const vec3 probe = v3_normalize(v3(0.2718, 0.9129, 0.3046));
+  vec3 o = p;
+  double tmin = scene_ray_eps(s, p);
+  surface_hit h;
+  for (int k = 0; k < 1000; k++) {
+    if (!scene_intersect_media(s, o, probe, tmin, INFINITY, &h)) return -1;
+    const mesh *m = &s->meshes[h.mesh];
+    if ((m->interior || m->exterior) && h.mesh != skip)
+      return scene_medium_after(s, &h, 0, v3_neg(probe));
+    o = h.p;
+    tmin = scene_ray_eps(s, h.p);
+  }
+  return -1;
 }
 
 int scene_tex_footprint(const scene *s, const surface_hit *h, vec3 org, vec3 dx, vec3 dy,

@@ -58,6 +58,8 @@ typedef struct scene {
   accel *accel;            /* every surface with a BSDF */
   accel *accel_media;      /* the same and the index-matched medium boundaries; NULL when
                               there are none (scene_intersect_media uses accel) */
+  int ambient_medium;      /* the medium (1-based; 0: none) outside every shape that bounds
+                              media: the camera's, when the camera lies outside them all */
   int finalized;
 } scene;
 
@@ -107,6 +109,10 @@ static inline int scene_medium_after(const scene *s, const surface_hit *h, int c
   if (!m->interior && !m->exterior) return cur;
   return v3_dot(dir, h->ng) > 0.0 ? m->exterior : m->interior;
 }
+/* The medium (1-based; 0: none) around point p, from the side a probe ray
+ * arrives at the first shape that bounds media (skipping the mesh `skip`,
+ * -1: none); -1 when the probe meets none. */
+int scene_locate_medium(const scene *s, vec3 p, int skip);
 /* The medium by its 1-based index (0: NULL, none). */
 static inline const medium *scene_medium(const scene *s, int index) {
   return index > 0 ? &s->media[index - 1] : NULL;

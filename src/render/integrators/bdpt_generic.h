@@ -808,10 +808,15 @@ static int bdpt__light_walk(BDPT_WALK_CTX, int max_vertices, BDPT_VERTEX *path) 
   }
   double tmin = l->type == LIGHT_AREA ? scene_ray_eps(sc, R3_V(les.p)) : 0.0;
 #if BDPT_MEDIA_CODE
-  /* The medium the light sits in (none at infinity). */
-  if (w->media)
+  /* The medium the light sits in (at infinity: the ambient one). */
+  if (w->media) {
     w->med = y0->med =
-        far ? 0 : render_medium_at(sc, l->type == LIGHT_AREA ? l->mesh : -1, les.p, les.n, les.dir);
+        far ? sc->ambient_medium
+            : render_medium_at(sc, l->type == LIGHT_AREA ? l->mesh : -1, les.p, les.n, les.dir);
+    /* From infinity through the ambient medium: only its clear channels. */
+    if (far && sc->ambient_medium)
+      beta = rgb_mul(beta, medium_transmittance(scene_medium(sc, sc->ambient_medium), INFINITY));
+  }
 #endif
   return bdpt__walk(w, TRANSPORT_IMPORTANCE, les.p, les.dir, tmin, beta, pdf_next, far, path, 1,
                     max_vertices);

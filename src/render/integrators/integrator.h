@@ -91,10 +91,9 @@ int render_integrator_media(const char *name);
 int render_media_note(const scene *s, const char *name);
 
 /* The medium (1-based; 0: none) a ray from p along dir starts in: on a
- * mesh that bounds media (mesh_index >= 0, n its normal at p) by the side dir
- * leaves on; elsewhere the medium around p, found by a probe ray to the
- * first boundary between media (the side it arrives from), 0 when there
- * is none (media_trace.c). */
+ * mesh that bounds media (mesh_index >= 0, n its normal at p) by the side
+ * dir leaves on; elsewhere the medium around p (scene_locate_medium), the
+ * scene's ambient medium when no boundary encloses p (media_trace.c). */
 int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir);
 
 /* How many index-matched boundaries between media a ray may cross before

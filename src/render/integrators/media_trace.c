@@ -58,19 +58,6 @@ int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir) {
     const mesh *m = &s->meshes[mesh_index];
     if (m->interior || m->exterior) return v3_dot(dir, n) > 0.0 ? m->exterior : m->interior;
   }
-  /* A probe along a fixed direction (no axis: it meets no edge-on face of a
-   * box) to the first boundary of a medium. */
-  const vec3 probe = v3_normalize(v3(0.2718, 0.9129, 0.3046));
-  vec3 o = p;
-  double tmin = scene_ray_eps(s, p);
-  surface_hit h;
-  for (int k = 0; k <= RENDER_MAX_CROSSINGS; k++) {
-    if (!scene_intersect_media(s, o, probe, tmin, INFINITY, &h)) return 0;
-    const mesh *m = &s->meshes[h.mesh];
-    if ((m->interior || m->exterior) && h.mesh != mesh_index)
-      return scene_medium_after(s, &h, 0, v3_neg(probe));
-    o = h.p;
-    tmin = scene_ray_eps(s, h.p);
-  }
-  return 0;
+  int med = scene_locate_medium(s, p, mesh_index);
+  return med >= 0 ? med : s->ambient_medium;
 }
