@@ -299,50 +299,6 @@ static REAL bdpt__mis_weight(BDPT_CTX, const BDPT_VERTEX *cam, int t, const BDPT
  * u2, J), BDPT_W_PDF_REV(bs, h, wo_l) (the reverse density of a BSDF
  * sample), BDPT_W_RR_Q(mode, beta, beta1, eta) and BDPT_W_SET_LOBE(v,
  * flags). */
-#if BDPT_MEDIA_CODE
-/* The free flight from org along dir from the medium *med, across the
- * index-matched boundaries on the way (*med follows them): to the first
- * surface with a BSDF (1, in *h), a scattering point (2, at *OUT_mp), or
- * out of the scene (0); the track's transmittance in *OUT_T, the flight's
- * density in *OUT_pdf and its weight (T, times sigma_s at a scattering
- * point, over the density) in *OUT_w. -1: lost (too many boundaries, or a
- * density of 0). */
-static int bdpt__fly(BDPT_WALK_CTX, vec3 org, vec3 dir, double tmin, int *med, double u_ch,
-                     double u_t, surface_hit *h, vec3 *OUT_mp, rgb *OUT_T, double *OUT_pdf,
-                     rgb *OUT_w) {
-  const scene *sc = w->sc;
-  medium_track k;
-  medium_track_begin(u_ch, u_t, &k);
-  int found = 0;
-  const medium *m = NULL;
-  for (int n = 0;; n++) {
-    if (n > RENDER_MAX_CROSSINGS) return -1;
-    int hit = BDPT_W_INTERSECT_MEDIA(org, dir, tmin, h);
-    m = scene_medium(sc, *med);
-    double t;
-    if (m && medium_track_piece(m, hit ? h->t : INFINITY, &k, &t)) {
-      *OUT_mp = v3_fma(org, dir, t);
-      found = 2;
-      break;
-    }
-    m = NULL;
-    if (!hit) break;
-    if (h->bsdf) {
-      found = 1;
-      break;
-    }
-    *med = scene_medium_after(sc, h, *med, dir);
-    org = h->p;
-    tmin = scene_ray_eps(sc, h->p);
-  }
-  *OUT_T = k.T;
-  *OUT_pdf = medium_track_pdf(m, found == 2, k.T);
-  if (!(*OUT_pdf > 0.0)) return -1;
-  *OUT_w = rgb_scale(found == 2 ? rgb_mul(k.T, m->sigma_s) : k.T, 1.0 / *OUT_pdf);
-  return found;
-}
-#endif
-
 static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, double tmin,
                       RRGB beta, REAL pdf_dir, int planar, BDPT_VERTEX *path, int n,
                       int max_vertices) {
@@ -372,7 +328,8 @@ static int bdpt__walk(BDPT_WALK_CTX, transport_mode mode, REAL3 org, REAL3 dir, 
     if (w->media) {
       double u_ch = BDPT_W_DRAW(0), u_t = BDPT_W_DRAW(1);
       rgb fw;
-      found = bdpt__fly(w, org, dir, tmin, &med, u_ch, u_t, &v->hit, &mp, &v->tseg, &flight, &fw);
+      found = render_fly(sc, w->cnt, org, dir, tmin, &med, u_ch, u_t, &v->hit, &mp, &v->tseg, &flight,
+                         &fw);
       if (found < 0) break;
       v->med = med;
       beta = rgb_mul(beta, fw);

@@ -109,6 +109,18 @@ static inline int render_trace_media(const scene *s, render_counters *cnt, vec3 
   return scene_intersect_media(s, org, dir, tmin, INFINITY, OUT_h);
 }
 
+/* The free flight from org along dir (unit) from the medium *med (medium.h's
+ * track from the numbers u_ch, u_t), across the index-matched boundaries
+ * on the way (*med follows them): to the first surface with a BSDF (1, in
+ * *h), a scattering point (2, at *OUT_mp, in *med), or out of the scene
+ * (0); the track's transmittance in *OUT_T, the flight's density in
+ * *OUT_pdf and its weight (T, times sigma_s at a scattering point, over
+ * the density) in *OUT_w. -1: lost (RENDER_MAX_CROSSINGS boundaries, or a
+ * density of 0). The walks of pt and bdpt through media (media_trace.c). */
+int render_fly(const scene *s, render_counters *cnt, vec3 org, vec3 dir, double tmin, int *med,
+               double u_ch, double u_t, surface_hit *h, vec3 *OUT_mp, rgb *OUT_T, double *OUT_pdf,
+               rgb *OUT_w);
+
 /* The shadow ray of render_blocked through media: 1 when no surface
  * blocks it, with the transmittance along it in *OUT_T, starting in the
  * medium med (1-based, 0: none) and crossing the index-matched boundaries

@@ -111,12 +111,6 @@ static int bdpt__intersect(bdpt__walker *w, vec3 org, vec3 dir, double tmin, sur
   return scene_intersect(w->sc, org, dir, tmin, INFINITY, h);
 }
 
-static int bdpt__intersect_media(bdpt__walker *w, vec3 org, vec3 dir, double tmin,
-                                 surface_hit *h) {
-  w->cnt->rays++;
-  return scene_intersect_media(w->sc, org, dir, tmin, INFINITY, h);
-}
-
 /* The point standing for an escaped ray's vertex: beyond the scene. */
 static vec3 bdpt__far_point(const scene *sc, vec3 org, vec3 dir) {
   return v3_fma(org, dir, 2.0 * sc->radius + v3_len(v3_sub(org, sc->center)));
@@ -132,8 +126,6 @@ static double bdpt__rr_q(transport_mode mode, rgb beta, rgb beta1, double eta_sc
   const scene *scene_ = w->sc; \
   (void)scene_;
 #define BDPT_W_INTERSECT(org, dir, tmin, hit) bdpt__intersect(w, (org), (dir), (tmin), (hit))
-#define BDPT_W_INTERSECT_MEDIA(org, dir, tmin, hit) \
-  bdpt__intersect_media(w, (org), (dir), (tmin), (hit))
 #define BDPT_W_DRAW(diff) sampler_next(w->smp)
 #define BDPT_W_TOPO(x) ((void)0)
 #define BDPT_W_FAR_POINT(org, dir) bdpt__far_point(w->sc, (org), (dir))

@@ -1,7 +1,8 @@
 /*
  * media_trace.c: shadow rays through participating media (integrator.h's
  * render_transmittance): the transmittance of each medium the segment
- * crosses between the index-matched boundaries on its way; and which
+ * crosses between the index-matched boundaries on its way; the free
+ * flight of pt's and bdpt's walks across them (render_fly); and which
  * integrators render media.
  */
 #include "render/integrators/integrator.h"
@@ -60,4 +61,38 @@ int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir) {
   }
   int med = scene_locate_medium(s, p, mesh_index);
   return med >= 0 ? med : s->ambient_medium;
+}
+
+int render_fly(const scene *s, render_counters *cnt, vec3 org, vec3 dir, double tmin, int *med,
+               double u_ch, double u_t, surface_hit *h, vec3 *OUT_mp, rgb *OUT_T, double *OUT_pdf,
+               rgb *OUT_w) {
+  medium_track k;
+  medium_track_begin(u_ch, u_t, &k);
+  int found = 0;
+  const medium *m = NULL;
+  for (int n = 0;; n++) {
+    if (n > RENDER_MAX_CROSSINGS) return -1;
+    int hit = render_trace_media(s, cnt, org, dir, tmin, h);
+    m = scene_medium(s, *med);
+    double t;
+    if (m && medium_track_piece(m, hit ? h->t : INFINITY, &k, &t)) {
+      *OUT_mp = v3_fma(org, dir, t);
+      found = 2;
+      break;
+    }
+    m = NULL;
+    if (!hit) break;
+    if (h->bsdf) {
+      found = 1;
+      break;
+    }
+    *med = scene_medium_after(s, h, *med, dir);
+    org = h->p;
+    tmin = scene_ray_eps(s, h->p);
+  }
+  *OUT_T = k.T;
+  *OUT_pdf = medium_track_pdf(m, found == 2, k.T);
+  if (!(*OUT_pdf > 0.0)) return -1;
+  *OUT_w = rgb_scale(found == 2 ? rgb_mul(k.T, m->sigma_s) : k.T, 1.0 / *OUT_pdf);
+  return found;
 }

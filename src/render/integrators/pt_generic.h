@@ -32,9 +32,7 @@
  *                   camera hit with ray differentials; duals: nothing);
  *   PT_MEDIA_CODE   1: the walk through participating media is compiled
  *                   (plain side: integrator_pt_media.c), used when
- *                   PT_MEDIA_ON; with it
- *                   PT_INTERSECT_MEDIA(org, dir, tmin, h) (surfaces and
- *                   the boundaries between media) and PT_TRANSMIT(p, wi,
+ *                   PT_MEDIA_ON; with it PT_TRANSMIT(p, wi,
  *                   lp, dist, med, T) (the shadow ray's transmittance,
  *                   0 when blocked). 0: the dual side, which has no media
  *                   yet.
@@ -43,49 +41,6 @@
 static int pt__counts(const render_settings *rs, int length) {
   return rs->mindepth <= 0 || length >= rs->mindepth;
 }
-
-#if PT_MEDIA_CODE
-/* The free flight from org along dir (unit) from the medium *med: across
- * the index-matched boundaries on the way (*med follows them) to the
- * first surface with a BSDF (1, in h), a scattering point (2, at *OUT_mp,
- * in *med), or out of the scene (0); beta takes the flight's weight, the
- * track's transmittance (times sigma_s at a scattering point) over its
- * density. -1: lost (RENDER_MAX_CROSSINGS boundaries, or a density of 0). */
-static int pt__fly(PT_CTX, REAL3 org, REAL3 dir, double tmin, int *med, REAL u_ch, REAL u_t,
-                   PT_HIT *h, REAL3 *OUT_mp, RRGB *beta) {
-  PT_ARENA
-  const scene *s = PT_SCENE;
-  R_FN(medium_track) k;
-  R_FN(medium_track_begin)(R_ARG u_ch, u_t, &k);
-  int found = 0;
-  for (int n = 0;; n++) {
-    if (n > RENDER_MAX_CROSSINGS) return -1;
-    int hit = PT_INTERSECT_MEDIA(org, dir, tmin, h);
-    const medium *m = scene_medium(s, *med);
-    REAL t;
-    if (m && R_FN(medium_track_piece)(R_ARG m, hit ? R_C(h->t) : R_C(INFINITY), &k, &t)) {
-      *OUT_mp = R3_ADD(org, R3_SCALE(dir, t));
-      REAL pdf = R_FN(medium_track_pdf)(R_ARG m, 1, k.T);
-      if (!(R_V(pdf) > 0.0)) return -1;
-      *beta = RRGB_MUL(*beta, RRGB_SCALE(RRGB_MUL(k.T, RRGB_CONST(m->sigma_s)), R_INV(pdf)));
-      return 2;
-    }
-    if (!hit) break;
-    if (h->bsdf) {
-      found = 1;
-      break;
-    }
-    *med = scene_medium_after(s, h, *med, R3_V(dir));
-    org = h->p;
-    tmin = scene_ray_eps(s, R3_V(h->p));
-  }
-  /* Past every piece: the transmittance over its density. */
-  REAL pdf = R_FN(medium_track_pdf)(R_ARG NULL, 0, k.T);
-  if (!(R_V(pdf) > 0.0)) return -1;
-  *beta = RRGB_MUL(*beta, RRGB_SCALE(k.T, R_INV(pdf)));
-  return found;
-}
-#endif
 
 /* What the walk carries from vertex to vertex. */
 typedef struct pt__state {
@@ -261,8 +216,12 @@ static RRGB pt__walk(PT_CTX, REAL3 org, REAL3 dir, REAL *keep_rx, REAL *keep_ry)
 #if PT_MEDIA_CODE
     if (PT_MEDIA_ON) {
       REAL u_ch = PT_DRAW(0), u_t = PT_DRAW(1);
-      found = pt__fly(c, org, dir, tmin, &med, u_ch, u_t, &h, &vp, &w.beta);
-      if (found < 0 || RRGB_IS_BLACK(w.beta)) break;
+      rgb T, fw;
+      double pdf;
+      found = render_fly(s, c->cnt, org, dir, tmin, &med, u_ch, u_t, &h, &vp, &T, &pdf, &fw);
+      if (found < 0) break;
+      w.beta = rgb_mul(w.beta, fw);
+      if (rgb_is_black(w.beta)) break;
       medv = found == 2;
     } else
 #endif

@@ -62,8 +62,6 @@ static void pt__footprint(pt__ctx *c, surface_hit *h, vec3 org) {
 #define PT_FOOTPRINT(h, depth, org) \
   ((depth) == 1 && c->rd ? pt__footprint(c, &(h), (org)) : (void)0)
 #define PT_MEDIA_ON 1
-#define PT_INTERSECT_MEDIA(org, dir, tmin, h) \
-  render_trace_media(c->s, c->cnt, (org), (dir), (tmin), (h))
 #define PT_TRANSMIT(p, wi, lp, dist, med, T) \
   render_transmittance(c->s, c->cnt, (p), (wi), (lp), (dist), (med), (T))
 #include "render/integrators/pt_generic.h"
