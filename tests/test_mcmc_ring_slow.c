@@ -6,9 +6,10 @@
  * in the image mean and in the means of a 4 x 4 grid of regions. So do
  * the moves through the inverse path sampler: pssmlt and mmlt with
  * reversible jumps (--technique-jump 0.2) and fused path moves
- * (--path-mutations 0.3) on the rings (pssmlt also on the box), and mlt
- * with its primary-sample step (--pss-mutation on) and with the manifold
- * perturbation (--manifold-perturbation on) on the glass ring and the box
+ * (--path-mutations 0.3) on the rings (pssmlt also on the box), mlt
+ * with its primary-sample step (--pss-mutation on) on the box, and with
+ * the manifold perturbation (--manifold-perturbation on) on the glass
+ * ring and the box
  * (the metal ring's reflected chains are the manifold tests' mirrors,
  * test_mut_manifold). This is the guard against start-up bias and wrong
  * normalisation.
@@ -19,7 +20,7 @@
  * MCMC mean must lie within 6.5 sqrt(SE_mcmc^2 + SE_bdpt^2) of bdpt's. The
  * difference over its estimated standard error follows roughly a Student t
  * with about 8 degrees of freedom (Welch), P(|t| > 6.5) ~ 2e-4 per check;
- * over the (5 + 7 + 4) x 17 = 272 checks the chance of a false alarm is
+ * over the (5 + 6 + 4) x 17 = 255 checks the chance of a false alarm is
  * about 5%.
  * Effort: --spp 80 (Cornell box: 512) for bdpt, pssmlt and mmlt (MCMC:
  * mutations per pixel); mlt makes 640 on the ring scenes. Its
@@ -34,7 +35,7 @@
  * short: b's error is part of each run's, so of the SE. The renders use
  * the default --direct separate (pt renders the paths of one and two
  * segments with the same spp, the chains the rest; test_mcmc_analytic
- * covers --direct mcmc). About 9 CPU-minutes in Release.
+ * covers --direct mcmc). About 8 CPU-minutes in Release.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -120,19 +121,19 @@ static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t m
 /* The integrators, and the moves through the inverse path sampler: pssmlt
  * on its bdpt states and mmlt with reversible jumps and fused path
  * moves, mlt with its primary-sample step. */
-#define N_CONFIGS 7
+#define N_CONFIGS 6
 static const config g_configs[N_CONFIGS] = {
     {"pssmlt", "pssmlt", {{NULL, NULL}}},
     {"mmlt", "mmlt", {{NULL, NULL}}},
     {"mlt", "mlt", {{NULL, NULL}}},
     {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
     {"mmlt jumps+path", "mmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
-    {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
     {"mlt manifold", "mlt", {{"manifold-perturbation", "on"}, {NULL, NULL}}},
 };
 
-/* The metal ring: the first five (mlt's own moves, without the
- * primary-sample step and the manifold perturbation). */
+/* The metal ring: the first five (mlt's own moves, without the manifold
+ * perturbation). mlt's primary-sample step is checked on the box (its
+ * balance and invariance: test_perturb.c). */
 #define N_METAL 5
 
 static void test_ring_caustics(void **state) {

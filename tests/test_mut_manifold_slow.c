@@ -1,15 +1,24 @@
 /*
- * test_mut_manifold_slow.c: the negative controls of the manifold
- * perturbation's one-step invariance test on the rough scenes of
- * mut_manifold_test.h (G chains, walked with their half vectors held),
- * which test_mut_manifold.c runs without them: through narrow glossy
- * lobes a path moves less between x and y, so a wrong density shows only
- * with more samples. Each control must be rejected at the Sidak level on
- * its bins: the chain's generalized geometry term G left out on `rough
- * point` and `rough sky`, and the G vertices' factors |det dc_i / dA_{i+1}|
- * left out on `rough mirror`, whose camera-side chain is retraced about a
- * G vertex's half vector. The same draws with the right densities pass
- * (the control of the control).
+ * test_mut_manifold_slow.c: the manifold perturbation's one-step
+ * invariance test on the seven scenes of mut_manifold_test.h (the exact
+ * checks of the move are test_mut_manifold.c's).
+ *
+ *  - invariance / invariance_detects_bias: test_pathspace.c's one-step
+ *    invariance test (the statistic is stated there) with the move as a
+ *    kernel of its own (a path it does not apply to stays), on all seven
+ *    scenes and the sky scenes' sky form, and the controls it must reject:
+ *    on the three smooth scenes with a curved chain the chain's
+ *    generalized geometry term G left out, on the rough sky's sky form the
+ *    G vertices' factors.
+ *  - rough controls: the controls on the other rough scenes (G chains,
+ *    walked with their half vectors held): through narrow glossy lobes a
+ *    path moves less between x and y, so a wrong density shows only with
+ *    more samples. Each control must be rejected at the Sidak level on
+ *    its bins: the chain's generalized geometry term G left out on `rough
+ *    point` and `rough sky`, and the G vertices' factors |det dc_i /
+ *    dA_{i+1}| left out on `rough mirror`, whose camera-side chain is
+ *    retraced about a G vertex's half vector. The same draws with the
+ *    right densities pass (the control of the control).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -24,6 +33,53 @@
 #include "lmc/path/mut_manifold.h" /* (tests/CMakeLists.txt links by the includes) */
 #include "mut_manifold_test.h"
 #include "test_util.h"
+
+/* E D S S L and E S D S S L: lengths 4 and 5 alone (pi restricted to a
+ * set the kernel never leaves is invariant under it too). */
+static const struct {
+  int scene, k_only, n;
+} inv_cases[] = {{POINT, 4, 6000000},   {AREA, 4, 3000000},    {SKY, 4, 3000000},
+                 {MIRROR, 5, 4000000},  {R_POINT, 4, 4000000}, {R_SKY, 4, 2000000},
+                 {R_MIRROR, 5, 3000000}, {SKY, 3, 3000000},    {R_SKY, 3, 2000000}};
+
+static void test_invariance(void **state) {
+  fixture *fx = *state;
+  for (size_t c = 0; c < sizeof inv_cases / sizeof inv_cases[0]; c++) {
+    ps_inv *r = invariance(fx->sc[inv_cases[c].scene], inv_cases[c].k_only, 71 + c, 1.0, 1.0,
+                           inv_cases[c].n);
+    print_message("%s: %d samples, %d moved, %d bins, min p %.3g (level %.3g)\n",
+                  scene_names[inv_cases[c].scene], r->samples, r->moved, r->bins, r->min_p,
+                  r->level);
+    assert_true(r->samples >= 20000 && r->moved >= 2000 && r->bins >= 20);
+    assert_true(r->min_p >= r->level);
+    free(r);
+  }
+}
+
+static void test_invariance_detects_bias(void **state) {
+  fixture *fx = *state;
+  int controls = 0;
+  for (size_t c = 0; c < sizeof inv_cases / sizeof inv_cases[0]; c++) {
+    /* G left out on the smooth scenes with a curved chain behind x_b; the
+     * G vertices' factors on the rough sky's sky form. */
+    int sky_form = inv_cases[c].scene == R_SKY && inv_cases[c].k_only == 3;
+    if (!sky_form && (inv_cases[c].scene == MIRROR || inv_cases[c].scene >= R_POINT ||
+                      inv_cases[c].k_only == 3))
+      continue;
+    controls++;
+    ps_inv *r = invariance(fx->sc[inv_cases[c].scene], inv_cases[c].k_only, 71 + c,
+                           sky_form ? 1.0 : 0.0, sky_form ? 0.0 : 1.0, inv_cases[c].n);
+    print_message("%s (length %d), %s left out: %d samples, %d moved, %d bins, min p %.3g "
+                  "(level %.3g)\n",
+                  scene_names[inv_cases[c].scene], inv_cases[c].k_only,
+                  sky_form ? "the G vertices' factors" : "G", r->samples, r->moved, r->bins,
+                  r->min_p, r->level);
+    assert_true(r->samples >= 20000 && r->moved >= 2000 && r->bins >= 20);
+    assert_true(r->min_p < r->level);
+    free(r);
+  }
+  assert_int_equal(controls, 4); /* the other rough scenes': test_rough_controls */
+}
 
 static const struct {
   int scene, k_only, n;
@@ -57,6 +113,8 @@ static void test_rough_controls(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_invariance),
+      cmocka_unit_test(test_invariance_detects_bias),
       cmocka_unit_test(test_rough_controls),
   };
   return cmocka_run_group_tests(tests, mm_setup, mm_teardown);
