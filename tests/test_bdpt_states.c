@@ -16,6 +16,9 @@
  *  - the gradient of f in a label's own coordinates against
  *    Richardson-extrapolated central differences of the plain f, where
  *    those converge.
+ *    The same through participating media (data/media/rough_glass_fog.xml),
+ *    where each vertex's numbers begin with its free flight's two and no
+ *    gradient is given yet.
  *  - without absolute directions (rough_min 2) relabel is absent and
  *    eval_label in the large step's coordinates gives f_j itself.
  *  - a chain's ray tallies (chain.h): the kernels' rays sum to the rays
@@ -130,11 +133,14 @@ static mc_target make_target(fixture *fx, mc_bdpt_states *ctx, double rough_min)
   return T;
 }
 
-static void test_relabel_consistency(void **state) {
-  fixture *fx = *state;
+/* The relabel checks on scene sc (grads: with the gradient's
+ * evaluation too; without, through media, eval_label refuses it). */
+static void relabel_consistency(scene *sc, int grads, int min_samples) {
+  fixture fxs = {sc}, *fx = &fxs;
   mc_bdpt_states ctx;
   mc_target T = make_target(fx, &ctx, 0.05);
   assert_non_null(T.relabel);
+  assert_int_equal(ctx.media, !grads);
   void *scratch = T.scratch_create(&T);
   mc_contrib *all = calloc((size_t)T.n_labels, sizeof *all);
   mc_contrib *again = calloc((size_t)T.n_labels, sizeof *again);
@@ -168,7 +174,13 @@ static void test_relabel_consistency(void **state) {
       assert_int_equal(T.eval_label(&T, scratch, &s.base, all[j].label, &a, NULL, NULL), 0);
       int ok = 0;
       s = vec_at(&T, v);
-      assert_int_equal(T.eval_label(&T, scratch, &s.base, all[j].label, &b, grad, &ok), 0);
+      if (grads) {
+        assert_int_equal(T.eval_label(&T, scratch, &s.base, all[j].label, &b, grad, &ok), 0);
+      } else {
+        assert_int_equal(T.eval_label(&T, scratch, &s.base, all[j].label, &b, grad, &ok), -1);
+        s = vec_at(&T, v);
+        assert_int_equal(T.eval_label(&T, scratch, &s.base, all[j].label, &b, NULL, NULL), 0);
+      }
       labels++;
       int good = rel_equal(a.f, all[j].v.f * jac, 1e-7) && rel_equal(a.f_large, all[j].v.f, 1e-7) &&
                  rel_equal(a.value.g, all[j].v.value.g * jac, 1e-7) &&
@@ -200,15 +212,30 @@ static void test_relabel_consistency(void **state) {
   print_message("%d samples, %d labels (%d with rough vertices, %d rewritten), %d with a "
                 "gradient, %d strategies re-evaluated\n",
                 samples, labels, rough_labels, moved, with_grad, resampled);
-  assert_true(samples >= 500);
-  assert_true(labels >= 2000);
-  assert_true(rough_labels >= 500);
+  assert_true(samples >= min_samples);
+  assert_true(labels >= 4 * min_samples);
+  assert_true(rough_labels >= min_samples);
   assert_true(moved >= rough_labels);
-  assert_true(with_grad >= labels / 2);
-  assert_true(resampled >= labels + 1000); /* samples with several strategies */
+  assert_true(grads ? with_grad >= labels / 2 : with_grad == 0);
+  assert_true(resampled >= labels + 2 * min_samples); /* samples with several strategies */
   free(all), free(again), free(u), free(v), free(grad);
   T.scratch_destroy(scratch);
   mc_bdpt_states_free(&ctx);
+}
+
+static void test_relabel_consistency(void **state) {
+  fixture *fx = *state;
+  relabel_consistency(fx->sc, 1, 500);
+}
+
+/* The same through media (tests/data/media/rough_glass_fog.xml: a rough
+ * glass sphere of fog in a fog): each vertex's numbers begin with its
+ * flight's, and relabel writes the rough directions after them. */
+static void test_relabel_through_media(void **state) {
+  (void)state;
+  scene *sc = load_scene("data/media/rough_glass_fog.xml");
+  relabel_consistency(sc, 0, 300);
+  scene_destroy(sc);
 }
 
 /* f of label lab at v with coordinate i set to x. */
@@ -445,6 +472,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_ray_tallies),
       cmocka_unit_test(test_relabel_consistency),
+      cmocka_unit_test(test_relabel_through_media),
       cmocka_unit_test(test_gradients),
       cmocka_unit_test(test_without_absolute),
       cmocka_unit_test(test_shared_workspace),

@@ -178,12 +178,14 @@ static void test_black_scenes_warn(void **state) {
   assert_int_equal(checks, 6 * 6 + 1);
 }
 
-/* Media: pt and bdpt render them without a word; every other integrator warns once
- * (naming the medium's file and line) and renders, or exits 2 without an
- * image under --strict. */
+/* Media: pt, bdpt and pssmlt (on its bdpt states) render them without a
+ * word; every other integrator or setting warns once (naming the medium's
+ * file and line) and renders, or exits 2 without an image under --strict. */
 static void test_media_warn(void **state) {
   (void)state;
-  static const char *const integrators[] = {"pt", "bdpt", "direct", "pssmlt", "lmc", "mlt"};
+  static const char *const integrators[] = {
+      "pt", "bdpt", "pssmlt --direct mcmc", "direct", "pssmlt --direct mcmc --states mmlt", "lmc",
+      "mlt"};
   static const char *const needle = "data/media/slab.xml:27: integrator";
   int checks = 0;
   for (size_t i = 0; i < sizeof integrators / sizeof integrators[0]; i++) {
@@ -193,7 +195,7 @@ static void test_media_warn(void **state) {
     snprintf(args, sizeof args,
              "render data/media/slab.xml --integrator %s --spp 2 -q -o " TMP "/media.exr",
              integrators[i]);
-    int rc = run_lmc(args), warned = i > 1;
+    int rc = run_lmc(args), warned = i > 2;
     if (rc != 0 || count_of(err_text, needle) != warned || stat(TMP "/media.exr", &sb) != 0)
       fail_msg("lmc %s: exit %d, expected 0, %d warning(s) and an image; stderr: %s", args, rc,
                warned, err_text);
@@ -204,7 +206,7 @@ static void test_media_warn(void **state) {
       fail_msg("lmc %s: exit %d, expected %d; stderr: %s", args, rc, warned ? 2 : 0, err_text);
     checks += 2;
   }
-  assert_int_equal(checks, 12);
+  assert_int_equal(checks, 14);
 }
 
 /* Reads an EXR written by the CLI; fails the test when it cannot. */

@@ -428,7 +428,8 @@ static int render__load_and_run(const lmc_render_input *in, const render_setting
     scene_destroy(s);
     return EXIT_BADINPUT;
   }
-  render_media_note(s, rs.integrator);
+  render_media_note(s, rs.integrator,
+                    render_integrator_media(rs.integrator) || mcmc_renders_media(&rs));
   /* --strict: every warning so far (a plugin lmc lacks or replaced, a
    * scene without light, media the integrator does not render, ...)
    * means the image would not be the scene's. */

@@ -30,6 +30,13 @@ lmc_status mcmc_set(render_settings *rs, const char *name, const char *value, lm
  * mcmc_option_tables'), into *OUT. Fails on a bad value (file, line). */
 lmc_status mcmc_scene_settings(const scene *s, render_settings *OUT, lmc_error *err);
 
+/* 1 when the MCMC integrator rs->integrator renders a scene's
+ * participating media with rs's flags (its states among its
+ * media_states, method.h, and neither --technique-jump nor
+ * --path-mutations: the inverse path sampler has no medium vertices yet);
+ * 0 otherwise, and for any other name. */
+int mcmc_renders_media(const render_settings *rs);
+
 /* The MCMC integrators' names, up to max into OUT; returns their count. */
 int mcmc_integrator_names(const char **OUT, int max);
 

@@ -104,6 +104,7 @@ int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;
 }
 
+
 /* --- the driver's flags ------------------------------------------------------ */
 
 static const char *const mcmc__small_steps[] = {"kelemen", "gauss", NULL};
@@ -182,6 +183,21 @@ static const mcmc_settings mcmc__defaults = {
 const lmc_opt_table mcmc_driver_options = {
     "MCMC (pssmlt, mmlt, lmc, h2mc, mlt; --spp counts mutations per pixel)", mcmc__opts,
     (int)(sizeof mcmc__opts / sizeof mcmc__opts[0]), &mcmc__defaults, sizeof mcmc__defaults};
+
+/* Whether method M with the driver's settings ms renders media. */
+static int mcmc__media(const mc_method *M, const mcmc_settings *ms) {
+  int id = ms->states != MCMC_STATES_DEFAULT ? ms->states : M->default_states;
+  return id >= 0 && id < 32 && ((M->media_states >> id) & 1u) && !(ms->jump_prob > 0.0) &&
+         !(ms->path_prob > 0.0);
+}
+
+int mcmc_renders_media(const render_settings *rs) {
+  const mc_method *M = mc_method_find(rs->integrator);
+  mcmc_settings ms;
+  lmc_error err;
+  if (!M || lmc_opt_read(&mcmc_driver_options, rs, &ms, &err) != LMC_OK) return 0;
+  return mcmc__media(M, &ms);
+}
 
 /* --- splat records ----------------------------------------------------------- */
 
@@ -283,6 +299,8 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
   const render_settings *rs = R->rs;
   *OUT_done = 0;
   R->crs = *rs;
+  /* The chains and the direct pass see the media, or neither does. */
+  R->crs.no_media = rs->no_media || !mcmc__media(R->M, &R->ms);
   if (!R->ms.direct_separate) return film_init(R->out, R->s->cam.width, R->s->cam.height, err);
   progress_phase(&R->bar, "direct light", 0.0);
   render_settings prs = *rs;
@@ -296,7 +314,7 @@ static lmc_status mcmc__direct(mcmc_render *R, int *OUT_done, lmc_error *err) {
     if (!(rs->set & SET_SPP)) prs.set &= ~(unsigned)SET_SPP;
   }
   prs.quiet = 1;
-  prs.no_media = 1;
+  prs.no_media = R->crs.no_media;
   render_stats pst;
   lmc_status status = render_run(R->s, &prs, R->out, &pst, err);
   if (status) return status;

@@ -69,6 +69,10 @@ typedef struct mc_method_setup {
 typedef struct mc_method {
   const char *name;          /* --integrator NAME */
   int default_states;        /* MCMC_STATES_*: the space without --states */
+  unsigned media_states;     /* 1u << MCMC_STATES_*: the states on which it renders a scene's
+                                participating media (without the inverse path sampler's
+                                moves); on others the chains and the direct pass see the media
+                                as empty space, after render_media_note's warning */
   const lmc_opt_table *opts; /* its own flags (NULL: none) */
   lmc_status (*create)(void **OUT_run, const mc_method_setup *setup, lmc_error *err);
   void (*destroy)(void *run);

@@ -127,6 +127,7 @@ static int bs__eval_label(const mc_target *t, void *scratch, lmc_sampler *smp, i
   memset(OUT_value, 0, sizeof *OUT_value);
   if (label < 0 || label >= st->n_labels) return -1;
   int ss = st->strat[label].s, tt = st->strat[label].t;
+  if (OUT_grad && st->media) return -1; /* no gradients through media yet */
   if (OUT_grad)
     return bs__eval_grad(t, sc, smp, ss, tt, OUT_value, OUT_grad, OUT_grad_ok, NULL, NULL, NULL,
                          NULL);
@@ -231,16 +232,16 @@ static double bs__relabel(const mc_target *t, void *scratch, int label, double *
   for (int j = 1; j <= tt - 2; j++) {
     const bdpt_vertex *v = &sc->cam[j];
     if (!v->rough) continue;
-    int i = cam0 + BDPT_DIMS_PER_VERTEX * (j - 1);
-    u[i] = rng_uniform(r), u[i + 1] = v->sph[0], u[i + 2] = v->sph[1];
+    int i = cam0 + st->per_vertex * (j - 1) + st->dir_at;
+    u[i - 1] = rng_uniform(r), u[i] = v->sph[0], u[i + 1] = v->sph[1];
     jac *= v->jac;
   }
   int lp0 = mc_target_stream_offset(t, LMC_STREAM_LIGHT) + BDPT_DIMS_LIGHT_START;
   for (int j = 1; j <= ss - 2; j++) {
     const bdpt_vertex *v = &sc->lp[j];
     if (!v->rough) continue;
-    int i = lp0 + BDPT_DIMS_PER_VERTEX * (j - 1);
-    u[i] = rng_uniform(r), u[i + 1] = v->sph[0], u[i + 2] = v->sph[1];
+    int i = lp0 + st->per_vertex * (j - 1) + st->dir_at;
+    u[i - 1] = rng_uniform(r), u[i] = v->sph[0], u[i + 1] = v->sph[1];
     jac *= v->jac;
   }
   return jac;
@@ -271,15 +272,15 @@ static int bs__label_coords(const mc_target *t, int label, int *OUT_idx) {
   int c0 = mc_target_stream_offset(t, LMC_STREAM_CAMERA);
   if (tt >= 2) OUT_idx[n++] = c0, OUT_idx[n++] = c0 + 1;
   for (int j = 1; j <= tt - 2; j++) {
-    int i = c0 + 2 + BDPT_DIMS_PER_VERTEX * (j - 1);
-    OUT_idx[n++] = i + 1, OUT_idx[n++] = i + 2;
+    int i = c0 + 2 + st->per_vertex * (j - 1) + st->dir_at;
+    OUT_idx[n++] = i, OUT_idx[n++] = i + 1;
   }
   int l0 = mc_target_stream_offset(t, LMC_STREAM_LIGHT);
   if (ss >= 2) {
     for (int k = 1; k < BDPT_DIMS_LIGHT_START; k++) OUT_idx[n++] = l0 + k;
     for (int j = 1; j <= ss - 2; j++) {
-      int i = l0 + BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (j - 1);
-      OUT_idx[n++] = i + 1, OUT_idx[n++] = i + 2;
+      int i = l0 + BDPT_DIMS_LIGHT_START + st->per_vertex * (j - 1) + st->dir_at;
+      OUT_idx[n++] = i, OUT_idx[n++] = i + 1;
     }
   }
   if (ss == 1) {
@@ -306,6 +307,9 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   ctx->area = (s->cam.width + 2.0 * ctx->margin) * (s->cam.height + 2.0 * ctx->margin);
   ctx->rough_min = rough_min;
   ctx->kmin = kmin, ctx->kmax = kmax;
+  ctx->media = s->n_media > 0 && !rs->no_media;
+  ctx->per_vertex = BDPT_DIMS_PER_VERTEX + (ctx->media ? BDPT_DIMS_MEDIA : 0);
+  ctx->dir_at = (ctx->media ? BDPT_DIMS_MEDIA : 0) + 1;
 
   /* The labels: length k has t = 1 .. k + 1, s = k + 1 - t, without
    * (1, 1); length 1 has (0, 2) alone (bdpt_connect's rules). */
@@ -330,8 +334,8 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   ctx->n_labels = n;
 
   mc_target *T = OUT_target;
-  T->stream_dim[LMC_STREAM_CAMERA] = 2 + BDPT_DIMS_PER_VERTEX * (kmax + 1);
-  T->stream_dim[LMC_STREAM_LIGHT] = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (kmax + 1);
+  T->stream_dim[LMC_STREAM_CAMERA] = 2 + ctx->per_vertex * (kmax + 1);
+  T->stream_dim[LMC_STREAM_LIGHT] = BDPT_DIMS_LIGHT_START + ctx->per_vertex * (kmax + 1);
   T->stream_dim[LMC_STREAM_CONNECT] = BDPT_DIMS_CONNECT * (kmax + 1);
   T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
   T->ctx = ctx;
@@ -341,7 +345,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   T->eval_all = bs__eval_all;
   if (ctx->rough_min < 1.0) T->relabel = bs__relabel;
   T->label_coords = bs__label_coords;
-  T->eval_hess = bs__eval_hess;
+  if (!ctx->media) T->eval_hess = bs__eval_hess;
 
   /* The light-position numbers u1 of the emission and of every connect
    * triple pick an area light's triangle (mc_light_u1_scale). */

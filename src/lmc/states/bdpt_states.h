@@ -40,6 +40,13 @@
  * Gradients (lmc): eval_label with a gradient runs path_eval_bdpt_abs
  * (render/integrators/path.h) on the same numbers, the plain evaluation otherwise
  * (the same value to about 1e-9, and faster).
+ *
+ * Media: on a scene with participating media (unless rs.no_media) the
+ * subpaths and the connections run through them as bdpt_li's do, each
+ * vertex's numbers led by its free flight's two (a surface or a
+ * scattering point in a medium); no gradients there yet (eval_label with
+ * a gradient fails, no eval_hess), so only the kernels without them
+ * (pssmlt's) run on such a target.
  */
 #ifndef LMC_MCMC_BDPT_STATES_H
 #define LMC_MCMC_BDPT_STATES_H
@@ -69,6 +76,10 @@ typedef struct mc_bdpt_states {
   mc_strategy *strat;  /* owned: label -> (s, t) */
   short *label_of;     /* owned: label of (s, t) at s (kmax + 2) + t, -1 for none */
   double *step_scale;  /* owned: the target's step_scale (light-position numbers) */
+  int media;           /* through the scene's media (it has some, rs.no_media unset): each
+                          vertex's numbers then begin with its flight's BDPT_DIMS_MEDIA */
+  int per_vertex;      /* numbers per subpath vertex: BDPT_DIMS_PER_VERTEX (+ BDPT_DIMS_MEDIA) */
+  int dir_at;          /* where a vertex's direction pair begins among them (1, or 3) */
 } mc_bdpt_states;
 
 /* Sets up *OUT_target over ctx (both owned by the caller; ctx must outlive

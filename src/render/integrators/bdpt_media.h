@@ -47,9 +47,8 @@ static int bdpt__fly(BDPT_WALK_CTX, vec3 org, vec3 dir, double tmin, int *med, B
  * density into *org, *dir, *pdf_dir (*planar cleared); 0: the walk ends
  * (the vertex counted). */
 static int bdpt__medium_vertex(BDPT_WALK_CTX, transport_mode mode, BDPT_VERTEX *path, int *n,
-                               int max_vertices, vec3 mp, int med, double flight,
-                               double eta_scale, rgb *beta, vec3 *org, vec3 *dir,
-                               double *pdf_dir, int *planar) {
+                               int max_vertices, vec3 mp, int med, double flight, double eta_scale,
+                               rgb *beta, vec3 *org, vec3 *dir, double *pdf_dir, int *planar) {
   BDPT_WALK_PROLOGUE
   const scene *sc = w->sc;
   BDPT_VERTEX *prev = &path[*n - 1], *v = &path[*n];

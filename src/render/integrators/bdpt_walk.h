@@ -345,6 +345,7 @@ static void bdpt__camera_vertex(BDPT_WALK_CTX, BDPT_VERTEX *z0) {
   z0->dir = z0->wo = R3_CONST(0.0, 0.0, 0.0);
 #if BDPT_MEDIA_CODE
   z0->med = w->media ? w->sc->cam.medium : 0;
+  z0->media = w->media;
 #endif
 }
 

@@ -82,13 +82,14 @@ static inline int render_blocked(const scene *s, render_counters *cnt, vec3 p, v
   return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
 }
 
-/* 1 when the integrator `name` renders participating media (pt); the
- * others render a scene's media as empty space, after
- * render_media_note's warning. */
+/* 1 when the integrator `name` of this library renders participating
+ * media (pt, bdpt); the others render a scene's media as empty space,
+ * after render_media_note's warning. */
 int render_integrator_media(const char *name);
-/* Warns (naming the first medium's file and line) when s has media that
- * the integrator `name` does not render; 1 when it warned. */
-int render_media_note(const scene *s, const char *name);
+/* Warns (naming the first medium's file and line) when s has media and
+ * `renders` is 0 (the integrator `name` does not render them, with its
+ * settings); 1 when it warned. */
+int render_media_note(const scene *s, const char *name, int renders);
 
 /* The medium (1-based; 0: none) a ray from p along dir starts in: on a
  * mesh that bounds media (mesh_index >= 0, n its normal at p) by the side
@@ -272,6 +273,7 @@ static inline double mis_power(double a, double b) {
 #define BDPT_DIMS_PER_VERTEX 4
 #define BDPT_DIMS_LIGHT_START 5
 #define BDPT_DIMS_CONNECT 3
+#define BDPT_DIMS_MEDIA 2 /* through media: each vertex's free flight, before its own */
 
 typedef enum bdpt_vertex_type {
   BDPT_VERTEX_CAMERA = 0, /* the pinhole */
@@ -308,6 +310,8 @@ typedef struct bdpt_vertex {
   rgb tseg;        /* the transmittance of the segment from the previous vertex of its
                       subpath (pdf_fwd holds that segment's free-flight density) */
   const phase_fn *ph; /* MEDIUM: its medium's phase function */
+  int media;       /* CAMERA: 1 when its subpath (and the light subpath joined to it) was
+                      walked through the scene's media; bdpt_connect then joins through them */
 } bdpt_vertex;
 
 /* How a subpath reads its direction numbers (the MCMC reparametrization,

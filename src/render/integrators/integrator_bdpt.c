@@ -225,7 +225,7 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
                           bdpt_vertex *OUT_path, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (max_vertices < 1) return 0;
-  bdpt__walker w = {sc, rs, smp, par, cnt, 0, 0};
+  bdpt__walker w = {sc, rs, smp, par, cnt, sc->n_media > 0 && !rs->no_media, 0};
   bdpt__camera_vertex(&w, &OUT_path[0]);
   vec3 org, dir;
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
@@ -240,7 +240,7 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
 int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                          int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
                          render_counters *cnt) {
-  bdpt__walker w = {sc, rs, smp, par, cnt, 0, 0};
+  bdpt__walker w = {sc, rs, smp, par, cnt, sc->n_media > 0 && !rs->no_media, 0};
   return bdpt__light_walk(&w, max_vertices, OUT_path);
 }
 
@@ -621,7 +621,8 @@ static rgb bdpt__connect(const scene *sc, const bdpt_vertex *cam, int t, const b
 rgb bdpt_connect(const scene *sc, const bdpt_vertex *cam, int t, const bdpt_vertex *lp, int s,
                  const double *u_connect, double *OUT_rx, double *OUT_ry, double *OUT_weight,
                  render_counters *cnt) {
-  return bdpt__connect(sc, cam, t, lp, s, u_connect, OUT_rx, OUT_ry, OUT_weight, cnt, 0);
+  return bdpt__connect(sc, cam, t, lp, s, u_connect, OUT_rx, OUT_ry, OUT_weight, cnt,
+                       sc->n_media > 0 && t >= 1 && cam[0].media);
 }
 
 /* ---------------------------------------------------------------------------

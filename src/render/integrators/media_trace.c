@@ -13,12 +13,13 @@ int render_integrator_media(const char *name) {
   return strcmp(name, "pt") == 0 || strcmp(name, "bdpt") == 0;
 }
 
-int render_media_note(const scene *s, const char *name) {
-  if (s->n_media == 0 || render_integrator_media(name)) return 0;
+int render_media_note(const scene *s, const char *name, int renders) {
+  if (s->n_media == 0 || renders) return 0;
   const medium *m = &s->media[0];
   lmc_warn(m->file, m->line,
-           "integrator %s does not render participating media yet: the scene's %d medi%s "
-           "ignored (light crosses %s unattenuated); pt and bdpt render them",
+           "integrator %s does not render participating media yet (with these settings): "
+           "the scene's %d medi%s ignored (light crosses %s unattenuated); pt, bdpt and pssmlt "
+           "(on its bdpt states, without --technique-jump and --path-mutations) render them",
            name, s->n_media, s->n_media == 1 ? "um is" : "a are", s->n_media == 1 ? "it" : "them");
   return 1;
 }
