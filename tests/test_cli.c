@@ -178,14 +178,14 @@ static void test_black_scenes_warn(void **state) {
   assert_int_equal(checks, 6 * 6 + 1);
 }
 
-/* Media: pt, bdpt and pssmlt (on its bdpt states) render them without a
+/* Media: pt, bdpt and pssmlt (without the jumps) render them without a
  * word; every other integrator or setting warns once (naming the medium's
  * file and line) and renders, or exits 2 without an image under --strict. */
 static void test_media_warn(void **state) {
   (void)state;
   static const char *const integrators[] = {
-      "pt", "bdpt", "pssmlt --direct mcmc", "direct", "pssmlt --direct mcmc --states mmlt", "lmc",
-      "mlt"};
+      "pt", "bdpt", "pssmlt --direct mcmc", "direct", "pssmlt --direct mcmc --technique-jump 0.2",
+      "lmc", "mlt"};
   static const char *const needle = "data/media/slab.xml:27: integrator";
   int checks = 0;
   for (size_t i = 0; i < sizeof integrators / sizeof integrators[0]; i++) {

@@ -1,6 +1,6 @@
 /*
  * test_media_mcmc.c: the MCMC integrators through participating media
- * (issue 59, part 2): pssmlt on its bdpt states renders the media scenes
+ * (issue 59, part 2): pssmlt and mmlt render the media scenes
  * of tests/data/media whose pixel values are known exactly, and the
  * integrators and settings that do not render media yet say so.
  *
@@ -13,7 +13,8 @@
  * The slab and the single scattering run with --direct mcmc (the chains
  * render every length); the furnace with the default --direct separate
  * (pt renders one and two segments through the media, the chains the
- * rest), so both halves and their seam are checked.
+ * rest), so both halves and their seam are checked, by pssmlt on the bdpt
+ * and the pt states and by mmlt on the mmlt states.
  *
  * Variance: an MCMC image's pixels are tied by the chains and scaled by
  * the bootstrap's b, so the spread over the pixels says nothing of the
@@ -21,8 +22,8 @@
  * seeds (each with its own bootstrap); the mean over the runs of each
  * channel's image mean must lie within t_5(0.9995) = 6.87 standard errors
  * (their spread over the runs / sqrt(R)) of the exact value, plus the
- * scene's stated geometric error: 3 scenes x 3 channels = 9 checks, a
- * false alarm about 1e-2 at most (the channels of a scene are not
+ * scene's stated geometric error: 5 configurations x 3 channels = 15
+ * checks, a false alarm about 2e-2 at most (the channels of a scene are not
  * independent). The control: the slab rendered with the media ignored
  * (render_settings.no_media) must fail the same check. Fixed seeds;
  * checks counted. Also: the same image with 1 and 2 threads.
@@ -47,19 +48,21 @@
 
 static int g_checks;
 
-/* The image mean of each channel over RUNS renders of path by pssmlt
- * (spp mutations per pixel, --direct `direct`, media ignored when
- * no_media) into mean[3], its standard error into se[3]. */
-static void runs(const char *path, int64_t spp, const char *direct, int no_media, double mean[3],
-                 double se[3]) {
+/* The image mean of each channel over RUNS renders of path by integrator
+ * (on `states`, NULL: its own; spp mutations per pixel, --direct
+ * `direct`, media ignored when no_media) into mean[3], its standard error
+ * into se[3]. */
+static void runs(const char *path, const char *integrator, const char *states, int64_t spp,
+                 const char *direct, int no_media, double mean[3], double se[3]) {
   scene *s = load_scene(path);
   assert_true(s->n_media > 0);
   double sum[3] = {0}, sum2[3] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
-    snprintf(rs.integrator, sizeof rs.integrator, "pssmlt");
+    snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
     lmc_error err;
     assert_int_equal(mcmc_set(&rs, "direct", direct, &err), LMC_OK);
+    if (states) assert_int_equal(mcmc_set(&rs, "states", states, &err), LMC_OK);
     assert_int_equal(mcmc_renders_media(&rs), 1);
     rs.spp = spp;
     rs.set |= SET_SPP;
@@ -109,11 +112,11 @@ static void test_slab(void **state) {
   (void)state;
   rgb ex = rgb_make(2.0 * exp(-0.5), 3.0 * exp(-1.0), 4.0 * exp(-2.0));
   double m[3], se[3];
-  runs("data/media/slab.xml", 64, "mcmc", 0, m, se);
+  runs("data/media/slab.xml", "pssmlt", NULL, 64, "mcmc", 0, m, se);
   assert_true(agrees("slab", m, se, ex, 1e-4));
   g_checks += 3;
   /* The control: through the slab as if it were empty. */
-  runs("data/media/slab.xml", 64, "mcmc", 1, m, se);
+  runs("data/media/slab.xml", "pssmlt", NULL, 64, "mcmc", 1, m, se);
   assert_false(agrees("slab, media ignored (control)", m, se, ex, 1e-4));
 }
 
@@ -123,23 +126,32 @@ static void test_single_scatter(void **state) {
   rgb ex = rgb_make(0.3 * p0 * 1.0 * exp(-0.4), 0.6 * p0 * 2.0 * exp(-0.7),
                     1.2 * p0 * 3.0 * exp(-1.3));
   double m[3], se[3];
-  runs("data/media/single_scatter.xml", 64, "mcmc", 0, m, se);
+  runs("data/media/single_scatter.xml", "pssmlt", NULL, 64, "mcmc", 0, m, se);
   assert_true(agrees("single scatter", m, se, ex, 1e-4));
   g_checks += 3;
 }
 
+/* The furnace by pssmlt on the bdpt and the pt states and by mmlt on the
+ * mmlt states (pssmlt there makes the same moves). */
 static void test_furnace(void **state) {
   (void)state;
-  double m[3], se[3];
-  runs("data/media/furnace.xml", 64, "separate", 0, m, se);
-  assert_true(agrees("furnace", m, se, rgb_make(1.0, 2.0, 3.0), 1e-9));
-  g_checks += 3;
+  static const char *const cfg[3][2] = {{"pssmlt", NULL}, {"pssmlt", "pt"}, {"mmlt", NULL}};
+  for (int i = 0; i < 3; i++) {
+    double m[3], se[3];
+    char what[64];
+    snprintf(what, sizeof what, "furnace, %s on %s states", cfg[i][0],
+             cfg[i][1] ? cfg[i][1] : "its own");
+    runs("data/media/furnace.xml", cfg[i][0], cfg[i][1], 64, "separate", 0, m, se);
+    assert_true(agrees(what, m, se, rgb_make(1.0, 2.0, 3.0), 1e-9));
+    g_checks += 3;
+  }
 }
 
-/* Which MCMC settings render media: pssmlt on its bdpt states; not on
- * the mmlt or pt states, not with the inverse path sampler's moves, and
- * not lmc, h2mc, mmlt or mlt yet. The scene's media are then named in the
- * warning (render_media_note), and not when the integrator renders them. */
+/* Which MCMC settings render media: pssmlt and mmlt on the bdpt, mmlt
+ * and pt states; not with the inverse path sampler's moves, not on the
+ * path states, and not lmc, h2mc or mlt yet. The scene's media are then
+ * named in the warning (render_media_note), and not when the integrator
+ * renders them. */
 static void test_which_render_media(void **state) {
   (void)state;
   scene *s = load_scene("data/media/slab.xml");
@@ -152,25 +164,28 @@ static void test_which_render_media(void **state) {
   assert_int_equal(render_media_note(s, "pssmlt", mcmc_renders_media(&rs)), 0);
   assert_int_equal(lmc_warning_count(), w0);
   checks++;
-  static const char *const flags[3][2] = {
-      {"states", "mmlt"}, {"technique-jump", "0.2"}, {"path-mutations", "0.3"}};
-  for (int i = 0; i < 3; i++) {
+  static const char *const flags[5][2] = {{"states", "mmlt"},
+                                           {"states", "pt"},
+                                           {"states", "path"},
+                                           {"technique-jump", "0.2"},
+                                           {"path-mutations", "0.3"}};
+  for (int i = 0; i < 5; i++) {
     render_settings r2 = rs;
     assert_int_equal(mcmc_set(&r2, flags[i][0], flags[i][1], &err), LMC_OK);
-    assert_int_equal(mcmc_renders_media(&r2), 0);
+    assert_int_equal(mcmc_renders_media(&r2), i < 2);
     checks++;
   }
   static const char *const others[] = {"mmlt", "lmc", "h2mc", "mlt", "pt", "nosuch"};
   for (int i = 0; i < 6; i++) {
     render_settings r2 = s->settings;
     snprintf(r2.integrator, sizeof r2.integrator, "%s", others[i]);
-    assert_int_equal(mcmc_renders_media(&r2), 0);
+    assert_int_equal(mcmc_renders_media(&r2), i == 0);
     checks++;
   }
   assert_int_equal(render_media_note(s, "lmc", 0), 1);
   assert_int_equal(lmc_warning_count(), w0 + 1);
   checks++;
-  assert_int_equal(checks, 11);
+  assert_int_equal(checks, 13);
   scene_destroy(s);
 }
 
@@ -204,7 +219,7 @@ static void test_threads(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 9);
+  assert_int_equal(g_checks, 15);
 }
 
 int main(void) {

@@ -1,5 +1,6 @@
 /*
- * test_media_mcmc_slow.c: pssmlt through participating media agrees with
+ * test_media_mcmc_slow.c: pssmlt (on the bdpt states, and on the pt
+ * states on the caustic) and mmlt through participating media agree with
  * bdpt on two scenes without a closed form, in the image mean and in the
  * means of a 4 x 4 grid of regions: the volumetric caustic
  * (scenes/volcaustic at 64 x 48: a smooth glass sphere of fog over an
@@ -13,7 +14,7 @@
  * error); per statistic the runs give a mean and SE = sd / sqrt(R), and
  * pssmlt's mean must lie within 6.5 sqrt(SE_pssmlt^2 + SE_bdpt^2) of
  * bdpt's (P(|t| > 6.5) ~ 2e-4 per check at about 8 degrees of freedom;
- * over 2 x 17 = 34 checks a false alarm about 1%). Effort: 80 samples
+ * over 5 x 17 = 85 checks a false alarm about 2%). Effort: 80 samples
  * (mutations) per pixel, the default --direct separate (pt renders one
  * and two segments through the media).
  */
@@ -38,16 +39,22 @@
 
 static int g_checks;
 
-static void run_stats(const scene *s, const char *integrator, int64_t spp, double mean[N_STATS],
+/* An integrator and the states it runs on (NULL: its own). */
+typedef struct config {
+  const char *integrator, *states;
+} config;
+
+static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
   double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
   for (int r = 0; r < RUNS; r++) {
     render_settings rs = s->settings;
-    snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
+    snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
     rs.spp = spp;
     rs.set |= SET_SPP;
     lmc_error err;
     assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
+    if (c->states) assert_int_equal(mcmc_set(&rs, "states", c->states, &err), LMC_OK);
     rs.time_limit = 0.0;
     rs.threads = 2;
     rs.seed = 2000 + (uint64_t)r;
@@ -57,42 +64,51 @@ static void run_stats(const scene *s, const char *integrator, int64_t spp, doubl
   region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
 }
 
-static void check_scene(const char *path, int w, int h) {
+static void check_scene(const char *path, int w, int h, const config *c, int n) {
   scene *s = load_source_scene("%s", path);
   assert_true(s->n_media > 0);
   camera_set_resolution(&s->cam, w, h);
   double ref[N_STATS], ref_se[N_STATS], m[N_STATS], se[N_STATS];
-  run_stats(s, "bdpt", 80, ref, ref_se);
-  run_stats(s, "pssmlt", 80, m, se);
-  double worst = 0.0;
-  for (int k = 0; k < N_STATS; k++) {
-    double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
-    double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
-    if (z > worst) worst = z;
-    if (k == GRID * GRID)
-      fprintf(stderr, "  %s pssmlt: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", path, m[k],
-              se[k], ref[k], ref_se[k]);
-    assert_true(sd > 0.0);
-    assert_near(m[k], ref[k], 6.5 * sd);
-    g_checks++;
+  const config bdpt = {"bdpt", NULL};
+  run_stats(s, &bdpt, 80, ref, ref_se);
+  for (int i = 0; i < n; i++) {
+    char name[64];
+    snprintf(name, sizeof name, "%s%s%s", c[i].integrator, c[i].states ? " on " : "",
+             c[i].states ? c[i].states : "");
+    run_stats(s, &c[i], 80, m, se);
+    double worst = 0.0;
+    for (int k = 0; k < N_STATS; k++) {
+      double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
+      double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
+      if (z > worst) worst = z;
+      if (k == GRID * GRID)
+        fprintf(stderr, "  %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", path, name,
+                m[k], se[k], ref[k], ref_se[k]);
+      assert_true(sd > 0.0);
+      assert_near(m[k], ref[k], 6.5 * sd);
+      g_checks++;
+    }
+    fprintf(stderr, "  %s %s: largest |difference| / SE over the regions %.2f\n", path, name,
+            worst);
   }
-  fprintf(stderr, "  %s pssmlt: largest |difference| / SE over the regions %.2f\n", path, worst);
   scene_destroy(s);
 }
 
 static void test_volcaustic(void **state) {
   (void)state;
-  check_scene("scenes/volcaustic/scene.xml", 64, 48);
+  static const config c[3] = {{"pssmlt", NULL}, {"pssmlt", "pt"}, {"mmlt", NULL}};
+  check_scene("scenes/volcaustic/scene.xml", 64, 48, c, 3);
 }
 
 static void test_rough_glass_fog(void **state) {
   (void)state;
-  check_scene("tests/data/media/rough_glass_fog.xml", 32, 24);
+  static const config c[2] = {{"pssmlt", NULL}, {"mmlt", NULL}};
+  check_scene("tests/data/media/rough_glass_fog.xml", 32, 24, c, 2);
 }
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 2 * N_STATS);
+  assert_int_equal(g_checks, 5 * N_STATS);
 }
 
 int main(void) {

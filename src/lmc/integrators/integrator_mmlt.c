@@ -23,5 +23,6 @@ static int mmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
 const mc_method mc_method_mmlt = {
     .name = "mmlt",
     .default_states = MCMC_STATES_MMLT,
+    .media_states = 1u << MCMC_STATES_BDPT | 1u << MCMC_STATES_MMLT | 1u << MCMC_STATES_PT,
     .chain_kernels = mmlt__chain_kernels,
 };

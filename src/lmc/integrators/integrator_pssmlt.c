@@ -21,6 +21,6 @@ static int pssmlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
 const mc_method mc_method_pssmlt = {
     .name = "pssmlt",
     .default_states = MCMC_STATES_BDPT,
-    .media_states = 1u << MCMC_STATES_BDPT,
+    .media_states = 1u << MCMC_STATES_BDPT | 1u << MCMC_STATES_MMLT | 1u << MCMC_STATES_PT,
     .chain_kernels = pssmlt__chain_kernels,
 };

@@ -28,6 +28,11 @@
  * and the Hessian are mapped back coordinate by coordinate, with the chain
  * rule factor (W + 2r) / W on the two film numbers.
  *
+ * Media: on a scene with participating media (unless rs.no_media) the
+ * subpaths and the connection run through them (states.c), each vertex's
+ * numbers led by its flight's BDPT_DIMS_MEDIA; f alone there (no
+ * gradients yet: eval with one fails, no eval_hess).
+ *
  * Step scales: the light-position numbers u1 of the light stream
  * (emission) and of the connect stream (the light sample of s = 1) pick an
  * area light's triangle (mc_light_u1_scale). The small step's default
@@ -163,6 +168,7 @@ static int mms__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
     mms__set_value(sc, OUT_value, c, rx, ry);
     return 0;
   }
+  if (st->media) return -1; /* no gradients through media yet */
   int ok;
   int rc = mms__eval_d(t, sc, smp, PATH_WANT_GRAD, OUT_value, OUT_grad, &ok, NULL, NULL,
                             NULL, NULL);
@@ -191,12 +197,12 @@ static int mms__local_coords(const mc_target *t, const double *u, int label, int
   int ss, tt;
   mms__strategy(st, u[off_conn], &ss, &tt);
   int n = 0;
-  int nc = 2 + BDPT_DIMS_PER_VERTEX * (tt - 1);
+  int nc = 2 + st->per_vertex * (tt - 1);
   if (nc > t->stream_dim[LMC_STREAM_CAMERA]) nc = t->stream_dim[LMC_STREAM_CAMERA];
   for (int i = 0; i < nc; i++) OUT_idx[n++] = i;
   if (ss > 0) {
     int off_l = mc_target_stream_offset(t, LMC_STREAM_LIGHT);
-    int nl = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (ss - 1);
+    int nl = BDPT_DIMS_LIGHT_START + st->per_vertex * (ss - 1);
     if (nl > t->stream_dim[LMC_STREAM_LIGHT]) nl = t->stream_dim[LMC_STREAM_LIGHT];
     for (int i = 0; i < nl; i++) OUT_idx[n++] = off_l + i;
   }
@@ -224,15 +230,17 @@ lmc_status mc_mmlt_states_init(mc_target *OUT_target, mc_mmlt_states *ctx, const
   ctx->n_strategies = length == 1 ? 1 : length + 1;
   ctx->margin = r;
   ctx->area = (W + 2.0 * r) * (H + 2.0 * r);
+  ctx->media = s->n_media > 0 && !rs->no_media;
+  ctx->per_vertex = BDPT_DIMS_PER_VERTEX + (ctx->media ? BDPT_DIMS_MEDIA : 0);
   mc_target *T = OUT_target;
-  T->stream_dim[LMC_STREAM_CAMERA] = 2 + BDPT_DIMS_PER_VERTEX * (length + 1);
-  T->stream_dim[LMC_STREAM_LIGHT] = BDPT_DIMS_LIGHT_START + BDPT_DIMS_PER_VERTEX * (length + 1);
+  T->stream_dim[LMC_STREAM_CAMERA] = 2 + ctx->per_vertex * (length + 1);
+  T->stream_dim[LMC_STREAM_LIGHT] = BDPT_DIMS_LIGHT_START + ctx->per_vertex * (length + 1);
   T->stream_dim[LMC_STREAM_CONNECT] = 1 + BDPT_DIMS_CONNECT;
   T->dim = T->stream_dim[0] + T->stream_dim[1] + T->stream_dim[2];
   T->ctx = ctx;
   T->eval = mms__eval;
   T->eval_expect = mms__expect;
-  T->eval_hess = mms__eval_hess;
+  if (!ctx->media) T->eval_hess = mms__eval_hess;
   T->local_coords = mms__local_coords;
   mc_states_use_scratch(T);
   /* The light-position coordinates u1 of the light stream (emission) and

@@ -29,6 +29,9 @@ typedef struct mc_mmlt_states {
   double margin;       /* filter radius r */
   double area;         /* (W + 2r)(H + 2r) */
   double *step_scale;  /* owned: the target's step_scale */
+  int media;           /* through the scene's media (rs.no_media unset): each subpath
+                          vertex's numbers led by its flight's; no gradients there yet */
+  int per_vertex;      /* numbers per subpath vertex: BDPT_DIMS_PER_VERTEX (+ BDPT_DIMS_MEDIA) */
 } mc_mmlt_states;
 
 /* Sets up *OUT_target for paths of `length` segments over ctx (both owned

@@ -22,6 +22,10 @@
  *
  * Step scales: next-event estimation's light-position number of every
  * bounce picks a light triangle (mc_pt_step_scale, states.h).
+ *
+ * Media: on a scene with participating media (unless rs.no_media) f comes
+ * from pt_li_media, each bounce's numbers led by its flight's
+ * PT_DIMS_MEDIA; no gradients there yet (eval with one fails).
  */
 #include <math.h>
 #include <stdio.h>
@@ -39,6 +43,8 @@ typedef struct pts__ctx {
   render_settings rs;  /* depths as the chains render them */
   double margin, area; /* r, (W + 2r)(H + 2r) */
   double *step_scale;  /* owned */
+  int media;           /* through the scene's media (pt_li_media; no gradients there yet) */
+  int per_bounce;      /* numbers per bounce: PT_DIMS_PER_BOUNCE (+ PT_DIMS_MEDIA) */
   mc_space_family fam;
 } pts__ctx;
 
@@ -79,6 +85,7 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
   pts__scratch *sc = scratch;
   if (OUT_grad_ok) *OUT_grad_ok = 0;
   sampler_use_stream(smp, LMC_STREAM_CAMERA);
+  if (OUT_grad && st->media) return -1; /* no gradients through media yet */
   if (OUT_grad) return pts__eval_grad(t, sc, smp, OUT_value, OUT_grad, OUT_grad_ok);
   /* f alone: pt_li in plain numbers. */
   double r = st->margin;
@@ -87,7 +94,8 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
   double ry = -r + u1 * (st->s->cam.height + 2.0 * r);
   vec3 org, dir;
   camera_generate_ray(&st->s->cam, rx, ry, &org, &dir);
-  rgb L = pt_li(st->s, &st->rs, smp, org, dir, NULL, &sc->cnt);
+  rgb L = st->media ? pt_li_media(st->s, &st->rs, smp, org, dir, NULL, &sc->cnt)
+                    : pt_li(st->s, &st->rs, smp, org, dir, NULL, &sc->cnt);
   mc_states_value(OUT_value, rgb_scale(L, st->area), rx, ry, &sc->cnt.nan_samples);
   return 0;
 }
@@ -95,10 +103,11 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
 /* The path length of a state whose deepest differentiated coordinate is
  * `last`: its bounce + 2, or 1 for the film position. */
 static int pts__length_of(const mc_space_family *F, int label, int last) {
-  (void)F, (void)label;
+  (void)label;
+  const pts__ctx *c = F->target.ctx;
   if (last < 0) return -1;
   if (last < PT_DIMS_CAMERA) return 1;
-  return (last - PT_DIMS_CAMERA) / PT_DIMS_PER_BOUNCE + 2;
+  return (last - PT_DIMS_CAMERA) / c->per_bounce + 2;
 }
 
 static void pts__destroy(mc_space *sp) {
@@ -115,9 +124,11 @@ lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settin
   c->rs = *rs;
   c->margin = s->filter.radius;
   c->area = (s->cam.width + 2.0 * c->margin) * (s->cam.height + 2.0 * c->margin);
+  c->media = s->n_media > 0 && !rs->no_media;
+  c->per_bounce = PT_DIMS_PER_BOUNCE + (c->media ? PT_DIMS_MEDIA : 0);
   int bounces = rs->maxdepth >= 0 ? rs->maxdepth : MC_PT_UNBOUNDED;
   mc_target *T = &c->fam.target;
-  T->stream_dim[LMC_STREAM_CAMERA] = PT_DIMS_CAMERA + PT_DIMS_PER_BOUNCE * (bounces + 1);
+  T->stream_dim[LMC_STREAM_CAMERA] = PT_DIMS_CAMERA + c->per_bounce * (bounces + 1);
   T->dim = T->stream_dim[LMC_STREAM_CAMERA];
   T->ctx = c;
   T->eval = pts__eval;
@@ -127,7 +138,7 @@ lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settin
     free(c);
     return lmc_error_set(err, LMC_ENOMEM, NULL, 0, "out of memory for the pt states");
   }
-  mc_pt_step_scale(s, T->dim, c->step_scale);
+  mc_pt_step_scale(s, T->dim, c->media, c->step_scale);
   T->step_scale = c->step_scale;
   c->fam.length = 0;
   c->fam.technique = -1;

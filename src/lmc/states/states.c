@@ -31,10 +31,12 @@ double mc_light_u1_scale(const scene *s) {
   return 1.0 / (double)n_max;
 }
 
-void mc_pt_step_scale(const scene *s, int dim, double *OUT_scale) {
+void mc_pt_step_scale(const scene *s, int dim, int media, double *OUT_scale) {
   double u1_scale = mc_light_u1_scale(s);
+  int lead = media ? PT_DIMS_MEDIA : 0;
   for (int i = 0; i < dim; i++) OUT_scale[i] = 1.0;
-  for (int i = PT_DIMS_CAMERA + 1; i < dim; i += PT_DIMS_PER_BOUNCE) OUT_scale[i] = u1_scale;
+  for (int i = PT_DIMS_CAMERA + lead + 1; i < dim; i += PT_DIMS_PER_BOUNCE + lead)
+    OUT_scale[i] = u1_scale;
 }
 
 rgb mc_mmlt_contribution(const scene *s, const render_settings *rs, int k, int n, double margin,

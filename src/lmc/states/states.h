@@ -19,11 +19,12 @@
 double mc_light_u1_scale(const scene *s);
 
 /* Fills OUT_scale[0 .. dim-1] for a camera stream in pt_li's layout
- * (integrator.h; pssmlt and lmc): 1, except mc_light_u1_scale(s) on the
- * first light-position number of every bounce, PT_DIMS_CAMERA +
- * PT_DIMS_PER_BOUNCE b + 1, which picks the triangle of next-event
- * estimation's light sample. */
-void mc_pt_step_scale(const scene *s, int dim, double *OUT_scale);
+ * (integrator.h; pssmlt and lmc), or with media set pt_li_media's (each
+ * bounce led by its flight's PT_DIMS_MEDIA numbers): 1, except
+ * mc_light_u1_scale(s) on the first light-position number of every
+ * bounce, PT_DIMS_CAMERA + (PT_DIMS_PER_BOUNCE + lead) b + lead + 1, which
+ * picks the triangle of next-event estimation's light sample. */
+void mc_pt_step_scale(const scene *s, int dim, int media, double *OUT_scale);
 
 /* The contribution of an mmlt state of a length-k family with n strategies
  * (the layout of mcmc.c's header; margin r and area (W + 2r)(H + 2r) of
