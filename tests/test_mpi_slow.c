@@ -18,6 +18,8 @@
  *    expectation is exactly 1): the image mean within its tolerance of 1
  *    (see the test), and every pixel has exactly the spp samples asked
  *    for (--spp 6 over 4 ranks: pt's passes 0-5 shared 2, 2, 1, 1).
+ *  - Through participating media (bdpt, pssmlt): one rank is the plain
+ *    run, two ranks' image does not depend on their threads.
  *  - A rank killed mid-render: mpirun exits non-zero within seconds and no
  *    image is written.
  *  - Ctrl-C (SIGINT) on mpirun, for pt, pssmlt and lmc: it exits non-zero
@@ -46,6 +48,7 @@
 
 #define CORNELL LMC_SOURCE_DIR "/scenes/cornell-box/scene.xml"
 #define FURNACE LMC_SOURCE_DIR "/tests/data/analytic/furnace.xml"
+#define MEDIA_FURNACE LMC_SOURCE_DIR "/tests/data/media/furnace.xml"
 
 static char tmp_dir[256];
 
@@ -394,6 +397,34 @@ static void test_furnace_over_ranks(void **state) {
   assert_int_equal(checked, 3 * N_INTEGRATORS);
 }
 
+/* Through participating media (tests/data/media/furnace.xml's fogs), bdpt
+ * and pssmlt: one rank writes the plain run's file, and two ranks with 1
+ * and with 2 threads each write the same image. */
+static void test_media_over_ranks(void **state) {
+  (void)state;
+  if (skip_without_mpi()) skip();
+  static const char *const which[] = {"bdpt", "pssmlt"};
+  int compared = 0;
+  for (int k = 0; k < 2; k++) {
+    char f1[256], f2[256], plain[64], one[64], a[64], b[64];
+    snprintf(f1, sizeof f1, "--integrator %s --spp 4 --seed 5 --threads 1", which[k]);
+    snprintf(f2, sizeof f2, "--integrator %s --spp 4 --seed 5 --threads 2", which[k]);
+    snprintf(plain, sizeof plain, "media_%s_plain", which[k]);
+    snprintf(one, sizeof one, "media_%s_one", which[k]);
+    snprintf(a, sizeof a, "media_%s_r2t1", which[k]);
+    snprintf(b, sizeof b, "media_%s_r2t2", which[k]);
+    assert_int_equal(render(0, MEDIA_FURNACE, f2, plain), 0);
+    assert_int_equal(render(1, MEDIA_FURNACE, f2, one), 0);
+    assert_true(same_file(plain, one));
+    assert_int_equal(render(2, MEDIA_FURNACE, f1, a), 0);
+    assert_int_equal(render(2, MEDIA_FURNACE, f2, b), 0);
+    assert_int_equal(differing(a, b), 0);
+    assert_true(same_file(a, b));
+    compared++;
+  }
+  assert_int_equal(compared, 2);
+}
+
 static void test_killed_rank_ends_the_job(void **state) {
   (void)state;
   if (skip_without_mpi()) skip();
@@ -482,6 +513,7 @@ int main(void) {
       cmocka_unit_test(test_mcmc_ranks_make_the_moves_of_one_process),
       cmocka_unit_test(test_error_over_ranks),
       cmocka_unit_test(test_furnace_over_ranks),
+      cmocka_unit_test(test_media_over_ranks),
       cmocka_unit_test(test_killed_rank_ends_the_job),
       cmocka_unit_test(test_interrupted_job_writes_its_image),
   };
