@@ -15,6 +15,10 @@ Prints (never part of ctest; no timed assertions anywhere):
     bench/bench_grad.c times path_eval_pt on ring-caustics at fixed path
     lengths (a lower layer, other paths), so it is not the C figure here:
     the batched call is.
+    In C: bench/bench_target.c, the same target's f and grad in a C loop
+    in a process without Python (one thread, its own states), beside the
+    batched figures: run with OMP_NUM_THREADS=1 for one thread on both
+    sides.
 (b) lmc.render against the `lmc render` binary (subprocess) at equal spp
     on a small scene, alternating, 3 runs each: the wall time of each
     (Python: load + render + save the EXR and the PNG in this process;
@@ -22,7 +26,7 @@ Prints (never part of ctest; no timed assertions anywhere):
     (stats["seconds"] and the binary's statistics line), and the ratios.
 
 usage: PYTHONPATH=build/python /usr/bin/python3 bench/python_speed.py [--lmc build/lmc]
-                                                   [--width 128] [--spp 64]
+                    [--width 128] [--spp 64] [--bench-target build/bench/bench_target]
 """
 import argparse
 import os
@@ -79,6 +83,7 @@ def bench_target(width, height):
     print(f"  {'':22}{'batch 10^4 [us/eval]':>22}{'batch 1 [us/eval]':>20}{'ratio':>8}")
     for name, per_b, per_1 in rows:
         print(f"  {name:22}{per_b:22.2f}{per_1:20.2f}{per_1 / per_b:8.2f}")
+    return rows
 
     # Two threads, a target each: the batches run without the GIL.
     t2 = lmc.target(scene, space="pt")
@@ -105,6 +110,28 @@ def bench_target(width, height):
     print(f"  grad, 2 threads x 10^4 (own targets): {t_two / (2 * len(P)) * 1e6:.2f} us/eval; "
           f"throughput {2 * t_one / t_two:.2f}x one thread's; "
           f"CPU/wall {cpu_two / t_two:.2f} (GIL held: <= 1)")
+
+
+def bench_c(bench_bin, rows, width, height):
+    """bench/bench_target.c (the same target in a C loop, one thread, no
+    Python in the process) beside the batched figures of (a)."""
+    if not os.access(bench_bin, os.X_OK):
+        print(f"\n(a) in C: {bench_bin} is not built (cmake --build build --target "
+              "bench_target): no C figure")
+        return
+    p = subprocess.run([bench_bin, "--width", str(width), "--height", str(height)],
+                       capture_output=True, text=True, timeout=600)
+    if p.returncode != 0:
+        sys.exit(f"bench_target failed: {p.stderr}")
+    c = {m.group(1).strip(): float(m.group(2))
+         for m in re.finditer(r"^  (.+?)\s+([0-9.]+) us/eval$", p.stdout, re.M)}
+    threads = os.environ.get("OMP_NUM_THREADS", "every core")
+    print(f"\n(a) in C: the same quantities by bench_target (one thread) against the batches "
+          f"(OpenMP threads: {threads})")
+    print(f"  {'':22}{'C [us/eval]':>14}{'batch 10^4 [us/eval]':>22}{'batch / C':>11}")
+    for name, per_b, _ in rows:
+        if name in c:
+            print(f"  {name:22}{c[name]:14.2f}{per_b:22.2f}{per_b / c[name]:11.2f}")
 
 
 def bench_render(binary, width, spp, runs=3):
@@ -150,10 +177,15 @@ def main():
     ap.add_argument("--lmc", default=os.environ.get("LMC_BINARY", default_bin))
     ap.add_argument("--width", type=int, default=128, help="(b)'s image width (height 3/4 of it)")
     ap.add_argument("--spp", type=int, default=64, help="(b)'s pt spp (lmc: an eighth)")
+    ap.add_argument("--bench-target", default=None,
+                    help="bench/bench_target.c's binary (default: bench/ beside --lmc)")
     args = ap.parse_args()
+    if args.bench_target is None:
+        args.bench_target = os.path.join(os.path.dirname(args.lmc), "bench", "bench_target")
     print(f"lmc {lmc.__version__}, python {sys.version.split()[0]}, numpy {np.__version__}, "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
-    bench_target(64, 48)
+    rows = bench_target(64, 48)
+    bench_c(args.bench_target, rows, 64, 48)
     bench_render(args.lmc, args.width, args.spp)
 
 

@@ -507,7 +507,7 @@ def test_docs_mala(monkeypatch, capsys):
     assert "mean" in capsys.readouterr().out
     exact = sum(0.5**k for k in range(3, 9))  # 0.24609375
     b, F, image, images = ns["b"], ns["F"], ns["image"], ns["images"]
-    W, H, steps = ns["W"], ns["H"], ns["steps"]
+    W, H = ns["W"], ns["H"]
     assert image.shape == (H, W, 3) and np.all(np.isfinite(image))
     rel_b = F.std(ddof=1) / np.sqrt(len(F)) / b
     # b: the mean of f over uniform u is the image's integral over the film
@@ -515,7 +515,7 @@ def test_docs_mala(monkeypatch, capsys):
     b_exact = exact * (W + 1) * (H + 1)
     assert abs(b - b_exact) < 4 * rel_b * b, (b, b_exact)
     # The chains move: MALA's acceptance neither ~0 nor ~1.
-    rate = ns["accepted"] / (len(images) * steps)
+    rate = ns["rate"]
     assert 0.1 < rate < 0.9, rate
     # The mean image value, and the gray box's channels alike.
     per_chain = images.mean(axis=(1, 2, 3))
@@ -526,10 +526,29 @@ def test_docs_mala(monkeypatch, capsys):
     # The chains sample f / b: E[1/f] over their states is P(f > 0) / b.
     # (Without the Metropolis-Hastings test the same chains give 1.08 +-
     # 0.016; with the ratio inverted 1.19: both fail here.)
-    hb = b * ns["inv_f"] / steps
+    hb = b * ns["mean_inv_f"]
     se_h = hb.mean() * np.hypot(hb.std(ddof=1) / np.sqrt(len(hb)) / hb.mean(), rel_b)
     p_support = (F > 0).mean()
     assert abs(hb.mean() - p_support) < 4 * se_h, (hb.mean(), p_support, se_h)
+
+
+def test_docs_mala_rings(monkeypatch, capsys):
+    """The NumPy MALA chains of docs/python.md on ring-caustics (32x24, every
+    path length) against lmc's own Langevin chains (`integrator="lmc",
+    adapt="none"`, 6 seeds): the image means agree within 4 standard errors
+    of their difference (MALA's from the spread over its independent chains
+    and b's relative error; lmc's from the spread over the seeds), and the
+    chains move."""
+    monkeypatch.chdir(SOURCE)
+    ns = {}
+    exec(compile(docs_block("<!-- test_docs_mala:"), "docs/python.md", "exec"), ns)
+    exec(compile(docs_block("<!-- test_docs_mala_rings"), "docs/python.md", "exec"), ns)
+    assert "NumPy MALA" in capsys.readouterr().out
+    assert ns["images"].shape == (512, 24, 32, 3) and np.all(np.isfinite(ns["images"]))
+    assert 0.05 < ns["rate"] < 0.9, ns["rate"]
+    assert len(ns["runs"]) == 6 and ns["lmc_se"] > 0 and ns["se"] > 0
+    diff, sd = ns["mean"] - ns["lmc_mean"], np.hypot(ns["se"], ns["lmc_se"])
+    assert abs(diff) < 4 * sd, (ns["mean"], ns["lmc_mean"], sd)
 
 
 def test_docs_seed_sweep(tmp_path, monkeypatch, capsys):
