@@ -413,7 +413,20 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
 static PyObject *lmcpy_target_f(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
   return lmcpy_target_call(self, args, kwargs, 0);
 }
+/* 0 and ValueError when the target runs through participating media,
+ * where the chains have no derivatives yet (`what`: grad or hessian). */
+static int lmcpy_no_media(lmcpy_target *self, const char *what) {
+  int n = self->scene->s->n_media;
+  if (n == 0) return 1;
+  PyErr_Format(PyExc_ValueError,
+               "%s: no derivatives through participating media yet (the scene has %d medi%s; "
+               "t.f and t.value evaluate f through them)",
+               what, n, n == 1 ? "um" : "a");
+  return 0;
+}
+
 static PyObject *lmcpy_target_grad(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
+  if (!lmcpy_no_media(self, "grad")) return NULL;
   return lmcpy_target_call(self, args, kwargs, 1);
 }
 
@@ -493,6 +506,7 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
   if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|Op:hessian", kwlist, &uo, &lo, &with_grad))
     return NULL;
   const mc_target *T = self->T;
+  if (!lmcpy_no_media(self, "hessian")) return NULL;
   if (!T->eval_hess)
     return PyErr_Format(PyExc_ValueError,
                         "hessian: the %s states have no Hessian (eval_hess; h2mc's spaces are "

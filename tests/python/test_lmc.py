@@ -481,6 +481,33 @@ def test_memory_target_calls():
 # --- the docs' Markov chain --------------------------------------------------------------------
 
 
+def test_target_through_media():
+    """lmc.target on a scene with participating media (tests/data/media/
+    furnace.xml: fogs that do not absorb in a box whose walls emit L =
+    (1, 2, 3), so every pixel is exactly L): f runs through the media, its
+    mean over uniform states is the image's integral over the film grown
+    by the box filter, lum(L) (W + 1) (H + 1), within 4 standard errors, on
+    the pt and bdpt states (every path length, up to 40 segments: longer
+    ones carry a negligible share here); the derivatives are refused with
+    a message naming the media."""
+    scene = lmc.load(os.path.join(SOURCE, "tests", "data", "media", "furnace.xml"))
+    exact = (0.2126 * 1 + 0.7152 * 2 + 0.0722 * 3) * (scene.width + 1) * (scene.height + 1)
+    checked = 0
+    for space in ("pt", "bdpt"):
+        t = lmc.target(scene, space=space, direct="mcmc", maxdepth=40)
+        F = t.f(np.random.default_rng(7).random((100_000, t.dim)))
+        se = F.std(ddof=1) / np.sqrt(len(F))
+        assert np.all(np.isfinite(F)) and se > 0
+        assert abs(F.mean() - exact) < 4 * se, (space, F.mean(), exact, se)
+        u = np.full(t.dim, 0.5)
+        with pytest.raises(ValueError, match="participating media"):
+            t.grad(u, label=0) if space == "bdpt" else t.grad(u)
+        with pytest.raises(ValueError, match="participating media"):
+            t.hessian(u, label=0)
+        checked += 1
+    assert checked == 2
+
+
 def docs_block(marker):
     """The python block after `marker` in docs/python.md."""
     with open(os.path.join(SOURCE, "docs", "python.md")) as f:
