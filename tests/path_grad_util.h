@@ -24,10 +24,13 @@ static const pg_strategy PG_PT = {-1, 0};
 
 /* Groups of bidirectional strategies, for counting what was checked. */
 enum { PG_S0, PG_S1, PG_T1, PG_ST, PG_GROUPS };
-static const char *pg_group_names[PG_GROUPS] = {"s=0 (emitter hit)", "s=1 (light sample)",
+static inline const char *pg_group_name(int g) {
+  static const char *const names[PG_GROUPS] = {"s=0 (emitter hit)", "s=1 (light sample)",
                                                  "t=1 (light tracing)", "s,t>=2 (connection)"};
+  return names[g];
+}
 
-static int pg_group(pg_strategy st) {
+static inline int pg_group(pg_strategy st) {
   if (st.s == 0) return PG_S0;
   if (st.t == 1) return PG_T1;
   if (st.s == 1) return PG_S1;
@@ -36,7 +39,7 @@ static int pg_group(pg_strategy st) {
 
 /* A strategy for a random path length in [1, maxdepth], uniform over the
  * strategies of that length that BDPT uses. */
-static pg_strategy pg_random_strategy(rng *r, int maxdepth) {
+static inline pg_strategy pg_random_strategy(rng *r, int maxdepth) {
   for (;;) {
     int len = 1 + (int)(rng_uniform(r) * maxdepth);
     int t = 1 + (int)(rng_uniform(r) * (len + 1));
@@ -46,7 +49,7 @@ static pg_strategy pg_random_strategy(rng *r, int maxdepth) {
   }
 }
 
-static void pg_eval(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
+static inline void pg_eval(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
                     pg_strategy st, int want_grad, path_scratch *ps, path_eval *ev) {
   if (st.s < 0)
     path_eval_pt(sc, rs, &vs->base, want_grad, ps, ev, NULL);
@@ -57,7 +60,7 @@ static void pg_eval(const scene *sc, const render_settings *rs, path_vec_sampler
 /* bdpt_connect for the numbers stored in vs (the plain integrator's
  * subpaths, from the layout of integrator.h); *rx, *ry get the splat's
  * raster position for t = 1. */
-static rgb pg_bdpt_reference(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
+static inline rgb pg_bdpt_reference(const scene *sc, const render_settings *rs, path_vec_sampler *vs,
                              pg_strategy st, double *rx, double *ry) {
   static bdpt_vertex cam[BDPT_MAX_VERTICES], lp[BDPT_MAX_VERTICES];
   int s = st.s, t = st.t;
@@ -87,11 +90,11 @@ static rgb pg_bdpt_reference(const scene *sc, const render_settings *rs, path_ve
   return bdpt_connect(sc, cam, t, lp, s, u, rx, ry, NULL, &cnt);
 }
 
-static int pg_rel_equal(double a, double b, double tol) {
+static inline int pg_rel_equal(double a, double b, double tol) {
   return fabs(a - b) <= tol * fmax(fabs(a), fabs(b)) || (a == 0.0 && b == 0.0);
 }
 
-static int pg_rgb_rel_equal(rgb a, rgb b, double tol) {
+static inline int pg_rgb_rel_equal(rgb a, rgb b, double tol) {
   return pg_rel_equal(a.r, b.r, tol) && pg_rel_equal(a.g, b.g, tol) && pg_rel_equal(a.b, b.b, tol);
 }
 
@@ -106,7 +109,7 @@ typedef struct pg_fd_stats {
 /* Checks the gradient of the current path of vs (already evaluated into
  * ev0 with want_grad) against central differences: d luminance/du and
  * d rgb/du, and for t = 1 also d rx/du and d ry/du of the splat. */
-static void pg_fd_check(const scene *sc, path_scratch *ps, const render_settings *rs,
+static inline void pg_fd_check(const scene *sc, path_scratch *ps, const render_settings *rs,
                         path_vec_sampler *vs, pg_strategy st, const path_eval *ev0,
                         pg_fd_stats *fs) {
   int n = ev0->n_coords;
@@ -311,7 +314,7 @@ static inline void pg_hess_check(const scene *sc, path_scratch *ps, const render
  * subpath draws its two numbers but uses none (the subpath stops there),
  * and an escaped camera ray (s = 0) draws nothing at its end: neither gets
  * a slot. */
-static int pg_bdpt_n_diff(pg_strategy st) {
+static inline int pg_bdpt_n_diff(pg_strategy st) {
   int n = 0;
   if (st.t >= 2) n += 2 + 2 * (st.t - 2);
   if (st.s >= 2) n += 4 + 2 * (st.s - 2);

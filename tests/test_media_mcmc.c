@@ -1,6 +1,6 @@
 /*
  * test_media_mcmc.c: the MCMC integrators through participating media
- * (issue 59, part 2): pssmlt and mmlt render the media scenes
+ * (issue 59, part 2): pssmlt, mmlt and lmc render the media scenes
  * of tests/data/media whose pixel values are known exactly, and the
  * integrators and settings that do not render media yet say so.
  *
@@ -14,7 +14,8 @@
  * render every length); the furnace with the default --direct separate
  * (pt renders one and two segments through the media, the chains the
  * rest), so both halves and their seam are checked, by pssmlt on the bdpt
- * and the pt states and by mmlt on the mmlt states.
+ * and the pt states, by mmlt on the mmlt states and by lmc on the pt
+ * states.
  *
  * Variance: an MCMC image's pixels are tied by the chains and scaled by
  * the bootstrap's b, so the spread over the pixels says nothing of the
@@ -22,7 +23,7 @@
  * seeds (each with its own bootstrap); the mean over the runs of each
  * channel's image mean must lie within t_5(0.9995) = 6.87 standard errors
  * (their spread over the runs / sqrt(R)) of the exact value, plus the
- * scene's stated geometric error: 5 configurations x 3 channels = 15
+ * scene's stated geometric error: 6 configurations x 3 channels = 18
  * checks, a false alarm about 2e-2 at most (the channels of a scene are not
  * independent). The control: the slab rendered with the media ignored
  * (render_settings.no_media) must fail the same check. Fixed seeds;
@@ -131,12 +132,14 @@ static void test_single_scatter(void **state) {
   g_checks += 3;
 }
 
-/* The furnace by pssmlt on the bdpt and the pt states and by mmlt on the
- * mmlt states (pssmlt there makes the same moves). */
+/* The furnace by pssmlt on the bdpt and the pt states, by mmlt on the
+ * mmlt states (pssmlt there makes the same moves), and by lmc on the pt
+ * states (Langevin steps through the fogs, path_eval_pt's gradient). */
 static void test_furnace(void **state) {
   (void)state;
-  static const char *const cfg[3][2] = {{"pssmlt", NULL}, {"pssmlt", "pt"}, {"mmlt", NULL}};
-  for (int i = 0; i < 3; i++) {
+  static const char *const cfg[4][2] = {
+      {"pssmlt", NULL}, {"pssmlt", "pt"}, {"mmlt", NULL}, {"lmc", "pt"}};
+  for (int i = 0; i < 4; i++) {
     double m[3], se[3];
     char what[64];
     snprintf(what, sizeof what, "furnace, %s on %s states", cfg[i][0],
@@ -148,8 +151,8 @@ static void test_furnace(void **state) {
 }
 
 /* Which MCMC settings render media: pssmlt and mmlt on the bdpt, mmlt
- * and pt states; not with the inverse path sampler's moves, not on the
- * path states, and not lmc, h2mc or mlt yet. The scene's media are then
+ * and pt states, lmc on the pt states; not with the inverse path
+ * sampler's moves, not on the path states, and not h2mc or mlt yet. The scene's media are then
  * named in the warning (render_media_note), and not when the integrator
  * renders them. */
 static void test_which_render_media(void **state) {
@@ -182,10 +185,19 @@ static void test_which_render_media(void **state) {
     assert_int_equal(mcmc_renders_media(&r2), i == 0);
     checks++;
   }
+  /* lmc on the pt states (gradients through media), not on its own bdpt
+   * states. */
+  render_settings r3 = s->settings;
+  snprintf(r3.integrator, sizeof r3.integrator, "lmc");
+  assert_int_equal(mcmc_set(&r3, "states", "pt", &err), LMC_OK);
+  assert_int_equal(mcmc_renders_media(&r3), 1);
+  assert_int_equal(mcmc_set(&r3, "states", "mmlt", &err), LMC_OK);
+  assert_int_equal(mcmc_renders_media(&r3), 0);
+  checks += 2;
   assert_int_equal(render_media_note(s, "lmc", 0), 1);
   assert_int_equal(lmc_warning_count(), w0 + 1);
   checks++;
-  assert_int_equal(checks, 13);
+  assert_int_equal(checks, 15);
   scene_destroy(s);
 }
 
@@ -219,7 +231,7 @@ static void test_threads(void **state) {
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(g_checks, 15);
+  assert_int_equal(g_checks, 18);
 }
 
 int main(void) {

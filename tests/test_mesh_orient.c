@@ -691,7 +691,7 @@ static void test_bdpt_gradient(void **state) {
   print_message("bdpt: %d strategies tried, %d mismatched with bdpt_connect\n", tries,
                 mismatched);
   for (int g = 0; g < PG_GROUPS; g++)
-    print_message("    %-22s %4d non-zero, %3d gradients checked\n", pg_group_names[g], nonzero[g],
+    print_message("    %-22s %4d non-zero, %3d gradients checked\n", pg_group_name(g), nonzero[g],
                   paths[g]);
   print_message("bdpt gradient: %d paths, %d components (%d non-trivial, %d raster), %d passed, "
                 "%d skipped (topology)\n",

@@ -201,7 +201,7 @@ static void test_bdpt_value_matches_bdpt_connect(void **state) {
   path_vec_sampler_free(&vs);
   print_message("bdpt value agreement: %d paths, %d mismatched\n", n, mismatched);
   for (int g = 0; g < PG_GROUPS; g++)
-    print_message("    %-22s %5d paths, %5d non-zero\n", pg_group_names[g], tried[g], nonzero[g]);
+    print_message("    %-22s %5d paths, %5d non-zero\n", pg_group_name(g), tried[g], nonzero[g]);
   assert_int_equal(mismatched, 0);
   /* Every kind of strategy contributed often enough to mean something. */
   for (int g = 0; g < PG_GROUPS; g++) assert_true(nonzero[g] >= 100);
@@ -242,7 +242,7 @@ static void test_bdpt_gradient_matches_fd(void **state) {
                 st.paths, st.components, st.nontrivial, st.raster, st.passed,
                 st.skipped_topology);
   for (int g = 0; g < PG_GROUPS; g++)
-    print_message("    %-22s %5d paths, %6d components\n", pg_group_names[g], paths[g], comps[g]);
+    print_message("    %-22s %5d paths, %6d components\n", pg_group_name(g), paths[g], comps[g]);
   assert_int_equal(st.paths, 300);
   assert_true(st.components > 3000);
   assert_true(st.nontrivial > st.components / 4);
@@ -409,7 +409,7 @@ static void test_bdpt_hessian_matches_fd(void **state) {
   }
   path_vec_sampler_free(&vs);
   for (int g = 0; g < PG_GROUPS; g++)
-    print_message("    %-22s %5d paths, %6d entries\n", pg_group_names[g], paths[g], entries[g]);
+    print_message("    %-22s %5d paths, %6d entries\n", pg_group_name(g), paths[g], entries[g]);
   hess_report("bdpt", &st, 100);
   for (int g = 0; g < PG_GROUPS; g++) {
     assert_int_equal(paths[g], 25);

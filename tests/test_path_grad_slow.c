@@ -168,7 +168,7 @@ static void check_bdpt(const char *file, const scene *sc, path_scratch *ps,
                 st.skipped_topology, subnormal);
   for (int g = 0; g < PG_GROUPS; g++)
     print_message("    %-22s %5d paths %7d components (%d non-trivial, %d passed)\n",
-                  pg_group_names[g], paths[g], comps[g], nontriv[g], pass[g]);
+                  pg_group_name(g), paths[g], comps[g], nontriv[g], pass[g]);
   for (int t = 0; t < TYPE_COUNT; t++)
     print_message("    %-12s %6d paths %7d components\n", type_names[t], cc.paths_by_type[t],
                   cc.comps_by_type[t]);
@@ -228,7 +228,7 @@ static void check_hessian(const char *file, const scene *sc, path_scratch *ps,
     }
     print_message("%s: Hessian, %-22s %3d paths, %6d entries (%d non-trivial, %d off the "
                   "diagonal), %d passed (%.3f%%), %d skipped (topology), %d unconverged\n",
-                  file, g == PG_GROUPS ? "unidirectional" : pg_group_names[g], st[g].paths,
+                  file, g == PG_GROUPS ? "unidirectional" : pg_group_name(g), st[g].paths,
                   st[g].entries, st[g].nontrivial, st[g].offdiag, st[g].passed,
                   st[g].entries ? 100.0 * st[g].passed / st[g].entries : 0.0,
                   st[g].skipped_topology, st[g].unconverged);

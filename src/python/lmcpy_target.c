@@ -413,15 +413,17 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
 static PyObject *lmcpy_target_f(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
   return lmcpy_target_call(self, args, kwargs, 0);
 }
-/* 0 and ValueError when the target runs through participating media,
- * where the chains have no derivatives yet (`what`: grad or hessian). */
+/* 0 and ValueError when the target runs through participating media on
+ * states that have no derivatives through them yet (all but pt's
+ * gradient; `what`: grad or hessian). */
 static int lmcpy_no_media(lmcpy_target *self, const char *what) {
   int n = self->scene->s->n_media;
-  if (n == 0) return 1;
+  if (n == 0 || (!strcmp(what, "grad") && !strcmp(self->sp.name, "pt"))) return 1;
   PyErr_Format(PyExc_ValueError,
-               "%s: no derivatives through participating media yet (the scene has %d medi%s; "
-               "t.f and t.value evaluate f through them)",
-               what, n, n == 1 ? "um" : "a");
+               "%s: no derivatives through participating media on the %s states yet (the scene "
+               "has %d medi%s; t.f and t.value evaluate f through them, and the pt states' "
+               "t.grad)",
+               what, self->sp.name, n, n == 1 ? "um" : "a");
   return 0;
 }
 

@@ -488,7 +488,8 @@ def test_target_through_media():
     mean over uniform states is the image's integral over the film grown
     by the box filter, lum(L) (W + 1) (H + 1), within 4 standard errors, on
     the pt and bdpt states (every path length, up to 40 segments: longer
-    ones carry a negligible share here); the derivatives are refused with
+    ones carry a negligible share here); the pt states' gradient through
+    them against a central difference, the other derivatives refused with
     a message naming the media."""
     scene = lmc.load(os.path.join(SOURCE, "tests", "data", "media", "furnace.xml"))
     exact = (0.2126 * 1 + 0.7152 * 2 + 0.0722 * 3) * (scene.width + 1) * (scene.height + 1)
@@ -500,8 +501,22 @@ def test_target_through_media():
         assert np.all(np.isfinite(F)) and se > 0
         assert abs(F.mean() - exact) < 4 * se, (space, F.mean(), exact, se)
         u = np.full(t.dim, 0.5)
-        with pytest.raises(ValueError, match="participating media"):
-            t.grad(u, label=0) if space == "bdpt" else t.grad(u)
+        if space == "pt":
+            # The gradient through the media (path_eval_pt), against a
+            # central difference along one flight's distance number.
+            x = np.random.default_rng(3).random((2000, t.dim))
+            x = x[t.f(x) > 0][0]
+            g, h = t.grad(x), 1e-6
+            assert np.all(np.isfinite(g)) and np.any(g != 0)
+            k = 3  # the first bounce's flight distance (camera 2, then u_ch, u_t)
+            xp, xm = x.copy(), x.copy()
+            xp[k] += h
+            xm[k] -= h
+            fd = (t.f(xp) - t.f(xm)) / (2 * h)
+            assert abs(fd - g[k]) <= 1e-3 * abs(fd) + 1e-6 * t.f(x), (fd, g[k])
+        else:
+            with pytest.raises(ValueError, match="participating media"):
+                t.grad(u, label=0)
         with pytest.raises(ValueError, match="participating media"):
             t.hessian(u, label=0)
         checked += 1

@@ -541,6 +541,7 @@ static void lmc__m_report(void *run, mc_chain *const *chains, int n, double chai
 const mc_method mc_method_lmc = {
     .name = "lmc",
     .default_states = MCMC_STATES_BDPT,
+    .media_states = 1u << MCMC_STATES_PT, /* gradients through media: the pt states' so far */
     .opts = &lmc__options,
     .create = lmc__m_create,
     .destroy = lmc__m_destroy,

@@ -25,7 +25,9 @@
  *
  * Media: on a scene with participating media (unless rs.no_media) f comes
  * from pt_li_media, each bounce's numbers led by its flight's
- * PT_DIMS_MEDIA; no gradients there yet (eval with one fails).
+ * PT_DIMS_MEDIA, and the gradient from path_eval_pt through them (the
+ * flight's distance number u_t a continuous coordinate, its channel
+ * number a discrete one).
  */
 #include <math.h>
 #include <stdio.h>
@@ -43,7 +45,7 @@ typedef struct pts__ctx {
   render_settings rs;  /* depths as the chains render them */
   double margin, area; /* r, (W + 2r)(H + 2r) */
   double *step_scale;  /* owned */
-  int media;           /* through the scene's media (pt_li_media; no gradients there yet) */
+  int media;           /* through the scene's media (pt_li_media, path_eval_pt's media walk) */
   int per_bounce;      /* numbers per bounce: PT_DIMS_PER_BOUNCE (+ PT_DIMS_MEDIA) */
   mc_space_family fam;
 } pts__ctx;
@@ -85,7 +87,6 @@ static int pts__eval(const mc_target *t, void *scratch, lmc_sampler *smp, mc_val
   pts__scratch *sc = scratch;
   if (OUT_grad_ok) *OUT_grad_ok = 0;
   sampler_use_stream(smp, LMC_STREAM_CAMERA);
-  if (OUT_grad && st->media) return -1; /* no gradients through media yet */
   if (OUT_grad) return pts__eval_grad(t, sc, smp, OUT_value, OUT_grad, OUT_grad_ok);
   /* f alone: pt_li in plain numbers. */
   double r = st->margin;

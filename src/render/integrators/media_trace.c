@@ -19,7 +19,8 @@ int render_media_note(const scene *s, const char *name, int renders) {
   lmc_warn(m->file, m->line,
            "integrator %s does not render participating media yet (with these settings): "
            "the scene's %d medi%s ignored (light crosses %s unattenuated); pt, bdpt, pssmlt and "
-           "mmlt (without --technique-jump and --path-mutations) render them",
+           "mmlt (without --technique-jump and --path-mutations), and lmc on the pt states "
+           "(--states pt) render them",
            name, s->n_media, s->n_media == 1 ? "um is" : "a are", s->n_media == 1 ? "it" : "them");
   return 1;
 }

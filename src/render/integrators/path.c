@@ -242,16 +242,21 @@ void path__hit_eval(path__ctx *c, int mi, int64_t prim, adv3 org, adv3 dir,
     h->tu = b1;
     h->tv = b2;
   }
-  h->bsdf = &c->sc->bsdfs[m->bsdf];
+  /* (an index-matched boundary between media has none: bsdf -1) */
+  h->bsdf = m->bsdf >= 0 ? &c->sc->bsdfs[m->bsdf] : NULL;
   h->light = m->light;
   /* A bump map or an anisotropic lobe (scene_intersect's rule). */
   vec3 dpdu, dpdv;
-  if (bsdf_needs_tangents(h->bsdf) && mesh_uv_tangents(m, prim, p0, p1, p2, &dpdu, &dpdv))
+  if (h->bsdf && bsdf_needs_tangents(h->bsdf) &&
+      mesh_uv_tangents(m, prim, p0, p1, p2, &dpdu, &dpdv))
     h->sh = bsdf_shading_frame_ad(A, h->bsdf, h->tu, h->tv, dpdu, dpdv, h->sh.n, h->ng);
 }
 
-/* Closest hit along the dual ray; 0 on a miss. */
-int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h) {
+/* Closest hit along the dual ray in (tmin, tmax), among the surfaces with
+ * a BSDF, or with `media` also the index-matched boundaries between media
+ * (scene_intersect_media: their hits have bsdf NULL); 0 on a miss. */
+static int path__trace(path__ctx *c, adv3 org, adv3 dir, double tmin, double tmax, int media,
+                       path__hit *h) {
   path_scratch *ps = c->ps;
   int mi;
   int64_t prim;
@@ -263,7 +268,9 @@ int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h)
   } else {
     surface_hit sh;
     c->rays++;
-    int hit = scene_intersect(c->sc, path__val(org), path__val(dir), tmin, INFINITY, &sh);
+    vec3 o = path__val(org), d = path__val(dir);
+    int hit = media ? scene_intersect_media(c->sc, o, d, tmin, tmax, &sh)
+                    : scene_intersect(c->sc, o, d, tmin, tmax, &sh);
     mi = hit ? sh.mesh : -1;
     prim = hit ? sh.prim : -1;
     if (ps->n_hit < PATH__MAX_HITS) {
@@ -279,6 +286,11 @@ int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h)
   if (mi < 0) return 0;
   path__hit_eval(c, mi, prim, org, dir, h);
   return 1;
+}
+
+/* Closest hit along the dual ray; 0 on a miss. */
+int path__intersect(path__ctx *c, adv3 org, adv3 dir, double tmin, path__hit *h) {
+  return path__trace(c, org, dir, tmin, INFINITY, 0, h);
 }
 
 /* Shadow ray: 1 when blocked (recorded in pass 1, read in pass 2). */
@@ -341,6 +353,100 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
   return le;
 }
 
+/* ---------------------------------------------------------------------------
+ * Through participating media (media_trace.c's flight and shadow rays in
+ * duals): the boundaries' hits re-evaluated on the dual rays, each piece's
+ * length the distance between them, so that the distances, the
+ * transmittances and the scattering points move with the path.
+ */
+
+/* scene_medium_after for a dual hit. */
+static int path__medium_after(const scene *s, const path__hit *h, int cur, vec3 dir) {
+  const mesh *m = &s->meshes[h->mesh];
+  if (!m->interior && !m->exterior) return cur;
+  return v3_dot(dir, h->ng) > 0.0 ? m->exterior : m->interior;
+}
+
+/* |b - a| in duals. */
+static ad path__dist(ad_arena *A, adv3 a, adv3 b) { return adv3_length(A, adv3_sub(A, b, a)); }
+
+/* render_fly in duals: the track from (u_ch, u_t) across the pieces
+ * between boundaries from org along dir; 1: a surface (in *h), 2: a
+ * scattering point (*OUT_p), 0: out of the scene, -1: lost; its weight in
+ * *OUT_w. */
+static int path__fly(path__ctx *c, adv3 org, adv3 dir, double tmin, int *med, ad u_ch, ad u_t,
+                     path__hit *h, adv3 *OUT_p, adrgb *OUT_w) {
+  ad_arena *A = c->A;
+  const scene *s = c->sc;
+  medium_track_ad k;
+  medium_track_begin_ad(A, u_ch, u_t, &k);
+  path__topo(c, k.c);
+  int found = 0;
+  const medium *m = NULL;
+  for (int n = 0;; n++) {
+    if (n > RENDER_MAX_CROSSINGS) return -1;
+    int hit = path__trace(c, org, dir, tmin, INFINITY, 1, h);
+    m = scene_medium(s, *med);
+    ad t;
+    if (m && medium_track_piece_ad(A, m, hit ? path__dist(A, org, h->p) : ad_const(A, INFINITY),
+                                   &k, &t)) {
+      *OUT_p = adv3_fma(A, org, dir, t);
+      found = 2;
+      break;
+    }
+    m = NULL;
+    if (!hit) break;
+    if (h->bsdf) {
+      found = 1;
+      break;
+    }
+    *med = path__medium_after(s, h, *med, path__val(dir));
+    org = h->p;
+    tmin = scene_ray_eps(s, path__val(h->p));
+  }
+  ad pdf = medium_track_pdf_ad(A, m, found == 2, k.T);
+  if (!(pdf.v > 0.0)) return -1;
+  adrgb w = found == 2 ? adrgb_mul(A, k.T, adrgb_const(A, m->sigma_s)) : k.T;
+  *OUT_w = adrgb_scale(A, w, ad_inv(A, pdf));
+  return found;
+}
+
+/* render_transmittance in duals: from p along wi to the light point lp
+ * (along wi forever when infinite), starting in medium med; 1 with the
+ * transmittance in *OUT_T when no surface blocks it. */
+static int path__transmit(path__ctx *c, adv3 p, adv3 wi, adv3 lp, int infinite, int med,
+                          adrgb *OUT_T) {
+  ad_arena *A = c->A;
+  const scene *s = c->sc;
+  adrgb T = adrgb_const(A, rgb_gray(1.0));
+  const medium *m = scene_medium(s, med);
+  if (!s->accel_media) {
+    if (path__blocked(c, path__val(p), path__val(wi), path__val(lp), infinite)) return 0;
+    *OUT_T = m ? medium_transmittance_ad(A, m, infinite ? ad_const(A, INFINITY)
+                                                         : path__dist(A, p, lp))
+               : T;
+    return 1;
+  }
+  adv3 o = p;
+  double tmin = scene_ray_eps(s, path__val(p));
+  for (int n = 0; n <= RENDER_MAX_CROSSINGS; n++) {
+    ad rest = infinite ? ad_const(A, INFINITY) : path__dist(A, o, lp);
+    double tmax = infinite ? INFINITY : rest.v - scene_ray_eps(s, path__val(lp));
+    path__hit h;
+    path__topo(c, tmax > tmin);
+    if (!(tmax > tmin) || !path__trace(c, o, wi, tmin, tmax, 1, &h)) {
+      *OUT_T = m ? adrgb_mul(A, T, medium_transmittance_ad(A, m, rest)) : T;
+      return 1;
+    }
+    if (h.bsdf) return 0;
+    if (m) T = adrgb_mul(A, T, medium_transmittance_ad(A, m, path__dist(A, o, h.p)));
+    m = scene_medium(s, med = path__medium_after(s, &h, med, path__val(wi)));
+    o = h.p;
+    tmin = scene_ray_eps(s, path__val(h.p));
+  }
+  return 0;
+}
+
 #define R_DUAL 1
 #include "render/real.h"
 #define PT_CTX path__ctx *c
@@ -367,7 +473,13 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
   ad_fmin(A, ad_const(A, 0.95), ad_mul_s(A, ad_fmax(A, (beta).r, ad_fmax(A, (beta).g, (beta).b)), (eta)))
 #define PT_LOBE(flags) path__lobe_flag(flags)
 #define PT_FOOTPRINT(h, depth, org) ((void)0)
-#define PT_MEDIA_CODE 0
+#define PT_MEDIA_CODE 1
+#define PT_MEDIA_ON (c->media)
+#define PT_TRANSMIT(at, w, sample, cur, T) \
+  path__transmit(c, (at), (w), (sample).pd, isinf((sample).dist), (cur), (T))
+#define PT_FLY(org, dir, tmin, med, u_ch, u_t, h, vp, fw) \
+  path__fly(c, (org), (dir), (tmin), (med), (u_ch), (u_t), (h), (vp), (fw))
+#define PT_MEDIUM_AFTER(h, cur, dir) path__medium_after(c->sc, (h), (cur), (dir))
 #include "render/integrators/pt_generic.h"
 
 /* The unidirectional estimator: the film position and the camera ray, then
@@ -394,6 +506,7 @@ static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings 
   c->smp = smp;
   c->replay = replay;
   c->jac = 1.0;
+  c->media = sc->n_media > 0 && !rs->no_media; /* (the unidirectional estimator's) */
 }
 
 void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int want_grad,

@@ -110,6 +110,7 @@ typedef struct path__ctx {
   unsigned flags;
   int length;
   const void *arg; /* the estimator's parameters (path_eval_bdpt: the strategy) */
+  int media;       /* the unidirectional estimator walks through the scene's media */
   double jac;      /* the estimator's Jacobian factor in the value (1: none; path_eval.jac) */
 } path__ctx;
 

@@ -31,11 +31,15 @@
  *                   reads its textures over its footprint (plain: the
  *                   camera hit with ray differentials; duals: nothing);
  *   PT_MEDIA_CODE   1: the walk through participating media is compiled
- *                   (plain side: integrator_pt_media.c), used when
- *                   PT_MEDIA_ON; with it PT_TRANSMIT(p, wi,
- *                   lp, dist, med, T) (the shadow ray's transmittance,
- *                   0 when blocked). 0: the dual side, which has no media
- *                   yet.
+ *                   (plain side: integrator_pt_media.c; duals: path.c), used
+ *                   when PT_MEDIA_ON; with it PT_FLY(org, dir, tmin, med,
+ *                   u_ch, u_t, h, vp, fw) (render_fly: the free flight
+ *                   across boundaries to a surface, 1, in h, or a
+ *                   scattering point, 2, at vp; its weight in fw),
+ *                   PT_TRANSMIT(p, wi, ls, med, T) (the shadow ray's
+ *                   transmittance to the light sample ls, 0 when blocked)
+ *                   and PT_MEDIUM_AFTER(h, cur, dir) (scene_medium_after).
+ *                   0: the walk without media (integrator_pt.c).
  */
 
 static int pt__counts(const render_settings *rs, int length) {
@@ -136,11 +140,12 @@ static int pt__nee(PT_CTX, const pt__vertex *v, const pt__state *w, REAL u_light
   nee = 3;
   int clear;
 #if PT_MEDIA_CODE
-  rgb tr = rgb_gray(1.0);
+  RRGB tr = RRGB_CONST(rgb_gray(1.0));
   if (PT_MEDIA_ON) {
-    int med_l = v->medv ? v->med : scene_medium_after(s, h, v->med, R3_V(ls.wi));
-    clear = PT_TRANSMIT(v->p, ls.wi, ls.p, ls.dist, med_l, &tr) && !rgb_is_black(tr);
-    if (clear) f = RRGB_MUL(f, RRGB_CONST(tr));
+    int med_l = v->medv ? v->med : PT_MEDIUM_AFTER(h, v->med, R3_V(ls.wi));
+    clear = PT_TRANSMIT(v->p, ls.wi, ls, med_l, &tr) && !RRGB_IS_BLACK(tr);
+    PT_TOPO(clear);
+    if (clear) f = RRGB_MUL(f, tr);
   } else
 #endif
     clear = !PT_BLOCKED(v->p, ls.wi, ls.p, ls.dist);
@@ -216,12 +221,12 @@ static RRGB pt__walk(PT_CTX, REAL3 org, REAL3 dir, REAL *keep_rx, REAL *keep_ry)
 #if PT_MEDIA_CODE
     if (PT_MEDIA_ON) {
       REAL u_ch = PT_DRAW(0), u_t = PT_DRAW(1);
-      rgb T, fw;
-      double pdf;
-      found = render_fly(s, c->cnt, org, dir, tmin, &med, u_ch, u_t, &h, &vp, &T, &pdf, &fw);
+      RRGB fw;
+      found = PT_FLY(org, dir, tmin, &med, u_ch, u_t, &h, &vp, &fw);
+      PT_TOPO(found);
       if (found < 0) break;
-      w.beta = rgb_mul(w.beta, fw);
-      if (rgb_is_black(w.beta)) break;
+      w.beta = RRGB_MUL(w.beta, fw);
+      if (RRGB_IS_BLACK(w.beta)) break;
       medv = found == 2;
     } else
 #endif
@@ -273,7 +278,7 @@ static RRGB pt__walk(PT_CTX, REAL3 org, REAL3 dir, REAL *keep_rx, REAL *keep_ry)
     REAL3 wi;
     if (!pt__scatter(c, &v, u_lobe, ub1, ub2, &w, &eta_scale, &wi)) break;
 #if PT_MEDIA_CODE
-    if (PT_MEDIA_ON && !medv) med = scene_medium_after(s, &h, med, R3_V(wi));
+    if (PT_MEDIA_ON && !medv) med = PT_MEDIUM_AFTER(&h, med, R3_V(wi));
 #endif
     w.prev_p = vp;
 

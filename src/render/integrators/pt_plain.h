@@ -38,6 +38,15 @@ static void pt__footprint(pt__ctx *c, surface_hit *h, vec3 org) {
     h->bsdf = bsdf_with_footprint(h->bsdf, &fp, &c->filtered);
 }
 
+/* The free flight of the walk (render_fly, its transmittance and density
+ * unused here). */
+static inline int pt__fly(pt__ctx *c, vec3 org, vec3 dir, double tmin, int *med, double u_ch,
+                          double u_t, surface_hit *h, vec3 *vp, rgb *fw) {
+  rgb T;
+  double pdf;
+  return render_fly(c->s, c->cnt, org, dir, tmin, med, u_ch, u_t, h, vp, &T, &pdf, fw);
+}
+
 #define R_DUAL 0
 #include "render/real.h"
 #define PT_CTX pt__ctx *c
@@ -62,8 +71,11 @@ static void pt__footprint(pt__ctx *c, surface_hit *h, vec3 org) {
 #define PT_FOOTPRINT(h, depth, org) \
   ((depth) == 1 && c->rd ? pt__footprint(c, &(h), (org)) : (void)0)
 #define PT_MEDIA_ON 1
-#define PT_TRANSMIT(p, wi, lp, dist, med, T) \
-  render_transmittance(c->s, c->cnt, (p), (wi), (lp), (dist), (med), (T))
+#define PT_TRANSMIT(at, w, sample, cur, T) \
+  render_transmittance(c->s, c->cnt, (at), (w), (sample).p, (sample).dist, (cur), (T))
+#define PT_FLY(org, dir, tmin, med, u_ch, u_t, h, vp, fw) \
+  pt__fly(c, (org), (dir), (tmin), (med), (u_ch), (u_t), (h), (vp), (fw))
+#define PT_MEDIUM_AFTER(h, cur, dir) scene_medium_after(c->s, (h), (cur), (dir))
 #include "render/integrators/pt_generic.h"
 
 /* The walk along (org, dir). */
