@@ -1,6 +1,7 @@
 /*
  * region_stats.h: per-region mean luminance of an image, and the mean and
- * standard error of such statistics over independent runs. The MCMC
+ * standard error of such statistics over independent runs (region_runs),
+ * and their agreement with a reference's (region_agree). The MCMC
  * agreement tests compare integrators with these (the image mean plus a
  * grid x grid of region means). Include after <cmocka.h>: region_stats_render
  * asserts.
@@ -63,6 +64,46 @@ static inline void region_stats_render(const scene *s, const render_settings *rs
   for (int k = 0; k < n; k++) sum[k] += reg[k], sum2[k] += reg[k] * reg[k];
   image_free(&img);
   film_free(&f);
+}
+
+/* The grid^2 + 1 statistics of region_means over `runs` renders of s with
+ * *rs (its integrator and flags set by the caller), seeds seed0, seed0 +
+ * 1, ...: their means into OUT_mean, their standard errors into OUT_se. */
+static inline void region_runs(const scene *s, const render_settings *rs, int runs,
+                               uint64_t seed0, int grid, double *OUT_mean, double *OUT_se) {
+  int n = grid * grid + 1;
+  double sum[n], sum2[n];
+  for (int k = 0; k < n; k++) sum[k] = sum2[k] = 0.0;
+  for (int r = 0; r < runs; r++) {
+    render_settings one = *rs;
+    one.seed = seed0 + (uint64_t)r;
+    region_stats_render(s, &one, grid, sum, sum2);
+  }
+  region_mean_se(n, runs, sum, sum2, OUT_mean, OUT_se);
+}
+
+/* Asserts every statistic m[k] (region_runs') within z_max sqrt(se^2 +
+ * ref_se^2) of ref[k], the runs' spread not zero unless both agree
+ * exactly; prints the image means and the largest |difference| / SE under
+ * `what`. Returns the number of checks, grid^2 + 1. */
+static inline int region_agree(const char *what, int grid, const double *m, const double *se,
+                               const double *ref, const double *ref_se, double z_max) {
+  int n = grid * grid + 1;
+  double worst = 0.0;
+  for (int k = 0; k < n; k++) {
+    double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
+    double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
+    if (z > worst) worst = z;
+    if (k == n - 1)
+      fprintf(stderr, "  %s: image mean %.5f +- %.2g, reference %.5f +- %.2g\n", what, m[k],
+              se[k], ref[k], ref_se[k]);
+    assert_true(sd > 0.0 || m[k] == ref[k]); /* independent runs differ */
+    if (!(fabs(m[k] - ref[k]) <= z_max * sd))
+      fail_msg("%s: statistic %d is %.6g, the reference's %.6g: %.2f of their SE (at most %.1f)",
+               what, k, m[k], ref[k], z, z_max);
+  }
+  fprintf(stderr, "  %s: largest |difference| / SE over the regions %.2f\n", what, worst);
+  return n;
 }
 
 #endif

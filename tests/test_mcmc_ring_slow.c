@@ -67,24 +67,19 @@ typedef struct config {
 /* Mean and SE over RUNS of the region means (index GRID*GRID: whole image). */
 static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
-  double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
-  for (int r = 0; r < RUNS; r++) {
-    render_settings rs = s->settings;
-    snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
-    rs.spp = spp;
-    rs.set |= SET_SPP;
-    lmc_error err;
-    /* The default, adaptive bootstrap; its error is part of the SE. */
-    assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
-    for (int f = 0; f < 2 && c->flags[f][0]; f++)
-      assert_int_equal(mcmc_set(&rs, c->flags[f][0], c->flags[f][1], &err), LMC_OK);
-    rs.time_limit = 0.0;
-    rs.threads = 2;
-    rs.seed = 1000 + (uint64_t)r;
-    rs.quiet = 1;
-    region_stats_render(s, &rs, GRID, sum, sum2);
-  }
-  region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  lmc_error err;
+  /* The default, adaptive bootstrap; its error is part of the SE. */
+  assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
+  for (int f = 0; f < 2 && c->flags[f][0]; f++)
+    assert_int_equal(mcmc_set(&rs, c->flags[f][0], c->flags[f][1], &err), LMC_OK);
+  rs.time_limit = 0.0;
+  rs.threads = 2;
+  rs.quiet = 1;
+  region_runs(s, &rs, RUNS, 1000, GRID, mean, se);
 }
 
 /* The MCMC configurations c[0 .. n-1] against bdpt on scene `folder` at
@@ -101,19 +96,9 @@ static void check_scene(const char *folder, int w, int h, int64_t spp, int64_t m
   for (int i = 0; i < n; i++) {
     double m[N_STATS], se[N_STATS];
     run_stats(s, &c[i], strcmp(c[i].integrator, "mlt") == 0 ? mlt_spp : spp, m, se);
-    double worst = 0.0;
-    for (int k = 0; k < N_STATS; k++) {
-      double tol = 6.5 * sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
-      double z = fabs(m[k] - ref[k]) / fmax(sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]), 1e-300);
-      if (z > worst) worst = z;
-      if (k == GRID * GRID)
-        fprintf(stderr, "  %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", folder,
-                c[i].name, m[k], se[k], ref[k], ref_se[k]);
-      assert_near(m[k], ref[k], tol);
-      g_checks++;
-    }
-    fprintf(stderr, "  %s %s: largest |difference| / SE over the regions %.2f\n", folder,
-            c[i].name, worst);
+    char what[128];
+    snprintf(what, sizeof what, "%s %s", folder, c[i].name);
+    g_checks += region_agree(what, GRID, m, se, ref, ref_se, 6.5);
   }
   scene_destroy(s);
 }

@@ -46,22 +46,17 @@ typedef struct config {
 
 static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
-  double sum[N_STATS] = {0}, sum2[N_STATS] = {0};
-  for (int r = 0; r < RUNS; r++) {
-    render_settings rs = s->settings;
-    snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
-    rs.spp = spp;
-    rs.set |= SET_SPP;
-    lmc_error err;
-    assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
-    if (c->states) assert_int_equal(mcmc_set(&rs, "states", c->states, &err), LMC_OK);
-    rs.time_limit = 0.0;
-    rs.threads = 2;
-    rs.seed = 2000 + (uint64_t)r;
-    rs.quiet = 1;
-    region_stats_render(s, &rs, GRID, sum, sum2);
-  }
-  region_mean_se(N_STATS, RUNS, sum, sum2, mean, se);
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  lmc_error err;
+  assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
+  if (c->states) assert_int_equal(mcmc_set(&rs, "states", c->states, &err), LMC_OK);
+  rs.time_limit = 0.0;
+  rs.threads = 2;
+  rs.quiet = 1;
+  region_runs(s, &rs, RUNS, 2000, GRID, mean, se);
 }
 
 static void check_scene(const char *path, int w, int h, const config *c, int n) {
@@ -72,24 +67,11 @@ static void check_scene(const char *path, int w, int h, const config *c, int n) 
   const config bdpt = {"bdpt", NULL};
   run_stats(s, &bdpt, 80, ref, ref_se);
   for (int i = 0; i < n; i++) {
-    char name[64];
-    snprintf(name, sizeof name, "%s%s%s", c[i].integrator, c[i].states ? " on " : "",
+    char what[256];
+    snprintf(what, sizeof what, "%s %s%s%s", path, c[i].integrator, c[i].states ? " on " : "",
              c[i].states ? c[i].states : "");
     run_stats(s, &c[i], 80, m, se);
-    double worst = 0.0;
-    for (int k = 0; k < N_STATS; k++) {
-      double sd = sqrt(se[k] * se[k] + ref_se[k] * ref_se[k]);
-      double z = fabs(m[k] - ref[k]) / fmax(sd, 1e-300);
-      if (z > worst) worst = z;
-      if (k == GRID * GRID)
-        fprintf(stderr, "  %s %s: image mean %.5f +- %.2g, bdpt %.5f +- %.2g\n", path, name,
-                m[k], se[k], ref[k], ref_se[k]);
-      assert_true(sd > 0.0);
-      assert_near(m[k], ref[k], 6.5 * sd);
-      g_checks++;
-    }
-    fprintf(stderr, "  %s %s: largest |difference| / SE over the regions %.2f\n", path, name,
-            worst);
+    g_checks += region_agree(what, GRID, m, se, ref, ref_se, 6.5);
   }
   scene_destroy(s);
 }
