@@ -346,6 +346,18 @@ static int lmcpy_eval(const mc_target *T, lmcpy_worker *w, const double *u, int 
   return 0;
 }
 
+/* NULL and ValueError: the target's states have no `what` (gradient,
+ * Hessian) through the scene's participating media yet (their eval
+ * refuses it; the pt states' gradient goes through them). */
+static PyObject *lmcpy_media_refused(lmcpy_target *self, const char *what) {
+  int n = self->scene->s->n_media;
+  return PyErr_Format(PyExc_ValueError,
+                      "%s: no derivatives through participating media on the %s states yet (the "
+                      "scene has %d medi%s; t.f and t.value evaluate f through them, and the pt "
+                      "states' t.grad)",
+                      what, self->sp.name, n, n == 1 ? "um" : "a");
+}
+
 /* t.f(u, label=None) and t.grad(u, label=None). */
 static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject *kwargs,
                                    int want_grad) {
@@ -397,6 +409,7 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
   if (failed) {
     Py_DECREF(fo);
     Py_XDECREF(go);
+    if (want_grad && self->scene->s->n_media > 0) return lmcpy_media_refused(self, "grad");
     PyErr_SetString(PyExc_RuntimeError, "the target's evaluation failed (out of memory)");
     return NULL;
   }
@@ -413,22 +426,7 @@ static PyObject *lmcpy_target_call(lmcpy_target *self, PyObject *args, PyObject 
 static PyObject *lmcpy_target_f(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
   return lmcpy_target_call(self, args, kwargs, 0);
 }
-/* 0 and ValueError when the target runs through participating media on
- * states that have no derivatives through them yet (all but pt's
- * gradient; `what`: grad or hessian). */
-static int lmcpy_no_media(lmcpy_target *self, const char *what) {
-  int n = self->scene->s->n_media;
-  if (n == 0 || (!strcmp(what, "grad") && !strcmp(self->sp.name, "pt"))) return 1;
-  PyErr_Format(PyExc_ValueError,
-               "%s: no derivatives through participating media on the %s states yet (the scene "
-               "has %d medi%s; t.f and t.value evaluate f through them, and the pt states' "
-               "t.grad)",
-               what, self->sp.name, n, n == 1 ? "um" : "a");
-  return 0;
-}
-
 static PyObject *lmcpy_target_grad(lmcpy_target *self, PyObject *args, PyObject *kwargs) {
-  if (!lmcpy_no_media(self, "grad")) return NULL;
   return lmcpy_target_call(self, args, kwargs, 1);
 }
 
@@ -508,7 +506,7 @@ static PyObject *lmcpy_target_hessian(lmcpy_target *self, PyObject *args, PyObje
   if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|Op:hessian", kwlist, &uo, &lo, &with_grad))
     return NULL;
   const mc_target *T = self->T;
-  if (!lmcpy_no_media(self, "hessian")) return NULL;
+  if (!T->eval_hess && self->scene->s->n_media > 0) return lmcpy_media_refused(self, "hessian");
   if (!T->eval_hess)
     return PyErr_Format(PyExc_ValueError,
                         "hessian: the %s states have no Hessian (eval_hess; h2mc's spaces are "

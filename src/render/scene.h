@@ -101,13 +101,19 @@ int scene_intersect(const scene *s, vec3 org, vec3 dir, double tmin, double tmax
 int scene_intersect_media(const scene *s, vec3 org, vec3 dir, double tmin, double tmax,
                           surface_hit *OUT_hit);
 /* The medium (1 + index into s->media; 0: none) a ray along dir enters
- * from the hit h, having come in medium cur: the hit shape's exterior when
- * dir leaves on the side of h->ng, else its interior, for a shape that
- * bounds media (Mitsuba's getTargetMedium); cur for one that does not. */
-static inline int scene_medium_after(const scene *s, const surface_hit *h, int cur, vec3 dir) {
-  const mesh *m = &s->meshes[h->mesh];
+ * crossing mesh mesh_index where its geometric normal is ng, having come
+ * in medium cur: the shape's exterior when dir leaves on the side of ng,
+ * else its interior, for a shape that bounds media (Mitsuba's
+ * getTargetMedium); cur for one that does not. scene_medium_after: the
+ * same at a hit h (the dual path's hits give their mesh and ng). */
+static inline int scene_medium_across(const scene *s, int mesh_index, vec3 ng, int cur,
+                                      vec3 dir) {
+  const mesh *m = &s->meshes[mesh_index];
   if (!m->interior && !m->exterior) return cur;
-  return v3_dot(dir, h->ng) > 0.0 ? m->exterior : m->interior;
+  return v3_dot(dir, ng) > 0.0 ? m->exterior : m->interior;
+}
+static inline int scene_medium_after(const scene *s, const surface_hit *h, int cur, vec3 dir) {
+  return scene_medium_across(s, h->mesh, h->ng, cur, dir);
 }
 /* The medium (1-based; 0: none) around point p, from the side a probe ray
  * arrives at the first shape that bounds media (skipping the mesh `skip`,

@@ -104,7 +104,6 @@ int mcmc_is_integrator(const char *name) {
   return mc_method_find(name) != NULL;
 }
 
-
 /* --- the driver's flags ------------------------------------------------------ */
 
 static const char *const mcmc__small_steps[] = {"kelemen", "gauss", NULL};

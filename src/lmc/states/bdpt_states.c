@@ -307,7 +307,7 @@ lmc_status mc_bdpt_states_init(mc_target *OUT_target, mc_bdpt_states *ctx, const
   ctx->area = (s->cam.width + 2.0 * ctx->margin) * (s->cam.height + 2.0 * ctx->margin);
   ctx->rough_min = rough_min;
   ctx->kmin = kmin, ctx->kmax = kmax;
-  ctx->media = s->n_media > 0 && !rs->no_media;
+  ctx->media = render_media_on(s, rs);
   ctx->per_vertex = BDPT_DIMS_PER_VERTEX + (ctx->media ? BDPT_DIMS_MEDIA : 0);
   ctx->dir_at = (ctx->media ? BDPT_DIMS_MEDIA : 0) + 1;
 

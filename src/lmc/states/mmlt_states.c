@@ -230,7 +230,7 @@ lmc_status mc_mmlt_states_init(mc_target *OUT_target, mc_mmlt_states *ctx, const
   ctx->n_strategies = length == 1 ? 1 : length + 1;
   ctx->margin = r;
   ctx->area = (W + 2.0 * r) * (H + 2.0 * r);
-  ctx->media = s->n_media > 0 && !rs->no_media;
+  ctx->media = render_media_on(s, rs);
   ctx->per_vertex = BDPT_DIMS_PER_VERTEX + (ctx->media ? BDPT_DIMS_MEDIA : 0);
   mc_target *T = OUT_target;
   T->stream_dim[LMC_STREAM_CAMERA] = 2 + ctx->per_vertex * (length + 1);

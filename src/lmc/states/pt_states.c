@@ -125,7 +125,7 @@ lmc_status mc_space_pt_create(mc_space *OUT, const scene *s, const render_settin
   c->rs = *rs;
   c->margin = s->filter.radius;
   c->area = (s->cam.width + 2.0 * c->margin) * (s->cam.height + 2.0 * c->margin);
-  c->media = s->n_media > 0 && !rs->no_media;
+  c->media = render_media_on(s, rs);
   c->per_bounce = PT_DIMS_PER_BOUNCE + (c->media ? PT_DIMS_MEDIA : 0);
   int bounces = rs->maxdepth >= 0 ? rs->maxdepth : MC_PT_UNBOUNDED;
   mc_target *T = &c->fam.target;

@@ -82,6 +82,13 @@ static inline int render_blocked(const scene *s, render_counters *cnt, vec3 p, v
   return isinf(dist) ? scene_occluded_ray(s, p, wi) : scene_occluded_segment(s, p, lp);
 }
 
+/* 1 when a render of s with rs goes through the scene's participating
+ * media: it has some, and rs.no_media (the MCMC driver's, for integrators
+ * and settings that do not render them) is unset. */
+static inline int render_media_on(const scene *s, const render_settings *rs) {
+  return s->n_media > 0 && !rs->no_media;
+}
+
 /* 1 when the integrator `name` of this library renders participating
  * media (pt, bdpt); the others render a scene's media as empty space,
  * after render_media_note's warning. */

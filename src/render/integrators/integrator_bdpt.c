@@ -225,7 +225,7 @@ int bdpt_camera_subpath_p(const scene *sc, const render_settings *rs, lmc_sample
                           bdpt_vertex *OUT_path, render_counters *cnt) {
   if (max_vertices > BDPT_MAX_VERTICES) max_vertices = BDPT_MAX_VERTICES;
   if (max_vertices < 1) return 0;
-  bdpt__walker w = {sc, rs, smp, par, cnt, sc->n_media > 0 && !rs->no_media, 0};
+  bdpt__walker w = {sc, rs, smp, par, cnt, render_media_on(sc, rs), 0};
   bdpt__camera_vertex(&w, &OUT_path[0]);
   vec3 org, dir;
   camera_generate_ray(&sc->cam, rx, ry, &org, &dir);
@@ -240,7 +240,7 @@ int bdpt_light_subpath(const scene *sc, const render_settings *rs, lmc_sampler *
 int bdpt_light_subpath_p(const scene *sc, const render_settings *rs, lmc_sampler *smp,
                          int max_vertices, const bdpt_param *par, bdpt_vertex *OUT_path,
                          render_counters *cnt) {
-  bdpt__walker w = {sc, rs, smp, par, cnt, sc->n_media > 0 && !rs->no_media, 0};
+  bdpt__walker w = {sc, rs, smp, par, cnt, render_media_on(sc, rs), 0};
   return bdpt__light_walk(&w, max_vertices, OUT_path);
 }
 
@@ -660,7 +660,7 @@ rgb bdpt_li(const scene *s, const render_settings *rs, lmc_sampler *smp, double 
 
   /* The two subpaths, each from its own stream (through the scene's
    * media, when it has some). */
-  int media = s->n_media > 0 && !rs->no_media, nc, nl;
+  int media = render_media_on(s, rs), nc, nl;
   bdpt_subpaths(sc, rs, smp, rx, ry, media, cam, &nc, lp, &nl, cnt);
 
   /* Every strategy (s, t); t = 1 goes to the splat film. */

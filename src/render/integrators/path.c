@@ -360,13 +360,6 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
  * transmittances and the scattering points move with the path.
  */
 
-/* scene_medium_after for a dual hit. */
-static int path__medium_after(const scene *s, const path__hit *h, int cur, vec3 dir) {
-  const mesh *m = &s->meshes[h->mesh];
-  if (!m->interior && !m->exterior) return cur;
-  return v3_dot(dir, h->ng) > 0.0 ? m->exterior : m->interior;
-}
-
 /* |b - a| in duals. */
 static ad path__dist(ad_arena *A, adv3 a, adv3 b) { return adv3_length(A, adv3_sub(A, b, a)); }
 
@@ -400,7 +393,7 @@ static int path__fly(path__ctx *c, adv3 org, adv3 dir, double tmin, int *med, ad
       found = 1;
       break;
     }
-    *med = path__medium_after(s, h, *med, path__val(dir));
+    *med = scene_medium_across(s, h->mesh, h->ng, *med, path__val(dir));
     org = h->p;
     tmin = scene_ray_eps(s, path__val(h->p));
   }
@@ -440,7 +433,7 @@ static int path__transmit(path__ctx *c, adv3 p, adv3 wi, adv3 lp, int infinite, 
     }
     if (h.bsdf) return 0;
     if (m) T = adrgb_mul(A, T, medium_transmittance_ad(A, m, path__dist(A, o, h.p)));
-    m = scene_medium(s, med = path__medium_after(s, &h, med, path__val(wi)));
+    m = scene_medium(s, med = scene_medium_across(s, h.mesh, h.ng, med, path__val(wi)));
     o = h.p;
     tmin = scene_ray_eps(s, path__val(h.p));
   }
@@ -479,7 +472,7 @@ static int path__transmit(path__ctx *c, adv3 p, adv3 wi, adv3 lp, int infinite, 
   path__transmit(c, (at), (w), (sample).pd, isinf((sample).dist), (cur), (T))
 #define PT_FLY(org, dir, tmin, med, u_ch, u_t, h, vp, fw) \
   path__fly(c, (org), (dir), (tmin), (med), (u_ch), (u_t), (h), (vp), (fw))
-#define PT_MEDIUM_AFTER(h, cur, dir) path__medium_after(c->sc, (h), (cur), (dir))
+#define PT_MEDIUM_AFTER(h, cur, dir) scene_medium_across(c->sc, (h)->mesh, (h)->ng, (cur), (dir))
 #include "render/integrators/pt_generic.h"
 
 /* The unidirectional estimator: the film position and the camera ray, then
@@ -506,7 +499,7 @@ static void path__ctx_init(path__ctx *c, const scene *sc, const render_settings 
   c->smp = smp;
   c->replay = replay;
   c->jac = 1.0;
-  c->media = sc->n_media > 0 && !rs->no_media; /* (the unidirectional estimator's) */
+  c->media = render_media_on(sc, rs); /* (the unidirectional estimator's) */
 }
 
 void path__run(const scene *sc, const render_settings *rs, lmc_sampler *smp, int want_grad,

@@ -143,7 +143,7 @@ static rgb render__pt(const scene *s, const render_settings *rs, const direct_se
     prd = &rd;
   }
   if (ds) return direct_li(s, rs, ds, smp, org, dir, prd, cnt);
-  return s->n_media > 0 && !rs->no_media ? pt_li_media(s, rs, smp, org, dir, prd, cnt)
+  return render_media_on(s, rs) ? pt_li_media(s, rs, smp, org, dir, prd, cnt)
                                          : pt_li(s, rs, smp, org, dir, prd, cnt);
 }
 
@@ -209,10 +209,10 @@ static rgb render__sample(const scene *s, const render_settings *rs, int x, int 
   uint64_t pixel = (uint64_t)y * (uint64_t)s->cam.width + (uint64_t)x;
   if (rs->sampler == LMC_SAMPLER_SOBOL) {
     sobol_sampler_init(&smp_store.sobol, rs->seed, pixel, (uint32_t)pass,
-                       use_bdpt ? (s->n_media > 0 && !rs->no_media ? &sampler_layout_bdpt_media
+                       use_bdpt ? (render_media_on(s, rs) ? &sampler_layout_bdpt_media
                                                                    : &sampler_layout_bdpt)
                        : ds     ? &sampler_layout_direct
-                       : s->n_media > 0 && !rs->no_media ? &sampler_layout_pt_media
+                       : render_media_on(s, rs) ? &sampler_layout_pt_media
                                 : &sampler_layout_pt);
     smp = &smp_store.sobol.base;
   } else {
