@@ -98,11 +98,52 @@ static inline int mm_teardown(void **state) {
   return 0;
 }
 
+/* ---- HSLT's scenes: the seven and `wall` (test_mut_hslt.c) ---------------------- */
+
+#define WALL N_SCENES /* the eighth scene */
+#define N_ALL (N_SCENES + 1)
+
+static const char *wall_shape =
+    MIRROR_SHAPE "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6\"/></bsdf>"
+                 "</shape>\n";
+
+typedef struct hfixture {
+  fixture *mm;
+  scene *sc[N_ALL];
+} hfixture;
+
+static inline int hslt_setup(void **state) {
+  void *mm;
+  if (mm_setup(&mm) != 0) return -1;
+  hfixture *fx = calloc(1, sizeof *fx);
+  fx->mm = mm;
+  for (int q = 0; q < N_SCENES; q++) fx->sc[q] = fx->mm->sc[q];
+  char xml[4096];
+  snprintf(xml, sizeof xml, "%s%s%s%s</scene>\n", scene_head, sphere_rough, wall_shape,
+           light_area);
+  fx->sc[WALL] = try_load_scene_text(xml, "hslt_wall");
+  if (!fx->sc[WALL]) return -1;
+  *state = fx;
+  return 0;
+}
+
+static inline int hslt_teardown(void **state) {
+  hfixture *fx = *state;
+  scene_destroy(fx->sc[WALL]);
+  void *mm = fx->mm;
+  mm_teardown(&mm);
+  free(fx);
+  return 0;
+}
+
+static inline const char *name_of(int q) { return q == WALL ? "wall" : scene_names[q]; }
+
 typedef struct movers {
   ps_context ctx;
   mut_bidir mb;
   mut_perturb mp;
   mut_manifold mm;
+  mut_manifold mh; /* HSLT's half-vector perturbation, step 1 */
 } movers;
 
 static inline void movers_init(movers *mv, const scene *sc) {
@@ -110,16 +151,21 @@ static inline void movers_init(movers *mv, const scene *sc) {
   mut_bidir_init(&mv->mb, &mv->ctx);
   mut_perturb_init(&mv->mp, &mv->ctx);
   mut_manifold_init(&mv->mm, &mv->ctx, &mv->mp);
+  mut_manifold_init_hslt(&mv->mh, &mv->ctx, &mv->mp, 1.0);
 }
 
-/* A path with f > 0 that the move applies to, or 0 after many tries. */
-static inline int draw_state(const movers *mv, rng *r, ps_path *x) {
+/* A path with f > 0 that move m applies to, or 0 after many tries. */
+static inline int draw_state_for(const movers *mv, const mut_manifold *m, rng *r, ps_path *x) {
   for (int tries = 0; tries < 2000000; tries++) {
     int k = 1 + (int)(rng_uniform(r) * KMAX);
     if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
-    if (mut_manifold_applies(&mv->mm, x)) return 1;
+    if (mut_manifold_applies(m, x)) return 1;
   }
   return 0;
+}
+
+static inline int draw_state(const movers *mv, rng *r, ps_path *x) {
+  return draw_state_for(mv, &mv->mm, r, x);
 }
 
 /* A chain vertex: S (delta) or G. */
@@ -139,13 +185,15 @@ static inline int inv_bin(const scene *sc, const ps_path *x) {
 }
 
 /* Weighted whole paths of length k_only (their weight C(x) / q(x), q the
- * sampler's density), each moved once. */
-static inline ps_inv *invariance(const scene *sc, int k_only, uint64_t seed, double power,
-                          double glossy_power, int n) {
+ * sampler's density), each moved once by the manifold perturbation, or by
+ * HSLT's when hslt is set. */
+static inline ps_inv *invariance_of(const scene *sc, int hslt, int k_only, uint64_t seed,
+                                    double power, double glossy_power, int n) {
   movers mv;
   movers_init(&mv, sc);
-  mv.mm.test_jac_power = power;
-  mv.mm.test_glossy_power = glossy_power;
+  mut_manifold *m = hslt ? &mv.mh : &mv.mm;
+  m->test_jac_power = power;
+  m->test_glossy_power = glossy_power;
   /* Larger moves than the defaults: more power against a wrong density. */
   mv.mp.r1 *= 4.0, mv.mp.r2 *= 4.0;
   ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
@@ -158,8 +206,7 @@ static inline ps_inv *invariance(const scene *sc, int k_only, uint64_t seed, dou
     assert_true(q > 0.0);
     double w = x->lum / q, ratio = 0.0;
     res->samples++;
-    int moved = mut_manifold_applies(&mv.mm, x) &&
-                mut_manifold_propose(&mv.mm, &r, x, y, &ratio, NULL, NULL) &&
+    int moved = mut_manifold_applies(m, x) && mut_manifold_propose(m, &r, x, y, &ratio, NULL, NULL) &&
                 rng_uniform(&r) < ratio;
     int b0 = inv_bin(sc, x), b1 = moved ? inv_bin(sc, y) : b0;
     ps_inv_add(res, w, b0, b1);
@@ -167,6 +214,11 @@ static inline ps_inv *invariance(const scene *sc, int k_only, uint64_t seed, dou
   ps_inv_finish(res);
   free(x), free(y);
   return res;
+}
+
+static inline ps_inv *invariance(const scene *sc, int k_only, uint64_t seed, double power,
+                                 double glossy_power, int n) {
+  return invariance_of(sc, 0, k_only, seed, power, glossy_power, n);
 }
 
 #endif

@@ -185,7 +185,7 @@ static void check_pairs(const scene *sc, uint64_t seed, int n, int *OUT_reverse,
     assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
     if (!(y->lum > 0.0) || !(ratio > 0.0)) continue;
     /* The move from y through x's raster point gives back x. */
-    assert_true(mut_manifold_generate(&mv.mm, y, x->rx, x->ry, z, NULL, NULL));
+    assert_true(mut_manifold_generate(&mv.mm, y, x->rx, x->ry, NULL, z, NULL, NULL));
     for (int j = 0; j <= x->k; j++) {
       /* (A direction at infinity: its point stands beyond the scene.) */
       double d = x->x[j].inf ? sc->radius * v3_len(v3_sub(z->x[j].v.dir, x->x[j].v.dir))

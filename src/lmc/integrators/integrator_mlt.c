@@ -7,9 +7,11 @@
  * both ends, by the lens, multi-chain and caustic perturbations
  * (lmc/path/mut_perturb.h), which move a path a little keeping its form,
  * and by the lens subpath mutation (lmc/path/mut_lenssub.h), which moves
- * it to a fresh image point, and by the manifold perturbation
+ * it to a fresh image point, by the manifold perturbation
  * (lmc/path/mut_manifold.h), which walks a specular chain pinned at both
- * ends. Each move is on or off (Mitsuba's flags; the
+ * ends, and by HSLT's half-vector perturbation (the same file), which
+ * steps every half vector between the camera's first non-specular vertex
+ * and the light and walks the path to them. Each move is on or off (Mitsuba's flags; the
  * lens subpath mutation, which Mitsuba lacks, has none), all on by default; a step
  * selects among those that apply to the current path with equal weights,
  * as Mitsuba does, but for the primary-sample step's own (--pss-weight;
@@ -25,11 +27,12 @@
 typedef struct mlt_settings {
   int move[MC_PATH_MOVE_COUNT]; /* on (1) or off, by mc_path_move */
   double pss_weight;            /* the primary-sample step's selection weight (the others 1) */
+  double hslt_weight;           /* HSLT's likewise */
 } mlt_settings;
 
-static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0, 0}, 1.0};
+static const mlt_settings mlt__defaults = {{1, 1, 1, 1, 1, 0, 0, 0}, 1.0, 1.0};
 static const char *const mlt__names[MC_PATH_MOVE_COUNT] = {
-    "bidir", "lens", "multichain", "caustic", "lenssub", "pss", "manifold"};
+    "bidir", "lens", "multichain", "caustic", "lenssub", "pss", "manifold", "hslt"};
 
 static const lmc_opt mlt__opts[] = {
     {"bidir-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_BIDIR]), 0, 0, 0,
@@ -60,6 +63,17 @@ static const lmc_opt mlt__opts[] = {
      "retraced, the chain behind its first diffuse vertex walked on its manifold, glossy "
      "vertices' half vectors held (paths E (S|G)* D (S|G)+ (D|L))",
      "manifoldPerturbation"},
+    {"hslt", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_HSLT]), 0, 0, 0,
+     lmc_opt_off_on, NULL, 0, NULL, "off",
+     "Kaplanyan et al.'s half-vector perturbation (HSLT): the image point moved and every half "
+     "vector between the camera's first non-specular vertex and the light stepped by its "
+     "roughness (--hslt-step), the path walked to them on its manifold (paths E S* D (S|G|D)+ L)",
+     NULL},
+    {"hslt-weight", LMC_OPT_DOUBLE, offsetof(mlt_settings, hslt_weight), 0, 1e-3, 1e3, NULL, NULL,
+     0, "W", "1",
+     "--hslt on: the move's weight in the choice of a move, each other move's being 1 (as "
+     "--pss-weight)",
+     NULL},
     {"pss-mutation", LMC_OPT_CHOICE, offsetof(mlt_settings, move[MC_PATH_MOVE_PSS]), 0, 0, 0,
      lmc_opt_off_on, NULL, 0, NULL, "off",
      "a primary-sample small step: the path's numbers for a strategy drawn by its MIS weights, "
@@ -88,10 +102,13 @@ static lmc_status mlt__create(void **OUT_run, const mc_method_setup *setup, lmc_
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--integrator mlt: every mutation is off (--bidir-mutation, "
                          "--lens-perturbation, --multichain-perturbation, --caustic-perturbation, "
-                         "--lens-subpath-mutation, --manifold-perturbation, --pss-mutation)");
+                         "--lens-subpath-mutation, --manifold-perturbation, --hslt, "
+                         "--pss-mutation)");
   if (ms->pss_weight != 1.0 && !ms->move[MC_PATH_MOVE_PSS])
     return lmc_error_set(err, LMC_EINVAL, NULL, 0,
                          "--pss-weight: the primary-sample step is off (--pss-mutation on)");
+  if (ms->hslt_weight != 1.0 && !ms->move[MC_PATH_MOVE_HSLT])
+    return lmc_error_set(err, LMC_EINVAL, NULL, 0, "--hslt-weight: HSLT is off (--hslt on)");
   if (!ms->move[MC_PATH_MOVE_BIDIR] && !setup->rs->quiet)
     lmc_warn(NULL, 0,
              "mlt without the bidirectional mutation: the perturbations alone keep each path's "
@@ -109,7 +126,9 @@ static int mlt__chain_kernels(void *run, const mc_method_setup *setup, int i,
   for (int j = 0; j < MC_PATH_MOVE_COUNT; j++) {
     if (!ms->move[j]) continue;
     k[n] = (mc_kernel){.name = mlt__names[j], .kind = MC_KERNEL_OWN, .coord = j};
-    p[n++] = j == MC_PATH_MOVE_PSS ? ms->pss_weight : 1.0;
+    p[n++] = j == MC_PATH_MOVE_PSS    ? ms->pss_weight
+             : j == MC_PATH_MOVE_HSLT ? ms->hslt_weight
+                                      : 1.0;
   }
   return n;
 }

@@ -620,7 +620,7 @@ static int mf__path_range(const ps_path *p, int a, int b, unsigned flags, int *O
 int mf_path_vertex(const ps_context *ctx, const ps_path *p, int j, unsigned flags,
                    mf_kind *OUT_kind, double *OUT_eta) {
   const ps_vertex *x = &p->x[j];
-  int glossy = (flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j);
+  int glossy = (flags & MF_PATH_ANY) || ((flags & MF_PATH_GLOSSY) && ps_glossy(ctx, p, j));
   if (!x->delta && !glossy) return MF_EINVAL;
   const bsdf *bs = x->v.hit.bsdf;
   if (!bs || bsdf_needs_tangents(bs)) return MF_EBSDF;

@@ -309,6 +309,8 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G);
 /* Flags of mf_chain_from_path and mf_chain_to_path. */
 #define MF_PATH_GLOSSY 1u /* glossy inner vertices (ps_glossy) are specular, targets their half vectors */
 #define MF_PATH_FROM_B 2u /* the chain starts at x_b (an endpoint at infinity is the start anyway) */
+#define MF_PATH_ANY 4u    /* every inner vertex that is not delta (glossy or not, diffuse too) is a
+                             chain vertex, its target its half vector (HSLT's whole-path chain) */
 
 /* The chain of path p's vertices x_a .. x_b (above) into *OUT: x_0 the
  * start (x_a, or x_b under MF_PATH_FROM_B or when x_b is at infinity), the
@@ -317,7 +319,8 @@ int mf_geometry_term(const scene *sc, const mf_chain *c, double *OUT_G);
  * current. MF_EINVAL when the vertices do not make a chain (an index out
  * of range, k = b - a - 1 outside 1 .. MF_MAX_CHAIN, an end that is
  * specular or (x_{k+1}) not a surface, an inner vertex that is neither
- * delta nor, under MF_PATH_GLOSSY, glossy, both ends at infinity);
+ * delta nor, under MF_PATH_GLOSSY, glossy (under MF_PATH_ANY, any inner
+ * surface vertex qualifies), both ends at infinity);
  * MF_EBSDF for a chain vertex whose BSDF the chain cannot follow (a
  * refraction on a surface that is not a dielectric or roughdielectric
  * (thindielectric, a mask's pass-through), a bump-mapped or anisotropic
@@ -326,7 +329,7 @@ int mf_chain_from_path(const ps_context *ctx, const ps_path *p, int a, int b, un
                        mf_chain *OUT);
 
 /* Whether path vertex j may be a chain vertex: delta, or glossy under
- * MF_PATH_GLOSSY (else MF_EINVAL), on a BSDF the chain can follow (else
+ * MF_PATH_GLOSSY, or any non-delta surface vertex under MF_PATH_ANY (else MF_EINVAL), on a BSDF the chain can follow (else
  * MF_EBSDF); its kind, a reflection or a refraction by the sides of the
  * geometric normal its path neighbours lie on, and a refraction's eta from
  * the BSDF, into *OUT_kind and *OUT_eta (left alone for a reflection). */

@@ -1,7 +1,11 @@
 /*
  * mut_manifold.c: the manifold perturbation on chains of smooth and glossy
- * vertices, and its sky form (mut_manifold.h states the move and its
- * density). Mitsuba 0.6's
+ * vertices, its sky form, and HSLT's half-vector perturbation over the
+ * whole path (mut_manifold.h states the moves and their densities).
+ * Kaplanyan et al. 2014 was read for HSLT's facts (a path as its ends and
+ * the half vectors between them, steps in those coordinates by each
+ * vertex's roughness, the change of measure by the constraints'
+ * Jacobian). Mitsuba 0.6's
  * manifold perturbation (src/libbidir/mut_manifold.cpp) was read for the
  * method's facts (a walk of the chain behind the perturbed vertex towards
  * its new position, the reverse walk computed and a move whose reverse
@@ -12,6 +16,8 @@
 
 #include <math.h>
 #include <string.h>
+
+#include "render/bsdf/bsdf_model.h"
 
 #define MM_PI 3.14159265358979323846
 /* The chain behind x_b: from x_c, glossy vertices kept at their half vectors. */
@@ -28,6 +34,26 @@ void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_pertur
   mm->back_tol = 1e-6 * ctx->sc->radius;
   mm->test_jac_power = 1.0;
   mm->test_glossy_power = 1.0;
+}
+
+void mut_manifold_init_hslt(mut_manifold *mm, const ps_context *ctx, const mut_perturb *mp,
+                            double step) {
+  mut_manifold_init(mm, ctx, mp);
+  mm->hslt = 1;
+  mm->hslt_step = step;
+}
+
+/* The flags of the chain behind x_b: from x_c, glossy vertices (under
+ * HSLT every vertex that is not S) held at their half vectors. */
+static unsigned mm__flags(const mut_manifold *mm) {
+  return mm->hslt ? MF_PATH_FROM_B | MF_PATH_ANY : MF_LIGHT_CHAIN;
+}
+
+double mut_manifold_hslt_width(const ps_context *ctx, const ps_path *x, int j) {
+  (void)ctx;
+  const bsdf *bs = x->x[j].v.hit.bsdf;
+  double r = bs && bs->model->roughness ? bs->model->roughness(bs) : 0.0;
+  return r > 0.0 ? fmin(r, MUT_HSLT_MAX_WIDTH) : 0.0;
 }
 
 /* Whether vertex i of x is a chain vertex: S (delta) or G (ps_glossy). */
@@ -53,8 +79,21 @@ static int mm__sky_form(const mut_manifold *mm, const ps_path *x) {
   return 1;
 }
 
+/* HSLT's form: x_1 .. x_{b-1} S, x_b not, at least one chain vertex
+ * between x_b and the emitter end x_k, both chains readable. */
+static int mm__hslt_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int *OUT_c) {
+  const ps_context *ctx = mm->ctx;
+  int k = x->k, b = 1;
+  while (b < k && x->x[b].delta) b++;
+  if (b + 1 >= k || mf_path_chain_fits(ctx, x, b, k, mm__flags(mm)) != MF_OK) return 0;
+  if (b > 1 && mf_path_chain_fits(ctx, x, 0, b, MF_PATH_GLOSSY) != MF_OK) return 0;
+  *OUT_b = b, *OUT_c = k;
+  return 1;
+}
+
 int mut_manifold_form(const mut_manifold *mm, const ps_path *x, int *OUT_b, int *OUT_c) {
   const ps_context *ctx = mm->ctx;
+  if (mm->hslt) return mm__hslt_form(mm, x, OUT_b, OUT_c);
   int k = x->k, b = 1;
   while (b < k && mm__specular(ctx, x, b)) b++;
   if (b == k) {
@@ -86,6 +125,41 @@ static int mm__walk(const mut_manifold *mm, const mf_chain *from, vec3 target, m
     tally->walked += st == MF_OK;
   }
   return st == MF_OK;
+}
+
+int mut_manifold_half_vectors(const mut_manifold *mm, const ps_path *x,
+                              double OUT_h[2 * PS_MAX_VERTICES]) {
+  int b, c;
+  mf_chain ch;
+  memset(OUT_h, 0, 2 * PS_MAX_VERTICES * sizeof *OUT_h);
+  if (!mut_manifold_form(mm, x, &b, &c) || b == c ||
+      mf_chain_from_path(mm->ctx, x, b, c, mm__flags(mm), &ch) != MF_OK)
+    return 0;
+  /* Chain vertex i is x_{c - i}. */
+  for (int i = 1; i <= ch.k; i++) {
+    if (x->x[c - i].delta) continue;
+    OUT_h[2 * (c - i)] = ch.v[i].target[0];
+    OUT_h[2 * (c - i) + 1] = ch.v[i].target[1];
+  }
+  return 1;
+}
+
+/* HSLT: chain ch (x_c .. x_b of path p) projected onto the manifold of the
+ * targets h (mut_manifold_half_vectors' layout) by a trace from its start
+ * through its x_1, into *OUT; 0 when a target is not inside the unit disk
+ * or the trace leaves the chain's meshes. */
+static int mm__retarget(const mut_manifold *mm, const ps_path *p, int c, const mf_chain *ch,
+                        const double *h, mf_chain *OUT, int64_t *rays) {
+  mf_chain proto = *ch;
+  for (int i = 1; i <= proto.k; i++) {
+    int j = c - i;
+    if (p->x[j].delta) continue;
+    if (!(h[2 * j] * h[2 * j] + h[2 * j + 1] * h[2 * j + 1] < 1.0)) return 0;
+    proto.v[i].target[0] = h[2 * j];
+    proto.v[i].target[1] = h[2 * j + 1];
+  }
+  if (rays) *rays += proto.k + 1;
+  return mf_trace_through(mm->ctx->sc, &proto, proto.v[1].p, OUT) == MF_OK;
 }
 
 /* Chain vertex j of path p as the walk's vertex: its place, and its kind,
@@ -136,7 +210,8 @@ static int mm__generate_sky(const mut_manifold *mm, const ps_path *x, double rx,
 }
 
 int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, double ry,
-                          ps_path *OUT_y, int64_t *rays, mut_manifold_tally *tally) {
+                          const double *h, ps_path *OUT_y, int64_t *rays,
+                          mut_manifold_tally *tally) {
   const ps_context *ctx = mm->ctx;
   const scene *sc = ctx->sc;
   int b, c;
@@ -157,13 +232,15 @@ int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, d
     if (mf_trace(sc, &cam, dir, &cam_y) != MF_OK) return 0;
     if (mf_chain_to_path(sc, &cam_y, 0, b, MF_PATH_GLOSSY, y) != MF_OK) return 0;
   }
-  /* The chain behind x_b walked to it, its end on y_b's surface. */
+  /* The chain behind x_b walked to it, its end on y_b's surface (under
+   * HSLT first moved onto the manifold of the new targets). */
   mf_chain cx, cy;
-  if (mf_chain_from_path(ctx, x, b, c, MF_LIGHT_CHAIN, &cx) != MF_OK) return 0;
+  if (mf_chain_from_path(ctx, x, b, c, mm__flags(mm), &cx) != MF_OK) return 0;
   if (y->x[b].v.hit.mesh != cx.v[cx.k + 1].mesh) return 0;
+  if (mm->hslt && (!h || !mm__retarget(mm, x, c, &cx, h, &cx, rays))) return 0;
   if (!mm__walk(mm, &cx, y->x[b].v.p, &cy, rays, tally)) return 0;
   bdpt_vertex yb = y->x[b].v;
-  if (mf_chain_to_path(sc, &cy, b, c, MF_LIGHT_CHAIN, y) != MF_OK) return 0;
+  if (mf_chain_to_path(sc, &cy, b, c, mm__flags(mm), y) != MF_OK) return 0;
   y->x[b].v = yb; /* the retraced vertex, which the walk's end reached within its tolerance */
   ps_update(ctx, y, 0, c + 1 > y->k ? y->k : c + 1);
   /* x's form: the kinds of every changed vertex. */
@@ -186,7 +263,12 @@ int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_p
   if (!mut_manifold_form(mm, x, &b, &c)) return 0;
   if (b == x->k) return 1; /* the sky form: no walk, the trace is its own inverse */
   mf_chain cy, cz;
-  if (mf_chain_from_path(mm->ctx, y, b, c, MF_LIGHT_CHAIN, &cy) != MF_OK) return 0;
+  if (mf_chain_from_path(mm->ctx, y, b, c, mm__flags(mm), &cy) != MF_OK) return 0;
+  if (mm->hslt) {
+    double hx[2 * PS_MAX_VERTICES];
+    if (!mut_manifold_half_vectors(mm, x, hx) || !mm__retarget(mm, y, c, &cy, hx, &cy, rays))
+      return 0;
+  }
   if (!mm__walk(mm, &cy, x->x[b].v.p, &cz, rays, tally)) return 0;
   /* Chain vertex i is x_{c - i}. */
   for (int i = 1; i <= cz.k; i++)
@@ -234,7 +316,7 @@ static double mm__chain_density(const mut_manifold *mm, const ps_path *y, int b,
   const ps_context *ctx = mm->ctx;
   mf_chain ch;
   mf_jac J;
-  if (mf_chain_from_path(ctx, y, b, c, MF_LIGHT_CHAIN, &ch) != MF_OK ||
+  if (mf_chain_from_path(ctx, y, b, c, mm__flags(mm), &ch) != MF_OK ||
       mf_jacobian(ctx->sc, &ch, &J) != MF_OK)
     return 0.0;
   double phi = y->x[c].inf ? fabs(v3_dot(ps_dir(y, c - 1, c), y->x[c - 1].v.n))
@@ -273,6 +355,23 @@ static double mm__sky_density(const mut_manifold *mm, const ps_path *y) {
   return jac;
 }
 
+/* HSLT: the density of y's half vectors drawn about x's, prod_j q(h'_j |
+ * h_j) (mut_manifold.h); a vertex of zero width keeps its half vector. */
+static double mm__hslt_density(const mut_manifold *mm, const ps_path *x, const ps_path *y) {
+  double hx[2 * PS_MAX_VERTICES], hy[2 * PS_MAX_VERTICES];
+  if (!mut_manifold_half_vectors(mm, x, hx) || !mut_manifold_half_vectors(mm, y, hy)) return 0.0;
+  int b, c;
+  mut_manifold_form(mm, x, &b, &c);
+  double q = 1.0;
+  for (int j = b + 1; j < c; j++) {
+    double s = mm->hslt_step * mut_manifold_hslt_width(mm->ctx, x, j);
+    if (x->x[j].delta || !(s > 0.0)) continue;
+    double dx = hy[2 * j] - hx[2 * j], dy = hy[2 * j + 1] - hx[2 * j + 1];
+    q *= exp(-(dx * dx + dy * dy) / (2.0 * s * s)) / (2.0 * MM_PI * s * s);
+  }
+  return q;
+}
+
 double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_path *y) {
   int bx, cx, by, cy;
   if (y->k != x->k || !mut_manifold_form(mm, x, &bx, &cx) || !mut_manifold_form(mm, y, &by, &cy) ||
@@ -282,7 +381,27 @@ double mut_manifold_density(const mut_manifold *mm, const ps_path *x, const ps_p
   double p = mut_perturb_log_pdf(mm->mp->r1, mm->mp->r2, dr) / (2.0 * MM_PI * dr);
   if (!(p > 0.0)) return 0.0;
   if (bx == x->k) return p * mm__sky_density(mm, y);
-  return p * mm__camera_density(mm, y, bx) * mm__chain_density(mm, y, bx, cx);
+  p *= mm__camera_density(mm, y, bx) * mm__chain_density(mm, y, bx, cx);
+  return mm->hslt && p > 0.0 ? p * mm__hslt_density(mm, x, y) : p;
+}
+
+/* HSLT: x's half vectors, each that is not S moved by sigma_j times a
+ * standard normal pair (Box-Muller), into OUT_h; 0 when one leaves the
+ * unit disk (no proposal). */
+static int mm__hslt_draw(const mut_manifold *mm, rng *r, const ps_path *x,
+                         double OUT_h[2 * PS_MAX_VERTICES]) {
+  if (!mut_manifold_half_vectors(mm, x, OUT_h)) return 0;
+  int b, c;
+  mut_manifold_form(mm, x, &b, &c);
+  for (int j = b + 1; j < c; j++) {
+    double s = mm->hslt_step * mut_manifold_hslt_width(mm->ctx, x, j);
+    if (x->x[j].delta || !(s > 0.0)) continue;
+    double rad = s * sqrt(-2.0 * log(1.0 - rng_uniform(r))), a = 2.0 * MM_PI * rng_uniform(r);
+    OUT_h[2 * j] += rad * cos(a);
+    OUT_h[2 * j + 1] += rad * sin(a);
+    if (!(OUT_h[2 * j] * OUT_h[2 * j] + OUT_h[2 * j + 1] * OUT_h[2 * j + 1] < 1.0)) return 0;
+  }
+  return 1;
 }
 
 int mut_manifold_propose(const mut_manifold *mm, rng *r, const ps_path *x, ps_path *OUT_y,
@@ -291,8 +410,10 @@ int mut_manifold_propose(const mut_manifold *mm, rng *r, const ps_path *x, ps_pa
   if (!mut_manifold_applies(mm, x)) return 0;
   double size = mut_perturb_log_sample(mm->mp->r1, mm->mp->r2, rng_uniform(r));
   double phi = 2.0 * MM_PI * rng_uniform(r);
-  if (!mut_manifold_generate(mm, x, x->rx + size * cos(phi), x->ry + size * sin(phi), OUT_y, rays,
-                             tally))
+  double h[2 * PS_MAX_VERTICES];
+  if (mm->hslt && !mm__hslt_draw(mm, r, x, h)) return 0;
+  if (!mut_manifold_generate(mm, x, x->rx + size * cos(phi), x->ry + size * sin(phi),
+                             mm->hslt ? h : NULL, OUT_y, rays, tally))
     return 0;
   double t_fwd = mut_manifold_density(mm, x, OUT_y);
   if (!(t_fwd > 0.0)) return 0;

@@ -76,6 +76,30 @@
  * direction y_k, 1 after an S vertex (its Dirac reduced) and |det d h_{k-1}
  * / d omega| (mf_half_vector_dir_jacobian) after a G vertex; a G vertex's
  * K_i before a surface is the same determinant times |cos y_{i+1}| / d^2.
+ *
+ * HSLT's half-vector perturbation (Kaplanyan, Hanika and Dachsbacher 2014;
+ * mut_manifold_init_hslt). The same move over the whole path: x_b is the
+ * camera's first vertex that is not S (x_1 .. x_{b-1} are S), x_c = x_k
+ * the emitter end, and every vertex between them (at least one) is a
+ * chain vertex, S or not: a D vertex too is held at a half vector, its
+ * target (MF_PATH_ANY). The move draws the raster offset as above and a
+ * new half vector for every chain vertex that is not S, h'_j = h_j +
+ * sigma_j z (z a standard normal pair, in the projected half vector's
+ * coordinates of manifold.h; sigma_j = hslt_step times the vertex's
+ * width, mut_manifold_hslt_width; a draw with |h'_j| >= 1 makes no
+ * proposal), projects x's chain onto the manifold of those targets (a
+ * trace from x_k through x_{k-1} about them: mf_trace_through) and walks
+ * it to y_b, which the retraced camera ray gives. The chain is then a
+ * function of y_b and the h', so
+ *   T(x -> y) = p_r(|dr|) / (2 pi |dr|) * W H * pdf_cam(y_1)
+ *               * prod_{i=1..b-1} K_i(y) * Phi(y) / G(y) * prod_j q(h'_j | h_j),
+ * Phi and G as above with every non-S chain vertex's factor |det dc_i /
+ * dA_{i+1}| (the density per unit of its half vector's measure), q the
+ * normal density of the draw. q is symmetric, so the ratio keeps f,
+ * Phi / G and the camera's Jacobians. The reverse walk from y, with x's
+ * half vectors as targets, must return to x, as above. The light's end
+ * x_k stays: a point on a light, or a light's direction at infinity
+ * (other moves change it).
  */
 #ifndef LMC_PATH_MUT_MANIFOLD_H
 #define LMC_PATH_MUT_MANIFOLD_H
@@ -84,8 +108,10 @@
 #include "lmc/path/mut_perturb.h"
 
 typedef struct mut_manifold {
-  const ps_context *ctx;  /* borrowed */
-  const mut_perturb *mp;  /* borrowed: the raster offset's range (r1, r2) */
+  const ps_context *ctx; /* borrowed */
+  const mut_perturb *mp; /* borrowed: the raster offset's range (r1, r2) */
+  int hslt;              /* 1: HSLT's half-vector perturbation (above); 0: the manifold one */
+  double hslt_step;      /* HSLT: sigma_j = hslt_step times the vertex's width */
   mf_options walk;        /* the walks' settings (mf_options_default) */
   double back_tol;        /* the reverse walk's chain against x's: 1e-6 scene radius */
   double test_jac_power;  /* tests only: G raised to this wrong power (1: right) */
@@ -101,6 +127,22 @@ typedef struct mut_manifold_tally {
 } mut_manifold_tally;
 
 void mut_manifold_init(mut_manifold *mm, const ps_context *ctx, const mut_perturb *mp);
+/* The same for HSLT's half-vector perturbation, its step factor `step` (> 0). */
+void mut_manifold_init_hslt(mut_manifold *mm, const ps_context *ctx, const mut_perturb *mp,
+                            double step);
+
+/* HSLT: the width of vertex j's half-vector step before hslt_step: its
+ * BSDF's roughness (bsdf_model.h; 1 for a diffuse surface), at most
+ * MUT_HSLT_MAX_WIDTH. */
+#define MUT_HSLT_MAX_WIDTH 0.25
+double mut_manifold_hslt_width(const ps_context *ctx, const ps_path *x, int j);
+
+/* The targets of the chain behind x_b as the move reads them from x: for
+ * each path vertex j (b < j < c) that is not S, its projected half vector
+ * (manifold.h) in OUT_h[2 j], OUT_h[2 j + 1]; the other entries 0. 1 on
+ * success, 0 when the move does not apply or a chain cannot be read. */
+int mut_manifold_half_vectors(const mut_manifold *mm, const ps_path *x,
+                              double OUT_h[2 * PS_MAX_VERTICES]);
 
 /* The form's indices of x (the opening comment): b and c, 1 when it
  * applies, else 0. */
@@ -111,13 +153,17 @@ static inline int mut_manifold_applies(const mut_manifold *mm, const ps_path *x)
 }
 
 /* y from x through the image point (rx, ry): the retrace and the walk
- * (the opening comment), without the reverse walk. Returns 1 with y
- * evaluated (f(y) may be 0: the join blocked), 0 when there is no y. rays
- * (may be NULL) adds the rays traced, tally (may be NULL) the walks. */
+ * (the opening comment), without the reverse walk; under HSLT, h gives
+ * the chain's new targets as mut_manifold_half_vectors lays them out
+ * (the manifold perturbation: NULL, x's own). Returns 1 with y evaluated
+ * (f(y) may be 0: the join blocked), 0 when there is no y. rays (may be
+ * NULL) adds the rays traced, tally (may be NULL) the walks. */
 int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, double ry,
-                          ps_path *OUT_y, int64_t *rays, mut_manifold_tally *tally);
+                          const double *h, ps_path *OUT_y, int64_t *rays,
+                          mut_manifold_tally *tally);
 
-/* Whether the walk from y's chain to x's x_b returns to x's chain. */
+/* Whether the walk from y's chain to x's x_b (under HSLT with x's half
+ * vectors as targets) returns to x's chain. */
 int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_path *y,
                             int64_t *rays, mut_manifold_tally *tally);
 

@@ -59,6 +59,7 @@ typedef struct path__space {
   mut_perturb mp;
   mut_lenssub ml;
   mut_manifold mm;
+  mut_manifold mh; /* HSLT */
   mut_pss mq;
   mc_chain_kind kind;
 } path__space;
@@ -185,6 +186,8 @@ static int path__applies(const path__space *P, int move, const ps_path *x) {
     return mut_lenssub_m(&P->ctx, x) > 0;
   case MC_PATH_MOVE_MANIFOLD:
     return mut_manifold_applies(&P->mm, x);
+  case MC_PATH_MOVE_HSLT:
+    return mut_manifold_applies(&P->mh, x);
   default:
     return 1;
   }
@@ -239,9 +242,10 @@ static int path__propose(const path__space *P, mc_chain *c, int ki, double p_x, 
     ok = pc->pss_v && mut_pss_propose(&P->mq, &c->r, x, y, &ratio, pc->pss_v, &y->rays, &ty);
     c->stats[ki].inverted += ty.inverted;
     c->stats[ki].refused += ty.refused, c->stats[ki].elsewhere += ty.elsewhere;
-  } else if (move == MC_PATH_MOVE_MANIFOLD) {
+  } else if (move == MC_PATH_MOVE_MANIFOLD || move == MC_PATH_MOVE_HSLT) {
     mut_manifold_tally ty = {0, 0, 0, 0};
-    ok = mut_manifold_propose(&P->mm, &c->r, x, y, &ratio, &y->rays, &ty);
+    ok = mut_manifold_propose(move == MC_PATH_MOVE_HSLT ? &P->mh : &P->mm, &c->r, x, y, &ratio,
+                              &y->rays, &ty);
     c->stats[ki].walks += ty.walks, c->stats[ki].walked += ty.walked;
     c->stats[ki].irreversible += ty.irreversible;
   } else {
@@ -300,9 +304,10 @@ static int64_t path__chain_rays(const mc_chain *c) {
 /* The space's own settings (its flag table). */
 typedef struct path__settings {
   double glossy_rough; /* --glossy-roughness */
+  double hslt_step;    /* --hslt-step */
 } path__settings;
 
-static const path__settings path__defaults = {0.1};
+static const path__settings path__defaults = {0.1, 1.0};
 
 static const lmc_opt path__opts[] = {
     {"glossy-roughness", LMC_OPT_DOUBLE, offsetof(path__settings, glossy_rough), 0, 0, 1, NULL,
@@ -311,10 +316,15 @@ static const lmc_opt path__opts[] = {
      "<= R by sampling their BSDFs, as they retrace specular ones (0: Veach's, joining "
      "through them)",
      NULL},
+    {"hslt-step", LMC_OPT_DOUBLE, offsetof(path__settings, hslt_step), 0, 1e-3, 1e3, NULL, NULL, 0,
+     "F", NULL,
+     "HSLT's half-vector perturbation: each vertex's half vector moves by a normal step of F "
+     "times its roughness (at most 0.25; a diffuse vertex 0.25)",
+     NULL},
 };
 
 const lmc_opt_table mc_space_path_options = {"The path states (--states path, mlt)", path__opts,
-                                             1, &path__defaults, sizeof path__defaults};
+                                             2, &path__defaults, sizeof path__defaults};
 
 static void path__space_destroy(mc_space *sp) {
   free(sp->ctx);
@@ -336,6 +346,7 @@ lmc_status mc_space_path_create(mc_space *OUT, const scene *s, const render_sett
   P->ctx.glossy_rough = ps.glossy_rough;
   mut_lenssub_init(&P->ml, &P->ctx);
   mut_manifold_init(&P->mm, &P->ctx, &P->mp);
+  mut_manifold_init_hslt(&P->mh, &P->ctx, &P->mp, ps.hslt_step);
   mut_pss_init(&P->mq, &P->ctx, mc_light_u1_scale(s));
   if (rs->maxdepth < 0 && !rs->quiet)
     fprintf(stderr, "lmc: %s renders paths of at most %d segments (set --maxdepth)\n",

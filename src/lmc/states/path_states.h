@@ -18,6 +18,7 @@ typedef enum mc_path_move {
                                  primary-sample states draws among (MC_PATH_MOVE_FUSED) */
   MC_PATH_MOVE_MANIFOLD,      /* the manifold perturbation (lmc/path/mut_manifold.h; not yet
                                  among the fused move's) */
+  MC_PATH_MOVE_HSLT,          /* HSLT's half-vector perturbation (mut_manifold.h; likewise) */
   MC_PATH_MOVE_COUNT
 } mc_path_move;
 
