@@ -8,8 +8,8 @@
  * reversible jumps (--technique-jump 0.2) and fused path moves
  * (--path-mutations 0.3) on the rings (pssmlt also on the box), mlt
  * with its primary-sample step (--pss-mutation on) on the box, and with
- * the manifold perturbation (--manifold-perturbation on) on the glass
- * ring and the box
+ * the manifold perturbation and HSLT's half-vector perturbation
+ * (--manifold-perturbation on --hslt on) on the glass ring and the box
  * (the metal ring's reflected chains are the manifold tests' mirrors,
  * test_mut_manifold). This is the guard against start-up bias and wrong
  * normalisation.
@@ -113,7 +113,7 @@ static const config g_configs[N_CONFIGS] = {
     {"mlt", "mlt", {{NULL, NULL}}},
     {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
     {"mmlt jumps+path", "mmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
-    {"mlt manifold", "mlt", {{"manifold-perturbation", "on"}, {NULL, NULL}}},
+    {"mlt manifold+hslt", "mlt", {{"manifold-perturbation", "on"}, {"hslt", "on"}}},
 };
 
 /* The metal ring: the first five (mlt's own moves, without the manifold
@@ -139,7 +139,7 @@ static void test_cornell_box_mlt(void **state) {
       {"mlt", "mlt", {{NULL, NULL}}},
       {"mlt pss step", "mlt", {{"pss-mutation", "on"}, {NULL, NULL}}},
       {"pssmlt jumps+path", "pssmlt", {{"technique-jump", "0.2"}, {"path-mutations", "0.3"}}},
-      {"mlt manifold", "mlt", {{"manifold-perturbation", "on"}, {NULL, NULL}}},
+      {"mlt manifold+hslt", "mlt", {{"manifold-perturbation", "on"}, {"hslt", "on"}}},
   };
   check_scene("cornell-box", 32, 32, 512, 512, c, 4);
 }

@@ -52,6 +52,7 @@ void mf_options_default(const scene *sc, mf_options *OUT) {
   OUT->tol = 1e-7 * (sc && sc->radius > 0.0 ? sc->radius : 1.0);
   OUT->max_traces = 64;
   OUT->min_beta = 1.0 / (1 << 20);
+  OUT->off_start = 0;
 }
 
 /* ---- Vertices in plain arithmetic ------------------------------------------ */
@@ -483,7 +484,9 @@ int mf_walk(const scene *sc, const mf_chain *c, vec3 target, const mf_options *o
   int k = cur.k, status = MF_ENOCONV;
   mf__geo ge;
   mf__geom(sc, &cur.v[k + 1], &ge);
-  inf.dist = v3_len(v3_sub(target, ge.p));
+  /* Off its manifold the end's distance says nothing: any projection that
+   * succeeds brings the chain onto it and is taken. */
+  inf.dist = opt.off_start ? INFINITY : v3_len(v3_sub(target, ge.p));
   double beta = 1.0;
 
   for (;;) {

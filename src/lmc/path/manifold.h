@@ -216,6 +216,8 @@ typedef struct mf_options {
   double tol;      /* success: |end - target| <= tol (default 1e-7 scene->radius) */
   int max_traces;  /* projections (accepted or not) before MF_ENOCONV (default 64) */
   double min_beta; /* step size below which a failing step ends the walk (default 2^-20) */
+  int off_start;   /* 1: the chain may start off its manifold (new targets): its first
+                      successful projection is taken whatever its end's distance (default 0) */
 } mf_options;
 
 /* What a walk did. */
@@ -293,9 +295,9 @@ int mf_trace(const scene *sc, const mf_chain *proto, vec3 dir, mf_chain *OUT);
  * MF_ESHAPE, nothing MF_EMISS). What mf_walk projects with. */
 int mf_trace_through(const scene *sc, const mf_chain *proto, vec3 x1, mf_chain *OUT);
 
-/* The manifold walk: moves chain c (on its manifold: as mf_trace made it)
- * so that its end reaches `target` (a point on the end's surface), x_0
- * fixed. On MF_OK, *OUT is the chain whose end is within o->tol of the
+/* The manifold walk: moves chain c (on its manifold: as mf_trace made it;
+ * under o->off_start it may be off it, its targets new) so that its end
+ * reaches `target` (a point on the end's surface), x_0 fixed. On MF_OK, *OUT is the chain whose end is within o->tol of the
  * target; on failure *OUT is the last chain reached (on the manifold) and
  * the status says why. info may be NULL. OUT may be c. */
 int mf_walk(const scene *sc, const mf_chain *c, vec3 target, const mf_options *o, mf_chain *OUT,

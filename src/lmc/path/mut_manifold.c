@@ -41,6 +41,7 @@ void mut_manifold_init_hslt(mut_manifold *mm, const ps_context *ctx, const mut_p
   mut_manifold_init(mm, ctx, mp);
   mm->hslt = 1;
   mm->hslt_step = step;
+  mm->walk.off_start = 1; /* the walks start at the new half vectors */
 }
 
 /* The flags of the chain behind x_b: from x_c, glossy vertices (under
@@ -144,22 +145,18 @@ int mut_manifold_half_vectors(const mut_manifold *mm, const ps_path *x,
   return 1;
 }
 
-/* HSLT: chain ch (x_c .. x_b of path p) projected onto the manifold of the
- * targets h (mut_manifold_half_vectors' layout) by a trace from its start
- * through its x_1, into *OUT; 0 when a target is not inside the unit disk
- * or the trace leaves the chain's meshes. */
-static int mm__retarget(const mut_manifold *mm, const ps_path *p, int c, const mf_chain *ch,
-                        const double *h, mf_chain *OUT, int64_t *rays) {
-  mf_chain proto = *ch;
-  for (int i = 1; i <= proto.k; i++) {
+/* HSLT: the targets h (mut_manifold_half_vectors' layout) set on chain ch
+ * (x_c .. x_b of path p), which is then off their manifold until the
+ * walk's first projection; 0 when one is not inside the unit disk. */
+static int mm__retarget(const ps_path *p, int c, const double *h, mf_chain *ch) {
+  for (int i = 1; i <= ch->k; i++) {
     int j = c - i;
     if (p->x[j].delta) continue;
     if (!(h[2 * j] * h[2 * j] + h[2 * j + 1] * h[2 * j + 1] < 1.0)) return 0;
-    proto.v[i].target[0] = h[2 * j];
-    proto.v[i].target[1] = h[2 * j + 1];
+    ch->v[i].target[0] = h[2 * j];
+    ch->v[i].target[1] = h[2 * j + 1];
   }
-  if (rays) *rays += proto.k + 1;
-  return mf_trace_through(mm->ctx->sc, &proto, proto.v[1].p, OUT) == MF_OK;
+  return 1;
 }
 
 /* Chain vertex j of path p as the walk's vertex: its place, and its kind,
@@ -237,7 +234,7 @@ int mut_manifold_generate(const mut_manifold *mm, const ps_path *x, double rx, d
   mf_chain cx, cy;
   if (mf_chain_from_path(ctx, x, b, c, mm__flags(mm), &cx) != MF_OK) return 0;
   if (y->x[b].v.hit.mesh != cx.v[cx.k + 1].mesh) return 0;
-  if (mm->hslt && (!h || !mm__retarget(mm, x, c, &cx, h, &cx, rays))) return 0;
+  if (mm->hslt && (!h || !mm__retarget(x, c, h, &cx))) return 0;
   if (!mm__walk(mm, &cx, y->x[b].v.p, &cy, rays, tally)) return 0;
   bdpt_vertex yb = y->x[b].v;
   if (mf_chain_to_path(sc, &cy, b, c, mm__flags(mm), y) != MF_OK) return 0;
@@ -266,8 +263,7 @@ int mut_manifold_reversible(const mut_manifold *mm, const ps_path *x, const ps_p
   if (mf_chain_from_path(mm->ctx, y, b, c, mm__flags(mm), &cy) != MF_OK) return 0;
   if (mm->hslt) {
     double hx[2 * PS_MAX_VERTICES];
-    if (!mut_manifold_half_vectors(mm, x, hx) || !mm__retarget(mm, y, c, &cy, hx, &cy, rays))
-      return 0;
+    if (!mut_manifold_half_vectors(mm, x, hx) || !mm__retarget(y, c, hx, &cy)) return 0;
   }
   if (!mm__walk(mm, &cy, x->x[b].v.p, &cz, rays, tally)) return 0;
   /* Chain vertex i is x_{c - i}. */

@@ -307,7 +307,7 @@ typedef struct path__settings {
   double hslt_step;    /* --hslt-step */
 } path__settings;
 
-static const path__settings path__defaults = {0.1, 1.0};
+static const path__settings path__defaults = {0.1, 0.1};
 
 static const lmc_opt path__opts[] = {
     {"glossy-roughness", LMC_OPT_DOUBLE, offsetof(path__settings, glossy_rough), 0, 0, 1, NULL,
