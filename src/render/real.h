@@ -93,6 +93,7 @@
 #undef R3_NEG
 #undef R3_SCALE
 #undef R3_SCALE_S
+#undef R3_FMA
 #undef R3_DOT
 #undef R3_LEN2
 #undef R3_CROSS
@@ -178,6 +179,7 @@ static inline ad r__dot_c(ad_arena *A, vec3 e, adv3 a) {
 #define R3_NEG(a) adv3_neg(A, (a))
 #define R3_SCALE(a, s) adv3_scale(A, (a), (s))
 #define R3_SCALE_S(a, s) adv3_scale_s(A, (a), (s))
+#define R3_FMA(a, b, s) adv3_fma(A, (a), (b), (s))
 #define R3_DOT(a, b) adv3_dot(A, (a), (b))
 #define R3_LEN2(a) adv3_len2(A, (a))
 #define R3_CROSS(a, b) adv3_cross(A, (a), (b))
@@ -243,6 +245,7 @@ static inline ad r__dot_c(ad_arena *A, vec3 e, adv3 a) {
 #define R3_NEG(a) v3_neg(a)
 #define R3_SCALE(a, s) v3_scale((a), (s))
 #define R3_SCALE_S(a, s) v3_scale((a), (s))
+#define R3_FMA(a, b, s) v3_fma((a), (b), (s))
 #define R3_DOT(a, b) v3_dot((a), (b))
 #define R3_LEN2(a) v3_len2(a)
 #define R3_CROSS(a, b) v3_cross((a), (b))

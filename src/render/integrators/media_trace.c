@@ -2,12 +2,35 @@
  * media_trace.c: shadow rays through participating media (integrator.h's
  * render_transmittance): the transmittance of each medium the segment
  * crosses between the index-matched boundaries on its way; the free
- * flight of pt's and bdpt's walks across them (render_fly); and which
- * integrators render media.
+ * flight of pt's and bdpt's walks across them (render_fly), both the plain
+ * forms of media_trace_generic.h (path.c has their dual forms); the medium
+ * a light's paths start in; and which integrators render media.
  */
 #include "render/integrators/integrator.h"
 
+#include <math.h>
 #include <string.h>
+
+/* The flight and the shadow ray, written once with path.c's dual forms. */
+#define R_DUAL 0
+#include "render/real.h"
+#define MT_FLY media__fly
+#define MT_TRANSMIT media__transmit
+#define MT_CTX const scene *mt_sc, render_counters *cnt
+#define MT_SC mt_sc
+#define MT_ARENA
+#define MT_HIT surface_hit
+#define MT_TRACE_FLY(org, dir, tmin, h) render_trace_media(mt_sc, cnt, (org), (dir), (tmin), (h))
+#define MT_SEGMENT(org, dir, tmin, tmax) \
+  (cnt->rays++, ray_log_add(cnt, (org), (dir), (tmin), (tmax), 1))
+#define MT_TRACE_SEG(org, dir, tmin, tmax, h) \
+  scene_intersect_media(mt_sc, (org), (dir), (tmin), (tmax), (h))
+#define MT_LEN(org, h) ((h)->t)
+#define MT_DIST(a, b) v3_len(v3_sub((b), (a)))
+#define MT_FULL(p, lp, dist) (dist)
+#define MT_BLOCKED(p, wi, lp, dist) render_blocked(mt_sc, cnt, (p), (wi), (lp), (dist))
+#define MT_TOPO(x) ((void)0)
+#include "render/integrators/media_trace_generic.h"
 
 int render_integrator_media(const char *name) {
   return strcmp(name, "pt") == 0 || strcmp(name, "bdpt") == 0;
@@ -25,37 +48,6 @@ int render_media_note(const scene *s, const char *name, int renders) {
   return 1;
 }
 
-int render_transmittance(const scene *s, render_counters *cnt, vec3 p, vec3 wi, vec3 lp,
-                         double dist, int med, rgb *OUT_T) {
-  rgb T = rgb_gray(1.0);
-  const medium *m = scene_medium(s, med);
-  if (!s->accel_media) {
-    /* No boundary without a BSDF: one medium all the way. */
-    if (render_blocked(s, cnt, p, wi, lp, dist)) return 0;
-    *OUT_T = m ? medium_transmittance(m, dist) : T;
-    return 1;
-  }
-  vec3 o = p;
-  double tmin = scene_ray_eps(s, p);
-  for (int n = 0; n <= RENDER_MAX_CROSSINGS; n++) {
-    double rest = isinf(dist) ? INFINITY : v3_len(v3_sub(lp, o));
-    double tmax = isinf(dist) ? INFINITY : rest - scene_ray_eps(s, lp);
-    surface_hit h;
-    cnt->rays++;
-    ray_log_add(cnt, o, wi, tmin, tmax, 1);
-    if (!(tmax > tmin) || !scene_intersect_media(s, o, wi, tmin, tmax, &h)) {
-      *OUT_T = m ? rgb_mul(T, medium_transmittance(m, rest)) : T;
-      return 1;
-    }
-    if (h.bsdf) return 0;
-    if (m) T = rgb_mul(T, medium_transmittance(m, h.t));
-    m = scene_medium(s, med = scene_medium_after(s, &h, med, wi));
-    o = h.p;
-    tmin = scene_ray_eps(s, h.p);
-  }
-  return 0;
-}
-
 int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir) {
   if (mesh_index >= 0) {
     const mesh *m = &s->meshes[mesh_index];
@@ -65,36 +57,13 @@ int render_medium_at(const scene *s, int mesh_index, vec3 p, vec3 n, vec3 dir) {
   return med >= 0 ? med : s->ambient_medium;
 }
 
+int render_transmittance(const scene *s, render_counters *cnt, vec3 p, vec3 wi, vec3 lp,
+                         double dist, int med, rgb *OUT_T) {
+  return media__transmit(s, cnt, p, wi, lp, dist, med, OUT_T);
+}
+
 int render_fly(const scene *s, render_counters *cnt, vec3 org, vec3 dir, double tmin, int *med,
                double u_ch, double u_t, surface_hit *h, vec3 *OUT_mp, rgb *OUT_T, double *OUT_pdf,
                rgb *OUT_w) {
-  medium_track k;
-  medium_track_begin(u_ch, u_t, &k);
-  int found = 0;
-  const medium *m = NULL;
-  for (int n = 0;; n++) {
-    if (n > RENDER_MAX_CROSSINGS) return -1;
-    int hit = render_trace_media(s, cnt, org, dir, tmin, h);
-    m = scene_medium(s, *med);
-    double t;
-    if (m && medium_track_piece(m, hit ? h->t : INFINITY, &k, &t)) {
-      *OUT_mp = v3_fma(org, dir, t);
-      found = 2;
-      break;
-    }
-    m = NULL;
-    if (!hit) break;
-    if (h->bsdf) {
-      found = 1;
-      break;
-    }
-    *med = scene_medium_after(s, h, *med, dir);
-    org = h->p;
-    tmin = scene_ray_eps(s, h->p);
-  }
-  *OUT_T = k.T;
-  *OUT_pdf = medium_track_pdf(m, found == 2, k.T);
-  if (!(*OUT_pdf > 0.0)) return -1;
-  *OUT_w = rgb_scale(found == 2 ? rgb_mul(k.T, m->sigma_s) : k.T, 1.0 / *OUT_pdf);
-  return found;
+  return media__fly(s, cnt, org, dir, tmin, med, u_ch, u_t, h, OUT_mp, OUT_T, OUT_pdf, OUT_w);
 }

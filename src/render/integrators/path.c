@@ -354,8 +354,9 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
 }
 
 /* ---------------------------------------------------------------------------
- * Through participating media (media_trace.c's flight and shadow rays in
- * duals): the boundaries' hits re-evaluated on the dual rays, each piece's
+ * Through participating media (media_trace_generic.h's flight and shadow
+ * ray, written once with media_trace.c's plain forms, here in duals): the
+ * boundaries' hits re-evaluated on the dual rays, each piece's
  * length the distance between them, so that the distances, the
  * transmittances and the scattering points move with the path.
  */
@@ -363,85 +364,25 @@ static rgb path__le_infinite(path__ctx *c, const light *l, adv3 dir) {
 /* |b - a| in duals. */
 static ad path__dist(ad_arena *A, adv3 a, adv3 b) { return adv3_length(A, adv3_sub(A, b, a)); }
 
-/* render_fly in duals: the track from (u_ch, u_t) across the pieces
- * between boundaries from org along dir; 1: a surface (in *h), 2: a
- * scattering point (*OUT_p), 0: out of the scene, -1: lost; its weight in
- * *OUT_w. */
-static int path__fly(path__ctx *c, adv3 org, adv3 dir, double tmin, int *med, ad u_ch, ad u_t,
-                     path__hit *h, adv3 *OUT_p, adrgb *OUT_w) {
-  ad_arena *A = c->A;
-  const scene *s = c->sc;
-  medium_track_ad k;
-  medium_track_begin_ad(A, u_ch, u_t, &k);
-  path__topo(c, k.c);
-  int found = 0;
-  const medium *m = NULL;
-  for (int n = 0;; n++) {
-    if (n > RENDER_MAX_CROSSINGS) return -1;
-    int hit = path__trace(c, org, dir, tmin, INFINITY, 1, h);
-    m = scene_medium(s, *med);
-    ad t;
-    if (m && medium_track_piece_ad(A, m, hit ? path__dist(A, org, h->p) : ad_const(A, INFINITY),
-                                   &k, &t)) {
-      *OUT_p = adv3_fma(A, org, dir, t);
-      found = 2;
-      break;
-    }
-    m = NULL;
-    if (!hit) break;
-    if (h->bsdf) {
-      found = 1;
-      break;
-    }
-    *med = scene_medium_across(s, h->mesh, h->ng, *med, path__val(dir));
-    org = h->p;
-    tmin = scene_ray_eps(s, path__val(h->p));
-  }
-  ad pdf = medium_track_pdf_ad(A, m, found == 2, k.T);
-  if (!(pdf.v > 0.0)) return -1;
-  adrgb w = found == 2 ? adrgb_mul(A, k.T, adrgb_const(A, m->sigma_s)) : k.T;
-  *OUT_w = adrgb_scale(A, w, ad_inv(A, pdf));
-  return found;
-}
-
-/* render_transmittance in duals: from p along wi to the light point lp
- * (along wi forever when infinite), starting in medium med; 1 with the
- * transmittance in *OUT_T when no surface blocks it. */
-static int path__transmit(path__ctx *c, adv3 p, adv3 wi, adv3 lp, int infinite, int med,
-                          adrgb *OUT_T) {
-  ad_arena *A = c->A;
-  const scene *s = c->sc;
-  adrgb T = adrgb_const(A, rgb_gray(1.0));
-  const medium *m = scene_medium(s, med);
-  if (!s->accel_media) {
-    if (path__blocked(c, path__val(p), path__val(wi), path__val(lp), infinite)) return 0;
-    *OUT_T = m ? medium_transmittance_ad(A, m, infinite ? ad_const(A, INFINITY)
-                                                         : path__dist(A, p, lp))
-               : T;
-    return 1;
-  }
-  adv3 o = p;
-  double tmin = scene_ray_eps(s, path__val(p));
-  for (int n = 0; n <= RENDER_MAX_CROSSINGS; n++) {
-    ad rest = infinite ? ad_const(A, INFINITY) : path__dist(A, o, lp);
-    double tmax = infinite ? INFINITY : rest.v - scene_ray_eps(s, path__val(lp));
-    path__hit h;
-    path__topo(c, tmax > tmin);
-    if (!(tmax > tmin) || !path__trace(c, o, wi, tmin, tmax, 1, &h)) {
-      *OUT_T = m ? adrgb_mul(A, T, medium_transmittance_ad(A, m, rest)) : T;
-      return 1;
-    }
-    if (h.bsdf) return 0;
-    if (m) T = adrgb_mul(A, T, medium_transmittance_ad(A, m, path__dist(A, o, h.p)));
-    m = scene_medium(s, med = scene_medium_across(s, h.mesh, h.ng, med, path__val(wi)));
-    o = h.p;
-    tmin = scene_ray_eps(s, path__val(h.p));
-  }
-  return 0;
-}
-
 #define R_DUAL 1
 #include "render/real.h"
+#define MT_FLY path__fly
+#define MT_TRANSMIT path__transmit
+#define MT_CTX path__ctx *c
+#define MT_SC (c->sc)
+#define MT_ARENA ad_arena *A = c->A;
+#define MT_HIT path__hit
+#define MT_TRACE_FLY(org, dir, tmin, h) path__trace(c, (org), (dir), (tmin), INFINITY, 1, (h))
+#define MT_SEGMENT(org, dir, tmin, tmax) path__topo(c, (tmax) > (tmin))
+#define MT_TRACE_SEG(org, dir, tmin, tmax, h) path__trace(c, (org), (dir), (tmin), (tmax), 1, (h))
+#define MT_LEN(org, h) path__dist(A, (org), (h)->p)
+#define MT_DIST(a, b) path__dist(A, (a), (b))
+#define MT_FULL(p, lp, dist) (isinf(dist) ? ad_const(A, INFINITY) : path__dist(A, (p), (lp)))
+#define MT_BLOCKED(p, wi, lp, dist) \
+  path__blocked(c, path__val(p), path__val(wi), path__val(lp), isinf(dist))
+#define MT_TOPO(x) path__topo(c, (x))
+#include "render/integrators/media_trace_generic.h"
+
 #define PT_CTX path__ctx *c
 #define PT_SCENE (c->sc)
 #define PT_RS (c->rs)
@@ -469,9 +410,9 @@ static int path__transmit(path__ctx *c, adv3 p, adv3 wi, adv3 lp, int infinite, 
 #define PT_MEDIA_CODE 1
 #define PT_MEDIA_ON (c->media)
 #define PT_TRANSMIT(at, w, sample, cur, T) \
-  path__transmit(c, (at), (w), (sample).pd, isinf((sample).dist), (cur), (T))
+  path__transmit(c, (at), (w), (sample).pd, (sample).dist, (cur), (T))
 #define PT_FLY(org, dir, tmin, med, u_ch, u_t, h, vp, fw) \
-  path__fly(c, (org), (dir), (tmin), (med), (u_ch), (u_t), (h), (vp), (fw))
+  path__fly(c, (org), (dir), (tmin), (med), (u_ch), (u_t), (h), (vp), NULL, NULL, (fw))
 #define PT_MEDIUM_AFTER(h, cur, dir) scene_medium_across(c->sc, (h)->mesh, (h)->ng, (cur), (dir))
 #include "render/integrators/pt_generic.h"
 
