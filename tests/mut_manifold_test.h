@@ -173,6 +173,72 @@ static inline int specular(const movers *mv, const ps_path *x, int j) {
   return x->x[j].delta || ps_glossy(&mv->ctx, x, j);
 }
 
+/* ---- Reverse moves, caches, detailed balance (both tests) ---------------------- */
+
+/* Whether x has a G vertex before its x_c (the manifold perturbation's form). */
+static inline int glossy_chain(const movers *mv, const ps_path *x) {
+  int b, c, n = 0;
+  if (!mut_manifold_form(&mv->mm, x, &b, &c)) return 0;
+  for (int j = 1; j < c; j++) n += ps_glossy(&mv->ctx, x, j);
+  return n > 0;
+}
+
+/* On n random pairs (x drawn whole, y proposed by the manifold perturbation
+ * or, when hslt is set, by HSLT's): every cache of y against a fresh
+ * evaluation; the move from y through x's raster point (and x's half
+ * vectors) gives back x, vertices to 1e-6 of the scene's size (the
+ * manifold perturbation: f to 1e-5, 1e-3 through G vertices, whose narrow
+ * lobes feel the walk's tolerance); the reverse walk returns; detailed
+ * balance to 1e-9, the reverse ratio computed anew from y. Counts the
+ * pairs reversed and balanced, and the mean acceptance. */
+static inline void check_pairs(const scene *sc, int hslt, uint64_t seed, int n, int *OUT_reverse,
+                               int *OUT_balance, double *OUT_acc) {
+  movers mv;
+  movers_init(&mv, sc);
+  const mut_manifold *m = hslt ? &mv.mh : &mv.mm;
+  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y), *z = malloc(sizeof *z);
+  rng r;
+  rng_seed(&r, seed, 3);
+  double acc = 0.0;
+  int n_acc = 0;
+  mut_manifold_tally t = {0, 0, 0, 0};
+  for (int i = 0; i < n; i++) {
+    if (!draw_state_for(&mv, m, &r, x)) fail();
+    double ratio;
+    if (!mut_manifold_propose(m, &r, x, y, &ratio, NULL, &t)) continue;
+    assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
+    if (!(y->lum > 0.0) || !(ratio > 0.0)) continue;
+    double hx[2 * PS_MAX_VERTICES];
+    if (hslt) assert_true(mut_manifold_half_vectors(m, x, hx));
+    assert_true(mut_manifold_generate(m, y, x->rx, x->ry, hslt ? hx : NULL, z, NULL, NULL));
+    for (int j = 0; j <= x->k; j++) {
+      /* (A direction at infinity: its point stands beyond the scene.) */
+      double d = x->x[j].inf ? sc->radius * v3_len(v3_sub(z->x[j].v.dir, x->x[j].v.dir))
+                             : v3_len(v3_sub(z->x[j].v.p, x->x[j].v.p));
+      if (!(d < 1e-6 * sc->radius)) print_message("vertex %d of %d back at %.3g\n", j, x->k, d);
+      assert_true(d < 1e-6 * sc->radius);
+    }
+    if (!hslt) assert_true(rel_close(z->lum, x->lum, glossy_chain(&mv, x) ? 1e-3 : 1e-5));
+    assert_true(mut_manifold_reversible(m, y, x, NULL, NULL));
+    (*OUT_reverse)++;
+    double tf = mut_manifold_density(m, x, y), tr = mut_manifold_density(m, y, x);
+    assert_true(tf > 0.0 && tr > 0.0);
+    double ratio_rev = x->lum * tf / (y->lum * tr);
+    double lhs = fmin(1.0, ratio), rhs = y->lum * tr / (x->lum * tf) * fmin(1.0, ratio_rev);
+    if (!rel_close(lhs, rhs, 1e-9)) print_message("balance %.17g vs %.17g\n", lhs, rhs);
+    assert_true(rel_close(lhs, rhs, 1e-9));
+    (*OUT_balance)++;
+    acc += fmin(1.0, ratio);
+    n_acc++;
+  }
+  *OUT_acc = n_acc > 0 ? acc / n_acc : 0.0;
+  print_message("  walks %lld, reached %lld, %.2f projections each, %lld refused as irreversible\n",
+                (long long)t.walks, (long long)t.walked,
+                t.walks > 0 ? (double)t.traces / (double)t.walks : 0.0, (long long)t.irreversible);
+  assert_true(t.walks > 0 && t.walked >= t.walks / (hslt ? 4 : 2));
+  free(x), free(y), free(z);
+}
+
 /* ---- One-step invariance (test_pathspace.c states the test) ------------------------ */
 
 #define INV_COLS 8

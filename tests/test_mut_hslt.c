@@ -97,52 +97,6 @@ static void test_forms(void **state) {
 
 /* ---- Reverse moves, caches, detailed balance ------------------------------------ */
 
-static void check_pairs(const scene *sc, uint64_t seed, int n, int *OUT_reverse, int *OUT_balance,
-                        double *OUT_acc) {
-  movers mv;
-  movers_init(&mv, sc);
-  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y), *z = malloc(sizeof *z);
-  rng r;
-  rng_seed(&r, seed, 3);
-  double acc = 0.0;
-  int n_acc = 0;
-  mut_manifold_tally t = {0, 0, 0, 0};
-  for (int i = 0; i < n; i++) {
-    if (!draw_state_for(&mv, &mv.mh, &r, x)) fail();
-    double ratio;
-    if (!mut_manifold_propose(&mv.mh, &r, x, y, &ratio, NULL, &t)) continue;
-    assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
-    if (!(y->lum > 0.0) || !(ratio > 0.0)) continue;
-    /* The move from y through x's raster point and half vectors gives back x. */
-    double hx[2 * PS_MAX_VERTICES];
-    assert_true(mut_manifold_half_vectors(&mv.mh, x, hx));
-    assert_true(mut_manifold_generate(&mv.mh, y, x->rx, x->ry, hx, z, NULL, NULL));
-    for (int j = 0; j <= x->k; j++) {
-      double d = x->x[j].inf ? sc->radius * v3_len(v3_sub(z->x[j].v.dir, x->x[j].v.dir))
-                             : v3_len(v3_sub(z->x[j].v.p, x->x[j].v.p));
-      if (!(d < 1e-6 * sc->radius)) print_message("vertex %d of %d back at %.3g\n", j, x->k, d);
-      assert_true(d < 1e-6 * sc->radius);
-    }
-    assert_true(mut_manifold_reversible(&mv.mh, y, x, NULL, NULL));
-    (*OUT_reverse)++;
-    double tf = mut_manifold_density(&mv.mh, x, y), tr = mut_manifold_density(&mv.mh, y, x);
-    assert_true(tf > 0.0 && tr > 0.0);
-    double ratio_rev = x->lum * tf / (y->lum * tr);
-    double lhs = fmin(1.0, ratio), rhs = y->lum * tr / (x->lum * tf) * fmin(1.0, ratio_rev);
-    if (!rel_close(lhs, rhs, 1e-9)) print_message("balance %.17g vs %.17g\n", lhs, rhs);
-    assert_true(rel_close(lhs, rhs, 1e-9));
-    (*OUT_balance)++;
-    acc += fmin(1.0, ratio);
-    n_acc++;
-  }
-  *OUT_acc = n_acc > 0 ? acc / n_acc : 0.0;
-  print_message("  walks %lld, reached %lld, %.2f projections each, %lld refused as irreversible\n",
-                (long long)t.walks, (long long)t.walked,
-                t.walks > 0 ? (double)t.traces / (double)t.walks : 0.0, (long long)t.irreversible);
-  assert_true(t.walks > 0 && t.walked >= t.walks / 4);
-  free(x), free(y), free(z);
-}
-
 static void test_reverse_and_balance(void **state) {
   hfixture *fx = *state;
   static const int scenes[] = {POINT, AREA, SKY, R_POINT, R_SKY, R_MIRROR, WALL};
@@ -150,7 +104,7 @@ static void test_reverse_and_balance(void **state) {
   for (size_t s = 0; s < sizeof scenes / sizeof scenes[0]; s++) {
     int q = scenes[s], rev = 0, bal = 0;
     double acc;
-    check_pairs(fx->sc[q], 331 + q, 1500, &rev, &bal, &acc);
+    check_pairs(fx->sc[q], 1, 331 + q, 1500, &rev, &bal, &acc);
     print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", name_of(q), rev, bal,
                   acc);
     assert_true(rev >= 200 && bal >= 200 && acc > 0.05);

@@ -160,69 +160,12 @@ static void test_dir_jacobian(void **state) {
 
 /* ---- Reverse moves, caches, detailed balance ------------------------------------ */
 
-/* Whether x has a G vertex before its x_c. */
-static int glossy_chain(const movers *mv, const ps_path *x) {
-  int b, c, n = 0;
-  if (!mut_manifold_form(&mv->mm, x, &b, &c)) return 0;
-  for (int j = 1; j < c; j++) n += ps_glossy(&mv->ctx, x, j);
-  return n > 0;
-}
-
-static void check_pairs(const scene *sc, uint64_t seed, int n, int *OUT_reverse,
-                        int *OUT_balance, double *OUT_acc) {
-  movers mv;
-  movers_init(&mv, sc);
-  ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y), *z = malloc(sizeof *z);
-  rng r;
-  rng_seed(&r, seed, 3);
-  double acc = 0.0;
-  int n_acc = 0;
-  mut_manifold_tally t = {0, 0, 0, 0};
-  for (int i = 0; i < n; i++) {
-    if (!draw_state(&mv, &r, x)) fail();
-    double ratio;
-    if (!mut_manifold_propose(&mv.mm, &r, x, y, &ratio, NULL, &t)) continue;
-    assert_true(ps_test_caches_fresh(&mv.ctx, y, z));
-    if (!(y->lum > 0.0) || !(ratio > 0.0)) continue;
-    /* The move from y through x's raster point gives back x. */
-    assert_true(mut_manifold_generate(&mv.mm, y, x->rx, x->ry, NULL, z, NULL, NULL));
-    for (int j = 0; j <= x->k; j++) {
-      /* (A direction at infinity: its point stands beyond the scene.) */
-      double d = x->x[j].inf ? sc->radius * v3_len(v3_sub(z->x[j].v.dir, x->x[j].v.dir))
-                             : v3_len(v3_sub(z->x[j].v.p, x->x[j].v.p));
-      if (!(d < 1e-6 * sc->radius))
-        print_message("vertex %d of %d back at %.3g\n", j, x->k, d);
-      assert_true(d < 1e-6 * sc->radius);
-    }
-    /* (G vertices' lobes are narrow: f moves with the walk's tolerance.) */
-    assert_true(rel_close(z->lum, x->lum, glossy_chain(&mv, x) ? 1e-3 : 1e-5));
-    assert_true(mut_manifold_reversible(&mv.mm, y, x, NULL, NULL));
-    (*OUT_reverse)++;
-    /* Detailed balance, T and the reverse ratio from y anew. */
-    double tf = mut_manifold_density(&mv.mm, x, y), tr = mut_manifold_density(&mv.mm, y, x);
-    assert_true(tf > 0.0 && tr > 0.0);
-    double ratio_rev = x->lum * tf / (y->lum * tr);
-    double lhs = fmin(1.0, ratio), rhs = y->lum * tr / (x->lum * tf) * fmin(1.0, ratio_rev);
-    if (!rel_close(lhs, rhs, 1e-9)) print_message("balance %.17g vs %.17g\n", lhs, rhs);
-    assert_true(rel_close(lhs, rhs, 1e-9));
-    (*OUT_balance)++;
-    acc += fmin(1.0, ratio);
-    n_acc++;
-  }
-  *OUT_acc = n_acc > 0 ? acc / n_acc : 0.0;
-  print_message("  walks %lld, reached %lld, %.2f projections each, %lld refused as irreversible\n",
-                (long long)t.walks, (long long)t.walked,
-                t.walks > 0 ? (double)t.traces / (double)t.walks : 0.0, (long long)t.irreversible);
-  assert_true(t.walks > 0 && t.walked >= t.walks / 2);
-  free(x), free(y), free(z);
-}
-
 static void test_reverse_and_balance(void **state) {
   fixture *fx = *state;
   for (int q = 0; q < N_SCENES; q++) {
     int rev = 0, bal = 0;
     double acc;
-    check_pairs(fx->sc[q], 31 + q, 3000, &rev, &bal, &acc);
+    check_pairs(fx->sc[q], 0, 31 + q, 3000, &rev, &bal, &acc);
     print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", scene_names[q], rev, bal,
                   acc);
     assert_true(rev >= 1000 && bal >= 1000 && acc > 0.2);
