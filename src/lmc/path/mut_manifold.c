@@ -42,6 +42,10 @@ void mut_manifold_init_hslt(mut_manifold *mm, const ps_context *ctx, const mut_p
   mm->hslt = 1;
   mm->hslt_step = step;
   mm->walk.off_start = 1; /* the walks start at the new half vectors */
+  /* A walk that has not converged in 8 projections seldom does: on the
+   * torus and the Veach door the acceptance is the same as with 64, at
+   * half and a third of the projections. */
+  mm->walk.max_traces = MUT_HSLT_MAX_TRACES;
 }
 
 /* The flags of the chain behind x_b: from x_c, glossy vertices (under

@@ -135,6 +135,9 @@ void mut_manifold_init_hslt(mut_manifold *mm, const ps_context *ctx, const mut_p
  * BSDF's roughness (bsdf_model.h; 1 for a diffuse surface), at most
  * MUT_HSLT_MAX_WIDTH. */
 #define MUT_HSLT_MAX_WIDTH 0.25
+/* HSLT: the projections a walk may trace before it fails (the manifold
+ * perturbation's: mf_options_default's 64). */
+#define MUT_HSLT_MAX_TRACES 8
 double mut_manifold_hslt_width(const ps_context *ctx, const ps_path *x, int j);
 
 /* The targets of the chain behind x_b as the move reads them from x: for
