@@ -13,11 +13,13 @@
  *   segments (--direct separate, the chains from three); every render
  *   makes its budget of spp mutations per pixel (up to whole rounds), and
  *   its statistics count the moves proposed and accepted; and with the
- *   primary-sample step (--pss-mutation on) among the moves, which must
- *   change the image (the box's contribution is nearly flat, so that
- *   step's exactness is test_perturb's to check).
+ *   primary-sample step (--pss-mutation on) among the moves, and with
+ *   HSLT's half-vector perturbation (--hslt on), each of which must
+ *   change the image (the box's contribution is nearly flat, so the
+ *   moves' exactness is test_perturb's and test_mut_hslt's to check).
  * - Determinism under --spp: the same seed gives a bit-identical film with
- *   1 and 2 threads; another seed a different one.
+ *   1 and 2 threads, with HSLT among the moves too; another seed a
+ *   different one.
  * - A plane under a directional light alone, every pixel rho / pi E cos:
  *   the mean of R seeds within 8 standard errors, no warning, --strict.
  * - A scene's <integrator type="mlt"> selects mlt; Mitsuba's mutation
@@ -87,16 +89,17 @@ static void test_emitting_box(void **state) {
   int checks = 0;
   scene *s = load_analytic_scene("emitting_box.xml");
   const double exact = 1.0 - 1.0 / 256.0;
-  /* The third: every path with the primary-sample step among the moves. */
-  const char *direct[3] = {"mcmc", "separate", "mcmc"};
-  for (int d = 0; d < 3; d++) {
+  /* The third: every path with the primary-sample step among the moves;
+   * the fourth with HSLT's half-vector perturbation among them. */
+  const char *direct[4] = {"mcmc", "separate", "mcmc", "mcmc"};
+  for (int d = 0; d < 4; d++) {
     double sum = 0.0, sum2 = 0.0, qs[4] = {0}, qs2[4] = {0};
     static double q0_first; /* quadrant 0's sum with d = 0: the step must change it */
     for (int r = 0; r < RUNS; r++) {
       render_settings rs = settings(s, 16, 100 + (uint64_t)r, 2, direct[d]);
-      if (d == 2) {
+      if (d >= 2) {
         lmc_error err;
-        assert_int_equal(mcmc_set(&rs, "pss-mutation", "on", &err), LMC_OK);
+        assert_int_equal(mcmc_set(&rs, d == 2 ? "pss-mutation" : "hslt", "on", &err), LMC_OK);
       }
       film f;
       render_stats st;
@@ -114,7 +117,7 @@ static void test_emitting_box(void **state) {
       film_free(&f);
     }
     if (d == 0) q0_first = qs[0];
-    if (d == 2) assert_true(qs[0] != q0_first); /* the step did move the chains */
+    if (d >= 2) assert_true(qs[0] != q0_first); /* the step did move the chains */
     /* Where the chains put the light (the total is b's): each quadrant's
      * mean within 8 of its standard errors of the exact value. */
     for (int q = 0; q < 4; q++) {
@@ -126,13 +129,13 @@ static void test_emitting_box(void **state) {
     }
     double mean = sum / RUNS, se = sqrt(fmax(0.0, (sum2 - RUNS * mean * mean) / (RUNS - 1)) / RUNS);
     fprintf(stderr, "  emitting box, --direct %s%s: mean %.5f (exact %.5f), SE %.2g\n", direct[d],
-            d == 2 ? " --pss-mutation on" : "", mean, exact, se);
+            d == 2 ? " --pss-mutation on" : d == 3 ? " --hslt on" : "", mean, exact, se);
     assert_true(se > 0.0);
     assert_near(mean, exact, 8.0 * se);
     checks += 2;
   }
   scene_destroy(s);
-  assert_int_equal(checks, 3 * (2 + 4));
+  assert_int_equal(checks, 4 * (2 + 4));
 }
 
 static int films_equal(const film *a, const film *b) {
@@ -145,19 +148,26 @@ static int films_equal(const film *a, const film *b) {
 static void test_determinism(void **state) {
   (void)state;
   scene *s = load_analytic_scene("emitting_box.xml");
-  film f[4];
-  const uint64_t seed[4] = {3, 3, 3, 4};
-  const int threads[4] = {2, 2, 1, 2};
-  for (int i = 0; i < 4; i++) {
-    render_settings rs = settings(s, 8, seed[i], threads[i], "separate");
-    render_stats st;
-    lmc_error err;
-    assert_int_equal(mcmc_render_run(s, &rs, &f[i], &st, &err), LMC_OK);
+  int checks = 0;
+  /* mlt's default moves, then with HSLT's among them. */
+  for (int hslt = 0; hslt < 2; hslt++) {
+    film f[4];
+    const uint64_t seed[4] = {3, 3, 3, 4};
+    const int threads[4] = {2, 2, 1, 2};
+    for (int i = 0; i < 4; i++) {
+      render_settings rs = settings(s, 8, seed[i], threads[i], "separate");
+      render_stats st;
+      lmc_error err;
+      if (hslt) assert_int_equal(mcmc_set(&rs, "hslt", "on", &err), LMC_OK);
+      assert_int_equal(mcmc_render_run(s, &rs, &f[i], &st, &err), LMC_OK);
+    }
+    assert_true(films_equal(&f[0], &f[1]));  /* same seed, same threads */
+    assert_true(films_equal(&f[0], &f[2]));  /* 1 vs 2 threads */
+    assert_false(films_equal(&f[0], &f[3])); /* another seed differs */
+    checks += 3;
+    for (int i = 0; i < 4; i++) film_free(&f[i]);
   }
-  assert_true(films_equal(&f[0], &f[1]));  /* same seed, same threads */
-  assert_true(films_equal(&f[0], &f[2]));  /* 1 vs 2 threads */
-  assert_false(films_equal(&f[0], &f[3])); /* another seed differs */
-  for (int i = 0; i < 4; i++) film_free(&f[i]);
+  assert_int_equal(checks, 6);
   scene_destroy(s);
 }
 
