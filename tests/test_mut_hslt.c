@@ -42,7 +42,7 @@
 static void test_forms(void **state) {
   hfixture *fx = *state;
   int total_diffuse = 0;
-  for (int q = 0; q < N_ALL; q++) {
+  for (int q = 0; q <= WALL; q++) {
     movers mv;
     movers_init(&mv, fx->sc[q]);
     ps_path *x = malloc(sizeof *x);
@@ -104,7 +104,7 @@ static void test_reverse_and_balance(void **state) {
   for (size_t s = 0; s < sizeof scenes / sizeof scenes[0]; s++) {
     int q = scenes[s], rev = 0, bal = 0;
     double acc;
-    check_pairs(fx->sc[q], 1, 331 + q, 1500, &rev, &bal, &acc);
+    check_pairs(fx->sc[q], 1, NULL, 331 + q, 1500, &rev, &bal, &acc);
     print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", name_of(q), rev, bal,
                   acc);
     assert_true(rev >= 200 && bal >= 200 && acc > 0.05);
@@ -236,5 +236,5 @@ int main(void) {
       cmocka_unit_test(test_reverse_and_balance),
       cmocka_unit_test(test_jacobian),
   };
-  return cmocka_run_group_tests(tests, hslt_setup, hslt_teardown);
+  return cmocka_run_group_tests(tests, ext_setup, ext_teardown);
 }

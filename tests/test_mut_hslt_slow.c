@@ -68,5 +68,5 @@ int main(void) {
       cmocka_unit_test(test_invariance),
       cmocka_unit_test(test_invariance_detects_bias),
   };
-  return cmocka_run_group_tests(tests, hslt_setup, hslt_teardown);
+  return cmocka_run_group_tests(tests, ext_setup, ext_teardown);
 }

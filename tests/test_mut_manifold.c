@@ -48,7 +48,7 @@
 
 
 static void test_forms(void **state) {
-  fixture *fx = *state;
+  hfixture *fx = *state;
   static const int min_applies[N_SCENES] = {200, 200, 200, 50, 200, 200, 50};
   for (int q = 0; q < N_SCENES; q++) {
     movers mv;
@@ -57,7 +57,7 @@ static void test_forms(void **state) {
     rng r;
     rng_seed(&r, 11 + q, 1);
     int drawn = 0, applies = 0, b_gt_1 = 0, inf = 0, glossy = 0, fits_checked = 0, fits_ok = 0;
-    int sky = 0;
+    int sky = 0, lit = 0;
     for (int i = 0; i < 200000; i++) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
@@ -77,9 +77,10 @@ static void test_forms(void **state) {
       if (!mut_manifold_form(&mv.mm, x, &b, &c)) continue;
       applies++;
       if (b == x->k) {
-        /* The sky form: the camera's chain reaches the sky. */
-        sky++;
-        assert_true(c == b && x->x[b].inf && x->k >= 2);
+        /* The sky form: the camera's chain reaches the sky (or an area
+         * light: test_area_light_form). */
+        sky += x->x[b].inf, lit += !x->x[b].inf;
+        assert_true(c == b && x->k >= 2);
         for (int j = 1; j < b; j++) assert_true(specular(&mv, x, j));
         continue;
       }
@@ -93,15 +94,16 @@ static void test_forms(void **state) {
       inf += c == x->k && x->x[c].inf;
     }
     print_message("%s: %d paths, the move applies to %d (%d with x_b past a specular chain, %d "
-                  "from a direction, %d to the sky)\n",
-                  scene_names[q], drawn, applies, b_gt_1, inf, sky);
+                  "from a direction, %d to the sky, %d to an area light)\n",
+                  scene_names[q], drawn, applies, b_gt_1, inf, sky, lit);
     assert_true(applies >= min_applies[q]);
     if (q == MIRROR || q == R_MIRROR) assert_true(b_gt_1 >= 20);
     /* G vertices exactly in the rough scenes' chains. */
-    if (q >= R_POINT) assert_true(glossy >= applies - sky);
+    if (q >= R_POINT) assert_true(glossy >= applies - sky - lit);
     else assert_int_equal(glossy, 0);
     if (q == SKY || q == R_SKY) assert_true(inf >= 100 && sky >= 100);
     else assert_int_equal(sky, 0);
+    if (q != AREA) assert_int_equal(lit, 0); /* the only area light's scene */
     print_message("  chain forms: %d checked, %d chains\n", fits_checked, fits_ok);
     assert_true(fits_checked >= 10000 && fits_ok >= applies);
     free(x);
@@ -112,7 +114,7 @@ static void test_forms(void **state) {
  * mf_half_vector_dirs over wo's tangent plane, at the G vertices of the
  * rough scenes' paths (reflections and refractions from both sides). */
 static void test_dir_jacobian(void **state) {
-  fixture *fx = *state;
+  hfixture *fx = *state;
   int checked = 0, refract = 0;
   for (int q = R_POINT; q < N_SCENES; q++) {
     movers mv;
@@ -161,15 +163,76 @@ static void test_dir_jacobian(void **state) {
 /* ---- Reverse moves, caches, detailed balance ------------------------------------ */
 
 static void test_reverse_and_balance(void **state) {
-  fixture *fx = *state;
+  hfixture *fx = *state;
   for (int q = 0; q < N_SCENES; q++) {
     int rev = 0, bal = 0;
     double acc;
-    check_pairs(fx->sc[q], 0, 31 + q, 3000, &rev, &bal, &acc);
+    check_pairs(fx->sc[q], 0, NULL, 31 + q, 3000, &rev, &bal, &acc);
     print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", scene_names[q], rev, bal,
                   acc);
     assert_true(rev >= 1000 && bal >= 1000 && acc > 0.2);
   }
+}
+
+/* ---- The sky form reaching an area light -------------------------------------- */
+
+/* Whether x is of the sky form with its emitter end on an area light. */
+static int light_form(const mut_manifold *m, const ps_path *x) {
+  int b, c;
+  return mut_manifold_form(m, x, &b, &c) && b == x->k && !x->x[x->k].inf;
+}
+
+/* A path of that form with f > 0 (draw_fn), or 0 after many tries. */
+static int draw_light_form(const movers *mv, const mut_manifold *m, rng *r, ps_path *x) {
+  for (int tries = 0; tries < 2000000; tries++) {
+    int k = 1 + (int)(rng_uniform(r) * KMAX);
+    if (mut_bidir_sample_whole(&mv->mb, r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+    if (light_form(m, x)) return 1;
+  }
+  return 0;
+}
+
+/* On the lit mirrors (E S L, E G L; a large area light on the floor seen in
+ * the mirror wall): the form is found, its emitter end a point of the
+ * light (not at infinity); the pairs of check_pairs drawn among those paths
+ * reverse and balance (the form has no walk: the camera's chain is traced
+ * to the light, its own inverse); the proposals land on the same light. */
+static void test_area_light_form(void **state) {
+  hfixture *fx = *state;
+  int checked = 0;
+  for (int q = LIT_MIRROR; q <= LIT_R_MIRROR; q++) {
+    movers mv;
+    movers_init(&mv, fx->sc[q]);
+    ps_path *x = malloc(sizeof *x), *y = malloc(sizeof *y);
+    rng r;
+    rng_seed(&r, 61 + q, 1);
+    int drawn = 0, lit = 0, moved = 0;
+    for (int i = 0; i < 150000; i++) {
+      int k = 1 + (int)(rng_uniform(&r) * KMAX);
+      if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
+      drawn++;
+      if (!light_form(&mv.mm, x)) continue;
+      lit++;
+      for (int j = 1; j < x->k; j++) assert_true(specular(&mv, x, j));
+      double ratio;
+      if (!mut_manifold_propose(&mv.mm, &r, x, y, &ratio, NULL, NULL) || !(y->lum > 0.0)) continue;
+      assert_true(light_form(&mv.mm, y));
+      assert_int_equal(y->x[y->k].v.light, x->x[x->k].v.light);
+      moved++;
+    }
+    print_message("%s: %d paths, %d of the form reaching the area light, %d proposals with f > 0\n",
+                  name_of(q), drawn, lit, moved);
+    assert_true(lit >= 100 && moved >= 50);
+    int rev = 0, bal = 0;
+    double acc;
+    check_pairs(fx->sc[q], 0, draw_light_form, 81 + q, 1000, &rev, &bal, &acc);
+    print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", name_of(q), rev, bal,
+                  acc);
+    assert_true(rev >= 200 && bal >= 200 && acc > 0.2);
+    checked++;
+    free(x), free(y);
+  }
+  assert_int_equal(checked, 2);
 }
 
 int main(void) {
@@ -177,6 +240,7 @@ int main(void) {
       cmocka_unit_test(test_forms),
       cmocka_unit_test(test_dir_jacobian),
       cmocka_unit_test(test_reverse_and_balance),
+      cmocka_unit_test(test_area_light_form),
   };
-  return cmocka_run_group_tests(tests, mm_setup, mm_teardown);
+  return cmocka_run_group_tests(tests, ext_setup, ext_teardown);
 }

@@ -67,13 +67,16 @@ static int mm__specular(const ps_context *ctx, const ps_path *x, int i) {
 }
 
 /* The sky form: the camera's chain reaches the emitter end, a direction
- * at infinity that a ray can meet (not a directional light's). */
+ * at infinity that a ray can meet (not a directional light's), or a point
+ * on an area light. */
 static int mm__sky_form(const mut_manifold *mm, const ps_path *x) {
   const ps_context *ctx = mm->ctx;
   int k = x->k;
   const bdpt_vertex *e = &x->x[k].v;
-  if (k < 2 || k - 1 > MF_MAX_CHAIN || !x->x[k].inf) return 0;
-  if (e->light >= 0 && !light_is_infinite(&ctx->sc->lights[e->light])) return 0;
+  if (k < 2 || k - 1 > MF_MAX_CHAIN) return 0;
+  if (x->x[k].inf ? e->light >= 0 && !light_is_infinite(&ctx->sc->lights[e->light])
+                  : !(e->light >= 0 && ctx->sc->lights[e->light].type == LIGHT_AREA))
+    return 0;
   for (int j = 1; j < k; j++) {
     mf_kind kind;
     double eta;
@@ -181,7 +184,7 @@ static int mm__vertex(const ps_context *ctx, const ps_path *p, const ps_path *x,
 
 /* The sky form's y: the camera ray through (rx, ry) traced through x_1 ..
  * x_{k-1}, each about its held half vector (an S vertex's is zero), and
- * out to the sky. */
+ * out to the sky, or to x_k's area light. */
 static int mm__generate_sky(const mut_manifold *mm, const ps_path *x, double rx, double ry,
                             ps_path *y, int64_t *rays) {
   const ps_context *ctx = mm->ctx;
@@ -198,14 +201,18 @@ static int mm__generate_sky(const mut_manifold *mm, const ps_path *x, double rx,
         return 0;
       continue;
     }
-    /* The last direction must leave the scene. */
-    if (!mut_perturb_trace_sky(ctx, &y->x[i].v, wo, &y->x[k].v, rays)) return 0;
+    /* The last direction must leave the scene, or meet x_k's area light. */
+    if (x->x[k].inf ? !mut_perturb_trace_sky(ctx, &y->x[i].v, wo, &y->x[k].v, rays)
+                    : !mut_perturb_trace(ctx, &y->x[i].v, wo, TRANSPORT_RADIANCE, &y->x[k].v,
+                                         rays) ||
+                          y->x[k].v.light != x->x[k].v.light)
+      return 0;
   }
   for (int i = 1; i < k; i++) y->x[i].v.delta = x->x[i].v.delta;
   ps_update(ctx, y, 0, k);
   for (int i = 1; i < k; i++)
     if (y->x[i].delta != x->x[i].delta || ps_glossy(ctx, y, i) != ps_glossy(ctx, x, i)) return 0;
-  if (!y->x[k].inf) return 0;
+  if (y->x[k].inf != x->x[k].inf) return 0;
   ps_total(y);
   return 1;
 }
@@ -335,14 +342,17 @@ static double mm__chain_density(const mut_manifold *mm, const ps_path *y, int b,
 }
 
 /* The sky form's density but the offset's: the raster-to-area Jacobian at
- * y_1 and each further vertex's, the last a direction (solid angle). */
+ * y_1 and each further vertex's, the last a direction (solid angle) or a
+ * point on the area light (area). */
 static double mm__sky_density(const mut_manifold *mm, const ps_path *y) {
   const ps_context *ctx = mm->ctx;
   const camera *cam = &ctx->sc->cam;
   int k = y->k;
   double jac = (double)cam->width * cam->height * y->x[1].pdf_cam;
   for (int i = 1; i < k && jac > 0.0; i++) {
-    double area = i + 1 < k ? ps_area_jacobian(ctx, y, i, i + 1) : 1.0;
+    double area = i + 1 < k    ? ps_area_jacobian(ctx, y, i, i + 1)
+                  : y->x[k].inf ? 1.0
+                                : pow(ps_area_jacobian(ctx, y, i, k), mm->test_jac_power);
     if (y->x[i].delta) {
       jac *= area;
       continue;

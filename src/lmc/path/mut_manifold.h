@@ -21,12 +21,14 @@
  *
  * The sky form. x_1 .. x_{k-1} are S or G and x_k is a direction at
  * infinity that a ray can meet (an environment, a constant or sunsky
- * emitter; not a directional light): the camera's chain reaches the sky
- * (a glass cube seen against the sky, the torus's other paths, E G+ L).
- * mut_manifold_form gives b = c = k. The camera ray through the moved
- * image point is traced through x_1 .. x_{k-1} about their held half
- * vectors (mf_scatter) and must leave the scene; y_k is its direction.
- * There is no walk: the trace is its own inverse.
+ * emitter; not a directional light), or a point on an area light: the
+ * camera's chain reaches the sky (a glass cube seen against the sky, the
+ * torus's other paths, E G+ L) or the light (a lamp seen in a mirror or
+ * through glass). mut_manifold_form gives b = c = k. The camera ray
+ * through the moved image point is traced through x_1 .. x_{k-1} about
+ * their held half vectors (mf_scatter) and must leave the scene (y_k is
+ * its direction) or meet x_k's area light (y_k is that point). There is
+ * no walk: the trace is its own inverse.
  *
  * The move. The raster point moves by the lens perturbation's offset
  * (mut_perturb.h: length with density proportional to 1/r on [r1, r2],
@@ -75,7 +77,8 @@
  * prod_{i=1..k-1} K_i, with K_i as above for i < k - 1 and, for the
  * direction y_k, 1 after an S vertex (its Dirac reduced) and |det d h_{k-1}
  * / d omega| (mf_half_vector_dir_jacobian) after a G vertex; a G vertex's
- * K_i before a surface is the same determinant times |cos y_{i+1}| / d^2.
+ * K_i before a surface (an area light's y_k too) is the same determinant
+ * times |cos y_{i+1}| / d^2, an S vertex's |cos y_{i+1}| / d^2.
  *
  * HSLT's half-vector perturbation (Kaplanyan, Hanika and Dachsbacher 2014;
  * mut_manifold_init_hslt). The same move over the whole path: x_b is the
@@ -114,7 +117,8 @@ typedef struct mut_manifold {
   double hslt_step;      /* HSLT: sigma_j = hslt_step times the vertex's width */
   mf_options walk;        /* the walks' settings (mf_options_default) */
   double back_tol;        /* the reverse walk's chain against x's: 1e-6 scene radius */
-  double test_jac_power;  /* tests only: G raised to this wrong power (1: right) */
+  double test_jac_power;  /* tests only: G (and the sky form's area factor at an area light)
+                             raised to this wrong power (1: right) */
   double test_glossy_power; /* tests only: the G vertices' factors likewise */
 } mut_manifold;
 
