@@ -202,6 +202,23 @@ static inline int specular(const movers *mv, const ps_path *x, int j) {
   return x->x[j].delta || ps_glossy(&mv->ctx, x, j);
 }
 
+/* mf_path_chain_fits says what mf_chain_from_path would, on every range of
+ * x under the chain flags 0 .. n_flags - 1; adds the ranges checked and
+ * those that make a chain to *checked and *ok. */
+static inline void check_chain_fits(const movers *mv, const ps_path *x, unsigned n_flags,
+                                    int *checked, int *ok) {
+  for (int a0 = 0; a0 < x->k; a0++)
+    for (int b0 = a0 + 2; b0 <= x->k; b0++)
+      for (unsigned fl = 0; fl < n_flags; fl++) {
+        mf_chain ch;
+        int full = mf_chain_from_path(&mv->ctx, x, a0, b0, fl, &ch);
+        int fits = mf_path_chain_fits(&mv->ctx, x, a0, b0, fl);
+        if (full == MF_OK) assert_int_equal(fits, MF_OK);
+        if (fits != MF_OK) assert_int_equal(full, fits);
+        (*checked)++, *ok += full == MF_OK;
+      }
+}
+
 /* ---- Reverse moves, caches, detailed balance (both tests) ---------------------- */
 
 /* Whether x has a G vertex before its x_c (the manifold perturbation's form). */

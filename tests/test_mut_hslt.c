@@ -48,21 +48,12 @@ static void test_forms(void **state) {
     ps_path *x = malloc(sizeof *x);
     rng r;
     rng_seed(&r, 211 + q, 1);
-    int drawn = 0, applies = 0, fits_checked = 0, diffuse = 0, b_gt_1 = 0;
+    int drawn = 0, applies = 0, fits_checked = 0, fits_ok = 0, diffuse = 0, b_gt_1 = 0;
     for (int i = 0; i < 60000; i++) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
       drawn++;
-      for (int a0 = 0; a0 < x->k; a0++)
-        for (int b0 = a0 + 2; b0 <= x->k; b0++)
-          for (unsigned fl = 0; fl < 8; fl++) {
-            mf_chain ch;
-            int full = mf_chain_from_path(&mv.ctx, x, a0, b0, fl, &ch);
-            int fits = mf_path_chain_fits(&mv.ctx, x, a0, b0, fl);
-            if (full == MF_OK) assert_int_equal(fits, MF_OK);
-            if (fits != MF_OK) assert_int_equal(full, fits);
-            fits_checked++;
-          }
+      check_chain_fits(&mv, x, 8, &fits_checked, &fits_ok);
       int b, c;
       if (!mut_manifold_form(&mv.mh, x, &b, &c)) continue;
       applies++;

@@ -62,17 +62,7 @@ static void test_forms(void **state) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
       drawn++;
-      /* mf_path_chain_fits says what mf_chain_from_path would. */
-      for (int a0 = 0; a0 < x->k; a0++)
-        for (int b0 = a0 + 2; b0 <= x->k; b0++)
-          for (unsigned fl = 0; fl < 4; fl++) {
-            mf_chain ch;
-            int full = mf_chain_from_path(&mv.ctx, x, a0, b0, fl, &ch);
-            int fits = mf_path_chain_fits(&mv.ctx, x, a0, b0, fl);
-            if (full == MF_OK) assert_int_equal(fits, MF_OK);
-            if (fits != MF_OK) assert_int_equal(full, fits);
-            fits_checked++, fits_ok += full == MF_OK;
-          }
+      check_chain_fits(&mv, x, 4, &fits_checked, &fits_ok);
       int b, c;
       if (!mut_manifold_form(&mv.mm, x, &b, &c)) continue;
       applies++;
