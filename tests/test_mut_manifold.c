@@ -197,7 +197,7 @@ static void test_area_light_form(void **state) {
     rng r;
     rng_seed(&r, 61 + q, 1);
     int drawn = 0, lit = 0, moved = 0;
-    for (int i = 0; i < 150000; i++) {
+    for (int i = 0; i < 50000; i++) {
       int k = 1 + (int)(rng_uniform(&r) * KMAX);
       if (mut_bidir_sample_whole(&mv.mb, &r, k, x) != MUT_BIDIR_OK || !(x->lum > 0.0)) continue;
       drawn++;
@@ -215,7 +215,7 @@ static void test_area_light_form(void **state) {
     assert_true(lit >= 100 && moved >= 50);
     int rev = 0, bal = 0;
     double acc;
-    check_pairs(fx->sc[q], 0, draw_light_form, 81 + q, 1000, &rev, &bal, &acc);
+    check_pairs(fx->sc[q], 0, draw_light_form, 81 + q, 400, &rev, &bal, &acc);
     print_message("%s: %d reversed, %d balanced; mean acceptance %.3f\n", name_of(q), rev, bal,
                   acc);
     assert_true(rev >= 200 && bal >= 200 && acc > 0.2);

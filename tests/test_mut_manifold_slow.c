@@ -124,7 +124,7 @@ static void test_area_light_form(void **state) {
   int checked = 0;
   for (int q = LIT_MIRROR; q <= LIT_R_MIRROR; q++) {
     const scene *sc = fx->sc[q];
-    int n = q == LIT_R_MIRROR ? 8000000 : 1500000; /* the rough lobe moves paths less */
+    int n = q == LIT_R_MIRROR ? 6000000 : 1500000; /* the rough lobe moves paths less */
     ps_inv *right = invariance(sc, 2, 191 + q, 1.0, 1.0, n);
     ps_inv *wrong = invariance(sc, 2, 191 + q, 0.0, 1.0, n);
     print_message("%s: right %d samples, %d moved, %d bins, min p %.3g; the light's area factor "
