@@ -66,6 +66,24 @@ static inline void region_stats_render(const scene *s, const render_settings *rs
   film_free(&f);
 }
 
+/* The settings of an agreement run: `integrator` at spp samples (or
+ * mutations) per pixel, 2 threads, quiet, no time limit, and for the MCMC
+ * integrators the default adaptive bootstrap to 3% (its error is part of
+ * the runs' spread). Flags beyond these are the caller's (mcmc_set). */
+static inline render_settings region_settings(const scene *s, const char *integrator,
+                                              int64_t spp) {
+  render_settings rs = s->settings;
+  snprintf(rs.integrator, sizeof rs.integrator, "%s", integrator);
+  rs.spp = spp;
+  rs.set |= SET_SPP;
+  lmc_error err;
+  assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
+  rs.time_limit = 0.0;
+  rs.threads = 2;
+  rs.quiet = 1;
+  return rs;
+}
+
 /* The grid^2 + 1 statistics of region_means over `runs` renders of s with
  * *rs (its integrator and flags set by the caller), seeds seed0, seed0 +
  * 1, ...: their means into OUT_mean, their standard errors into OUT_se. */

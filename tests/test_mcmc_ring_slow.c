@@ -67,18 +67,10 @@ typedef struct config {
 /* Mean and SE over RUNS of the region means (index GRID*GRID: whole image). */
 static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
-  render_settings rs = s->settings;
-  snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
-  rs.spp = spp;
-  rs.set |= SET_SPP;
+  render_settings rs = region_settings(s, c->integrator, spp);
   lmc_error err;
-  /* The default, adaptive bootstrap; its error is part of the SE. */
-  assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
   for (int f = 0; f < 2 && c->flags[f][0]; f++)
     assert_int_equal(mcmc_set(&rs, c->flags[f][0], c->flags[f][1], &err), LMC_OK);
-  rs.time_limit = 0.0;
-  rs.threads = 2;
-  rs.quiet = 1;
   region_runs(s, &rs, RUNS, 1000, GRID, mean, se);
 }
 

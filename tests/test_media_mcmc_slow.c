@@ -46,16 +46,9 @@ typedef struct config {
 
 static void run_stats(const scene *s, const config *c, int64_t spp, double mean[N_STATS],
                       double se[N_STATS]) {
-  render_settings rs = s->settings;
-  snprintf(rs.integrator, sizeof rs.integrator, "%s", c->integrator);
-  rs.spp = spp;
-  rs.set |= SET_SPP;
+  render_settings rs = region_settings(s, c->integrator, spp);
   lmc_error err;
-  assert_int_equal(mcmc_set(&rs, "bootstrap-error", "0.03", &err), LMC_OK);
   if (c->states) assert_int_equal(mcmc_set(&rs, "states", c->states, &err), LMC_OK);
-  rs.time_limit = 0.0;
-  rs.threads = 2;
-  rs.quiet = 1;
   region_runs(s, &rs, RUNS, 2000, GRID, mean, se);
 }
 
